@@ -1,0 +1,58 @@
+// Controller and supervisor parameters (rig file sections `leg_controller` and
+// `supervisor`). Plain data with the defaults of the reference rig; validated by config/.
+#pragma once
+
+namespace hexa {
+
+// Gaussian-weighted numerical differentiator (eq 40, 41).
+struct DifferentiatorParams {
+  int window = 15;        // N, samples
+  double sigma = 0.85;    // standard deviation of w(x), in samples
+};
+
+// Backstepping-sliding mode controller (Sec. 3.2, eq 19-45).
+struct BsSmcParams {
+  double lambda_1_s = 40.0;             // sliding surface slope (eq 19)
+  double switching_gain_n = 30.0;       // K (eq 22, 30), as a force
+  double boundary_layer_xi_s_m = 10.0;  // xi in tanh(xi S) (eq 45); paper: 10
+  double backstepping_beta_1_s = 200.0; // beta (eq 38)
+  double effective_mass_kg = 1.25;      // load the leg moves (piston + share of platform)
+  double gravity_load_n = 11.0;         // static load along the leg at home (compressive > 0)
+  double viscous_estimate_scale = 1.0;  // B_hat = scale * Table 8 B (eq 21)
+};
+
+// PI baseline (paper ref [11]) with anti-windup.
+struct PiParams {
+  double proportional_v_m = 60.0;       // valve volts per metre of length error
+  double integral_v_m_s = 120.0;        // valve volts per metre-second
+  double integrator_limit_v = 2.0;      // anti-windup clamp of the integral term
+};
+
+struct LegControllerParams {
+  DifferentiatorParams differentiator;
+  BsSmcParams bssmc;
+  PiParams pi;
+  double setpoint_timeout_s = 0.015;    // setpoints older than this -> hold (3 periods)
+};
+
+// Outer loop (Sec. 4.1): task-space error -> leg corrections through the Jacobian (eq 48).
+struct OuterLoopParams {
+  bool enabled = true;
+  double gain = 0.2;                    // fraction of the mapped error added per 5 ms step
+  double max_correction_m = 0.005;      // per-leg bound of the accumulated correction
+};
+
+struct SupervisorParams {
+  double period_s = 0.005;
+  double blend_duration_s = 2.0;        // smooth blend from the current pose
+  double stop_duration_s = 1.0;         // smooth stop at the end
+  double stroke_margin_m = 0.01;        // feasibility: keep this far from either end stop
+  double max_leg_speed_m_s = 0.8;       // feasibility envelope (derived in docs/)
+  double max_leg_acceleration_m_s2 = 8.0;
+  int max_consecutive_deadline_misses = 5;
+  double workspace_radius_m = 0.15;     // estimate outside -> hold
+  bool least_squares_estimator = false; // GQFK (eq 47) by default; six-leg LSQ if true
+  OuterLoopParams outer_loop;
+};
+
+}  // namespace hexa
