@@ -5,9 +5,12 @@
 namespace hexa {
 
 // Gaussian-weighted numerical differentiator (eq 40, 41).
+// Causal: the window is the last N samples; the Gaussian is centred centre_lag_samples
+// before the newest sample (0 = newest, (N-1)/2 = window centre). docs/controller.md.
 struct DifferentiatorParams {
-  int window = 15;        // N, samples
-  double sigma = 0.85;    // standard deviation of w(x), in samples
+  int window = 15;                  // N, samples (at most 32)
+  double sigma = 0.85;              // standard deviation of w(x), in samples
+  double centre_lag_samples = 2.0;  // c of eq 40, in samples before the newest sample
 };
 
 // Backstepping-sliding mode controller (Sec. 3.2, eq 19-45).
@@ -19,6 +22,8 @@ struct BsSmcParams {
   double effective_mass_kg = 1.25;      // load the leg moves (piston + share of platform)
   double gravity_load_n = 11.0;         // static load along the leg at home (compressive > 0)
   double viscous_estimate_scale = 1.0;  // B_hat = scale * Table 8 B (eq 21)
+  double friction_estimate_scale = 1.0; // F_s, F_c estimate = scale * Table 8 (eq 14)
+  double friction_smoothing_velocity_m_s = 0.005;  // sgn(v) -> tanh(v / this) in eq 14
 };
 
 // PI baseline (paper ref [11]) with anti-windup.
