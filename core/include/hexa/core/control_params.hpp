@@ -56,7 +56,9 @@ struct SupervisorParams {
   double max_leg_acceleration_m_s2 = 8.0;
   int max_consecutive_deadline_misses = 5;
   double workspace_radius_m = 0.15;     // estimate outside -> hold
+  double workspace_max_rotation_rad = 0.5236;  // |rotation from home| beyond -> hold (30 deg)
   bool least_squares_estimator = false; // GQFK (eq 47) by default; six-leg LSQ if true
+  double estimator_outlier_threshold_m = 0.003;  // LSQ: residual beyond -> leg excluded
   OuterLoopParams outer_loop;
 };
 
