@@ -1,0 +1,273 @@
+// hexa_session: runs one complete closed-loop session on this machine. Starts the
+// recorder, the six leg controllers, the supervisor and the plant as separate processes
+// on loopback DDS (own domain id), runs one trajectory, stops everything cleanly, writes
+// the report, and exits 0 only if the session completed. Ctrl-C or the death of any
+// process stops all of them; children die with this process even if it is SIGKILLed.
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "hexa/services/cli.hpp"
+#include "hexa/services/logging.hpp"
+#include "process_group.hpp"
+
+namespace fs = std::filesystem;
+using hexa::deploy::ChildSpec;
+using hexa::deploy::ProcessGroup;
+
+namespace {
+
+std::string Timestamp() {
+  const std::time_t t = std::time(nullptr);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", std::localtime(&t));
+  return buf;
+}
+
+std::string TailOf(const std::string& path, int lines) {
+  std::ifstream in(path);
+  std::vector<std::string> all;
+  for (std::string l; std::getline(in, l);) all.push_back(l);
+  std::ostringstream os;
+  for (size_t i = all.size() > size_t(lines) ? all.size() - lines : 0; i < all.size(); ++i)
+    os << "    " << all[i] << "\n";
+  return os.str();
+}
+
+struct Options {
+  std::string trajectory, controller, profile, mode, out_dir, rig, dds_config;
+  long long seed = 1, domain = 0, periods = 0;
+  bool recorder = true, standby = false, outer_loop = true;
+  double timeout_s = 0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  hexa::cli::Parser cli("hexa_session",
+                        "Runs a complete closed-loop session: plant, six leg controllers, "
+                        "supervisor and recorder as separate processes over loopback DDS.");
+  cli.AddOption("trajectory", "name|file.csv",
+                "x y z roll pitch yaw (pure motions, Table 9), combined (eq 49, Table 10), "
+                "or a CSV file (docs/task_space.md)", "combined");
+  cli.AddChoice("controller", {"bssmc", "pi"}, "leg position controller", "bssmc");
+  cli.AddChoice("profile", {"realistic", "ideal"}, "plant disturbance profile", "realistic");
+  cli.AddChoice("mode", {"lockstep", "realtime"}, "time base", "lockstep");
+  cli.AddOption("seed", "N", "random seed of the plant (noise, calibration errors)", "1");
+  cli.AddOption("out", "dir", "output directory (default: out/session-<timestamp>)");
+  cli.AddOption("rig", "file", "rig file (protobuf text format)", HEXA_DEFAULT_RIG_FILE);
+  cli.AddOption("dds-config", "file", "Cyclone DDS configuration", HEXA_DEFAULT_CYCLONE_CONFIG);
+  cli.AddOption("domain", "id", "DDS domain id (default: derived from the pid, 100-199)");
+  cli.AddOption("periods", "N", "trajectory periods to track (0 = the trajectory's default)", "0");
+  cli.AddOption("timeout", "s", "wall-clock limit of the session (0 = none)", "0");
+  cli.AddFlag("no-recorder", "do not record (no report)");
+  cli.AddFlag("no-outer-loop", "disable the task-space outer loop");
+  cli.AddFlag("standby", "also start a hot-standby controller per leg");
+  const bool parsed = cli.Parse(argc, argv);
+  if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
+
+  Options o;
+  o.trajectory = cli.Get("trajectory");
+  o.controller = cli.Get("controller");
+  o.profile = cli.Get("profile");
+  o.mode = cli.Get("mode");
+  o.rig = fs::absolute(cli.Get("rig")).string();
+  o.dds_config = fs::absolute(cli.Get("dds-config")).string();
+  o.recorder = !cli.Flag("no-recorder");
+  o.standby = cli.Flag("standby");
+  o.outer_loop = !cli.Flag("no-outer-loop");
+  auto seed = cli.GetInt("seed", 0, (1LL << 62));
+  auto periods = cli.GetInt("periods", 0, 1000);
+  auto timeout = cli.GetDouble("timeout", 0, 1e6);
+  std::optional<long long> domain = 100 + getpid() % 100;
+  if (cli.Has("domain")) domain = cli.GetInt("domain", 0, 230);
+  if (!seed || !periods || !timeout || !domain) {
+    std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
+    return 2;
+  }
+  o.seed = *seed;
+  o.periods = *periods;
+  o.timeout_s = *timeout;
+  o.domain = *domain;
+  static const std::vector<std::string> kNamed{"x", "y", "z", "roll", "pitch", "yaw", "combined"};
+  if (std::find(kNamed.begin(), kNamed.end(), o.trajectory) == kNamed.end()) {
+    if (!fs::exists(o.trajectory)) {
+      std::fprintf(stderr, "error: --trajectory '%s' is neither one of x y z roll pitch yaw "
+                   "combined nor an existing CSV file\n", o.trajectory.c_str());
+      return 2;
+    }
+    o.trajectory = fs::absolute(o.trajectory).string();
+  }
+  for (const auto& [what, path] : {std::pair{"rig file", o.rig}, {"DDS config", o.dds_config}}) {
+    if (!fs::exists(path)) {
+      std::fprintf(stderr, "error: %s '%s' does not exist\n", what, path.c_str());
+      return 2;
+    }
+  }
+  o.out_dir = cli.Has("out") ? cli.Get("out") : "out/session-" + Timestamp();
+  std::error_code ec;
+  fs::create_directories(o.out_dir, ec);
+  if (ec) {
+    std::fprintf(stderr, "error: cannot create output directory '%s': %s\n",
+                 o.out_dir.c_str(), ec.message().c_str());
+    return 2;
+  }
+  o.out_dir = fs::absolute(o.out_dir).string();
+
+  ProcessGroup group;  // blocks SIGINT/SIGTERM/SIGCHLD before any thread exists
+  auto log = hexa::logging::Init("session", o.out_dir + "/session.log");
+  log->info("session: trajectory={} controller={} profile={} mode={} seed={} domain={} out={}",
+            o.trajectory, o.controller, o.profile, o.mode, o.seed, o.domain, o.out_dir);
+  log->info("DDS config: {}", o.dds_config);
+
+  const std::string bin = HEXA_BINARY_DIR;
+  const std::map<std::string, std::string> env{
+      {"CYCLONEDDS_URI", "file://" + o.dds_config}};
+  const std::vector<std::string> common{"--rig", o.rig, "--domain", std::to_string(o.domain),
+                                        "--mode", o.mode};
+  auto spec = [&](const std::string& name, const std::string& exe,
+                  std::vector<std::string> args) {
+    ChildSpec s;
+    s.name = name;
+    s.argv = {bin + exe};
+    s.argv.insert(s.argv.end(), args.begin(), args.end());
+    s.argv.insert(s.argv.end(), common.begin(), common.end());
+    s.argv.push_back("--log-file");
+    s.argv.push_back(o.out_dir + "/" + name + ".log");
+    s.env = env;
+    s.log_path = o.out_dir + "/" + name + ".console.log";
+    return s;
+  };
+
+  std::vector<ChildSpec> specs;
+  const std::string mcap = o.out_dir + "/session.mcap";
+  if (o.recorder) {
+    ChildSpec r;
+    r.name = "recorder";
+    r.argv = {bin + "/services/recorder/hexa_recorder", "record", "--out", mcap, "--domain",
+              std::to_string(o.domain), "--log-file", o.out_dir + "/recorder.log"};
+    r.env = env;
+    r.log_path = o.out_dir + "/recorder.console.log";
+    specs.push_back(r);
+  }
+  for (int leg = 1; leg <= 6; ++leg) {
+    specs.push_back(spec("leg" + std::to_string(leg), "/services/leg_ctrl/hexa_leg_ctrl",
+                         {"--leg", std::to_string(leg), "--controller", o.controller}));
+    if (o.standby)
+      specs.push_back(spec("leg" + std::to_string(leg) + "_standby",
+                           "/services/leg_ctrl/hexa_leg_ctrl",
+                           {"--leg", std::to_string(leg), "--controller", o.controller,
+                            "--standby"}));
+  }
+  std::vector<std::string> sup_args{"--trajectory", o.trajectory, "--autostart",
+                                    "--exit-when-done", "--periods", std::to_string(o.periods)};
+  if (!o.outer_loop) sup_args.push_back("--no-outer-loop");
+  specs.push_back(spec("supervisor", "/services/task_space/hexa_task_space", sup_args));
+  std::vector<std::string> plant_args{"--profile", o.profile, "--seed", std::to_string(o.seed),
+                                      "--legs", "6", "--supervisor"};
+  if (o.recorder) plant_args.push_back("--expect-recorder");
+  specs.push_back(spec("plant", "/services/plant_sim/hexa_plant_sim", plant_args));
+
+  const auto t0 = std::chrono::steady_clock::now();
+  for (const auto& s : specs) {
+    std::string err;
+    if (group.Start(s, err) < 0) {
+      log->error("cannot start {}: {}", s.name, err);
+      group.StopAll(std::chrono::milliseconds(2000));
+      return 1;
+    }
+    log->info("started {}", s.name);
+  }
+
+  bool completed = false;
+  bool failed = false;
+  while (!completed && !failed) {
+    auto ev = group.WaitEvent(std::chrono::milliseconds(1000));
+    const double elapsed_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (ev.kind == ProcessGroup::Event::kInterrupted) {
+      log->warn("interrupted by signal {}: stopping every process", ev.signal);
+      failed = true;
+    } else if (ev.kind == ProcessGroup::Event::kChildExited) {
+      const auto& e = ev.exit;
+      if (e.name == "supervisor" && e.signal == 0 && e.exit_code == 0) {
+        log->info("supervisor finished the trajectory after {:.1f} s wall", elapsed_s);
+        completed = true;
+      } else {
+        log->error("{} before the session completed; its last log lines:\n{}", e.Describe(),
+                   TailOf(o.out_dir + "/" + e.name + ".console.log", 15));
+        failed = true;
+      }
+    } else if (o.timeout_s > 0 && elapsed_s > o.timeout_s) {
+      log->error("session exceeded --timeout {} s", o.timeout_s);
+      failed = true;
+    }
+  }
+
+  // Stop order: plant first (the clock), then controllers, recorder last so that it
+  // records everything the others published.
+  bool clean = completed;
+  auto stop = [&](const std::string& name) {
+    if (!group.Running(name)) return;
+    auto e = group.Stop(name, std::chrono::milliseconds(5000));
+    if (!e) return;
+    const bool ok = e->signal == 0 && e->exit_code == 0;
+    if (!ok) clean = false;
+    (ok ? log->info("{}", e->Describe()) : log->error("{}", e->Describe()));
+  };
+  stop("plant");
+  stop("supervisor");
+  for (const auto& name : group.RunningNames())
+    if (name != "recorder") stop(name);
+  stop("recorder");
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  log->info("all processes stopped; session wall time {:.1f} s", wall_s);
+
+  if (completed && o.recorder) {
+    ChildSpec r;
+    r.name = "report";
+    r.argv = {bin + "/services/recorder/hexa_recorder", "report", mcap, "--out", o.out_dir};
+    r.env = env;
+    r.log_path = o.out_dir + "/report.console.log";
+    std::string err;
+    if (group.Start(r, err) < 0) {
+      log->error("cannot start the report: {}", err);
+      clean = false;
+    } else {
+      while (true) {
+        auto ev = group.WaitEvent(std::chrono::milliseconds(600000));
+        if (ev.kind == ProcessGroup::Event::kChildExited) {
+          if (ev.exit.signal != 0 || ev.exit.exit_code != 0) {
+            log->error("report failed: {}\n{}", ev.exit.Describe(),
+                       TailOf(r.log_path, 15));
+            clean = false;
+          }
+          break;
+        }
+        if (ev.kind != ProcessGroup::Event::kTimeout) {
+          clean = false;
+          break;
+        }
+      }
+      std::ifstream md(o.out_dir + "/report.md");
+      if (md) std::printf("\n%s\n", std::string(std::istreambuf_iterator<char>(md), {}).c_str());
+    }
+  }
+  if (completed && clean) {
+    log->info("session completed; outputs in {}", o.out_dir);
+    return 0;
+  }
+  log->error("session did NOT complete; logs in {}", o.out_dir);
+  return 1;
+}

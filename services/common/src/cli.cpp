@@ -1,0 +1,160 @@
+#include "hexa/services/cli.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+
+namespace hexa::cli {
+
+Parser::Parser(std::string program, std::string summary)
+    : program_(std::move(program)), summary_(std::move(summary)) {
+  AddFlag("help", "print this help and exit");
+}
+
+void Parser::AddOption(const std::string& name, const std::string& value_name,
+                       const std::string& help, std::optional<std::string> default_value) {
+  order_.push_back(name);
+  specs_[name] = Spec{value_name, help, std::move(default_value), {}, false};
+}
+
+void Parser::AddChoice(const std::string& name, const std::vector<std::string>& choices,
+                       const std::string& help, const std::string& default_value) {
+  std::string value_name;
+  for (const auto& c : choices) value_name += (value_name.empty() ? "" : "|") + c;
+  order_.push_back(name);
+  specs_[name] = Spec{value_name, help, default_value, choices, false};
+}
+
+void Parser::AddFlag(const std::string& name, const std::string& help) {
+  order_.push_back(name);
+  specs_[name] = Spec{"", help, std::nullopt, {}, true};
+}
+
+bool Parser::Parse(int argc, const char* const* argv) {
+  for (int i = 1; i < argc; ++i) {
+    std::string arg = argv[i];
+    if (arg.rfind("--", 0) != 0) {
+      positional_.push_back(arg);
+      continue;
+    }
+    std::string name = arg.substr(2);
+    std::optional<std::string> inline_value;
+    if (auto eq = name.find('='); eq != std::string::npos) {
+      inline_value = name.substr(eq + 1);
+      name = name.substr(0, eq);
+    }
+    auto it = specs_.find(name);
+    if (it == specs_.end()) {
+      error_ = "unknown option --" + name;
+      return false;
+    }
+    if (it->second.is_flag) {
+      if (inline_value) {
+        error_ = "option --" + name + " takes no value";
+        return false;
+      }
+      values_[name] = "1";
+      if (name == "help") help_requested_ = true;
+      continue;
+    }
+    std::string value;
+    if (inline_value) {
+      value = *inline_value;
+    } else if (i + 1 < argc) {
+      value = argv[++i];
+    } else {
+      error_ = "option --" + name + " needs a value (" + it->second.value_name + ")";
+      return false;
+    }
+    const auto& choices = it->second.choices;
+    if (!choices.empty() && std::find(choices.begin(), choices.end(), value) == choices.end()) {
+      error_ = "option --" + name + ": '" + value + "' is not one of " + it->second.value_name;
+      return false;
+    }
+    values_[name] = value;
+  }
+  return !help_requested_;
+}
+
+std::string Parser::Help() const {
+  std::ostringstream os;
+  os << "Usage: " << program_ << " [options]\n" << summary_ << "\n\nOptions:\n";
+  for (const auto& name : order_) {
+    const Spec& s = specs_.at(name);
+    std::string left = "  --" + name + (s.is_flag ? "" : " <" + s.value_name + ">");
+    os << left;
+    if (left.size() < 34) os << std::string(34 - left.size(), ' ');
+    else os << "\n" << std::string(34, ' ');
+    os << s.help;
+    if (s.default_value) os << " (default: " << *s.default_value << ")";
+    os << "\n";
+  }
+  return os.str();
+}
+
+bool Parser::Has(const std::string& name) const {
+  if (values_.count(name)) return true;
+  auto it = specs_.find(name);
+  return it != specs_.end() && it->second.default_value.has_value();
+}
+
+bool Parser::Flag(const std::string& name) const { return values_.count(name) > 0; }
+
+std::string Parser::Get(const std::string& name) const {
+  if (auto it = values_.find(name); it != values_.end()) return it->second;
+  auto it = specs_.find(name);
+  if (it != specs_.end() && it->second.default_value) return *it->second.default_value;
+  return {};
+}
+
+std::optional<long long> Parser::GetInt(const std::string& name, long long min, long long max) {
+  const std::string text = Get(name);
+  errno = 0;
+  char* end = nullptr;
+  const long long v = std::strtoll(text.c_str(), &end, 10);
+  if (text.empty() || errno != 0 || end == nullptr || *end != '\0') {
+    error_ = "option --" + name + ": '" + text + "' is not an integer";
+    return std::nullopt;
+  }
+  if (v < min || v > max) {
+    error_ = "option --" + name + ": " + text + " is outside [" + std::to_string(min) + ", " +
+             std::to_string(max) + "]";
+    return std::nullopt;
+  }
+  return v;
+}
+
+std::optional<double> Parser::GetDouble(const std::string& name, double min, double max) {
+  const std::string text = Get(name);
+  errno = 0;
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || errno != 0 || end == nullptr || *end != '\0' || !std::isfinite(v)) {
+    error_ = "option --" + name + ": '" + text + "' is not a finite number";
+    return std::nullopt;
+  }
+  if (v < min || v > max) {
+    std::ostringstream os;
+    os << "option --" << name << ": " << text << " is outside [" << min << ", " << max << "]";
+    error_ = os.str();
+    return std::nullopt;
+  }
+  return v;
+}
+
+int HandleParseResult(const Parser& parser, bool ok) {
+  if (parser.help_requested()) {
+    std::fputs(parser.Help().c_str(), stdout);
+    return 0;
+  }
+  if (!ok) {
+    std::fprintf(stderr, "error: %s\n(see --help)\n", parser.error().c_str());
+    return 2;
+  }
+  return -1;
+}
+
+}  // namespace hexa::cli
