@@ -1,0 +1,111 @@
+// Named QoS profiles: the one place where every topic of idl/hexa.idl gets its name, its
+// reliability, history, durability, deadline, liveliness and ownership (docs/comm.md has the
+// table and the reasoning per topic). Writers and readers of a topic take their QoS from
+// MakeQos(kind, role, params) so that what a writer offers and what a reader requests are
+// compatible by construction (e.g. a reader requesting a deadline only matches a writer that
+// offers one at least as short; PLATFORM_NOTES.md).
+#pragma once
+
+#include <dds/dds.h>
+
+#include <cstdint>
+#include <optional>
+#include <string_view>
+
+namespace hexa::comm {
+
+enum class TopicKind : uint8_t {
+  kLegSensors,
+  kValveCommand,
+  kImuSample,
+  kLegSetpoint,
+  kPoseReport,
+  kGroundTruth,
+  kOperatorCommand,
+  kNodeStatus,
+  kFaultEvent,
+};
+inline constexpr int kTopicKindCount = 9;
+
+// Topic names on the wire (the DDS topic name; the type name comes from the IDL).
+inline constexpr std::string_view kLegSensorsTopic = "hexa_LegSensors";
+inline constexpr std::string_view kValveCommandTopic = "hexa_ValveCommand";
+inline constexpr std::string_view kImuSampleTopic = "hexa_ImuSample";
+inline constexpr std::string_view kLegSetpointTopic = "hexa_LegSetpoint";
+inline constexpr std::string_view kPoseReportTopic = "hexa_PoseReport";
+inline constexpr std::string_view kGroundTruthTopic = "hexa_GroundTruth";
+inline constexpr std::string_view kOperatorCommandTopic = "hexa_OperatorCommand";
+inline constexpr std::string_view kNodeStatusTopic = "hexa_NodeStatus";
+inline constexpr std::string_view kFaultEventTopic = "hexa_FaultEvent";
+
+std::string_view TopicName(TopicKind kind);
+
+// Nominal period of a periodic topic (DESIGN.md "Topics and QoS"); nullopt for event topics.
+std::optional<double> NominalPeriod_s(TopicKind kind);
+
+// Who uses the QoS. Readers differ by purpose: a control reader wants the newest sample with
+// the least latency, the recorder wants every sample.
+enum class EndpointRole : uint8_t {
+  kWriter,
+  kControlReader,   // leg_ctrl, task_space, plant: newest sample (keep-last 1 per instance)
+  kRecorderReader,  // recorder: reliable keep-all, historic data for transient-local topics
+};
+
+enum class LivelinessKind : uint8_t { kAutomatic, kManualByTopic };
+
+// Ownership strengths of the hot-standby scheme (DESIGN.md "Safety").
+inline constexpr int32_t kPrimaryOwnershipStrength = 20;
+inline constexpr int32_t kStandbyOwnershipStrength = 10;
+
+struct QosParams {
+  // Deadline period of the topic. nullopt: the topic's nominal period (1 ms or 5 ms), used
+  // in real time. Lockstep runs and tests on this VM (ms-level scheduling jitter,
+  // PLATFORM_NOTES.md) pass a longer one; +infinity disables the deadline. Writers and
+  // readers of one topic must use the same value (the reader's must be >= the writer's).
+  std::optional<double> deadline_period_s;
+  // ValveCommand only: how the writer shows it is alive, and the lease. MANUAL_BY_TOPIC also
+  // catches a hung control thread (Cyclone's own threads keep AUTOMATIC alive); it needs a
+  // write or AssertLiveliness() at least once per lease. Readers always request AUTOMATIC
+  // with the same lease, which is compatible with either kind the writer offers.
+  LivelinessKind valve_liveliness = LivelinessKind::kAutomatic;
+  double valve_liveliness_lease_s = 0.010;
+  // ValveCommand writer only: EXCLUSIVE ownership strength (primary 20, standby 10).
+  int32_t ownership_strength = kPrimaryOwnershipStrength;
+  // Control readers: lockstep needs every sample (a lost one would stall the tick), so the
+  // reader asks for RELIABLE; in real time BEST_EFFORT avoids head-of-line blocking behind a
+  // repair and the next sample supersedes a lost one 1 ms later.
+  bool lockstep = false;
+
+  // Throws std::invalid_argument naming the field, value and limit.
+  void Validate() const;
+};
+
+// Owning handle of a dds_qos_t (dds_create_qos / dds_delete_qos).
+class Qos {
+ public:
+  Qos();
+  ~Qos();
+  Qos(Qos&& other) noexcept;
+  Qos& operator=(Qos&& other) noexcept;
+  Qos(const Qos&) = delete;
+  Qos& operator=(const Qos&) = delete;
+  dds_qos_t* get() const { return qos_; }
+
+ private:
+  dds_qos_t* qos_;
+};
+
+// The QoS of `kind` for `role`. Validates params (throws std::invalid_argument).
+Qos MakeQos(TopicKind kind, EndpointRole role, const QosParams& params = {});
+
+// The QoS given to the topic entity itself (role-independent parts).
+Qos MakeTopicQos(TopicKind kind);
+
+// Effective deadline of `kind` under params, in ns; DDS_INFINITY for none.
+dds_duration_t DeadlinePeriod_ns(TopicKind kind, const QosParams& params);
+
+// Writer history depth per instance: the window over which a reliable reader (recorder,
+// lockstep) can still have a lost sample repaired without the writer ever blocking.
+int32_t WriterHistoryDepth(TopicKind kind);
+
+}  // namespace hexa::comm

@@ -1,0 +1,119 @@
+// Communication status counters a service reads and reports (NodeStatus, FaultEvent).
+// Cyclone's listeners write them from its own threads: the callbacks only store into
+// lock-free atomics and claim fixed slots with compare-and-swap, no lock, no allocation.
+// Instance handles (leg) and publication handles (which writer) are resolved to keys /
+// GUIDs later, outside the callbacks (Reader<T>::DeadlineMissedForLeg, DescribeWriter).
+#pragma once
+
+#include <dds/dds.h>
+
+#include <array>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+
+namespace hexa::comm {
+
+// Counts attributed to one instance (reader: a leg's key; writer: an instance it writes).
+struct InstanceSlot {
+  std::atomic<dds_instance_handle_t> handle{0};  // 0 = free
+  std::atomic<uint32_t> deadline_missed{0};
+  std::atomic<int64_t> last_miss_mono_ns{0};
+};
+
+enum class WriterLiveliness : int32_t { kUnknown = 0, kAlive = 1, kNotAlive = 2, kGone = 3 };
+
+// Liveliness as seen by a reader for one matched writer (publication handle).
+struct WriterSlot {
+  std::atomic<dds_instance_handle_t> publication{0};  // 0 = free
+  std::atomic<int32_t> state{0};                      // WriterLiveliness
+  std::atomic<uint32_t> became_alive{0};
+  std::atomic<uint32_t> became_not_alive{0};
+  std::atomic<int64_t> last_change_mono_ns{0};
+};
+
+// Plain copy of the totals, for reporting.
+struct StatusSnapshot {
+  // Reader side.
+  uint32_t requested_deadline_missed_total = 0;
+  uint32_t requested_incompatible_qos_total = 0;
+  uint32_t sample_lost_total = 0;
+  uint32_t sample_rejected_total = 0;
+  uint32_t liveliness_alive_count = 0;      // writers currently alive
+  uint32_t liveliness_not_alive_count = 0;  // writers matched but not alive
+  uint32_t liveliness_changed_events = 0;
+  uint32_t liveliness_lost_events = 0;      // alive -> not alive transitions seen
+  dds_instance_handle_t last_liveliness_publication = 0;
+  int64_t last_liveliness_change_mono_ns = 0;
+  uint32_t subscription_matched_current = 0;
+  uint32_t subscription_matched_total = 0;
+  // Writer side.
+  uint32_t offered_deadline_missed_total = 0;
+  uint32_t offered_incompatible_qos_total = 0;
+  uint32_t liveliness_lost_total = 0;  // this writer failed to assert its liveliness
+  uint32_t publication_matched_current = 0;
+  uint32_t publication_matched_total = 0;
+  // Instances whose misses did not fit in the slot table (counted in the totals only).
+  uint32_t instance_slot_overflow = 0;
+};
+
+class StatusCounters {
+ public:
+  static constexpr std::size_t kMaxInstances = 16;
+  static constexpr std::size_t kMaxWriters = 8;
+
+  StatusCounters() = default;
+  StatusCounters(const StatusCounters&) = delete;
+  StatusCounters& operator=(const StatusCounters&) = delete;
+
+  // A listener whose callbacks update this object; the caller owns and deletes it
+  // (dds_delete_listener) after handing it to dds_create_reader / dds_create_writer, which
+  // copy it. The object must outlive the entity.
+  dds_listener_t* CreateListener();
+
+  StatusSnapshot Snapshot() const;
+  const std::array<InstanceSlot, kMaxInstances>& instances() const { return instances_; }
+  const std::array<WriterSlot, kMaxWriters>& writers() const { return writers_; }
+
+  // Callback bodies (public for the C trampolines; also usable in tests).
+  void OnRequestedDeadlineMissed(const dds_requested_deadline_missed_status_t& s);
+  void OnOfferedDeadlineMissed(const dds_offered_deadline_missed_status_t& s);
+  void OnLivelinessChanged(const dds_liveliness_changed_status_t& s);
+  void OnLivelinessLost(const dds_liveliness_lost_status_t& s);
+  void OnSampleLost(const dds_sample_lost_status_t& s);
+  void OnSampleRejected(const dds_sample_rejected_status_t& s);
+  void OnSubscriptionMatched(const dds_subscription_matched_status_t& s);
+  void OnPublicationMatched(const dds_publication_matched_status_t& s);
+  void OnRequestedIncompatibleQos(const dds_requested_incompatible_qos_status_t& s);
+  void OnOfferedIncompatibleQos(const dds_offered_incompatible_qos_status_t& s);
+
+ private:
+  InstanceSlot* ClaimInstance(dds_instance_handle_t handle);
+  WriterSlot* ClaimWriter(dds_instance_handle_t publication);
+
+  std::atomic<uint32_t> requested_deadline_missed_total_{0};
+  std::atomic<uint32_t> requested_incompatible_qos_total_{0};
+  std::atomic<uint32_t> sample_lost_total_{0};
+  std::atomic<uint32_t> sample_rejected_total_{0};
+  std::atomic<uint32_t> liveliness_alive_count_{0};
+  std::atomic<uint32_t> liveliness_not_alive_count_{0};
+  std::atomic<uint32_t> liveliness_changed_events_{0};
+  std::atomic<uint32_t> liveliness_lost_events_{0};
+  std::atomic<dds_instance_handle_t> last_liveliness_publication_{0};
+  std::atomic<int64_t> last_liveliness_change_mono_ns_{0};
+  std::atomic<uint32_t> subscription_matched_current_{0};
+  std::atomic<uint32_t> subscription_matched_total_{0};
+  std::atomic<uint32_t> offered_deadline_missed_total_{0};
+  std::atomic<uint32_t> offered_incompatible_qos_total_{0};
+  std::atomic<uint32_t> liveliness_lost_total_{0};
+  std::atomic<uint32_t> publication_matched_current_{0};
+  std::atomic<uint32_t> publication_matched_total_{0};
+  std::atomic<uint32_t> instance_slot_overflow_{0};
+  std::array<InstanceSlot, kMaxInstances> instances_{};
+  std::array<WriterSlot, kMaxWriters> writers_{};
+};
+
+// CLOCK_MONOTONIC in ns (async-signal-safe, used for event times in the callbacks).
+int64_t MonotonicNow_ns();
+
+}  // namespace hexa::comm

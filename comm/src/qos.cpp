@@ -1,0 +1,180 @@
+#include "hexa/comm/qos.hpp"
+
+#include <cmath>
+#include <new>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace hexa::comm {
+namespace {
+
+dds_duration_t SecondsToDuration(double seconds) {
+  if (std::isinf(seconds)) return DDS_INFINITY;
+  return static_cast<dds_duration_t>(std::llround(seconds * 1e9));
+}
+
+bool IsPeriodic(TopicKind kind) { return NominalPeriod_s(kind).has_value(); }
+
+// Status and fault topics are the only ones a late joiner must see history of.
+bool IsTransientLocal(TopicKind kind) {
+  return kind == TopicKind::kNodeStatus || kind == TopicKind::kFaultEvent;
+}
+
+}  // namespace
+
+std::string_view TopicName(TopicKind kind) {
+  switch (kind) {
+    case TopicKind::kLegSensors: return kLegSensorsTopic;
+    case TopicKind::kValveCommand: return kValveCommandTopic;
+    case TopicKind::kImuSample: return kImuSampleTopic;
+    case TopicKind::kLegSetpoint: return kLegSetpointTopic;
+    case TopicKind::kPoseReport: return kPoseReportTopic;
+    case TopicKind::kGroundTruth: return kGroundTruthTopic;
+    case TopicKind::kOperatorCommand: return kOperatorCommandTopic;
+    case TopicKind::kNodeStatus: return kNodeStatusTopic;
+    case TopicKind::kFaultEvent: return kFaultEventTopic;
+  }
+  return "hexa_unknown";
+}
+
+std::optional<double> NominalPeriod_s(TopicKind kind) {
+  switch (kind) {
+    case TopicKind::kLegSensors:
+    case TopicKind::kValveCommand:
+    case TopicKind::kGroundTruth: return 0.001;
+    case TopicKind::kImuSample:
+    case TopicKind::kLegSetpoint:
+    case TopicKind::kPoseReport: return 0.005;
+    case TopicKind::kOperatorCommand:
+    case TopicKind::kNodeStatus:  // 10 Hz + on change: no rate to enforce, state is what counts
+    case TopicKind::kFaultEvent: return std::nullopt;
+  }
+  return std::nullopt;
+}
+
+void QosParams::Validate() const {
+  if (deadline_period_s.has_value() && !(*deadline_period_s > 0.0)) {
+    throw std::invalid_argument("QosParams.deadline_period_s = " +
+                                std::to_string(*deadline_period_s) +
+                                " s: must be > 0 (or +infinity for no deadline)");
+  }
+  if (!(valve_liveliness_lease_s > 0.0) || std::isinf(valve_liveliness_lease_s)) {
+    throw std::invalid_argument("QosParams.valve_liveliness_lease_s = " +
+                                std::to_string(valve_liveliness_lease_s) +
+                                " s: must be finite and > 0");
+  }
+  if (ownership_strength < 0) {
+    throw std::invalid_argument("QosParams.ownership_strength = " +
+                                std::to_string(ownership_strength) + ": must be >= 0");
+  }
+}
+
+Qos::Qos() : qos_(dds_create_qos()) {
+  if (qos_ == nullptr) throw std::bad_alloc();
+}
+Qos::~Qos() {
+  if (qos_ != nullptr) dds_delete_qos(qos_);
+}
+Qos::Qos(Qos&& other) noexcept : qos_(std::exchange(other.qos_, nullptr)) {}
+Qos& Qos::operator=(Qos&& other) noexcept {
+  if (this != &other) {
+    if (qos_ != nullptr) dds_delete_qos(qos_);
+    qos_ = std::exchange(other.qos_, nullptr);
+  }
+  return *this;
+}
+
+dds_duration_t DeadlinePeriod_ns(TopicKind kind, const QosParams& params) {
+  const std::optional<double> nominal = NominalPeriod_s(kind);
+  if (!nominal) return DDS_INFINITY;
+  return SecondsToDuration(params.deadline_period_s.value_or(*nominal));
+}
+
+int32_t WriterHistoryDepth(TopicKind kind) {
+  switch (kind) {
+    case TopicKind::kLegSensors:
+    case TopicKind::kValveCommand:
+    case TopicKind::kGroundTruth: return 100;  // 100 ms at 1 kHz
+    case TopicKind::kImuSample:
+    case TopicKind::kLegSetpoint:
+    case TopicKind::kPoseReport: return 20;  // 100 ms at 200 Hz
+    case TopicKind::kNodeStatus: return 1;   // per node: the current status is what matters
+    case TopicKind::kFaultEvent: return 64;  // the last 64 faults for late joiners
+    case TopicKind::kOperatorCommand: return 0;  // keep-all
+  }
+  return 1;
+}
+
+Qos MakeTopicQos(TopicKind kind) {
+  Qos qos;
+  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_durability(qos.get(), IsTransientLocal(kind) ? DDS_DURABILITY_TRANSIENT_LOCAL
+                                                        : DDS_DURABILITY_VOLATILE);
+  if (kind == TopicKind::kValveCommand) dds_qset_ownership(qos.get(), DDS_OWNERSHIP_EXCLUSIVE);
+  return qos;
+}
+
+Qos MakeQos(TopicKind kind, EndpointRole role, const QosParams& params) {
+  params.Validate();
+  Qos qos;
+  dds_qos_t* q = qos.get();
+  const bool writer = role == EndpointRole::kWriter;
+  const bool recorder = role == EndpointRole::kRecorderReader;
+
+  // Reliability. Writers always offer RELIABLE (offered >= requested), so each reader picks.
+  // Writers use keep-last histories (below), so a reliable writer never blocks in write();
+  // max_blocking_time only matters for the keep-all OperatorCommand writer.
+  const bool reliable = writer || recorder || !IsPeriodic(kind) || params.lockstep;
+  dds_qset_reliability(q, reliable ? DDS_RELIABILITY_RELIABLE : DDS_RELIABILITY_BEST_EFFORT,
+                       DDS_MSECS(100));
+
+  // History.
+  if (writer) {
+    const int32_t depth = WriterHistoryDepth(kind);
+    if (depth == 0) {
+      dds_qset_history(q, DDS_HISTORY_KEEP_ALL, DDS_LENGTH_UNLIMITED);
+    } else {
+      dds_qset_history(q, DDS_HISTORY_KEEP_LAST, depth);
+    }
+  } else if (recorder || kind == TopicKind::kOperatorCommand || kind == TopicKind::kFaultEvent) {
+    dds_qset_history(q, DDS_HISTORY_KEEP_ALL, DDS_LENGTH_UNLIMITED);
+  } else {
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);  // the newest sample per instance
+  }
+
+  // Durability: offered (writer) and requested (reader) alike.
+  dds_qset_durability(q, IsTransientLocal(kind) ? DDS_DURABILITY_TRANSIENT_LOCAL
+                                                : DDS_DURABILITY_VOLATILE);
+
+  // Deadline. The recorder requests none (it would match any offer) and proves rates from
+  // tick numbers instead; every other endpoint of a periodic topic offers / requests the
+  // same period.
+  if (IsPeriodic(kind) && !recorder) {
+    dds_qset_deadline(q, DeadlinePeriod_ns(kind, params));
+  }
+
+  // Liveliness, ownership and instance lifecycle of the hot-standby valve command.
+  if (kind == TopicKind::kValveCommand) {
+    const dds_duration_t lease = SecondsToDuration(params.valve_liveliness_lease_s);
+    if (writer) {
+      dds_qset_liveliness(q,
+                          params.valve_liveliness == LivelinessKind::kManualByTopic
+                              ? DDS_LIVELINESS_MANUAL_BY_TOPIC
+                              : DDS_LIVELINESS_AUTOMATIC,
+                          lease);
+      dds_qset_ownership_strength(q, params.ownership_strength);
+      // A primary that exits cleanly unregisters its leg without disposing it, so the
+      // instance stays alive and ownership passes to the standby.
+      dds_qset_writer_data_lifecycle(q, false);
+    } else {
+      dds_qset_liveliness(q, DDS_LIVELINESS_AUTOMATIC, lease);
+    }
+    // Every endpoint must agree on EXCLUSIVE, the recorder too (it then records what the
+    // plant applies: the owning writer's commands).
+    dds_qset_ownership(q, DDS_OWNERSHIP_EXCLUSIVE);
+  }
+  return qos;
+}
+
+}  // namespace hexa::comm

@@ -1,0 +1,25 @@
+#include "hexa/comm/reader.hpp"
+
+namespace hexa::comm {
+
+std::string DescribeMatchedWriter(dds_entity_t reader, dds_instance_handle_t publication) {
+  dds_builtintopic_endpoint_t* ep = dds_get_matched_publication_data(reader, publication);
+  if (ep == nullptr) return {};
+  int32_t strength = -1;
+  if (ep->qos != nullptr) (void)dds_qget_ownership_strength(ep->qos, &strength);
+  std::string text = "guid=" + FormatGuid(ep->key) + " participant=" +
+                     FormatGuid(ep->participant_key) + " strength=" + std::to_string(strength);
+  dds_builtintopic_free_endpoint(ep);
+  return text;
+}
+
+int32_t MatchedWriterStrength(dds_entity_t reader, dds_instance_handle_t publication) {
+  dds_builtintopic_endpoint_t* ep = dds_get_matched_publication_data(reader, publication);
+  if (ep == nullptr) return -1;
+  int32_t strength = -1;
+  if (ep->qos == nullptr || !dds_qget_ownership_strength(ep->qos, &strength)) strength = -1;
+  dds_builtintopic_free_endpoint(ep);
+  return strength;
+}
+
+}  // namespace hexa::comm
