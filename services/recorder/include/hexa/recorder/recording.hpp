@@ -1,0 +1,191 @@
+// Protobuf-aware layer over the MCAP format: writing protobuf messages with their
+// FileDescriptorSet schemas, decoding any protobuf MCAP file with the schemas it embeds, and
+// the file-level tools of `hexa_recorder` (info, diff, export, recover).
+#pragma once
+
+#include <google/protobuf/descriptor.h>
+#include <google/protobuf/dynamic_message.h>
+#include <google/protobuf/message.h>
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hexa/recorder/mcap.hpp"
+
+namespace hexa::recorder {
+
+inline constexpr const char* kProtobufEncoding = "protobuf";
+// Channel metadata keys written by the recorder (docs/recorder.md lists them all).
+inline constexpr const char* kMetaType = "hexa.type";          // "hexa.rec.LegSensors"
+inline constexpr const char* kMetaPeriodS = "hexa.period_s";   // "0.001"; "0" for event topics
+
+// Serialized google.protobuf.FileDescriptorSet holding the file that defines `type` and every
+// file it depends on, dependencies first (the MCAP "protobuf" schema encoding).
+std::string FileDescriptorSetFor(const google::protobuf::Descriptor& type);
+
+class RecordingWriter {
+ public:
+  explicit RecordingWriter(McapWriterConfig config = {}) : mcap_(std::move(config)) {}
+  void Open(const std::string& path) { mcap_.Open(path); }
+  // One schema per message type (shared by channels), one channel per call.
+  uint16_t AddTopic(const std::string& topic, const google::protobuf::Descriptor& type,
+                    std::map<std::string, std::string> metadata);
+  void Write(uint16_t channel_id, uint64_t log_time_ns, uint64_t publish_time_ns,
+             const google::protobuf::Message& message);
+  void Close() { mcap_.Close(); }
+  McapWriter& mcap() { return mcap_; }
+
+ private:
+  McapWriter mcap_;
+  std::map<std::string, uint16_t> schema_ids_;
+  std::string buffer_;
+};
+
+// Decodes messages with the schemas embedded in the file (never the compiled-in types), so any
+// protobuf MCAP file can be inspected and files written by older builds still decode.
+class ProtoDecoder {
+ public:
+  ProtoDecoder();
+  ~ProtoDecoder();
+  // Throw McapError naming the schema/channel: encoding not "protobuf", FileDescriptorSet that
+  // does not parse or build, message name absent from it, channel without a known schema.
+  void AddSchema(const McapSchema& schema);
+  void AddChannel(const McapChannel& channel);
+  // The returned message is reused by the next Decode of the same channel. Throws McapError
+  // when the bytes do not parse as the channel's type.
+  const google::protobuf::Message& Decode(const McapMessageView& message);
+  const google::protobuf::Descriptor* descriptor(uint16_t channel_id) const;
+
+ private:
+  struct SchemaEntry {
+    std::unique_ptr<google::protobuf::DescriptorPool> pool;
+    const google::protobuf::Descriptor* type = nullptr;
+  };
+  std::map<uint16_t, SchemaEntry> schemas_;
+  std::map<uint16_t, std::unique_ptr<google::protobuf::Message>> channel_messages_;
+  std::unique_ptr<google::protobuf::DynamicMessageFactory> factory_;
+  std::vector<std::string> channel_topics_;
+};
+
+using DecodedMessageFn = std::function<void(const McapChannel&, const McapMessageView&,
+                                            const google::protobuf::Message&)>;
+struct RecordingCatalog {
+  std::map<uint16_t, McapSchema> schemas;
+  std::map<uint16_t, McapChannel> channels;
+};
+// Scans the file and calls `fn` for each message, decoded. Strict by default. `catalog`, when
+// given, receives every schema and channel found.
+McapScanResult ReadRecording(const std::string& path, const DecodedMessageFn& fn,
+                             const McapScanOptions& options = {},
+                             RecordingCatalog* catalog = nullptr);
+
+// Tick of a decoded message (header.tick, else tick, else sequence) and its instance key
+// (leg_id, else node_name); nullopt / "" when the type has none.
+std::optional<uint64_t> MessageTick(const google::protobuf::Message& message);
+std::string MessageKey(const google::protobuf::Message& message);
+
+// Loss from tick numbers, per instance (topic + key). The expected tick step of a stream is its
+// most frequent positive tick difference (1 for 1 kHz topics, 5 for 200 Hz ones); a difference
+// of k steps means k - 1 samples missing.
+struct StreamLoss {
+  std::string key;
+  uint64_t count = 0;
+  uint64_t first_tick = 0, last_tick = 0;
+  uint64_t step_ticks = 0;
+  uint64_t expected = 0;       // (last - first) / step + 1
+  uint64_t missing = 0;
+  uint64_t gaps = 0;           // number of holes
+  uint64_t max_gap_ticks = 0;  // largest tick difference seen
+  uint64_t not_increasing = 0; // duplicates or reordered samples
+};
+
+class TickLossTracker {
+ public:
+  void Add(const std::string& key, uint64_t tick);
+  std::vector<StreamLoss> Results() const;
+
+ private:
+  struct Stream {
+    uint64_t count = 0, first = 0, last = 0, max_tick = 0, not_increasing = 0;
+    std::map<uint64_t, uint64_t> delta_histogram;
+  };
+  std::map<std::string, Stream> streams_;
+};
+
+struct ChannelInfo {
+  uint16_t id = 0;
+  std::string topic;
+  std::string schema_name;
+  std::map<std::string, std::string> metadata;
+  uint64_t count = 0;
+  uint64_t first_log_ns = 0, last_log_ns = 0;
+  double rate_hz = 0.0;          // (count - 1) / (last - first)
+  uint64_t max_log_gap_ns = 0;   // largest log-time gap between consecutive messages
+  bool loss_analysed = false;    // periodic topic with ticks
+  std::vector<StreamLoss> streams;
+  uint64_t missing = 0;          // sum over streams
+};
+
+struct RecordingInfo {
+  std::string path;
+  uint64_t file_size = 0;
+  bool complete = false;
+  std::vector<std::string> problems;
+  uint64_t messages = 0, chunks = 0;
+  uint64_t start_ns = 0, end_ns = 0;
+  std::vector<ChannelInfo> channels;
+};
+
+RecordingInfo Inspect(const std::string& path, const McapScanOptions& options = {});
+std::string FormatInfo(const RecordingInfo& info);
+
+struct LegDiff {
+  uint32_t leg_id = 0;
+  uint64_t common_ticks = 0, only_a = 0, only_b = 0;
+  double max_abs_diff_v = 0.0, rms_diff_v = 0.0;
+  bool differs = false;
+  uint64_t first_diff_tick = 0;  // valid when differs
+};
+struct DiffReport {
+  std::vector<LegDiff> legs;
+  bool identical = true;  // no tick beyond tolerance, no tick present in only one file
+};
+// Compares valve_v of the ValveCommand streams (schema hexa.rec.ValveCommand) per leg, matched
+// by header.tick. |a - b| > tolerance_v counts as a difference.
+DiffReport DiffValveCommands(const std::string& path_a, const std::string& path_b,
+                             double tolerance_v);
+std::string FormatDiff(const DiffReport& report);
+
+// Topic filter: shell globs (fnmatch); an empty include list means every topic.
+struct TopicFilter {
+  std::vector<std::string> include;
+  std::vector<std::string> exclude;
+  bool Matches(const std::string& topic) const;
+};
+
+struct ExportResult {
+  std::vector<std::pair<std::string, uint64_t>> files;  // path, rows
+};
+// One CSV per topic: log_time_ns, publish_time_ns, sequence, then every field flattened
+// (nested as a.b, repeated as name[i]).
+ExportResult ExportCsv(const std::string& path, const std::string& out_dir,
+                       const TopicFilter& filter);
+
+struct RecoverResult {
+  bool input_complete = false;
+  uint64_t messages = 0;
+  uint64_t chunks_read = 0;
+  uint64_t bad_chunks = 0;
+  uint64_t bytes_dropped = 0;    // after the last intact record
+  std::vector<std::string> problems;
+};
+// Reads what is intact (tolerant scan) and rewrites it as a complete MCAP file with summary.
+RecoverResult Recover(const std::string& in_path, const std::string& out_path,
+                      const McapWriterConfig& config = {});
+
+}  // namespace hexa::recorder

@@ -1,0 +1,645 @@
+#include "hexa/recorder/recording.hpp"
+
+#include <fnmatch.h>
+#include <sys/stat.h>
+
+#include <google/protobuf/descriptor.pb.h>
+#include <google/protobuf/descriptor_database.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cinttypes>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace hexa::recorder {
+namespace gp = google::protobuf;
+
+// ================================================================ schemas and writing
+
+std::string FileDescriptorSetFor(const gp::Descriptor& type) {
+  gp::FileDescriptorSet set;
+  std::set<std::string> seen;
+  // Post-order: every dependency precedes the files that import it.
+  std::function<void(const gp::FileDescriptor*)> add = [&](const gp::FileDescriptor* f) {
+    if (!seen.insert(f->name()).second) return;
+    for (int i = 0; i < f->dependency_count(); ++i) add(f->dependency(i));
+    f->CopyTo(set.add_file());
+  };
+  add(type.file());
+  return set.SerializeAsString();
+}
+
+uint16_t RecordingWriter::AddTopic(const std::string& topic, const gp::Descriptor& type,
+                                   std::map<std::string, std::string> metadata) {
+  auto it = schema_ids_.find(type.full_name());
+  if (it == schema_ids_.end()) {
+    const uint16_t id = mcap_.AddSchema(type.full_name(), kProtobufEncoding,
+                                        FileDescriptorSetFor(type));
+    it = schema_ids_.emplace(type.full_name(), id).first;
+  }
+  metadata.emplace(kMetaType, type.full_name());
+  return mcap_.AddChannel(it->second, topic, kProtobufEncoding, std::move(metadata));
+}
+
+void RecordingWriter::Write(uint16_t channel_id, uint64_t log_time_ns, uint64_t publish_time_ns,
+                            const gp::Message& message) {
+  buffer_.clear();
+  if (!message.AppendToString(&buffer_))
+    throw McapError("cannot serialize a " + message.GetTypeName() + " message");
+  mcap_.Write(channel_id, log_time_ns, publish_time_ns, buffer_);
+}
+
+// ================================================================ decoding
+
+namespace {
+class CollectErrors : public gp::DescriptorPool::ErrorCollector {
+ public:
+  void AddError(const std::string& filename, const std::string& element_name,
+                const gp::Message*, ErrorLocation, const std::string& message) override {
+    if (!text.empty()) text += "; ";
+    text += filename + ": " + element_name + ": " + message;
+  }
+  std::string text;
+};
+
+// Owns the database behind a pool (the pool must not outlive it).
+struct PoolWithDb : gp::DescriptorPool {
+  PoolWithDb(std::unique_ptr<gp::SimpleDescriptorDatabase> db, ErrorCollector* errors)
+      : gp::DescriptorPool(db.get(), errors), database(std::move(db)) {}
+  std::unique_ptr<gp::SimpleDescriptorDatabase> database;
+};
+}  // namespace
+
+ProtoDecoder::ProtoDecoder() : factory_(std::make_unique<gp::DynamicMessageFactory>()) {}
+
+ProtoDecoder::~ProtoDecoder() {
+  channel_messages_.clear();  // messages before the factory that describes them
+  factory_.reset();
+  schemas_.clear();
+}
+
+void ProtoDecoder::AddSchema(const McapSchema& schema) {
+  const std::string what = "schema " + std::to_string(schema.id) + " '" + schema.name + "'";
+  if (schema.encoding != kProtobufEncoding)
+    throw McapError(what + ": unknown schema encoding '" + schema.encoding +
+                    "' (this tool decodes only \"protobuf\")");
+  gp::FileDescriptorSet set;
+  if (!set.ParseFromString(schema.data))
+    throw McapError(what + ": schema data is not a serialized FileDescriptorSet");
+  auto db = std::make_unique<gp::SimpleDescriptorDatabase>();
+  for (const auto& file : set.file()) {
+    if (!db->Add(file))
+      throw McapError(what + ": FileDescriptorSet holds a conflicting file '" + file.name() + "'");
+  }
+  CollectErrors errors;
+  auto pool = std::make_unique<PoolWithDb>(std::move(db), &errors);
+  const gp::Descriptor* type = pool->FindMessageTypeByName(schema.name);
+  if (type == nullptr)
+    throw McapError(what + ": unknown schema: no message named '" + schema.name +
+                    "' in its FileDescriptorSet" +
+                    (errors.text.empty() ? std::string() : " (" + errors.text + ")"));
+  SchemaEntry entry;
+  entry.type = type;
+  entry.pool = std::move(pool);
+  schemas_[schema.id] = std::move(entry);
+}
+
+void ProtoDecoder::AddChannel(const McapChannel& channel) {
+  const std::string what = "channel " + std::to_string(channel.id) + " '" + channel.topic + "'";
+  if (channel.message_encoding != kProtobufEncoding)
+    throw McapError(what + ": unknown message encoding '" + channel.message_encoding +
+                    "' (this tool decodes only \"protobuf\")");
+  auto it = schemas_.find(channel.schema_id);
+  if (it == schemas_.end())
+    throw McapError(what + ": unknown schema id " + std::to_string(channel.schema_id));
+  channel_messages_[channel.id].reset(factory_->GetPrototype(it->second.type)->New());
+  if (channel_topics_.size() <= channel.id) channel_topics_.resize(channel.id + 1u);
+  channel_topics_[channel.id] = channel.topic;
+}
+
+const gp::Message& ProtoDecoder::Decode(const McapMessageView& m) {
+  auto it = channel_messages_.find(m.channel_id);
+  if (it == channel_messages_.end())
+    throw McapError("message on undecodable channel " + std::to_string(m.channel_id));
+  gp::Message& msg = *it->second;
+  if (!msg.ParseFromArray(m.data.data(), static_cast<int>(m.data.size())))
+    throw McapError("message " + std::to_string(m.sequence) + " on channel '" +
+                    channel_topics_[m.channel_id] + "' (log time " +
+                    std::to_string(m.log_time_ns) + ") does not parse as " +
+                    msg.GetDescriptor()->full_name());
+  return msg;
+}
+
+const gp::Descriptor* ProtoDecoder::descriptor(uint16_t channel_id) const {
+  auto it = channel_messages_.find(channel_id);
+  return it == channel_messages_.end() ? nullptr : it->second->GetDescriptor();
+}
+
+McapScanResult ReadRecording(const std::string& path, const DecodedMessageFn& fn,
+                             const McapScanOptions& options, RecordingCatalog* catalog) {
+  McapReader reader;
+  reader.Open(path);
+  ProtoDecoder decoder;
+  McapVisitor v;
+  v.on_schema = [&](const McapSchema& s) { decoder.AddSchema(s); };
+  v.on_channel = [&](const McapChannel& c) { decoder.AddChannel(c); };
+  v.on_message = [&](const McapMessageView& m) {
+    const gp::Message& msg = decoder.Decode(m);
+    if (fn) fn(reader.channels().at(m.channel_id), m, msg);
+  };
+  try {
+    McapScanResult r = reader.Scan(v, options);
+    if (catalog != nullptr) {
+      catalog->schemas = reader.schemas();
+      catalog->channels = reader.channels();
+    }
+    return r;
+  } catch (const McapError& e) {
+    const std::string text = e.what();
+    if (text.rfind("'" + path + "'", 0) == 0) throw;
+    throw McapError("'" + path + "': " + text);
+  }
+}
+
+// ================================================================ ticks and loss
+
+std::optional<uint64_t> MessageTick(const gp::Message& message) {
+  const gp::Descriptor* d = message.GetDescriptor();
+  const gp::Reflection* r = message.GetReflection();
+  auto as_uint = [](const gp::Message& m, const gp::FieldDescriptor* f) -> std::optional<uint64_t> {
+    if (f == nullptr || f->is_repeated()) return std::nullopt;
+    const gp::Reflection* rr = m.GetReflection();
+    switch (f->cpp_type()) {
+      case gp::FieldDescriptor::CPPTYPE_UINT64: return rr->GetUInt64(m, f);
+      case gp::FieldDescriptor::CPPTYPE_UINT32: return rr->GetUInt32(m, f);
+      case gp::FieldDescriptor::CPPTYPE_INT64: return static_cast<uint64_t>(rr->GetInt64(m, f));
+      case gp::FieldDescriptor::CPPTYPE_INT32: return static_cast<uint64_t>(rr->GetInt32(m, f));
+      default: return std::nullopt;
+    }
+  };
+  const gp::FieldDescriptor* header = d->FindFieldByName("header");
+  if (header != nullptr && !header->is_repeated() &&
+      header->cpp_type() == gp::FieldDescriptor::CPPTYPE_MESSAGE) {
+    const gp::Message& h = r->GetMessage(message, header);
+    if (auto t = as_uint(h, h.GetDescriptor()->FindFieldByName("tick"))) return t;
+  }
+  if (auto t = as_uint(message, d->FindFieldByName("tick"))) return t;
+  return as_uint(message, d->FindFieldByName("sequence"));
+}
+
+std::string MessageKey(const gp::Message& message) {
+  const gp::Descriptor* d = message.GetDescriptor();
+  const gp::Reflection* r = message.GetReflection();
+  if (const auto* f = d->FindFieldByName("leg_id");
+      f != nullptr && !f->is_repeated() && f->cpp_type() == gp::FieldDescriptor::CPPTYPE_UINT32)
+    return "leg " + std::to_string(r->GetUInt32(message, f));
+  if (const auto* f = d->FindFieldByName("node_name");
+      f != nullptr && !f->is_repeated() && f->cpp_type() == gp::FieldDescriptor::CPPTYPE_STRING)
+    return "node " + r->GetString(message, f);
+  return "";
+}
+
+void TickLossTracker::Add(const std::string& key, uint64_t tick) {
+  Stream& s = streams_[key];
+  if (s.count == 0) {
+    s.first = s.last = s.max_tick = tick;
+  } else if (tick > s.max_tick) {
+    ++s.delta_histogram[tick - s.max_tick];
+    s.max_tick = tick;
+  } else {
+    ++s.not_increasing;  // duplicate or late sample: not a loss, but reported
+  }
+  s.first = std::min(s.first, tick);
+  s.last = s.max_tick;
+  ++s.count;
+}
+
+std::vector<StreamLoss> TickLossTracker::Results() const {
+  std::vector<StreamLoss> out;
+  for (const auto& [key, s] : streams_) {
+    StreamLoss l;
+    l.key = key;
+    l.count = s.count;
+    l.first_tick = s.first;
+    l.last_tick = s.last;
+    l.not_increasing = s.not_increasing;
+    uint64_t best = 0;
+    for (const auto& [delta, n] : s.delta_histogram) {
+      if (n > best) {
+        best = n;
+        l.step_ticks = delta;
+      }
+      l.max_gap_ticks = std::max(l.max_gap_ticks, delta);
+    }
+    if (l.step_ticks == 0) l.step_ticks = 1;
+    for (const auto& [delta, n] : s.delta_histogram) {
+      if (delta > l.step_ticks) {
+        // Round to the nearest whole number of steps: a late sample shifts one difference.
+        const uint64_t steps = (delta + l.step_ticks / 2) / l.step_ticks;
+        if (steps > 1) {
+          l.missing += (steps - 1) * n;
+          l.gaps += n;
+        }
+      }
+    }
+    l.expected = (l.last_tick - l.first_tick) / l.step_ticks + 1;
+    out.push_back(l);
+  }
+  return out;
+}
+
+// ================================================================ info
+
+RecordingInfo Inspect(const std::string& path, const McapScanOptions& options) {
+  RecordingInfo info;
+  info.path = path;
+  std::map<uint16_t, ChannelInfo> channels;
+  std::map<uint16_t, TickLossTracker> trackers;
+  std::map<uint16_t, uint64_t> last_log;
+  RecordingCatalog catalog;
+  const McapScanResult r = ReadRecording(
+      path,
+      [&](const McapChannel& ch, const McapMessageView& m, const gp::Message& msg) {
+        ChannelInfo& c = channels[ch.id];
+        if (c.count == 0) {
+          c.first_log_ns = c.last_log_ns = m.log_time_ns;
+        } else {
+          c.max_log_gap_ns = std::max(c.max_log_gap_ns,
+                                      m.log_time_ns > last_log[ch.id] ? m.log_time_ns - last_log[ch.id] : 0);
+        }
+        last_log[ch.id] = m.log_time_ns;
+        c.first_log_ns = std::min(c.first_log_ns, m.log_time_ns);
+        c.last_log_ns = std::max(c.last_log_ns, m.log_time_ns);
+        ++c.count;
+        // Loss only for periodic topics: event topics (period 0) have no expected tick step.
+        auto period = ch.metadata.find(kMetaPeriodS);
+        const bool periodic =
+            period == ch.metadata.end() ? true : std::strtod(period->second.c_str(), nullptr) > 0;
+        if (!periodic) return;
+        if (auto tick = MessageTick(msg)) trackers[ch.id].Add(MessageKey(msg), *tick);
+      },
+      options, &catalog);
+  info.file_size = r.file_size;
+  info.complete = r.complete;
+  info.problems = r.problems;
+  info.messages = r.messages;
+  info.chunks = r.chunks;
+  bool first = true;
+  for (const auto& [id, ch] : catalog.channels) {
+    ChannelInfo c = channels.count(id) ? channels[id] : ChannelInfo{};
+    c.id = id;
+    c.topic = ch.topic;
+    c.metadata = ch.metadata;
+    auto s = catalog.schemas.find(ch.schema_id);
+    c.schema_name = s == catalog.schemas.end() ? "" : s->second.name;
+    if (c.count > 1 && c.last_log_ns > c.first_log_ns)
+      c.rate_hz = static_cast<double>(c.count - 1) * 1e9 /
+                  static_cast<double>(c.last_log_ns - c.first_log_ns);
+    if (trackers.count(id)) {
+      c.loss_analysed = true;
+      c.streams = trackers[id].Results();
+      for (const auto& l : c.streams) c.missing += l.missing;
+    }
+    if (c.count > 0) {
+      if (first || c.first_log_ns < info.start_ns) info.start_ns = c.first_log_ns;
+      if (first || c.last_log_ns > info.end_ns) info.end_ns = c.last_log_ns;
+      first = false;
+    }
+    info.channels.push_back(std::move(c));
+  }
+  return info;
+}
+
+std::string FormatInfo(const RecordingInfo& info) {
+  std::ostringstream o;
+  char line[512];
+  o << "file:      " << info.path << " (" << info.file_size << " bytes)\n";
+  o << "status:    "
+    << (info.complete ? "complete (data end, summary, footer valid)"
+                      : "INCOMPLETE (read up to the last intact chunk)")
+    << "\n";
+  for (const auto& p : info.problems) o << "problem:   " << p << "\n";
+  const double duration_s =
+      info.end_ns > info.start_ns ? static_cast<double>(info.end_ns - info.start_ns) * 1e-9 : 0.0;
+  std::snprintf(line, sizeof line, "duration:  %.3f s (log time %" PRIu64 " .. %" PRIu64 " ns)\n",
+                duration_s, info.start_ns, info.end_ns);
+  o << line;
+  o << "messages:  " << info.messages << " in " << info.chunks << " chunks, "
+    << info.channels.size() << " channels\n\n";
+  std::snprintf(line, sizeof line, "%-4s %-28s %-26s %10s %10s %11s %9s %8s\n", "id", "topic",
+                "type", "messages", "rate_hz", "max_gap_ms", "missing", "loss_%");
+  o << line;
+  for (const auto& c : info.channels) {
+    uint64_t expected = 0;
+    for (const auto& l : c.streams) expected += l.expected;
+    std::string missing = c.loss_analysed ? std::to_string(c.missing) : "-";
+    char loss[32] = "-";
+    if (c.loss_analysed && expected > 0)
+      std::snprintf(loss, sizeof loss, "%.3f", 100.0 * static_cast<double>(c.missing) /
+                                                   static_cast<double>(expected));
+    std::snprintf(line, sizeof line, "%-4u %-28s %-26s %10" PRIu64 " %10.1f %11.3f %9s %8s\n",
+                  c.id, c.topic.c_str(), c.schema_name.c_str(), c.count, c.rate_hz,
+                  static_cast<double>(c.max_log_gap_ns) * 1e-6, missing.c_str(), loss);
+    o << line;
+  }
+  bool header = false;
+  for (const auto& c : info.channels) {
+    for (const auto& l : c.streams) {
+      if (!header) {
+        o << "\nloss from tick numbers (per instance):\n";
+        header = true;
+      }
+      std::snprintf(line, sizeof line,
+                    "  %-28s %-12s ticks %" PRIu64 "..%" PRIu64 " step %" PRIu64
+                    ": %" PRIu64 " received, %" PRIu64 " expected, %" PRIu64
+                    " missing in %" PRIu64 " gaps (largest %" PRIu64 " ticks), %" PRIu64
+                    " duplicate/reordered\n",
+                    c.topic.c_str(), l.key.empty() ? "-" : l.key.c_str(), l.first_tick,
+                    l.last_tick, l.step_ticks, l.count, l.expected, l.missing, l.gaps,
+                    l.max_gap_ticks, l.not_increasing);
+      o << line;
+    }
+  }
+  return o.str();
+}
+
+// ================================================================ diff
+
+DiffReport DiffValveCommands(const std::string& path_a, const std::string& path_b,
+                             double tolerance_v) {
+  using Series = std::map<uint32_t, std::vector<std::pair<uint64_t, double>>>;
+  auto load = [](const std::string& path) {
+    Series s;
+    uint64_t n = 0;
+    ReadRecording(path, [&](const McapChannel&, const McapMessageView&, const gp::Message& msg) {
+      const gp::Descriptor* d = msg.GetDescriptor();
+      if (d->full_name() != "hexa.rec.ValveCommand") return;
+      const gp::Reflection* r = msg.GetReflection();
+      const auto* leg = d->FindFieldByName("leg_id");
+      const auto* v = d->FindFieldByName("valve_v");
+      const auto tick = MessageTick(msg);
+      if (leg == nullptr || v == nullptr || !tick) return;
+      s[r->GetUInt32(msg, leg)].emplace_back(*tick, r->GetDouble(msg, v));
+      ++n;
+    });
+    if (n == 0) throw McapError("'" + path + "' holds no hexa.rec.ValveCommand messages");
+    for (auto& [leg, v] : s)
+      std::stable_sort(v.begin(), v.end(),
+                       [](const auto& a, const auto& b) { return a.first < b.first; });
+    return s;
+  };
+  const Series a = load(path_a), b = load(path_b);
+  std::set<uint32_t> legs;
+  for (const auto& [l, v] : a) legs.insert(l);
+  for (const auto& [l, v] : b) legs.insert(l);
+  DiffReport report;
+  static const std::vector<std::pair<uint64_t, double>> kEmpty;
+  for (uint32_t leg : legs) {
+    const auto& va = a.count(leg) ? a.at(leg) : kEmpty;
+    const auto& vb = b.count(leg) ? b.at(leg) : kEmpty;
+    LegDiff d;
+    d.leg_id = leg;
+    double sum_sq = 0.0;
+    size_t i = 0, j = 0;
+    auto mark = [&](uint64_t tick) {
+      if (!d.differs || tick < d.first_diff_tick) d.first_diff_tick = tick;
+      d.differs = true;
+    };
+    while (i < va.size() || j < vb.size()) {
+      // Duplicate ticks within one file: the first sample counts.
+      if (i > 0 && i < va.size() && va[i].first == va[i - 1].first) { ++i; continue; }
+      if (j > 0 && j < vb.size() && vb[j].first == vb[j - 1].first) { ++j; continue; }
+      if (j >= vb.size() || (i < va.size() && va[i].first < vb[j].first)) {
+        ++d.only_a;
+        mark(va[i].first);
+        ++i;
+      } else if (i >= va.size() || vb[j].first < va[i].first) {
+        ++d.only_b;
+        mark(vb[j].first);
+        ++j;
+      } else {
+        const double diff = std::fabs(va[i].second - vb[j].second);
+        // NaN in one file and not the other is a difference.
+        if (diff > tolerance_v || (std::isnan(va[i].second) != std::isnan(vb[j].second)))
+          mark(va[i].first);
+        if (std::isfinite(diff)) {
+          d.max_abs_diff_v = std::max(d.max_abs_diff_v, diff);
+          sum_sq += diff * diff;
+        }
+        ++d.common_ticks;
+        ++i;
+        ++j;
+      }
+    }
+    d.rms_diff_v = d.common_ticks ? std::sqrt(sum_sq / static_cast<double>(d.common_ticks)) : 0.0;
+    report.identical = report.identical && !d.differs;
+    report.legs.push_back(d);
+  }
+  return report;
+}
+
+std::string FormatDiff(const DiffReport& report) {
+  std::ostringstream o;
+  char line[256];
+  std::snprintf(line, sizeof line, "%-4s %12s %8s %8s %14s %14s %18s\n", "leg", "common_ticks",
+                "only_a", "only_b", "max_abs_diff_v", "rms_diff_v", "first_diff_tick");
+  o << line;
+  for (const auto& d : report.legs) {
+    std::string first = d.differs ? std::to_string(d.first_diff_tick) : "-";
+    std::snprintf(line, sizeof line, "%-4u %12" PRIu64 " %8" PRIu64 " %8" PRIu64 " %14.6g %14.6g %18s\n",
+                  d.leg_id, d.common_ticks, d.only_a, d.only_b, d.max_abs_diff_v, d.rms_diff_v,
+                  first.c_str());
+    o << line;
+  }
+  o << (report.identical ? "valve command streams are identical\n"
+                         : "valve command streams differ\n");
+  return o.str();
+}
+
+// ================================================================ export
+
+bool TopicFilter::Matches(const std::string& topic) const {
+  auto any = [&](const std::vector<std::string>& globs) {
+    for (const auto& g : globs)
+      if (fnmatch(g.c_str(), topic.c_str(), 0) == 0) return true;
+    return false;
+  };
+  if (!include.empty() && !any(include)) return false;
+  return !any(exclude);
+}
+
+namespace {
+void CsvField(std::string& out, const std::string& s) {
+  if (s.find_first_of(",\"\n\r") == std::string::npos) {
+    out += s;
+    return;
+  }
+  out += '"';
+  for (char c : s) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  out += '"';
+}
+
+std::string ScalarText(const gp::Message& m, const gp::FieldDescriptor* f, int index) {
+  const gp::Reflection* r = m.GetReflection();
+  const bool rep = f->is_repeated();
+  char buf[64];
+  switch (f->cpp_type()) {
+    case gp::FieldDescriptor::CPPTYPE_DOUBLE:
+      std::snprintf(buf, sizeof buf, "%.17g", rep ? r->GetRepeatedDouble(m, f, index) : r->GetDouble(m, f));
+      return buf;
+    case gp::FieldDescriptor::CPPTYPE_FLOAT:
+      std::snprintf(buf, sizeof buf, "%.9g", rep ? r->GetRepeatedFloat(m, f, index) : r->GetFloat(m, f));
+      return buf;
+    case gp::FieldDescriptor::CPPTYPE_INT32:
+      return std::to_string(rep ? r->GetRepeatedInt32(m, f, index) : r->GetInt32(m, f));
+    case gp::FieldDescriptor::CPPTYPE_INT64:
+      return std::to_string(rep ? r->GetRepeatedInt64(m, f, index) : r->GetInt64(m, f));
+    case gp::FieldDescriptor::CPPTYPE_UINT32:
+      return std::to_string(rep ? r->GetRepeatedUInt32(m, f, index) : r->GetUInt32(m, f));
+    case gp::FieldDescriptor::CPPTYPE_UINT64:
+      return std::to_string(rep ? r->GetRepeatedUInt64(m, f, index) : r->GetUInt64(m, f));
+    case gp::FieldDescriptor::CPPTYPE_BOOL:
+      return (rep ? r->GetRepeatedBool(m, f, index) : r->GetBool(m, f)) ? "1" : "0";
+    case gp::FieldDescriptor::CPPTYPE_ENUM:
+      return (rep ? r->GetRepeatedEnum(m, f, index) : r->GetEnum(m, f))->name();
+    case gp::FieldDescriptor::CPPTYPE_STRING:
+      return rep ? r->GetRepeatedString(m, f, index) : r->GetString(m, f);
+    default:
+      return "";
+  }
+}
+
+// Column layout of one channel: fixed by the first message (repeated-field sizes included).
+struct Column {
+  std::vector<const gp::FieldDescriptor*> path;  // nested singular messages, then the leaf
+  int index = -1;                                // element of a repeated leaf
+  std::string name;
+};
+
+void BuildColumns(const gp::Message& m, std::vector<const gp::FieldDescriptor*> path,
+                  const std::string& prefix, std::vector<Column>& out) {
+  const gp::Descriptor* d = m.GetDescriptor();
+  const gp::Reflection* r = m.GetReflection();
+  for (int i = 0; i < d->field_count(); ++i) {
+    const gp::FieldDescriptor* f = d->field(i);
+    auto p = path;
+    p.push_back(f);
+    const std::string name = prefix + f->name();
+    if (f->cpp_type() == gp::FieldDescriptor::CPPTYPE_MESSAGE) {
+      if (!f->is_repeated()) BuildColumns(r->GetMessage(m, f), p, name + ".", out);
+      continue;  // repeated messages have no flat CSV form
+    }
+    if (f->is_repeated()) {
+      for (int k = 0; k < r->FieldSize(m, f); ++k)
+        out.push_back({p, k, name + "[" + std::to_string(k) + "]"});
+    } else {
+      out.push_back({p, -1, name});
+    }
+  }
+}
+
+std::string ColumnValue(const gp::Message& root, const Column& c) {
+  const gp::Message* m = &root;
+  for (size_t i = 0; i + 1 < c.path.size(); ++i) m = &m->GetReflection()->GetMessage(*m, c.path[i]);
+  const gp::FieldDescriptor* leaf = c.path.back();
+  if (c.index >= 0 && c.index >= m->GetReflection()->FieldSize(*m, leaf)) return "";
+  return ScalarText(*m, leaf, c.index);
+}
+}  // namespace
+
+ExportResult ExportCsv(const std::string& path, const std::string& out_dir,
+                       const TopicFilter& filter) {
+  struct stat st {};
+  if (::stat(out_dir.c_str(), &st) != 0 && ::mkdir(out_dir.c_str(), 0755) != 0)
+    throw McapError("cannot create output directory '" + out_dir + "': " + std::strerror(errno));
+  struct Sink {
+    std::ofstream file;
+    std::string path;
+    std::vector<Column> columns;
+    uint64_t rows = 0;
+  };
+  std::map<uint16_t, Sink> sinks;
+  std::string row;
+  ReadRecording(path, [&](const McapChannel& ch, const McapMessageView& m, const gp::Message& msg) {
+    if (!filter.Matches(ch.topic)) return;
+    auto it = sinks.find(ch.id);
+    if (it == sinks.end()) {
+      std::string name = ch.topic;
+      std::replace_if(name.begin(), name.end(), [](char c) { return !std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-'; }, '_');
+      name.erase(0, name.find_first_not_of('_'));
+      Sink s;
+      s.path = out_dir + "/" + (name.empty() ? "channel" + std::to_string(ch.id) : name) + ".csv";
+      s.file.open(s.path, std::ios::out | std::ios::trunc);
+      if (!s.file) throw McapError("cannot write '" + s.path + "': " + std::strerror(errno));
+      BuildColumns(msg, {}, "", s.columns);
+      s.file << "log_time_ns,publish_time_ns,sequence";
+      for (const auto& c : s.columns) s.file << ',' << c.name;
+      s.file << '\n';
+      it = sinks.emplace(ch.id, std::move(s)).first;
+    }
+    Sink& s = it->second;
+    row = std::to_string(m.log_time_ns) + ',' + std::to_string(m.publish_time_ns) + ',' +
+          std::to_string(m.sequence);
+    for (const auto& c : s.columns) {
+      row += ',';
+      CsvField(row, ColumnValue(msg, c));
+    }
+    row += '\n';
+    s.file << row;
+    ++s.rows;
+  });
+  ExportResult result;
+  for (auto& [id, s] : sinks) {
+    s.file.close();
+    if (!s.file) throw McapError("writing '" + s.path + "' failed");
+    result.files.emplace_back(s.path, s.rows);
+  }
+  return result;
+}
+
+// ================================================================ recover
+
+RecoverResult Recover(const std::string& in_path, const std::string& out_path,
+                      const McapWriterConfig& config) {
+  McapReader reader;
+  reader.Open(in_path);
+  McapWriterConfig out_config = config;
+  out_config.sync = McapSyncMode::kNone;  // one sync at Close() is enough for a rewrite
+  McapWriter writer(out_config);
+  writer.Open(out_path);
+  std::map<uint16_t, uint16_t> schema_map, channel_map;
+  McapVisitor v;
+  v.on_schema = [&](const McapSchema& s) {
+    if (!schema_map.count(s.id)) schema_map[s.id] = writer.AddSchema(s.name, s.encoding, s.data);
+  };
+  v.on_channel = [&](const McapChannel& c) {
+    if (channel_map.count(c.id)) return;
+    const uint16_t schema = c.schema_id == 0 ? 0 : schema_map.at(c.schema_id);
+    channel_map[c.id] = writer.AddChannel(schema, c.topic, c.message_encoding, c.metadata);
+  };
+  v.on_message = [&](const McapMessageView& m) {
+    writer.WriteWithSequence(channel_map.at(m.channel_id), m.sequence, m.log_time_ns,
+                             m.publish_time_ns, m.data);
+  };
+  McapScanOptions options;
+  options.tolerant = true;
+  const McapScanResult r = reader.Scan(v, options);
+  writer.Close();
+  RecoverResult result;
+  result.input_complete = r.complete;
+  result.messages = r.messages;
+  result.chunks_read = r.chunks;
+  result.bad_chunks = r.bad_chunks;
+  result.problems = r.problems;
+  result.bytes_dropped = r.complete ? 0 : r.file_size - r.valid_data_end;
+  return result;
+}
+
+}  // namespace hexa::recorder
