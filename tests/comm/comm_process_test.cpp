@@ -1,0 +1,335 @@
+// Integration tests over loopback between processes: every topic exchanged field by field,
+// deadline counters per leg, liveliness after kill -9, exclusive-ownership failover, SIGTERM
+// shutdown of a process blocked in a waitset, and proof that Cyclone used lo only.
+// Domain ids 40-44. Every helper is started by PID and killed / reaped by ChildProcess.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "child_process.hpp"
+#include "hexa/comm/comm.hpp"
+
+namespace {
+
+using namespace hexa::comm;
+using hexa::comm::test::ChildProcess;
+using hexa::comm::test::EnvironmentWithoutCycloneUri;
+using std::chrono::milliseconds;
+
+constexpr dds_domainid_t kDomainExchange = 40;
+constexpr dds_domainid_t kDomainDeadline = 41;
+constexpr dds_domainid_t kDomainLiveliness = 42;
+constexpr dds_domainid_t kDomainOwnership = 43;
+constexpr dds_domainid_t kDomainShutdown = 44;
+
+const std::string kHelper = HEXA_COMM_TEST_HELPER;
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string TempPath(const std::string& name) {
+  return ::testing::TempDir() + "hexa_comm_" + name + "_" + std::to_string(getpid()) + ".log";
+}
+
+bool ExitedWith(const std::optional<int>& status, int code) {
+  return status.has_value() && WIFEXITED(*status) && WEXITSTATUS(*status) == code;
+}
+
+std::string Describe(const std::optional<int>& status) {
+  if (!status) return "still running";
+  if (WIFEXITED(*status)) return "exit " + std::to_string(WEXITSTATUS(*status));
+  if (WIFSIGNALED(*status)) return "signal " + std::to_string(WTERMSIG(*status));
+  return "status " + std::to_string(*status);
+}
+
+class CommProcess : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { EnsureDdsConfig(); }
+};
+
+// A publisher and a subscriber process exchange every topic of idl/hexa.idl; the subscriber
+// recomputes each sample from its sequence number and compares every field, and checks the
+// sample's source time equals the DDS source timestamp. Both run with CYCLONEDDS_URI unset,
+// so they use the built-in default, and trace Cyclone's network choice to a file: the test
+// fails if Cyclone selected any interface but lo or an address outside 127/8.
+TEST_F(CommProcess, EveryTopicArrivesUnchangedOverLoopbackDefaultConfig) {
+  const std::string pub_log = TempPath("pub_all");
+  const std::string sub_log = TempPath("sub_all");
+  std::remove(pub_log.c_str());
+  std::remove(sub_log.c_str());
+  const auto env = EnvironmentWithoutCycloneUri();
+  const std::string domain = std::to_string(kDomainExchange);
+  ChildProcess sub(kHelper,
+                   {"sub-all", "--domain", domain, "--min-per-topic", "5", "--max-s", "20",
+                    "--trace", sub_log},
+                   env);
+  ASSERT_TRUE(sub.WaitForLine("READY", milliseconds(10000))) << "subscriber did not start";
+  ChildProcess pub(kHelper,
+                   {"pub-all", "--domain", domain, "--period-ms", "10", "--max-s", "25",
+                    "--trace", pub_log},
+                   env);
+  ASSERT_TRUE(pub.WaitForLine("READY", milliseconds(10000))) << "publisher did not start";
+
+  const auto status = sub.WaitExit(milliseconds(30000));
+  pub.Signal(SIGTERM);
+  const auto pub_status = pub.WaitExit(milliseconds(5000));
+  for (const std::string& line : sub.AllLines()) std::printf("  sub: %s\n", line.c_str());
+  EXPECT_TRUE(ExitedWith(status, 0)) << "subscriber: " << Describe(status);
+  EXPECT_TRUE(ExitedWith(pub_status, 0)) << "publisher: " << Describe(pub_status);
+
+  // Both used the built-in loopback default (CYCLONEDDS_URI was unset).
+  for (ChildProcess* child : {&sub, &pub}) {
+    bool saw_default = false;
+    for (const std::string& line : child->AllLines()) {
+      if (line == "CONFIG default file://" + DefaultDdsConfigPath()) saw_default = true;
+    }
+    EXPECT_TRUE(saw_default) << "helper did not fall back on " << DefaultDdsConfigPath();
+  }
+  // And Cyclone, by its own account, used lo only.
+  for (const std::string& log : {pub_log, sub_log}) {
+    const CycloneNetworkReport report = ParseCycloneNetworkLog(ReadFile(log));
+    std::string why;
+    EXPECT_TRUE(IsLoopbackOnly(report, &why)) << log << ": " << why;
+  }
+}
+
+// Deadline: 6 legs published every 20 ms with a 100 ms deadline -> no miss; leg 3 paused for
+// ~600 ms -> misses, all attributed to leg 3.
+TEST_F(CommProcess, DeadlineMissesAreCountedPerLeg) {
+  Participant p(kDomainDeadline);
+  QosParams params;
+  params.deadline_period_s = 0.100;
+  Topic<hexa_msg_LegSensors> topic(p);
+  Reader<hexa_msg_LegSensors> reader(p, topic, EndpointRole::kControlReader, params, 64);
+  WaitSet ws(p);
+  ws.Attach(reader.data_condition(), 1);
+
+  ChildProcess pub(kHelper,
+                   {"pub-legs", "--domain", std::to_string(kDomainDeadline), "--period-ms", "20",
+                    "--deadline-ms", "100", "--pause-leg", "3", "--max-s", "30"},
+                   EnvironmentWithoutCycloneUri());
+  ASSERT_TRUE(pub.WaitForLine("READY", milliseconds(10000)));
+
+  // Drain samples for `duration`, counting them per leg.
+  auto drain = [&](milliseconds duration) {
+    std::array<int, 7> per_leg{};
+    const dds_time_t end = dds_time() + DDS_MSECS(duration.count());
+    while (dds_time() < end) {
+      if (ws.WaitUntil(end) <= 0) continue;
+      reader.Take();
+      for (std::size_t i = 0; i < reader.count(); ++i) {
+        if (reader.info(i).valid_data && reader.sample(i).leg_id <= 6) ++per_leg[reader.sample(i).leg_id];
+      }
+    }
+    return per_leg;
+  };
+  // Wait until every leg flows (discovery), then start counting.
+  bool all_legs = false;
+  for (int attempt = 0; attempt < 50 && !all_legs; ++attempt) {
+    const auto seen = drain(milliseconds(100));
+    all_legs = true;
+    for (int leg = 1; leg <= 6; ++leg) all_legs = all_legs && seen[leg] > 0;
+  }
+  ASSERT_TRUE(all_legs) << "not every leg arrived";
+  const uint32_t misses_before = reader.Snapshot().requested_deadline_missed_total;
+
+  const auto steady = drain(milliseconds(1500));
+  for (int leg = 1; leg <= 6; ++leg) EXPECT_GE(steady[leg], 40) << "leg " << leg;
+  EXPECT_EQ(reader.Snapshot().requested_deadline_missed_total, misses_before)
+      << "deadline missed while publishing every 20 ms against a 100 ms deadline";
+
+  pub.Signal(SIGUSR1);  // pause leg 3
+  const auto paused = drain(milliseconds(650));
+  pub.Signal(SIGUSR1);  // resume
+  drain(milliseconds(200));
+  const StatusSnapshot after = reader.Snapshot();
+  const uint32_t leg3 = reader.DeadlineMissedForLeg(3);
+  std::printf("  leg 3 paused ~650 ms: %u misses on leg 3, %u total\n", leg3,
+              after.requested_deadline_missed_total - misses_before);
+  EXPECT_LE(paused[3], 2) << "leg 3 was not paused";
+  EXPECT_GE(leg3, 3u) << "a 650 ms gap against a 100 ms deadline must miss several times";
+  for (int leg : {1, 2, 4, 5, 6}) EXPECT_EQ(reader.DeadlineMissedForLeg(leg), 0u) << "leg " << leg;
+  EXPECT_EQ(after.requested_deadline_missed_total - misses_before, leg3);
+  EXPECT_EQ(after.instance_slot_overflow, 0u);
+}
+
+// Liveliness: kill -9 of a ValveCommand writer is noticed by the reader, and the counters
+// name that writer (its GUID, strength 20).
+TEST_F(CommProcess, KilledValveWriterLosesLiveliness) {
+  Participant p(kDomainLiveliness);
+  QosParams params;
+  params.deadline_period_s = 0.100;
+  params.valve_liveliness_lease_s = 0.050;
+  Topic<hexa_msg_ValveCommand> topic(p);
+  Reader<hexa_msg_ValveCommand> reader(p, topic, EndpointRole::kControlReader, params);
+  ChildProcess writer(kHelper,
+                      {"pub-valve", "--domain", std::to_string(kDomainLiveliness), "--leg", "2",
+                       "--strength", "20", "--period-ms", "5", "--deadline-ms", "100",
+                       "--lease-ms", "50", "--max-s", "30"},
+                      EnvironmentWithoutCycloneUri());
+  const auto ready = writer.WaitForLine("READY ", milliseconds(10000));
+  ASSERT_TRUE(ready);
+  const std::string writer_guid = ready->substr(6);
+
+  WaitSet ws(p);
+  ws.Attach(reader.data_condition(), 1);
+  hexa_msg_ValveCommand cmd{};
+  bool got = false;
+  const dds_time_t give_up = dds_time() + DDS_SECS(10);
+  while (!got && dds_time() < give_up) {
+    ws.WaitUntil(give_up);
+    got = reader.TakeLatestForLeg(2, cmd) == 1;
+  }
+  ASSERT_TRUE(got) << "no ValveCommand arrived";
+  StatusSnapshot before = reader.Snapshot();
+  EXPECT_EQ(before.liveliness_alive_count, 1u);
+  EXPECT_EQ(before.liveliness_lost_events, 0u);
+
+  const int64_t kill_ns = MonotonicNow_ns();
+  writer.Signal(SIGKILL);
+  // Bounded wait on the counter (test only; services read counters in their cycle).
+  StatusSnapshot after = reader.Snapshot();
+  while (after.liveliness_lost_events == 0 && MonotonicNow_ns() - kill_ns < 2000000000LL) {
+    ws.Wait(DDS_MSECS(5));
+    reader.Take();
+    after = reader.Snapshot();
+  }
+  ASSERT_EQ(after.liveliness_lost_events, 1u) << "kill -9 not noticed within 2 s";
+  const double detect_ms = (after.last_liveliness_change_mono_ns - kill_ns) * 1e-6;
+  std::printf("  liveliness lost noticed %.1f ms after kill -9 (lease 50 ms)\n", detect_ms);
+  EXPECT_LT(detect_ms, 1000.0);  // "a few leases"; generous for a loaded shared VM
+  EXPECT_EQ(after.liveliness_alive_count, 0u);
+  EXPECT_EQ(after.liveliness_not_alive_count, 1u);
+  // Which writer: the publication handle resolves to the killed process's writer GUID.
+  const std::string who = reader.DescribeWriter(after.last_liveliness_publication);
+  EXPECT_NE(who.find("guid=" + writer_guid), std::string::npos) << who << " vs " << writer_guid;
+  EXPECT_NE(who.find("strength=20"), std::string::npos) << who;
+  bool slot_found = false;
+  for (const WriterSlot& slot : reader.status().writers()) {
+    if (slot.publication.load() == after.last_liveliness_publication) {
+      slot_found = true;
+      EXPECT_EQ(slot.state.load(), static_cast<int32_t>(WriterLiveliness::kNotAlive));
+      EXPECT_EQ(slot.became_not_alive.load(), 1u);
+    }
+  }
+  EXPECT_TRUE(slot_found);
+}
+
+// Exclusive ownership: strong (20) and weak (10) writers of leg 1; the reader sees only the
+// strong one; after kill -9 of the strong one, the weak one's samples arrive.
+TEST_F(CommProcess, ExclusiveOwnershipFailsOverToStandbyAfterKill) {
+  Participant p(kDomainOwnership);
+  QosParams params;
+  params.deadline_period_s = 0.100;
+  params.valve_liveliness_lease_s = 0.020;
+  Topic<hexa_msg_ValveCommand> topic(p);
+  Reader<hexa_msg_ValveCommand> reader(p, topic, EndpointRole::kControlReader, params, 64);
+  WaitSet ws(p);
+  ws.Attach(reader.data_condition(), 1);
+  const auto env = EnvironmentWithoutCycloneUri();
+  const std::string domain = std::to_string(kDomainOwnership);
+  auto start = [&](const char* strength, const char* standby) {
+    return std::make_unique<ChildProcess>(
+        kHelper,
+        std::vector<std::string>{"pub-valve", "--domain", domain, "--leg", "1", "--strength",
+                                 strength, "--standby", standby, "--period-ms", "2",
+                                 "--deadline-ms", "100", "--lease-ms", "20", "--max-s", "30"},
+        env);
+  };
+  auto strong = start("20", "0");
+  auto weak = start("10", "1");
+  ASSERT_TRUE(strong->WaitForLine("READY", milliseconds(10000)));
+  ASSERT_TRUE(weak->WaitForLine("READY", milliseconds(10000)));
+
+  // Count samples by origin for `duration` (standby flag = weak writer).
+  struct Counts { int strong = 0; int weak = 0; int64_t first_weak_ns = 0; };
+  auto drain = [&](milliseconds duration) {
+    Counts c;
+    const dds_time_t end = dds_time() + DDS_MSECS(duration.count());
+    while (dds_time() < end) {
+      if (ws.WaitUntil(end) <= 0) continue;
+      reader.Take();
+      for (std::size_t i = 0; i < reader.count(); ++i) {
+        if (!reader.info(i).valid_data) continue;
+        if (reader.sample(i).standby) {
+          if (c.weak++ == 0) c.first_weak_ns = MonotonicNow_ns();
+        } else {
+          ++c.strong;
+        }
+      }
+      if (c.weak > 0 && duration.count() == 0) break;
+    }
+    return c;
+  };
+  // Until both writers are matched, alive, and the strong one owns the instance.
+  bool settled = false;
+  for (int attempt = 0; attempt < 100 && !settled; ++attempt) {
+    const Counts c = drain(milliseconds(100));
+    const StatusSnapshot s = reader.Snapshot();
+    settled = s.subscription_matched_current == 2 && s.liveliness_alive_count == 2 && c.strong > 0;
+  }
+  ASSERT_TRUE(settled) << "writers did not both match";
+  const Counts owned = drain(milliseconds(1000));
+  std::printf("  1 s with both alive: %d strong, %d weak samples\n", owned.strong, owned.weak);
+  EXPECT_GT(owned.strong, 100);
+  EXPECT_EQ(owned.weak, 0) << "standby samples reached the reader while the primary was alive";
+
+  const int64_t kill_ns = MonotonicNow_ns();
+  strong->Signal(SIGKILL);
+  Counts after{};
+  const dds_time_t end = dds_time() + DDS_SECS(2);
+  while (after.weak == 0 && dds_time() < end) {
+    if (ws.WaitUntil(end) <= 0) continue;
+    reader.Take();
+    for (std::size_t i = 0; i < reader.count(); ++i) {
+      if (reader.info(i).valid_data && reader.sample(i).standby) {
+        after.weak = 1;
+        after.first_weak_ns = MonotonicNow_ns();
+        break;
+      }
+    }
+  }
+  ASSERT_EQ(after.weak, 1) << "standby never took over";
+  const double gap_ms = (after.first_weak_ns - kill_ns) * 1e-6;
+  std::printf("  failover gap: %.1f ms from kill -9 to first standby sample (lease 20 ms)\n",
+              gap_ms);
+  EXPECT_LT(gap_ms, 1000.0);
+}
+
+// SIGTERM to a process blocked in dds_waitset_wait (infinite timeout) makes it exit 0.
+TEST_F(CommProcess, SigtermWakesBlockedWaitSetAndExitsZero) {
+  for (int signo : {SIGTERM, SIGINT}) {
+    ChildProcess child(kHelper,
+                       {"wait-shutdown", "--domain", std::to_string(kDomainShutdown), "--max-s",
+                        "30"},
+                       EnvironmentWithoutCycloneUri());
+    ASSERT_TRUE(child.WaitForLine("READY", milliseconds(10000)));
+    const auto sent = std::chrono::steady_clock::now();
+    child.Signal(signo);
+    const auto status = child.WaitExit(milliseconds(5000));
+    const double exit_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - sent).count();
+    std::printf("  signal %d -> exit in %.1f ms\n", signo, exit_ms);
+    EXPECT_TRUE(ExitedWith(status, 0)) << Describe(status);
+    bool said = false;
+    for (const std::string& line : child.AllLines()) {
+      if (line == "RESULT shutdown signal=" + std::to_string(signo)) said = true;
+    }
+    EXPECT_TRUE(said) << "the waitset was not woken by the shutdown guard";
+  }
+}
+
+}  // namespace

@@ -1,0 +1,236 @@
+// In-process tests of the comm layer: QoS profiles, config-log parsing, reader/writer
+// behaviour within one participant, waitset wake-ups. Domain ids 45-46.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "hexa/comm/comm.hpp"
+
+namespace {
+
+using namespace hexa::comm;
+
+constexpr dds_domainid_t kDomainInProcess = 45;
+constexpr dds_domainid_t kDomainShutdown = 46;
+
+class CommUnit : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { EnsureDdsConfig(); }
+};
+
+TEST_F(CommUnit, QosProfilesMatchTheTopicTable) {
+  // Writers offer RELIABLE and the nominal deadline; LegSensors 1 ms, LegSetpoint 5 ms.
+  {
+    const Qos q = MakeQos(TopicKind::kLegSensors, EndpointRole::kWriter);
+    dds_reliability_kind_t rel;
+    dds_duration_t block;
+    ASSERT_TRUE(dds_qget_reliability(q.get(), &rel, &block));
+    EXPECT_EQ(rel, DDS_RELIABILITY_RELIABLE);
+    dds_duration_t deadline = 0;
+    ASSERT_TRUE(dds_qget_deadline(q.get(), &deadline));
+    EXPECT_EQ(deadline, DDS_MSECS(1));
+    dds_history_kind_t hist;
+    int32_t depth = 0;
+    ASSERT_TRUE(dds_qget_history(q.get(), &hist, &depth));
+    EXPECT_EQ(hist, DDS_HISTORY_KEEP_LAST);
+    EXPECT_EQ(depth, 100);
+  }
+  {
+    const Qos q = MakeQos(TopicKind::kLegSetpoint, EndpointRole::kControlReader);
+    dds_duration_t deadline = 0;
+    ASSERT_TRUE(dds_qget_deadline(q.get(), &deadline));
+    EXPECT_EQ(deadline, DDS_MSECS(5));
+    dds_reliability_kind_t rel;
+    dds_duration_t block;
+    ASSERT_TRUE(dds_qget_reliability(q.get(), &rel, &block));
+    EXPECT_EQ(rel, DDS_RELIABILITY_BEST_EFFORT);  // real time: no head-of-line blocking
+  }
+  {
+    QosParams lockstep;
+    lockstep.lockstep = true;
+    const Qos q = MakeQos(TopicKind::kLegSetpoint, EndpointRole::kControlReader, lockstep);
+    dds_reliability_kind_t rel;
+    dds_duration_t block;
+    ASSERT_TRUE(dds_qget_reliability(q.get(), &rel, &block));
+    EXPECT_EQ(rel, DDS_RELIABILITY_RELIABLE);  // lockstep must not lose a sample
+  }
+  {
+    // Valve command: exclusive, strength, liveliness lease, no auto-dispose.
+    QosParams standby;
+    standby.ownership_strength = kStandbyOwnershipStrength;
+    standby.valve_liveliness = LivelinessKind::kManualByTopic;
+    const Qos q = MakeQos(TopicKind::kValveCommand, EndpointRole::kWriter, standby);
+    dds_ownership_kind_t own;
+    ASSERT_TRUE(dds_qget_ownership(q.get(), &own));
+    EXPECT_EQ(own, DDS_OWNERSHIP_EXCLUSIVE);
+    int32_t strength = 0;
+    ASSERT_TRUE(dds_qget_ownership_strength(q.get(), &strength));
+    EXPECT_EQ(strength, 10);
+    dds_liveliness_kind_t live;
+    dds_duration_t lease = 0;
+    ASSERT_TRUE(dds_qget_liveliness(q.get(), &live, &lease));
+    EXPECT_EQ(live, DDS_LIVELINESS_MANUAL_BY_TOPIC);
+    EXPECT_EQ(lease, DDS_MSECS(10));
+    bool autodispose = true;
+    ASSERT_TRUE(dds_qget_writer_data_lifecycle(q.get(), &autodispose));
+    EXPECT_FALSE(autodispose);
+  }
+  {
+    const Qos q = MakeQos(TopicKind::kNodeStatus, EndpointRole::kControlReader);
+    dds_durability_kind_t dur;
+    ASSERT_TRUE(dds_qget_durability(q.get(), &dur));
+    EXPECT_EQ(dur, DDS_DURABILITY_TRANSIENT_LOCAL);
+  }
+  {
+    const Qos q = MakeQos(TopicKind::kOperatorCommand, EndpointRole::kWriter);
+    dds_history_kind_t hist;
+    int32_t depth = 0;
+    ASSERT_TRUE(dds_qget_history(q.get(), &hist, &depth));
+    EXPECT_EQ(hist, DDS_HISTORY_KEEP_ALL);
+  }
+  {
+    // The recorder requests no deadline, so it matches whatever period a writer offers.
+    const Qos q = MakeQos(TopicKind::kGroundTruth, EndpointRole::kRecorderReader);
+    dds_duration_t deadline = 0;
+    EXPECT_FALSE(dds_qget_deadline(q.get(), &deadline) && deadline != DDS_INFINITY);
+  }
+}
+
+TEST_F(CommUnit, QosParamsValidateNamesTheField) {
+  QosParams p;
+  p.deadline_period_s = -0.001;
+  try {
+    p.Validate();
+    FAIL() << "negative deadline accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("deadline_period_s"), std::string::npos);
+  }
+  QosParams q;
+  q.valve_liveliness_lease_s = 0.0;
+  EXPECT_THROW(q.Validate(), std::invalid_argument);
+  QosParams r;
+  r.deadline_period_s = std::numeric_limits<double>::infinity();
+  EXPECT_NO_THROW(r.Validate());
+  EXPECT_EQ(DeadlinePeriod_ns(TopicKind::kLegSensors, r), DDS_INFINITY);
+}
+
+TEST_F(CommUnit, NetworkLogParserAcceptsLoopbackAndRejectsEth0) {
+  const char* loopback =
+      "1.0 [40] p: interfaces: lo udp/127.0.0.1(q1) eth0 udp/192.0.2.2(q9)\n"
+      "1.0 [40] p: assuming multicast capable interface lo.selected interfaces: lo (index 1 "
+      "priority 2)\n"
+      "1.0 [40] p: ownip: udp/127.0.0.1\n";
+  const CycloneNetworkReport ok = ParseCycloneNetworkLog(loopback);
+  std::string why;
+  EXPECT_TRUE(IsLoopbackOnly(ok, &why)) << why;
+  ASSERT_EQ(ok.selected_interfaces.size(), 1u);
+  EXPECT_EQ(ok.selected_interfaces[0], "lo");
+
+  // What an unpinned Cyclone reports: it picks eth0. Must be rejected.
+  const char* eth0 =
+      "1.0 [40] p: interfaces: lo udp/127.0.0.1(q1) eth0 udp/192.0.2.2(q9)\n"
+      "1.0 [40] p: selected interfaces: eth0 (index 2 priority 0)\n"
+      "1.0 [40] p: ownip: udp/192.0.2.2\n";
+  EXPECT_FALSE(IsLoopbackOnly(ParseCycloneNetworkLog(eth0), &why));
+  EXPECT_NE(why.find("eth0"), std::string::npos) << why;
+  // Both interfaces selected is not loopback-only either.
+  const char* both =
+      "selected interfaces: lo (index 1 priority 2), eth0 (index 2 priority 0)\n"
+      "ownip: udp/127.0.0.1\n";
+  EXPECT_FALSE(IsLoopbackOnly(ParseCycloneNetworkLog(both), &why));
+  // No log lines at all (tracing not enabled) proves nothing.
+  EXPECT_FALSE(IsLoopbackOnly(ParseCycloneNetworkLog("nothing here\n"), &why));
+}
+
+TEST_F(CommUnit, ReaderTakesLatestPerLegAndFilteredTopicSeesOneLeg) {
+  Participant p(kDomainInProcess);
+  QosParams params;
+  params.deadline_period_s = std::numeric_limits<double>::infinity();
+  Topic<hexa_msg_LegSensors> topic(p);
+  auto leg4_topic = Topic<hexa_msg_LegSensors>::FilteredByLeg(p, 4);
+  Writer<hexa_msg_LegSensors> writer(p, topic, params);
+  Reader<hexa_msg_LegSensors> reader(p, topic, EndpointRole::kControlReader, params);
+  Reader<hexa_msg_LegSensors> leg4(p, leg4_topic, EndpointRole::kControlReader, params);
+
+  hexa_msg_LegSensors out{};
+  EXPECT_EQ(reader.TakeLatestForLeg(2, out), 0);  // nothing yet
+
+  for (uint64_t tick = 1; tick <= 3; ++tick) {
+    for (uint8_t leg = 1; leg <= 6; ++leg) {
+      hexa_msg_LegSensors s{};
+      s.leg_id = leg;
+      FillHeader(s.header, tick, tick * 0.001, RealtimeNow_ns());
+      s.length_m = leg * 0.1 + static_cast<double>(tick);
+      ASSERT_EQ(writer.Write(s, s.header.source_time_ns), DDS_RETCODE_OK);
+    }
+  }
+  // Local delivery is synchronous in Cyclone for a writer and reader of one participant.
+  dds_sample_info_t info{};
+  ASSERT_EQ(reader.TakeLatestForLeg(2, out, &info), 1);
+  EXPECT_EQ(out.leg_id, 2);
+  EXPECT_EQ(out.header.tick, 3u);  // keep-last 1: the newest
+  EXPECT_EQ(info.source_timestamp, out.header.source_time_ns);
+  EXPECT_EQ(reader.TakeLatestForLeg(2, out), 0);  // taken
+
+  ASSERT_GT(leg4.Take(), 0);
+  for (std::size_t i = 0; i < leg4.count(); ++i) EXPECT_EQ(leg4.sample(i).leg_id, 4);
+  EXPECT_EQ(leg4.count(), 1u);  // one instance, keep-last 1
+}
+
+TEST_F(CommUnit, ReaderRequestingShorterDeadlineThanOfferedDoesNotMatch) {
+  Participant p(kDomainInProcess);
+  QosParams writer_params;
+  writer_params.deadline_period_s = 0.100;
+  QosParams reader_params;
+  reader_params.deadline_period_s = 0.010;  // asks for more than the writer promises
+  Topic<hexa_msg_ImuSample> topic(p);
+  Writer<hexa_msg_ImuSample> writer(p, topic, writer_params);
+  Reader<hexa_msg_ImuSample> reader(p, topic, EndpointRole::kControlReader, reader_params);
+  Reader<hexa_msg_ImuSample> compatible(p, topic, EndpointRole::kControlReader, writer_params);
+  hexa_msg_ImuSample s{};
+  s.orientation_wxyz[0] = 1.0;
+  ASSERT_EQ(writer.WriteNow(s), DDS_RETCODE_OK);
+  EXPECT_EQ(reader.Take(), 0);
+  EXPECT_GE(reader.Snapshot().requested_incompatible_qos_total, 1u);
+  EXPECT_EQ(compatible.Take(), 1);
+  EXPECT_EQ(writer.Snapshot().publication_matched_current, 1u);
+}
+
+TEST_F(CommUnit, GuardConditionWakesWaitSet) {
+  Participant p(kDomainInProcess);
+  GuardCondition guard(p);
+  WaitSet ws(p);
+  ws.Attach(guard.get(), 7);
+  EXPECT_EQ(ws.Wait(DDS_MSECS(1)), 0);  // nothing triggered: timeout
+  guard.Set();
+  ASSERT_EQ(ws.Wait(DDS_SECS(5)), 1);
+  EXPECT_TRUE(ws.Triggered(7));
+}
+
+TEST_F(CommUnit, ShutdownGuardTurnsSigtermIntoGuardCondition) {
+  Participant p(kDomainShutdown);
+  ShutdownGuard guard(p);
+  EXPECT_THROW(ShutdownGuard second(p), std::runtime_error);
+  WaitSet ws(p);
+  ws.Attach(guard.guard_condition(), 1);
+  EXPECT_FALSE(guard.requested());
+  ASSERT_EQ(raise(SIGTERM), 0);  // handled: the process goes on
+  ASSERT_EQ(ws.Wait(DDS_SECS(5)), 1);
+  EXPECT_TRUE(ws.Triggered(1));
+  EXPECT_TRUE(guard.requested());
+  EXPECT_EQ(guard.signal_number(), SIGTERM);
+}
+
+TEST_F(CommUnit, ParticipantOnInvalidDomainFailsWithClearMessage) {
+  try {
+    Participant p(static_cast<dds_domainid_t>(300));  // above Cyclone's 232 limit
+    FAIL() << "participant on domain 300 was created";
+  } catch (const DdsError& e) {
+    EXPECT_NE(std::string(e.what()).find("domain 300"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
