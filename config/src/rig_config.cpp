@@ -1,0 +1,729 @@
+// Rig file loader: protobuf text format -> hexa::config::SystemConfig.
+//
+// Stages, each stopping at its first failing stage so that messages stay about the cause:
+//   1. parse (syntax, unknown fields, repeated singular fields): the parser's line/column;
+//   2. presence and finiteness of every field (reflection over the schema), with the line
+//      of the field (non-finite) or of its enclosing block (missing);
+//   3. structure: six legs with ids 1..6, unique profile names;
+//   4. translation into the core structs and value rules (validate.cpp); each rule names a
+//      field path that is mapped back to its line through the parser's ParseInfoTree.
+#include <google/protobuf/descriptor.h>
+#include <google/protobuf/io/tokenizer.h>
+#include <google/protobuf/text_format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <sstream>
+
+#include "hexa/config/rig_config.hpp"
+#include "internal.hpp"
+#include "rig.pb.h"
+
+namespace hexa::config {
+
+namespace gp = google::protobuf;
+using internal::FormatDouble;
+using ParseInfoTree = gp::TextFormat::ParseInfoTree;
+
+std::string ConfigIssue::ToString() const {
+  std::ostringstream out;
+  out << file << ":" << line << ":" << column << ": error: ";
+  if (!field.empty()) out << field << ": ";
+  out << message;
+  if (!value.empty() || !limit.empty()) {
+    out << " (";
+    if (!value.empty()) out << "value " << value;
+    if (!value.empty() && !limit.empty()) out << ", ";
+    if (!limit.empty()) out << "limit " << limit;
+    out << ")";
+  }
+  return out.str();
+}
+
+std::string DefaultRigFile() { return HEXA_DEFAULT_RIG_FILE; }
+
+namespace {
+
+struct Location {
+  int line = 0;    // 1-based, 0 = unknown
+  int column = 0;  // 1-based
+  int end_line = 0;
+};
+
+Location FromRange(const gp::TextFormat::ParseLocationRange& range) {
+  Location loc;
+  if (range.start.line >= 0) {
+    loc.line = range.start.line + 1;
+    loc.column = range.start.column + 1;
+    loc.end_line = range.end.line + 1;
+  }
+  return loc;
+}
+
+class CollectingErrors : public gp::io::ErrorCollector {
+ public:
+  struct Error {
+    int line;
+    int column;
+    std::string message;
+  };
+  void AddError(int line, gp::io::ColumnNumber column, const std::string& message) override {
+    errors.push_back({line, column, message});
+  }
+  void AddWarning(int, gp::io::ColumnNumber, const std::string&) override {}
+  std::vector<Error> errors;
+};
+
+// Levenshtein distance, for "did you mean" on unknown field names.
+std::size_t EditDistance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diag = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0u : 1u)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// Every path in the schema where a message type appears ("cylinder", "friction.extend").
+void PathsOfType(const gp::Descriptor* root, const gp::Descriptor* type, const std::string& prefix,
+                 std::vector<std::string>& out, int depth = 0) {
+  if (depth > 8) return;
+  for (int i = 0; i < root->field_count(); ++i) {
+    const gp::FieldDescriptor* fd = root->field(i);
+    if (fd->cpp_type() != gp::FieldDescriptor::CPPTYPE_MESSAGE) continue;
+    const std::string path = prefix.empty() ? fd->name() : prefix + "." + fd->name();
+    if (fd->message_type() == type) out.push_back(path);
+    PathsOfType(fd->message_type(), type, path, out, depth + 1);
+  }
+}
+
+// Turns the parser's "Message type "X" has no field named "y"." into an issue with the
+// field path (when the type is used in one place only), the known fields and a guess.
+ConfigIssue ParserIssue(const CollectingErrors::Error& e, const std::string& file) {
+  ConfigIssue issue;
+  issue.file = file;
+  issue.line = e.line + 1;
+  issue.column = e.column + 1;
+  issue.message = e.message;
+  static const std::regex kUnknown(R"re(Message type "([^"]+)" has no field named "([^"]+)")re");
+  std::smatch m;
+  if (!std::regex_search(e.message, m, kUnknown)) {
+    issue.message = "syntax error: " + e.message;
+    return issue;
+  }
+  const std::string type_name = m[1];
+  const std::string field_name = m[2];
+  const gp::Descriptor* type = gp::DescriptorPool::generated_pool()->FindMessageTypeByName(type_name);
+  issue.value = field_name;
+  if (type == nullptr) {
+    issue.message = "unknown field name";
+    return issue;
+  }
+  std::vector<std::string> paths;
+  if (type == pb::RigFile::descriptor()) paths.push_back("");
+  PathsOfType(pb::RigFile::descriptor(), type, "", paths);
+  std::string known;
+  std::string best;
+  std::size_t best_distance = 1000;
+  for (int i = 0; i < type->field_count(); ++i) {
+    const std::string& name = type->field(i)->name();
+    known += (known.empty() ? "" : ", ") + name;
+    const std::size_t d = EditDistance(field_name, name);
+    if (d < best_distance) {
+      best_distance = d;
+      best = name;
+    }
+  }
+  std::string where;
+  if (paths.size() == 1) {
+    where = paths[0].empty() ? "the top level" : "block '" + paths[0] + "'";
+    issue.field = paths[0].empty() ? field_name : paths[0] + "." + field_name;
+  } else {
+    where = "a " + type->name() + " block";
+    issue.field = field_name;
+  }
+  issue.message = "unknown field name in " + where;
+  if (best_distance <= std::max<std::size_t>(2, field_name.size() / 3)) {
+    issue.message += " (did you mean '" + best + "'?)";
+  }
+  issue.limit = "one of: " + known;
+  return issue;
+}
+
+int CountLines(const std::string& text) {
+  int lines = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+  if (!text.empty() && text.back() != '\n') ++lines;
+  return std::max(lines, 1);
+}
+
+// Selector of a repeated element in a path: "[id=3]", "[name=ideal]" or "[2]".
+std::string ElementSelector(const gp::Message& element, int index) {
+  const gp::Descriptor* d = element.GetDescriptor();
+  const gp::Reflection* r = element.GetReflection();
+  if (const gp::FieldDescriptor* id = d->FindFieldByName("id");
+      id != nullptr && id->cpp_type() == gp::FieldDescriptor::CPPTYPE_INT32 && r->HasField(element, id)) {
+    return "[id=" + std::to_string(r->GetInt32(element, id)) + "]";
+  }
+  if (const gp::FieldDescriptor* name = d->FindFieldByName("name");
+      name != nullptr && name->cpp_type() == gp::FieldDescriptor::CPPTYPE_STRING && r->HasField(element, name)) {
+    return "[name=" + r->GetString(element, name) + "]";
+  }
+  return "[" + std::to_string(index) + "]";
+}
+
+struct PresenceContext {
+  const std::string& file;
+  int eof_line;
+  std::vector<ConfigIssue>& issues;
+};
+
+// Stage 2: every singular field present, every floating-point value finite.
+void CheckPresence(const gp::Message& msg, const ParseInfoTree* tree, const std::string& path,
+                   const Location& block, PresenceContext& ctx) {
+  const gp::Descriptor* d = msg.GetDescriptor();
+  const gp::Reflection* r = msg.GetReflection();
+  for (int i = 0; i < d->field_count(); ++i) {
+    const gp::FieldDescriptor* fd = d->field(i);
+    const std::string field_path = path.empty() ? fd->name() : path + "." + fd->name();
+    const bool is_message = fd->cpp_type() == gp::FieldDescriptor::CPPTYPE_MESSAGE;
+    if (fd->is_repeated()) {
+      if (!is_message) continue;
+      for (int k = 0; k < r->FieldSize(msg, fd); ++k) {
+        const gp::Message& element = r->GetRepeatedMessage(msg, fd, k);
+        const Location loc = tree ? FromRange(tree->GetLocationRange(fd, k)) : Location{};
+        CheckPresence(element, tree ? tree->GetTreeForNested(fd, k) : nullptr,
+                      path.empty() ? fd->name() + ElementSelector(element, k)
+                                   : path + "." + fd->name() + ElementSelector(element, k),
+                      loc, ctx);
+      }
+      continue;
+    }
+    const Location loc = tree ? FromRange(tree->GetLocationRange(fd, -1)) : Location{};
+    if (!r->HasField(msg, fd)) {
+      ConfigIssue issue;
+      issue.file = ctx.file;
+      issue.field = field_path;
+      issue.value = "(absent)";
+      issue.limit = "every field must be written";
+      if (path.empty()) {
+        issue.line = ctx.eof_line;
+        issue.column = 1;
+        issue.message = std::string("required ") + (is_message ? "block" : "field") + " '" + fd->name() +
+                        "' is missing from the file";
+      } else {
+        issue.line = block.line;
+        issue.column = block.column;
+        issue.message = std::string("required ") + (is_message ? "block" : "field") + " '" + fd->name() +
+                        "' is missing from block '" + path + "' (lines " + std::to_string(block.line) + "-" +
+                        std::to_string(block.end_line) + ")";
+      }
+      ctx.issues.push_back(std::move(issue));
+      continue;
+    }
+    if (is_message) {
+      CheckPresence(r->GetMessage(msg, fd), tree ? tree->GetTreeForNested(fd, -1) : nullptr, field_path, loc,
+                    ctx);
+    } else if (fd->cpp_type() == gp::FieldDescriptor::CPPTYPE_DOUBLE ||
+               fd->cpp_type() == gp::FieldDescriptor::CPPTYPE_FLOAT) {
+      const double v = fd->cpp_type() == gp::FieldDescriptor::CPPTYPE_DOUBLE ? r->GetDouble(msg, fd)
+                                                                            : r->GetFloat(msg, fd);
+      if (!std::isfinite(v)) {
+        ctx.issues.push_back({ctx.file, loc.line, loc.column, field_path, "value must be a finite number",
+                              FormatDouble(v), "finite"});
+      }
+    }
+  }
+}
+
+// Maps a field path ("geometry.leg[id=3].p_BA_B_m.y", "disturbance_profile[name=ideal]")
+// to the location of the deepest part of it that is written in the file.
+Location Locate(const pb::RigFile& file, const ParseInfoTree& root, const std::string& path) {
+  const gp::Message* msg = &file;
+  const ParseInfoTree* tree = &root;
+  Location best;
+  std::size_t pos = 0;
+  while (pos < path.size() && msg != nullptr && tree != nullptr) {
+    std::size_t end = pos;
+    while (end < path.size() && path[end] != '.' && path[end] != '[') ++end;
+    const std::string name = path.substr(pos, end - pos);
+    std::string selector;
+    bool has_selector = false;
+    if (end < path.size() && path[end] == '[') {
+      const std::size_t close = path.find(']', end);
+      if (close == std::string::npos) break;
+      selector = path.substr(end + 1, close - end - 1);
+      has_selector = true;
+      end = close + 1;
+    }
+    pos = (end < path.size() && path[end] == '.') ? end + 1 : end;
+
+    const gp::Descriptor* d = msg->GetDescriptor();
+    const gp::Reflection* r = msg->GetReflection();
+    const gp::FieldDescriptor* fd = d->FindFieldByName(name);
+    if (fd == nullptr) break;
+    int index = -1;
+    if (fd->is_repeated()) {
+      if (!has_selector || fd->cpp_type() != gp::FieldDescriptor::CPPTYPE_MESSAGE) {
+        const Location loc = FromRange(tree->GetLocationRange(fd, 0));
+        if (loc.line > 0) best = loc;
+        break;
+      }
+      for (int k = 0; k < r->FieldSize(*msg, fd) && index < 0; ++k) {
+        if (ElementSelector(r->GetRepeatedMessage(*msg, fd, k), k) == "[" + selector + "]" ||
+            selector == std::to_string(k)) {
+          index = k;
+        }
+      }
+      if (index < 0) break;
+    }
+    const Location loc = FromRange(tree->GetLocationRange(fd, index));
+    if (loc.line > 0) best = loc;
+    if (fd->cpp_type() != gp::FieldDescriptor::CPPTYPE_MESSAGE) break;
+    msg = index >= 0 ? &r->GetRepeatedMessage(*msg, fd, index) : &r->GetMessage(*msg, fd);
+    tree = tree->GetTreeForNested(fd, index);
+  }
+  return best;
+}
+
+Eigen::Vector3d FromPb(const pb::Vector3& v) { return {v.x(), v.y(), v.z()}; }
+void ToPb(const Eigen::Vector3d& v, pb::Vector3* out) {
+  out->set_x(v.x());
+  out->set_y(v.y());
+  out->set_z(v.z());
+}
+
+FrictionDirectionParams FromPb(const pb::FrictionDirectionConfig& f) {
+  FrictionDirectionParams p;
+  p.stribeck_velocity_m_s = f.stribeck_velocity_m_s();
+  p.viscous_n_s_m = f.viscous_n_s_m();
+  p.static_n = f.static_n();
+  p.coulomb_n = f.coulomb_n();
+  return p;
+}
+void ToPb(const FrictionDirectionParams& p, pb::FrictionDirectionConfig* f) {
+  f->set_stribeck_velocity_m_s(p.stribeck_velocity_m_s);
+  f->set_viscous_n_s_m(p.viscous_n_s_m);
+  f->set_static_n(p.static_n);
+  f->set_coulomb_n(p.coulomb_n);
+}
+
+PolytropicParams FromPb(const pb::PolytropicConfig& g) {
+  PolytropicParams p;
+  p.inflow = g.inflow();
+  p.outflow = g.outflow();
+  p.volume = g.volume();
+  return p;
+}
+void ToPb(const PolytropicParams& p, pb::PolytropicConfig* g) {
+  g->set_inflow(p.inflow);
+  g->set_outflow(p.outflow);
+  g->set_volume(p.volume);
+}
+
+DisturbanceProfile FromPb(const pb::DisturbanceProfileConfig& d) {
+  DisturbanceProfile p;
+  p.sensor_noise = d.sensor_noise();
+  p.friction_scale = d.friction_scale();
+  p.polytropic_scale = d.polytropic_scale();
+  p.payload_scale = d.payload_scale();
+  p.supply_ripple_amplitude_pa = d.supply_ripple_amplitude_pa();
+  p.supply_ripple_frequency_hz = d.supply_ripple_frequency_hz();
+  p.joint_position_error_max_m = d.joint_position_error_max_m();
+  p.potentiometer_offset_max_m = d.potentiometer_offset_max_m();
+  p.potentiometer_gain_error_max = d.potentiometer_gain_error_max();
+  return p;
+}
+void ToPb(const std::string& name, const DisturbanceProfile& p, pb::DisturbanceProfileConfig* d) {
+  d->set_name(name);
+  d->set_sensor_noise(p.sensor_noise);
+  d->set_friction_scale(p.friction_scale);
+  d->set_polytropic_scale(p.polytropic_scale);
+  d->set_payload_scale(p.payload_scale);
+  d->set_supply_ripple_amplitude_pa(p.supply_ripple_amplitude_pa);
+  d->set_supply_ripple_frequency_hz(p.supply_ripple_frequency_hz);
+  d->set_joint_position_error_max_m(p.joint_position_error_max_m);
+  d->set_potentiometer_offset_max_m(p.potentiometer_offset_max_m);
+  d->set_potentiometer_gain_error_max(p.potentiometer_gain_error_max);
+}
+
+// Stage 4a: proto -> structs (all fields known to be present; legs and profiles checked).
+SystemConfig Translate(const pb::RigFile& f) {
+  SystemConfig c;
+  c.rig_name = f.rig_name();
+  RigParams& rig = c.rig;
+  rig.air.heat_ratio = f.air().heat_ratio();
+  rig.air.temperature_k = f.air().temperature_k();
+  rig.air.gas_constant_j_kg_k = f.air().gas_constant_j_kg_k();
+  rig.air.atmosphere_pressure_pa = f.air().atmosphere_pressure_pa();
+  rig.air.supply_pressure_pa = f.air().supply_pressure_pa();
+
+  for (const pb::LegConfig& leg : f.geometry().leg()) {
+    const auto i = static_cast<std::size_t>(leg.id() - 1);
+    rig.geometry.p_BA_B[i] = FromPb(leg.p_ba_b_m());
+    rig.geometry.p_PB_P[i] = FromPb(leg.p_pb_p_m());
+  }
+  rig.geometry.home_position_m = FromPb(f.geometry().home_position_m());
+
+  const pb::CylinderConfig& y = f.cylinder();
+  rig.cylinder.cap_area_m2 = y.cap_area_m2();
+  rig.cylinder.annulus_area_m2 = y.annulus_area_m2();
+  rig.cylinder.rod_area_m2 = y.rod_area_m2();
+  rig.cylinder.stroke_m = y.stroke_m();
+  rig.cylinder.dead_volume_m3 = y.dead_volume_m3();
+  rig.cylinder.moving_mass_kg = y.moving_mass_kg();
+  rig.cylinder.mid_stroke_length_m = y.mid_stroke_length_m();
+  rig.cylinder.end_stop_stiffness_n_m = y.end_stop_stiffness_n_m();
+  rig.cylinder.end_stop_damping_n_s_m = y.end_stop_damping_n_s_m();
+
+  const pb::ValveConfig& v = f.valve();
+  rig.valve.min_voltage_v = v.min_voltage_v();
+  rig.valve.max_voltage_v = v.max_voltage_v();
+  rig.valve.null_voltage_v = v.null_voltage_v();
+  rig.valve.spool_gain_m_v = v.spool_gain_m_v();
+  rig.valve.spool_offset_m = v.spool_offset_m();
+  rig.valve.max_spool_m = v.max_spool_m();
+  rig.valve.max_orifice_area_m2 = v.max_orifice_area_m2();
+  rig.valve.discharge_coefficient = v.discharge_coefficient();
+  rig.valve.spool_time_constant_s = v.spool_time_constant_s();
+
+  rig.friction.extend = FromPb(f.friction().extend());
+  rig.friction.retract = FromPb(f.friction().retract());
+  rig.friction.bristle_stiffness_n_m = f.friction().bristle_stiffness_n_m();
+  rig.friction.bristle_damping_n_s_m = f.friction().bristle_damping_n_s_m();
+  rig.polytropic.extend = FromPb(f.polytropic().extend());
+  rig.polytropic.retract = FromPb(f.polytropic().retract());
+
+  rig.platform.mass_kg = f.platform().mass_kg();
+  rig.platform.inertia_diag_kg_m2 = FromPb(f.platform().inertia_diag_kg_m2());
+  rig.platform.gravity_m_s2 = f.platform().gravity_m_s2();
+
+  const pb::SensorNoiseConfig& s = f.sensors();
+  rig.sensors.length_sigma_m = s.length_sigma_m();
+  rig.sensors.length_bits = s.length_bits();
+  rig.sensors.pressure_sigma_pa = s.pressure_sigma_pa();
+  rig.sensors.imu_orientation_sigma_rad = s.imu_orientation_sigma_rad();
+  rig.sensors.imu_bias_walk_rad_sqrt_s = s.imu_bias_walk_rad_sqrt_s();
+  rig.sensors.imu_period_s = s.imu_period_s();
+
+  const pb::LegControllerConfig& lc = f.leg_controller();
+  c.leg_controller.differentiator.window = lc.differentiator().window();
+  c.leg_controller.differentiator.sigma = lc.differentiator().sigma();
+  c.leg_controller.differentiator.centre_lag_samples = lc.differentiator().centre_lag_samples();
+  const pb::BsSmcConfig& b = lc.bssmc();
+  c.leg_controller.bssmc.lambda_1_s = b.lambda_1_s();
+  c.leg_controller.bssmc.switching_gain_n = b.switching_gain_n();
+  c.leg_controller.bssmc.boundary_layer_xi_s_m = b.boundary_layer_xi_s_m();
+  c.leg_controller.bssmc.backstepping_beta_1_s = b.backstepping_beta_1_s();
+  c.leg_controller.bssmc.effective_mass_kg = b.effective_mass_kg();
+  c.leg_controller.bssmc.gravity_load_n = b.gravity_load_n();
+  c.leg_controller.bssmc.viscous_estimate_scale = b.viscous_estimate_scale();
+  c.leg_controller.bssmc.friction_estimate_scale = b.friction_estimate_scale();
+  c.leg_controller.bssmc.friction_smoothing_velocity_m_s = b.friction_smoothing_velocity_m_s();
+  c.leg_controller.pi.proportional_v_m = lc.pi().proportional_v_m();
+  c.leg_controller.pi.integral_v_m_s = lc.pi().integral_v_m_s();
+  c.leg_controller.pi.integrator_limit_v = lc.pi().integrator_limit_v();
+  c.leg_controller.setpoint_timeout_s = lc.setpoint_timeout_s();
+
+  const pb::SupervisorConfig& sv = f.supervisor();
+  c.supervisor.period_s = sv.period_s();
+  c.supervisor.blend_duration_s = sv.blend_duration_s();
+  c.supervisor.stop_duration_s = sv.stop_duration_s();
+  c.supervisor.stroke_margin_m = sv.stroke_margin_m();
+  c.supervisor.max_leg_speed_m_s = sv.max_leg_speed_m_s();
+  c.supervisor.max_leg_acceleration_m_s2 = sv.max_leg_acceleration_m_s2();
+  c.supervisor.max_consecutive_deadline_misses = sv.max_consecutive_deadline_misses();
+  c.supervisor.workspace_radius_m = sv.workspace_radius_m();
+  c.supervisor.workspace_max_rotation_rad = sv.workspace_max_rotation_rad();
+  c.supervisor.least_squares_estimator = sv.least_squares_estimator();
+  c.supervisor.estimator_outlier_threshold_m = sv.estimator_outlier_threshold_m();
+  c.supervisor.outer_loop.enabled = sv.outer_loop().enabled();
+  c.supervisor.outer_loop.gain = sv.outer_loop().gain();
+  c.supervisor.outer_loop.max_correction_m = sv.outer_loop().max_correction_m();
+
+  for (const pb::DisturbanceProfileConfig& d : f.disturbance_profile()) c.profiles[d.name()] = FromPb(d);
+  c.default_profile = f.default_profile();
+  return c;
+}
+
+// Stage 3: six legs with ids 1..6 once each; profile names non-empty and unique.
+void CheckStructure(const pb::RigFile& f, const ParseInfoTree& tree, const std::string& file, int eof_line,
+                    std::vector<ConfigIssue>& issues) {
+  const gp::FieldDescriptor* geometry_fd = pb::RigFile::descriptor()->FindFieldByName("geometry");
+  const Location geometry_loc = FromRange(tree.GetLocationRange(geometry_fd, -1));
+  const ParseInfoTree* geometry_tree = tree.GetTreeForNested(geometry_fd, -1);
+  const gp::FieldDescriptor* leg_fd = pb::GeometryConfig::descriptor()->FindFieldByName("leg");
+  const gp::FieldDescriptor* id_fd = pb::LegConfig::descriptor()->FindFieldByName("id");
+  if (f.geometry().leg_size() != static_cast<int>(kNumLegs)) {
+    issues.push_back({file, geometry_loc.line, geometry_loc.column, "geometry.leg",
+                      "a 6-6 platform needs exactly six legs", std::to_string(f.geometry().leg_size()) + " legs",
+                      "exactly 6"});
+  }
+  std::map<int, int> first_line_of_id;
+  for (int k = 0; k < f.geometry().leg_size(); ++k) {
+    const int id = f.geometry().leg(k).id();
+    const ParseInfoTree* leg_tree = geometry_tree ? geometry_tree->GetTreeForNested(leg_fd, k) : nullptr;
+    const Location loc = leg_tree ? FromRange(leg_tree->GetLocationRange(id_fd, -1)) : geometry_loc;
+    const std::string path = "geometry.leg[" + std::to_string(k) + "].id";
+    if (id < 1 || id > static_cast<int>(kNumLegs)) {
+      issues.push_back({file, loc.line, loc.column, path, "leg id out of range", std::to_string(id), "[1, 6]"});
+    } else if (const auto it = first_line_of_id.find(id); it != first_line_of_id.end()) {
+      issues.push_back({file, loc.line, loc.column, path,
+                        "leg " + std::to_string(id) + " is defined twice (first at line " +
+                            std::to_string(it->second) + ")",
+                        std::to_string(id), "each id 1..6 exactly once"});
+    } else {
+      first_line_of_id[id] = loc.line;
+    }
+  }
+
+  const gp::FieldDescriptor* profile_fd = pb::RigFile::descriptor()->FindFieldByName("disturbance_profile");
+  const gp::FieldDescriptor* name_fd = pb::DisturbanceProfileConfig::descriptor()->FindFieldByName("name");
+  if (f.disturbance_profile_size() == 0) {
+    issues.push_back({file, eof_line, 1, "disturbance_profile", "at least one disturbance profile is required",
+                      "0 profiles", ">= 1"});
+  }
+  std::map<std::string, int> first_line_of_name;
+  for (int k = 0; k < f.disturbance_profile_size(); ++k) {
+    const std::string& name = f.disturbance_profile(k).name();
+    const ParseInfoTree* profile_tree = tree.GetTreeForNested(profile_fd, k);
+    const Location loc = profile_tree ? FromRange(profile_tree->GetLocationRange(name_fd, -1))
+                                      : FromRange(tree.GetLocationRange(profile_fd, k));
+    const std::string path = "disturbance_profile[" + std::to_string(k) + "].name";
+    if (name.empty()) {
+      issues.push_back({file, loc.line, loc.column, path, "profile name must not be empty", "\"\"", "non-empty"});
+    } else if (const auto it = first_line_of_name.find(name); it != first_line_of_name.end()) {
+      issues.push_back({file, loc.line, loc.column, path,
+                        "disturbance profile '" + name + "' is defined twice (first at line " +
+                            std::to_string(it->second) + ")",
+                        "\"" + name + "\"", "unique profile names"});
+    } else {
+      first_line_of_name[name] = loc.line;
+    }
+  }
+}
+
+std::string JoinIssues(const std::vector<ConfigIssue>& issues) {
+  std::string out;
+  for (const ConfigIssue& issue : issues) out += (out.empty() ? "" : "\n") + issue.ToString();
+  return out;
+}
+
+ConfigResult Fail(std::vector<ConfigIssue> issues) {
+  ConfigResult result;
+  result.ok = false;
+  result.error = JoinIssues(issues);
+  result.issues = std::move(issues);
+  return result;
+}
+
+}  // namespace
+
+ConfigResult ParseSystemConfig(const std::string& text, const std::string& display_name) {
+  try {
+    pb::RigFile file;
+    ParseInfoTree tree;
+    CollectingErrors errors;
+    gp::TextFormat::Parser parser;
+    parser.RecordErrorsTo(&errors);
+    parser.WriteLocationsTo(&tree);
+    if (!parser.ParseFromString(text, &file)) {
+      std::vector<ConfigIssue> issues;
+      for (const auto& e : errors.errors) issues.push_back(ParserIssue(e, display_name));
+      if (issues.empty()) issues.push_back({display_name, 1, 1, "", "text format parse failed", "", ""});
+      return Fail(std::move(issues));
+    }
+    const int eof_line = CountLines(text);
+
+    std::vector<ConfigIssue> issues;
+    PresenceContext ctx{display_name, eof_line, issues};
+    CheckPresence(file, &tree, "", Location{1, 1, eof_line}, ctx);
+    if (!issues.empty()) return Fail(std::move(issues));
+
+    CheckStructure(file, tree, display_name, eof_line, issues);
+    if (!issues.empty()) return Fail(std::move(issues));
+
+    SystemConfig config = Translate(file);
+    config.source_path = display_name;
+    issues = ValidateSystemConfig(config);
+    for (ConfigIssue& issue : issues) {
+      issue.file = display_name;
+      const Location loc = Locate(file, tree, issue.field);
+      issue.line = loc.line > 0 ? loc.line : 1;
+      issue.column = loc.line > 0 ? loc.column : 1;
+    }
+    if (!issues.empty()) return Fail(std::move(issues));
+
+    ConfigResult result;
+    result.ok = true;
+    result.config = std::move(config);
+    return result;
+  } catch (const std::exception& e) {  // e.g. std::bad_alloc; the status API never throws
+    return Fail({{display_name, 0, 0, "", std::string("internal error while loading: ") + e.what(), "", ""}});
+  }
+}
+
+ConfigResult LoadSystemConfig(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    return Fail({{path, 0, 0, "", "cannot open rig file", "", ""}});
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) return Fail({{path, 0, 0, "", "cannot read rig file", "", ""}});
+  return ParseSystemConfig(text.str(), path);
+}
+
+SystemConfig LoadSystemConfigOrThrow(const std::string& path) {
+  ConfigResult result = LoadSystemConfig(path);
+  if (!result.ok) throw ConfigError(result.error);
+  return std::move(result.config);
+}
+
+ProfileResult SelectProfile(const SystemConfig& config, const std::string& name) {
+  ProfileResult result;
+  result.name = name.empty() ? config.default_profile : name;
+  const auto it = config.profiles.find(result.name);
+  if (it != config.profiles.end()) {
+    result.ok = true;
+    result.profile = it->second;
+    return result;
+  }
+  std::string names;
+  for (const auto& [known, profile] : config.profiles) names += (names.empty() ? "" : ", ") + known;
+  ConfigIssue issue;
+  issue.file = config.source_path.empty() ? "<config>" : config.source_path;
+  issue.field = "disturbance_profile";
+  issue.message = "unknown disturbance profile requested";
+  issue.value = "\"" + result.name + "\"";
+  issue.limit = "one of the profiles defined in the file: " + names;
+  result.error = issue.ToString();
+  return result;
+}
+
+std::string ToTextFormat(const SystemConfig& c) {
+  pb::RigFile f;
+  f.set_rig_name(c.rig_name);
+  const RigParams& rig = c.rig;
+  pb::AirConfig* air = f.mutable_air();
+  air->set_heat_ratio(rig.air.heat_ratio);
+  air->set_temperature_k(rig.air.temperature_k);
+  air->set_gas_constant_j_kg_k(rig.air.gas_constant_j_kg_k);
+  air->set_atmosphere_pressure_pa(rig.air.atmosphere_pressure_pa);
+  air->set_supply_pressure_pa(rig.air.supply_pressure_pa);
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    pb::LegConfig* leg = f.mutable_geometry()->add_leg();
+    leg->set_id(static_cast<int>(i + 1));
+    ToPb(rig.geometry.p_BA_B[i], leg->mutable_p_ba_b_m());
+    ToPb(rig.geometry.p_PB_P[i], leg->mutable_p_pb_p_m());
+  }
+  ToPb(rig.geometry.home_position_m, f.mutable_geometry()->mutable_home_position_m());
+  pb::CylinderConfig* y = f.mutable_cylinder();
+  y->set_cap_area_m2(rig.cylinder.cap_area_m2);
+  y->set_annulus_area_m2(rig.cylinder.annulus_area_m2);
+  y->set_rod_area_m2(rig.cylinder.rod_area_m2);
+  y->set_stroke_m(rig.cylinder.stroke_m);
+  y->set_dead_volume_m3(rig.cylinder.dead_volume_m3);
+  y->set_moving_mass_kg(rig.cylinder.moving_mass_kg);
+  y->set_mid_stroke_length_m(rig.cylinder.mid_stroke_length_m);
+  y->set_end_stop_stiffness_n_m(rig.cylinder.end_stop_stiffness_n_m);
+  y->set_end_stop_damping_n_s_m(rig.cylinder.end_stop_damping_n_s_m);
+  pb::ValveConfig* v = f.mutable_valve();
+  v->set_min_voltage_v(rig.valve.min_voltage_v);
+  v->set_max_voltage_v(rig.valve.max_voltage_v);
+  v->set_null_voltage_v(rig.valve.null_voltage_v);
+  v->set_spool_gain_m_v(rig.valve.spool_gain_m_v);
+  v->set_spool_offset_m(rig.valve.spool_offset_m);
+  v->set_max_spool_m(rig.valve.max_spool_m);
+  v->set_max_orifice_area_m2(rig.valve.max_orifice_area_m2);
+  v->set_discharge_coefficient(rig.valve.discharge_coefficient);
+  v->set_spool_time_constant_s(rig.valve.spool_time_constant_s);
+  ToPb(rig.friction.extend, f.mutable_friction()->mutable_extend());
+  ToPb(rig.friction.retract, f.mutable_friction()->mutable_retract());
+  f.mutable_friction()->set_bristle_stiffness_n_m(rig.friction.bristle_stiffness_n_m);
+  f.mutable_friction()->set_bristle_damping_n_s_m(rig.friction.bristle_damping_n_s_m);
+  ToPb(rig.polytropic.extend, f.mutable_polytropic()->mutable_extend());
+  ToPb(rig.polytropic.retract, f.mutable_polytropic()->mutable_retract());
+  f.mutable_platform()->set_mass_kg(rig.platform.mass_kg);
+  ToPb(rig.platform.inertia_diag_kg_m2, f.mutable_platform()->mutable_inertia_diag_kg_m2());
+  f.mutable_platform()->set_gravity_m_s2(rig.platform.gravity_m_s2);
+  pb::SensorNoiseConfig* s = f.mutable_sensors();
+  s->set_length_sigma_m(rig.sensors.length_sigma_m);
+  s->set_length_bits(rig.sensors.length_bits);
+  s->set_pressure_sigma_pa(rig.sensors.pressure_sigma_pa);
+  s->set_imu_orientation_sigma_rad(rig.sensors.imu_orientation_sigma_rad);
+  s->set_imu_bias_walk_rad_sqrt_s(rig.sensors.imu_bias_walk_rad_sqrt_s);
+  s->set_imu_period_s(rig.sensors.imu_period_s);
+
+  pb::LegControllerConfig* lc = f.mutable_leg_controller();
+  lc->mutable_differentiator()->set_window(c.leg_controller.differentiator.window);
+  lc->mutable_differentiator()->set_sigma(c.leg_controller.differentiator.sigma);
+  lc->mutable_differentiator()->set_centre_lag_samples(c.leg_controller.differentiator.centre_lag_samples);
+  pb::BsSmcConfig* b = lc->mutable_bssmc();
+  b->set_lambda_1_s(c.leg_controller.bssmc.lambda_1_s);
+  b->set_switching_gain_n(c.leg_controller.bssmc.switching_gain_n);
+  b->set_boundary_layer_xi_s_m(c.leg_controller.bssmc.boundary_layer_xi_s_m);
+  b->set_backstepping_beta_1_s(c.leg_controller.bssmc.backstepping_beta_1_s);
+  b->set_effective_mass_kg(c.leg_controller.bssmc.effective_mass_kg);
+  b->set_gravity_load_n(c.leg_controller.bssmc.gravity_load_n);
+  b->set_viscous_estimate_scale(c.leg_controller.bssmc.viscous_estimate_scale);
+  b->set_friction_estimate_scale(c.leg_controller.bssmc.friction_estimate_scale);
+  b->set_friction_smoothing_velocity_m_s(c.leg_controller.bssmc.friction_smoothing_velocity_m_s);
+  lc->mutable_pi()->set_proportional_v_m(c.leg_controller.pi.proportional_v_m);
+  lc->mutable_pi()->set_integral_v_m_s(c.leg_controller.pi.integral_v_m_s);
+  lc->mutable_pi()->set_integrator_limit_v(c.leg_controller.pi.integrator_limit_v);
+  lc->set_setpoint_timeout_s(c.leg_controller.setpoint_timeout_s);
+
+  pb::SupervisorConfig* sv = f.mutable_supervisor();
+  sv->set_period_s(c.supervisor.period_s);
+  sv->set_blend_duration_s(c.supervisor.blend_duration_s);
+  sv->set_stop_duration_s(c.supervisor.stop_duration_s);
+  sv->set_stroke_margin_m(c.supervisor.stroke_margin_m);
+  sv->set_max_leg_speed_m_s(c.supervisor.max_leg_speed_m_s);
+  sv->set_max_leg_acceleration_m_s2(c.supervisor.max_leg_acceleration_m_s2);
+  sv->set_max_consecutive_deadline_misses(c.supervisor.max_consecutive_deadline_misses);
+  sv->set_workspace_radius_m(c.supervisor.workspace_radius_m);
+  sv->set_workspace_max_rotation_rad(c.supervisor.workspace_max_rotation_rad);
+  sv->set_least_squares_estimator(c.supervisor.least_squares_estimator);
+  sv->set_estimator_outlier_threshold_m(c.supervisor.estimator_outlier_threshold_m);
+  sv->mutable_outer_loop()->set_enabled(c.supervisor.outer_loop.enabled);
+  sv->mutable_outer_loop()->set_gain(c.supervisor.outer_loop.gain);
+  sv->mutable_outer_loop()->set_max_correction_m(c.supervisor.outer_loop.max_correction_m);
+
+  for (const auto& [name, profile] : c.profiles) ToPb(name, profile, f.add_disturbance_profile());
+  f.set_default_profile(c.default_profile);
+
+  std::string text;
+  gp::TextFormat::Printer printer;
+  printer.PrintToString(f, &text);
+  return text;
+}
+
+std::string Summary(const SystemConfig& c) {
+  const internal::HomeGeometry home = internal::ComputeHomeGeometry(c.rig.geometry);
+  const auto [lo, hi] = std::minmax_element(home.length_m.begin(), home.length_m.end());
+  std::ostringstream out;
+  out.precision(6);
+  out << c.rig_name << ": " << kNumLegs << " legs, home leg length " << *lo;
+  if (*hi - *lo > 1e-7) out << ".." << *hi;
+  out << " m (mid-stroke " << c.rig.cylinder.mid_stroke_length_m << " m, stroke " << c.rig.cylinder.stroke_m
+      << " m), home Jacobian condition " << home.jacobian_condition << ", supply " << c.rig.air.supply_pressure_pa
+      << " Pa, platform " << c.rig.platform.mass_kg << " kg, profiles {";
+  bool first = true;
+  for (const auto& [name, profile] : c.profiles) {
+    out << (first ? "" : ", ") << name;
+    first = false;
+  }
+  out << "}, default " << c.default_profile;
+  return out.str();
+}
+
+}  // namespace hexa::config
