@@ -15,10 +15,10 @@ struct DifferentiatorParams {
 
 // Backstepping-sliding mode controller (Sec. 3.2, eq 19-45).
 struct BsSmcParams {
-  double lambda_1_s = 40.0;             // sliding surface slope (eq 19)
+  double lambda_1_s = 120.0;            // sliding surface slope (eq 19)
   double switching_gain_n = 30.0;       // K (eq 22, 30), as a force
   double boundary_layer_xi_s_m = 10.0;  // xi in tanh(xi S) (eq 45); paper: 10
-  double backstepping_beta_1_s = 200.0; // beta (eq 38)
+  double backstepping_beta_1_s = 100.0; // beta (eq 38)
   double effective_mass_kg = 1.25;      // load the leg moves (piston + share of platform)
   double gravity_load_n = 11.0;         // static load along the leg at home (compressive > 0)
   double viscous_estimate_scale = 1.0;  // B_hat = scale * Table 8 B (eq 21)
@@ -28,8 +28,8 @@ struct BsSmcParams {
 
 // PI baseline (paper ref [11]) with anti-windup.
 struct PiParams {
-  double proportional_v_m = 60.0;       // valve volts per metre of length error
-  double integral_v_m_s = 120.0;        // valve volts per metre-second
+  double proportional_v_m = 1600.0;      // valve volts per metre of length error
+  double integral_v_m_s = 250.0;         // valve volts per metre-second
   double integrator_limit_v = 2.0;      // anti-windup clamp of the integral term
 };
 

@@ -1,0 +1,92 @@
+// Backstepping-sliding mode position controller of one pneumatic leg (paper Sec. 3.2,
+// eq 14-45), as implemented and corrected in docs/controller.md:
+//
+//   x = l - l_mid (piston position, eq 64), e = x - x_d, S = e_dot + lambda e      (eq 19)
+//   M x_ddot = phi_p - B x_dot + C,  phi_p = P1 A1 - P2 A2                   (eq 14-18, M kept)
+//   phi = M (x_ddot_d - lambda e_dot) + B_hat x_dot - C_hat - K tanh(xi S)   (eq 25, 26, 45)
+//   z = P1 A1 - P2 A2 - phi                                                  (eq 35)
+//   A1 P1_dot - A2 P2_dot = phi_dot - beta z                                 (eq 38)
+//   -> required orifice area through the flow model (eq 4, 7, 43), routing (extend /
+//      retract) chosen by the sign of the required flow term, spool -> voltage (eq 42, 44),
+//   saturated to the valve's 0-10 V.
+//
+// phi_dot is the Gaussian derivative (eq 40) of phi, as in the paper. Velocity x_dot is the
+// Gaussian derivative of the measured length.
+//
+// Update neither throws nor allocates and never returns a non-finite voltage.
+#pragma once
+
+#include "hexa/core/control_params.hpp"
+#include "hexa/core/differentiator.hpp"
+#include "hexa/core/rig.hpp"
+
+namespace hexa {
+
+// The controller's nominal model of one leg: what it believes about the rig.
+struct NominalLegModel {
+  AirParams air;
+  CylinderParams cylinder;
+  ValveParams valve;
+  FrictionParams friction;
+  PolytropicSet polytropic;
+
+  static NominalLegModel FromRig(const RigParams& rig);
+};
+
+struct BsSmcConfig {
+  BsSmcParams params;
+  DifferentiatorParams differentiator;
+  NominalLegModel model;
+  double period_s = 0.001;  // control (and sensor) period
+  // Throws std::invalid_argument naming the field, value and limit.
+  void Validate() const;
+};
+
+struct BsSmcInput {
+  double length_m = 0.0;               // measured leg length
+  double cap_pressure_pa = 1.0e5;      // P1, absolute
+  double rod_pressure_pa = 1.0e5;      // P2, absolute
+  double supply_pressure_pa = 7.0e5;   // Ps, absolute (measured)
+  double desired_length_m = 0.0;       // x_d + l_mid (incl. outer-loop correction)
+  double desired_velocity_m_s = 0.0;   // x_dot_d
+  double desired_acceleration_m_s2 = 0.0;  // x_ddot_d
+};
+
+struct BsSmcOutput {
+  double valve_v = 5.0;
+  double sliding_surface_m_s = 0.0;   // S (eq 19)
+  double velocity_m_s = 0.0;          // x_dot estimate (eq 40)
+  double desired_force_n = 0.0;       // phi (eq 45)
+  double desired_force_rate_n_s = 0.0;  // phi_dot (eq 40 applied to phi)
+  double force_error_n = 0.0;         // z (eq 35)
+  double spool_m = 0.0;               // commanded spool position before saturation
+  bool saturated = false;             // voltage clipped to the valve range
+};
+
+class BsSmcController {
+ public:
+  explicit BsSmcController(const BsSmcConfig& config);  // validates (throws)
+
+  // Forget the differentiator histories (after a hold).
+  void Reset();
+
+  // One control period. Inputs are trusted to be finite and in range (LegController checks
+  // them); a non-finite intermediate still yields the null voltage.
+  void Update(const BsSmcInput& input, BsSmcOutput& output);
+
+  const BsSmcConfig& config() const { return config_; }
+
+  // Static friction estimate of eq 14 (without the viscous part), signed: opposes v.
+  double FrictionEstimateN(double velocity_m_s) const;
+
+ private:
+  BsSmcConfig config_;
+  GaussianDifferentiator velocity_diff_;
+  GaussianDifferentiator force_diff_;
+};
+
+// Orifice mass-flow function of eq 4 per unit area and discharge coefficient:
+// mdot = C_f A_v FlowPerArea(Pu, Pd). Zero when Pd >= Pu. [kg/(s m^2)]
+double FlowPerAreaKgSM2(double upstream_pa, double downstream_pa, const AirParams& air);
+
+}  // namespace hexa

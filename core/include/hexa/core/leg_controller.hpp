@@ -1,0 +1,104 @@
+// One leg's position controller as the leg_ctrl service runs it every 1 ms sensor tick:
+// validates the inputs, interpolates the 5 ms setpoint to the tick, adds the outer-loop
+// correction, and runs the BS-SMC (Sec. 3.2) or the PI baseline (ref [11]). Holds (valve at
+// null) when there is no setpoint yet, when the setpoint is stale, or when any input is
+// non-finite or out of range. Pure: time is an argument; Update neither throws nor
+// allocates and never outputs a non-finite number.
+#pragma once
+
+#include <cstdint>
+
+#include "hexa/core/bssmc_controller.hpp"
+#include "hexa/core/control_params.hpp"
+#include "hexa/core/pi_controller.hpp"
+#include "hexa/core/rig.hpp"
+
+namespace hexa {
+
+enum class LegControllerKind : std::uint8_t { kBsSmc, kPi };
+
+// Matches idl LegCtrlStatus.
+enum class LegControlStatus : std::uint8_t {
+  kOk,
+  kHoldNoSetpoint,     // no setpoint received yet: valve at null
+  kHoldStaleSetpoint,  // setpoint older than setpoint_timeout_s: valve at null
+  kHoldBadInput,       // non-finite or out-of-range sensor or setpoint: valve at null
+  kHoldSupervisor,     // setpoint says hold: the controller keeps length_m at zero velocity
+};
+
+const char* ToString(LegControlStatus status);
+
+struct LegControllerConfig {
+  LegControllerKind kind = LegControllerKind::kBsSmc;
+  LegControllerParams params;
+  NominalLegModel model;           // the controller's nominal model of the leg
+  double period_s = 0.001;        // sensor / control period
+  // Plausibility limits: anything outside -> kHoldBadInput.
+  double length_margin_m = 0.02;  // beyond either end of the stroke
+  double min_pressure_pa = 0.2e5;
+  double max_pressure_pa = 12.0e5;
+  double max_setpoint_speed_m_s = 2.0;
+  double max_setpoint_acceleration_m_s2 = 100.0;
+  double max_correction_m = 0.05;
+
+  static LegControllerConfig FromRig(const RigParams& rig, const LegControllerParams& params,
+                                     LegControllerKind kind);
+  void Validate() const;  // throws std::invalid_argument naming field, value and limit
+};
+
+struct LegControllerInput {
+  // Sensor sample of this tick.
+  std::uint64_t tick = 0;
+  double time_s = 0.0;
+  double length_m = 0.0;
+  double cap_pressure_pa = 1.0e5;
+  double rod_pressure_pa = 1.0e5;
+  double supply_pressure_pa = 7.0e5;
+  // Latest setpoint (values at setpoint_time_s).
+  bool has_setpoint = false;
+  std::uint64_t setpoint_tick = 0;
+  double setpoint_time_s = 0.0;
+  double setpoint_length_m = 0.0;
+  double setpoint_velocity_m_s = 0.0;
+  double setpoint_acceleration_m_s2 = 0.0;
+  double correction_m = 0.0;  // outer-loop correction (Sec. 4.1), added to the length
+  bool hold = false;
+};
+
+struct LegControllerOutput {
+  std::uint64_t tick = 0;           // tick answered
+  std::uint64_t setpoint_tick = 0;  // tick of the setpoint used
+  double valve_v = 5.0;
+  LegControlStatus status = LegControlStatus::kHoldNoSetpoint;
+  double desired_length_m = 0.0;    // interpolated setpoint + correction actually used
+  double desired_velocity_m_s = 0.0;
+  double sliding_surface_m_s = 0.0; // S (eq 19); 0 for the PI baseline
+  double velocity_m_s = 0.0;        // estimated leg velocity (BS-SMC), 0 for PI
+  double desired_force_n = 0.0;     // phi (BS-SMC)
+};
+
+class LegController {
+ public:
+  explicit LegController(const LegControllerConfig& config);  // validates (throws)
+
+  void Update(const LegControllerInput& input, LegControllerOutput& output);
+
+  // Setpoint at time_s from one at t0 (eq: l + v dt + a dt^2 / 2), for tests and tools.
+  static void Interpolate(const LegControllerInput& input, double& length_m, double& velocity_m_s,
+                          double& acceleration_m_s2);
+
+  const LegControllerConfig& config() const { return config_; }
+
+ private:
+  bool SensorsValid(const LegControllerInput& in) const;
+  bool LengthPlausible(double length_m) const;
+  void Hold(LegControlStatus status, LegControllerOutput& out);
+
+  LegControllerConfig config_;
+  BsSmcController bssmc_;
+  PiController pi_;
+  bool active_ = false;  // the control law ran last tick (histories valid)
+  double last_desired_length_m_ = 0.0;
+};
+
+}  // namespace hexa

@@ -1,0 +1,47 @@
+// PI baseline (paper ref [11]): joint-space PI on the leg length error, with anti-windup.
+//
+//   e = l_d - l,  u = u_null + sign(a) (Kp e + I),  I = clamp(I + Ki e h, +-I_max)
+//
+// sign(a) is the sign of the spool gain of eq 42 (a < 0 on the MPYE: a voltage below null
+// extends), so positive gains push the leg towards the setpoint. Anti-windup: the integral
+// is clamped, and it is not integrated while the output is saturated in the direction the
+// error would push it further (conditional integration). Output saturated to 0-10 V.
+#pragma once
+
+#include "hexa/core/control_params.hpp"
+#include "hexa/core/rig.hpp"
+
+namespace hexa {
+
+struct PiConfig {
+  PiParams params;
+  ValveParams valve;
+  double period_s = 0.001;
+  void Validate() const;  // throws std::invalid_argument naming field, value, limit
+};
+
+struct PiInput {
+  double length_m = 0.0;
+  double desired_length_m = 0.0;
+};
+
+struct PiOutput {
+  double valve_v = 5.0;
+  double error_m = 0.0;       // l_d - l
+  double integral_v = 0.0;    // integral term, volts (before the spool-sign)
+  bool saturated = false;
+};
+
+class PiController {
+ public:
+  explicit PiController(const PiConfig& config);
+  void Reset();
+  void Update(const PiInput& input, PiOutput& output);  // never throws or allocates
+  const PiConfig& config() const { return config_; }
+
+ private:
+  PiConfig config_;
+  double integral_v_ = 0.0;
+};
+
+}  // namespace hexa

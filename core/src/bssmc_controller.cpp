@@ -1,0 +1,204 @@
+#include "hexa/core/bssmc_controller.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace hexa {
+namespace {
+
+void Require(bool ok, const char* field, double value, const char* limit) {
+  if (ok) return;
+  std::ostringstream m;
+  m << "bssmc: " << field << " = " << value << " must be " << limit;
+  throw std::invalid_argument(m.str());
+}
+
+DifferentiatorConfig DiffConfig(const BsSmcConfig& c) {
+  DifferentiatorConfig d;
+  d.params = c.differentiator;
+  d.sample_period_s = c.period_s;
+  return d;
+}
+
+}  // namespace
+
+NominalLegModel NominalLegModel::FromRig(const RigParams& rig) {
+  NominalLegModel m;
+  m.air = rig.air;
+  m.cylinder = rig.cylinder;
+  m.valve = rig.valve;
+  m.friction = rig.friction;
+  m.polytropic = rig.polytropic;
+  return m;
+}
+
+void BsSmcConfig::Validate() const {
+  const BsSmcParams& p = params;
+  Require(std::isfinite(p.lambda_1_s) && p.lambda_1_s > 0, "lambda_1_s", p.lambda_1_s, "finite and > 0");
+  Require(std::isfinite(p.switching_gain_n) && p.switching_gain_n >= 0, "switching_gain_n",
+          p.switching_gain_n, "finite and >= 0");
+  Require(std::isfinite(p.boundary_layer_xi_s_m) && p.boundary_layer_xi_s_m > 0,
+          "boundary_layer_xi_s_m", p.boundary_layer_xi_s_m, "finite and > 0");
+  Require(std::isfinite(p.backstepping_beta_1_s) && p.backstepping_beta_1_s > 0,
+          "backstepping_beta_1_s", p.backstepping_beta_1_s, "finite and > 0");
+  Require(std::isfinite(p.effective_mass_kg) && p.effective_mass_kg > 0, "effective_mass_kg",
+          p.effective_mass_kg, "finite and > 0");
+  Require(std::isfinite(p.gravity_load_n) && std::abs(p.gravity_load_n) < 1e4, "gravity_load_n",
+          p.gravity_load_n, "finite and |.| < 1e4 N");
+  Require(std::isfinite(p.viscous_estimate_scale) && p.viscous_estimate_scale >= 0,
+          "viscous_estimate_scale", p.viscous_estimate_scale, "finite and >= 0");
+  Require(std::isfinite(p.friction_estimate_scale) && p.friction_estimate_scale >= 0,
+          "friction_estimate_scale", p.friction_estimate_scale, "finite and >= 0");
+  Require(std::isfinite(p.friction_smoothing_velocity_m_s) && p.friction_smoothing_velocity_m_s > 0,
+          "friction_smoothing_velocity_m_s", p.friction_smoothing_velocity_m_s, "finite and > 0");
+  Require(std::isfinite(period_s) && period_s > 0, "period_s", period_s, "finite and > 0");
+  const ValveParams& v = model.valve;
+  Require(std::isfinite(v.spool_gain_m_v) && v.spool_gain_m_v != 0, "valve.spool_gain_m_v",
+          v.spool_gain_m_v, "finite and != 0");
+  Require(v.max_spool_m > 0, "valve.max_spool_m", v.max_spool_m, "> 0");
+  Require(v.max_orifice_area_m2 > 0, "valve.max_orifice_area_m2", v.max_orifice_area_m2, "> 0");
+  Require(v.discharge_coefficient > 0, "valve.discharge_coefficient", v.discharge_coefficient, "> 0");
+  Require(v.max_voltage_v > v.min_voltage_v, "valve.max_voltage_v", v.max_voltage_v,
+          "> valve.min_voltage_v");
+  const CylinderParams& c = model.cylinder;
+  Require(c.cap_area_m2 > 0, "cylinder.cap_area_m2", c.cap_area_m2, "> 0");
+  Require(c.annulus_area_m2 > 0, "cylinder.annulus_area_m2", c.annulus_area_m2, "> 0");
+  Require(c.stroke_m > 0, "cylinder.stroke_m", c.stroke_m, "> 0");
+  Require(c.dead_volume_m3 > 0, "cylinder.dead_volume_m3", c.dead_volume_m3, "> 0");
+  Require(model.air.temperature_k > 0, "air.temperature_k", model.air.temperature_k, "> 0");
+  Require(model.air.heat_ratio > 1, "air.heat_ratio", model.air.heat_ratio, "> 1");
+  DiffConfig(*this).Validate();
+}
+
+double FlowPerAreaKgSM2(double upstream_pa, double downstream_pa, const AirParams& air) {
+  // Eq 4 and 5, per unit C_f A_v.
+  if (!(upstream_pa > 0.0) || !(downstream_pa < upstream_pa)) return 0.0;
+  const double k = air.heat_ratio;
+  const double r = std::max(downstream_pa, 0.0) / upstream_pa;
+  const double critical = std::pow(2.0 / (k + 1.0), k / (k - 1.0));  // eq 5, 0.528
+  const double scale = upstream_pa / std::sqrt(air.temperature_k);
+  if (r <= critical) {  // choked
+    return scale *
+           std::sqrt(k / air.gas_constant_j_kg_k * std::pow(2.0 / (k + 1.0), (k + 1.0) / (k - 1.0)));
+  }
+  return scale * std::sqrt(k / air.gas_constant_j_kg_k * 2.0 / (k - 1.0)) * std::pow(r, 1.0 / k) *
+         std::sqrt(std::max(0.0, 1.0 - std::pow(r, (k - 1.0) / k)));
+}
+
+BsSmcController::BsSmcController(const BsSmcConfig& config)
+    : config_((config.Validate(), config)),
+      velocity_diff_(DiffConfig(config)),
+      force_diff_(DiffConfig(config)) {}
+
+void BsSmcController::Reset() {
+  velocity_diff_.Reset();
+  force_diff_.Reset();
+}
+
+double BsSmcController::FrictionEstimateN(double velocity_m_s) const {
+  // Eq 14's bracket: F_c sgn(v) + (F_s - F_c) exp(-(v/v_s)^2) sgn(v), per stroke direction
+  // (Table 8 as magnitudes), sgn smoothed to tanh(v / v_eps) so that the estimate is
+  // continuous through a reversal (docs/controller.md).
+  const FrictionParams& f = config_.model.friction;
+  const FrictionDirectionParams& d = velocity_m_s >= 0.0 ? f.extend : f.retract;
+  const double ratio = velocity_m_s / d.stribeck_velocity_m_s;
+  const double magnitude = d.coulomb_n + (d.static_n - d.coulomb_n) * std::exp(-ratio * ratio);
+  return config_.params.friction_estimate_scale * magnitude *
+         std::tanh(velocity_m_s / config_.params.friction_smoothing_velocity_m_s);
+}
+
+void BsSmcController::Update(const BsSmcInput& in, BsSmcOutput& out) {
+  const BsSmcParams& p = config_.params;
+  const NominalLegModel& m = config_.model;
+  const CylinderParams& cyl = m.cylinder;
+  const double mid_m = cyl.mid_stroke_length_m;
+
+  // States (eq 15): x1 = x, x2 = v, x3 = P1, x4 = P2.
+  const double x_m = in.length_m - mid_m;
+  const double v_m_s = velocity_diff_.Update(x_m);  // eq 40 on the measured position
+  const double xd_m = in.desired_length_m - mid_m;
+  const double e_m = x_m - xd_m;
+  const double edot_m_s = v_m_s - in.desired_velocity_m_s;
+  const double s_m_s = edot_m_s + p.lambda_1_s * e_m;  // eq 19
+
+  // Load model (eq 14, 18 with M kept): M x_ddot = phi_p - B x_dot + C, where
+  // C = -Pa Ar - F_g - F_fric(v). Friction and viscous estimates are evaluated at the
+  // desired velocity (feed-forward, see docs).
+  const double vd = in.desired_velocity_m_s;
+  const FrictionDirectionParams& fd = vd >= 0.0 ? m.friction.extend : m.friction.retract;
+  const double b_hat = p.viscous_estimate_scale * fd.viscous_n_s_m;  // eq 21
+  const double c_hat = -m.air.atmosphere_pressure_pa * cyl.rod_area_m2 - p.gravity_load_n -
+                       FrictionEstimateN(vd);  // eq 14
+  const double phi_hat = p.effective_mass_kg * (in.desired_acceleration_m_s2 - p.lambda_1_s * edot_m_s) +
+                         b_hat * vd - c_hat;                                    // eq 25
+  const double phi = phi_hat - p.switching_gain_n * std::tanh(p.boundary_layer_xi_s_m * s_m_s);  // eq 45
+  // phi_dot (eq 38): the paper differentiates phi numerically (eq 40). Only its model part
+  // is differentiated here: the feedback part (lambda e_dot, K tanh(xi S)) is sensor noise
+  // at 1 kHz and its derivative drove a 34 Hz limit cycle (docs/controller.md); beta z
+  // corrects what the model part misses.
+  const double phi_model = phi_hat + p.effective_mass_kg * p.lambda_1_s * edot_m_s;
+  const double phi_dot = force_diff_.Update(phi_model);  // eq 40
+
+  // Backstepping (eq 35, 38): drive z to zero at rate beta.
+  const double p1 = in.cap_pressure_pa;
+  const double p2 = in.rod_pressure_pa;
+  const double z_n = p1 * cyl.cap_area_m2 - p2 * cyl.annulus_area_m2 - phi;  // eq 35
+  const double force_rate_required = phi_dot - p.backstepping_beta_1_s * z_n;  // eq 38
+
+  // Pressure dynamics (eq 7) with V1 = V0 + A1 (L/2 + x), V2 = V0 + A2 (L/2 - x) (eq 64).
+  const double half = 0.5 * cyl.stroke_m;
+  const double xc = std::clamp(x_m, -half, half);
+  const double v1 = cyl.dead_volume_m3 + cyl.cap_area_m2 * (half + xc);
+  const double v2 = cyl.dead_volume_m3 + cyl.annulus_area_m2 * (half - xc);
+  const double rt = m.air.gas_constant_j_kg_k * m.air.temperature_k;
+  const PolytropicParams& motion = v_m_s >= 0.0 ? m.polytropic.extend : m.polytropic.retract;
+  // Force rate caused by the motion alone (compression / expansion, gamma_k terms).
+  const double motion_rate = -motion.volume * v_m_s *
+                             (cyl.cap_area_m2 * cyl.cap_area_m2 * p1 / v1 +
+                              cyl.annulus_area_m2 * cyl.annulus_area_m2 * p2 / v2);
+  // What the valve flow must contribute (eq 44's numerator, with the outflow kept).
+  const double flow_rate_required = force_rate_required - motion_rate;
+
+  const double ps = in.supply_pressure_pa;
+  const double pa = m.air.atmosphere_pressure_pa;
+  const ValveParams& valve = m.valve;
+  double spool_m = 0.0;
+  if (flow_rate_required >= 0.0) {
+    // Extend routing (Table 4): supply -> chamber 1, chamber 2 -> exhaust. Spool > 0.
+    const PolytropicParams& g = m.polytropic.extend;
+    const double gain = valve.discharge_coefficient * rt *
+                        (cyl.cap_area_m2 * g.inflow * FlowPerAreaKgSM2(ps, p1, m.air) / v1 +
+                         cyl.annulus_area_m2 * g.outflow * FlowPerAreaKgSM2(p2, pa, m.air) / v2);
+    const double area = gain > 1e-12 ? flow_rate_required / gain : valve.max_orifice_area_m2;
+    spool_m = valve.max_spool_m * std::sqrt(std::min(area / valve.max_orifice_area_m2, 1.0));  // eq 43
+  } else {
+    // Retract routing (Table 5): supply -> chamber 2, chamber 1 -> exhaust. Spool < 0.
+    const PolytropicParams& g = m.polytropic.retract;
+    const double gain = valve.discharge_coefficient * rt *
+                        (cyl.cap_area_m2 * g.outflow * FlowPerAreaKgSM2(p1, pa, m.air) / v1 +
+                         cyl.annulus_area_m2 * g.inflow * FlowPerAreaKgSM2(ps, p2, m.air) / v2);
+    const double area = gain > 1e-12 ? -flow_rate_required / gain : valve.max_orifice_area_m2;
+    spool_m = -valve.max_spool_m * std::sqrt(std::min(area / valve.max_orifice_area_m2, 1.0));
+  }
+  double u_v = (spool_m - valve.spool_offset_m) / valve.spool_gain_m_v;  // eq 42 inverted (eq 44)
+  const double u_clamped = std::clamp(u_v, valve.min_voltage_v, valve.max_voltage_v);
+
+  out.saturated = u_clamped != u_v;
+  out.valve_v = std::isfinite(u_v) ? u_clamped : valve.null_voltage_v;
+  out.sliding_surface_m_s = s_m_s;
+  out.velocity_m_s = v_m_s;
+  out.desired_force_n = phi;
+  out.desired_force_rate_n_s = phi_dot;
+  out.force_error_n = z_n;
+  out.spool_m = spool_m;
+  if (!std::isfinite(phi) || !std::isfinite(phi_dot)) {
+    // A non-finite value would poison the differentiator rings for a whole window.
+    Reset();
+    out.valve_v = valve.null_voltage_v;
+  }
+}
+
+}  // namespace hexa

@@ -1,0 +1,104 @@
+#include "hexa/core/differentiator.hpp"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace hexa {
+
+void DifferentiatorConfig::Validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("differentiator: " + what); };
+  if (params.window < 2 || params.window > GaussianDifferentiator::kMaxWindow) {
+    std::ostringstream m;
+    m << "window = " << params.window << " outside [2, " << GaussianDifferentiator::kMaxWindow << "]";
+    fail(m.str());
+  }
+  if (!(params.sigma > 0.0) || !std::isfinite(params.sigma)) {
+    std::ostringstream m;
+    m << "sigma = " << params.sigma << " must be finite and > 0 (samples)";
+    fail(m.str());
+  }
+  if (!std::isfinite(params.centre_lag_samples) || params.centre_lag_samples < 0.0 ||
+      params.centre_lag_samples > params.window - 1) {
+    std::ostringstream m;
+    m << "centre_lag_samples = " << params.centre_lag_samples << " outside [0, window-1 = "
+      << params.window - 1 << "]";
+    fail(m.str());
+  }
+  if (!(sample_period_s > 0.0) || !std::isfinite(sample_period_s)) {
+    std::ostringstream m;
+    m << "sample_period_s = " << sample_period_s << " must be finite and > 0";
+    fail(m.str());
+  }
+}
+
+GaussianDifferentiator::GaussianDifferentiator(const DifferentiatorConfig& config) {
+  config.Validate();
+  window_ = config.params.window;
+  period_s_ = config.sample_period_s;
+  const double sigma = config.params.sigma;
+  const double lag = config.params.centre_lag_samples;
+  // Sample k (0 = newest) sits at time -k h. Pair (older a, newer b), a > b:
+  // midpoint -(a + b) / 2, baseline (a - b) h. Eq 41's normalising constant cancels in the
+  // weighted mean, so only the exponential is kept.
+  for (int n = 1; n < window_; ++n) {  // n + 1 samples held
+    double weight_sum = 0.0;
+    std::array<double, kMaxWindow> c{};
+    for (int a = 1; a <= n; ++a) {
+      for (int b = 0; b < a; ++b) {
+        const double offset = -0.5 * (a + b) + lag;  // midpoint - c, in samples
+        const double w = std::exp(-offset * offset / (2.0 * sigma * sigma));  // eq 41
+        const double inv_dt = 1.0 / ((a - b) * period_s_);
+        c[b] += w * inv_dt;  // eq 40: w (x_j - x_i) / (t_j - t_i), x_j the newer
+        c[a] -= w * inv_dt;
+        weight_sum += w;
+      }
+    }
+    // weight_sum > 0 always: a Gaussian is positive (it can underflow only for absurd lags,
+    // excluded by Validate).
+    for (int k = 0; k <= n; ++k) coeff_[n][k] = c[k] / weight_sum;
+  }
+  Reset();
+}
+
+void GaussianDifferentiator::Reset() {
+  ring_.fill(0.0);
+  newest_ = -1;
+  fill_ = 0;
+}
+
+double GaussianDifferentiator::Update(double value) {
+  newest_ = (newest_ + 1) % window_;
+  ring_[newest_] = value;
+  if (fill_ < window_) ++fill_;
+  if (fill_ < 2) return 0.0;
+  const auto& c = coeff_[fill_ - 1];
+  double sum = 0.0;
+  int idx = newest_;
+  for (int k = 0; k < fill_; ++k) {
+    sum += c[k] * ring_[idx];
+    idx = (idx == 0) ? window_ - 1 : idx - 1;
+  }
+  return sum;
+}
+
+double GaussianDifferentiator::coefficient(int k) const {
+  if (k < 0 || k >= window_) return 0.0;
+  return coeff_[window_ - 1][k];
+}
+
+double GaussianDifferentiator::GroupDelaySamples() const {
+  // For x = (k h)^2 sampled at t = -k h: estimate = h^2 sum c_k k^2 = 2 (0 - d h)
+  // (sum c_k = 0 and sum c_k (-k h) = 1 by exactness on lines).
+  double s = 0.0;
+  for (int k = 0; k < window_; ++k) s += coeff_[window_ - 1][k] * k * k;
+  return -s * period_s_ / 2.0;
+}
+
+double GaussianDifferentiator::NoiseGain() const {
+  double s = 0.0;
+  for (int k = 0; k < window_; ++k) s += coeff_[window_ - 1][k] * coeff_[window_ - 1][k];
+  return std::sqrt(s);
+}
+
+}  // namespace hexa

@@ -1,0 +1,194 @@
+#include "hexa/core/leg_controller.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace hexa {
+namespace {
+
+void Require(bool ok, const char* field, double value, const char* limit) {
+  if (ok) return;
+  std::ostringstream m;
+  m << "leg_controller: " << field << " = " << value << " must be " << limit;
+  throw std::invalid_argument(m.str());
+}
+
+BsSmcConfig MakeBsSmcConfig(const LegControllerConfig& c) {
+  BsSmcConfig b;
+  b.params = c.params.bssmc;
+  b.differentiator = c.params.differentiator;
+  b.model = c.model;
+  b.period_s = c.period_s;
+  return b;
+}
+
+PiConfig MakePiConfig(const LegControllerConfig& c) {
+  PiConfig p;
+  p.params = c.params.pi;
+  p.valve = c.model.valve;
+  p.period_s = c.period_s;
+  return p;
+}
+
+}  // namespace
+
+const char* ToString(LegControlStatus status) {
+  switch (status) {
+    case LegControlStatus::kOk: return "ok";
+    case LegControlStatus::kHoldNoSetpoint: return "hold_no_setpoint";
+    case LegControlStatus::kHoldStaleSetpoint: return "hold_stale_setpoint";
+    case LegControlStatus::kHoldBadInput: return "hold_bad_input";
+    case LegControlStatus::kHoldSupervisor: return "hold_supervisor";
+  }
+  return "unknown";
+}
+
+LegControllerConfig LegControllerConfig::FromRig(const RigParams& rig, const LegControllerParams& params,
+                                                 LegControllerKind kind) {
+  LegControllerConfig c;
+  c.kind = kind;
+  c.params = params;
+  c.model = NominalLegModel::FromRig(rig);
+  return c;
+}
+
+void LegControllerConfig::Validate() const {
+  Require(std::isfinite(params.setpoint_timeout_s) && params.setpoint_timeout_s > 0,
+          "setpoint_timeout_s", params.setpoint_timeout_s, "finite and > 0");
+  Require(std::isfinite(period_s) && period_s > 0, "period_s", period_s, "finite and > 0");
+  Require(std::isfinite(length_margin_m) && length_margin_m >= 0, "length_margin_m", length_margin_m,
+          "finite and >= 0");
+  Require(std::isfinite(min_pressure_pa) && min_pressure_pa >= 0, "min_pressure_pa", min_pressure_pa,
+          "finite and >= 0");
+  Require(std::isfinite(max_pressure_pa) && max_pressure_pa > min_pressure_pa, "max_pressure_pa",
+          max_pressure_pa, "finite and > min_pressure_pa");
+  Require(std::isfinite(max_setpoint_speed_m_s) && max_setpoint_speed_m_s > 0, "max_setpoint_speed_m_s",
+          max_setpoint_speed_m_s, "finite and > 0");
+  Require(std::isfinite(max_setpoint_acceleration_m_s2) && max_setpoint_acceleration_m_s2 > 0,
+          "max_setpoint_acceleration_m_s2", max_setpoint_acceleration_m_s2, "finite and > 0");
+  Require(std::isfinite(max_correction_m) && max_correction_m >= 0, "max_correction_m", max_correction_m,
+          "finite and >= 0");
+  MakeBsSmcConfig(*this).Validate();
+  MakePiConfig(*this).Validate();
+}
+
+LegController::LegController(const LegControllerConfig& config)
+    : config_((config.Validate(), config)),
+      bssmc_(MakeBsSmcConfig(config)),
+      pi_(MakePiConfig(config)),
+      last_desired_length_m_(config.model.cylinder.mid_stroke_length_m) {}
+
+void LegController::Interpolate(const LegControllerInput& in, double& length_m, double& velocity_m_s,
+                                double& acceleration_m_s2) {
+  if (in.hold) {  // supervisor hold: keep the commanded length at rest
+    length_m = in.setpoint_length_m + in.correction_m;
+    velocity_m_s = 0.0;
+    acceleration_m_s2 = 0.0;
+    return;
+  }
+  // Constant-acceleration extrapolation over the ticks inside the 5 ms setpoint period.
+  const double dt = std::max(0.0, in.time_s - in.setpoint_time_s);
+  length_m = in.setpoint_length_m + in.setpoint_velocity_m_s * dt +
+             0.5 * in.setpoint_acceleration_m_s2 * dt * dt + in.correction_m;
+  velocity_m_s = in.setpoint_velocity_m_s + in.setpoint_acceleration_m_s2 * dt;
+  acceleration_m_s2 = in.setpoint_acceleration_m_s2;
+}
+
+bool LegController::LengthPlausible(double length_m) const {
+  const CylinderParams& c = config_.model.cylinder;
+  const double half = 0.5 * c.stroke_m + config_.length_margin_m;
+  return std::isfinite(length_m) && std::abs(length_m - c.mid_stroke_length_m) <= half;
+}
+
+bool LegController::SensorsValid(const LegControllerInput& in) const {
+  auto pressure_ok = [&](double p) {
+    return std::isfinite(p) && p >= config_.min_pressure_pa && p <= config_.max_pressure_pa;
+  };
+  return std::isfinite(in.time_s) && LengthPlausible(in.length_m) && pressure_ok(in.cap_pressure_pa) &&
+         pressure_ok(in.rod_pressure_pa) && pressure_ok(in.supply_pressure_pa);
+}
+
+void LegController::Hold(LegControlStatus status, LegControllerOutput& out) {
+  if (active_) {  // histories would be stale when control resumes
+    bssmc_.Reset();
+    pi_.Reset();
+    active_ = false;
+  }
+  out.valve_v = config_.model.valve.null_voltage_v;
+  out.status = status;
+  out.desired_length_m = last_desired_length_m_;
+  out.desired_velocity_m_s = 0.0;
+  out.sliding_surface_m_s = 0.0;
+  out.velocity_m_s = 0.0;
+  out.desired_force_n = 0.0;
+}
+
+void LegController::Update(const LegControllerInput& in, LegControllerOutput& out) {
+  out.tick = in.tick;
+  out.setpoint_tick = in.setpoint_tick;
+  if (!SensorsValid(in)) return Hold(LegControlStatus::kHoldBadInput, out);
+  if (!in.has_setpoint) return Hold(LegControlStatus::kHoldNoSetpoint, out);
+  const double age_s = in.time_s - in.setpoint_time_s;
+  if (!std::isfinite(in.setpoint_time_s) || !std::isfinite(age_s)) {
+    return Hold(LegControlStatus::kHoldBadInput, out);
+  }
+  if (age_s > config_.params.setpoint_timeout_s) return Hold(LegControlStatus::kHoldStaleSetpoint, out);
+  // A setpoint stamped more than half a period in the future is inconsistent.
+  if (age_s < -0.5 * config_.period_s) return Hold(LegControlStatus::kHoldBadInput, out);
+  if (!std::isfinite(in.setpoint_velocity_m_s) || !std::isfinite(in.setpoint_acceleration_m_s2) ||
+      !std::isfinite(in.correction_m) ||
+      std::abs(in.setpoint_velocity_m_s) > config_.max_setpoint_speed_m_s ||
+      std::abs(in.setpoint_acceleration_m_s2) > config_.max_setpoint_acceleration_m_s2 ||
+      std::abs(in.correction_m) > config_.max_correction_m) {
+    return Hold(LegControlStatus::kHoldBadInput, out);
+  }
+  double ld_m = 0.0, vd_m_s = 0.0, ad_m_s2 = 0.0;
+  Interpolate(in, ld_m, vd_m_s, ad_m_s2);
+  if (!LengthPlausible(ld_m) || !std::isfinite(vd_m_s)) return Hold(LegControlStatus::kHoldBadInput, out);
+
+  active_ = true;
+  last_desired_length_m_ = ld_m;
+  out.status = in.hold ? LegControlStatus::kHoldSupervisor : LegControlStatus::kOk;
+  out.desired_length_m = ld_m;
+  out.desired_velocity_m_s = vd_m_s;
+  if (config_.kind == LegControllerKind::kBsSmc) {
+    BsSmcInput b;
+    b.length_m = in.length_m;
+    b.cap_pressure_pa = in.cap_pressure_pa;
+    b.rod_pressure_pa = in.rod_pressure_pa;
+    b.supply_pressure_pa = in.supply_pressure_pa;
+    b.desired_length_m = ld_m;
+    b.desired_velocity_m_s = vd_m_s;
+    b.desired_acceleration_m_s2 = ad_m_s2;
+    BsSmcOutput o;
+    bssmc_.Update(b, o);
+    out.valve_v = o.valve_v;
+    out.sliding_surface_m_s = std::isfinite(o.sliding_surface_m_s) ? o.sliding_surface_m_s : 0.0;
+    out.velocity_m_s = std::isfinite(o.velocity_m_s) ? o.velocity_m_s : 0.0;
+    out.desired_force_n = std::isfinite(o.desired_force_n) ? o.desired_force_n : 0.0;
+  } else {
+    PiInput p;
+    p.length_m = in.length_m;
+    p.desired_length_m = ld_m;
+    PiOutput o;
+    pi_.Update(p, o);
+    out.valve_v = o.valve_v;
+    out.sliding_surface_m_s = 0.0;
+    out.velocity_m_s = 0.0;
+    out.desired_force_n = 0.0;
+  }
+  // Last line of defence: never emit a non-finite or out-of-range voltage.
+  const ValveParams& v = config_.model.valve;
+  if (!std::isfinite(out.valve_v)) {
+    out.valve_v = v.null_voltage_v;
+    out.status = LegControlStatus::kHoldBadInput;
+    bssmc_.Reset();
+    pi_.Reset();
+    active_ = false;
+  }
+  out.valve_v = std::clamp(out.valve_v, v.min_voltage_v, v.max_voltage_v);
+}
+
+}  // namespace hexa

@@ -1,0 +1,73 @@
+#include "hexa/core/pi_controller.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace hexa {
+namespace {
+
+void Require(bool ok, const char* field, double value, const char* limit) {
+  if (ok) return;
+  std::ostringstream m;
+  m << "pi: " << field << " = " << value << " must be " << limit;
+  throw std::invalid_argument(m.str());
+}
+
+}  // namespace
+
+void PiConfig::Validate() const {
+  Require(std::isfinite(params.proportional_v_m) && params.proportional_v_m >= 0, "proportional_v_m",
+          params.proportional_v_m, "finite and >= 0");
+  Require(std::isfinite(params.integral_v_m_s) && params.integral_v_m_s >= 0, "integral_v_m_s",
+          params.integral_v_m_s, "finite and >= 0");
+  Require(std::isfinite(params.integrator_limit_v) && params.integrator_limit_v >= 0,
+          "integrator_limit_v", params.integrator_limit_v, "finite and >= 0");
+  Require(std::isfinite(period_s) && period_s > 0, "period_s", period_s, "finite and > 0");
+  Require(std::isfinite(valve.spool_gain_m_v) && valve.spool_gain_m_v != 0, "valve.spool_gain_m_v",
+          valve.spool_gain_m_v, "finite and != 0");
+  Require(valve.max_voltage_v > valve.min_voltage_v, "valve.max_voltage_v", valve.max_voltage_v,
+          "> valve.min_voltage_v");
+  Require(valve.null_voltage_v >= valve.min_voltage_v && valve.null_voltage_v <= valve.max_voltage_v,
+          "valve.null_voltage_v", valve.null_voltage_v, "inside [min_voltage_v, max_voltage_v]");
+}
+
+PiController::PiController(const PiConfig& config) : config_((config.Validate(), config)) {}
+
+void PiController::Reset() { integral_v_ = 0.0; }
+
+void PiController::Update(const PiInput& in, PiOutput& out) {
+  const PiParams& p = config_.params;
+  const ValveParams& valve = config_.valve;
+  const double direction = valve.spool_gain_m_v < 0.0 ? -1.0 : 1.0;  // sign(a), eq 42
+  const double e_m = in.desired_length_m - in.length_m;
+  if (!std::isfinite(e_m)) {
+    out.valve_v = valve.null_voltage_v;
+    out.error_m = e_m;
+    out.integral_v = integral_v_;
+    out.saturated = false;
+    return;
+  }
+  auto voltage = [&](double integral_v) {
+    return valve.null_voltage_v + direction * (p.proportional_v_m * e_m + integral_v);
+  };
+  const double candidate =
+      std::clamp(integral_v_ + p.integral_v_m_s * e_m * config_.period_s, -p.integrator_limit_v,
+                 p.integrator_limit_v);
+  const double u_candidate = voltage(candidate);
+  // Conditional integration: keep the old integral when the output is saturated and the
+  // integration would push it further into saturation.
+  const double du_v = direction * (candidate - integral_v_);
+  const bool winds_up = (u_candidate > valve.max_voltage_v && du_v > 0.0) ||
+                        (u_candidate < valve.min_voltage_v && du_v < 0.0);
+  if (!winds_up) integral_v_ = candidate;
+  const double u = voltage(integral_v_);
+  const double u_clamped = std::clamp(u, valve.min_voltage_v, valve.max_voltage_v);
+  out.valve_v = u_clamped;
+  out.saturated = u_clamped != u;
+  out.error_m = e_m;
+  out.integral_v = integral_v_;
+}
+
+}  // namespace hexa

@@ -1,0 +1,273 @@
+// LegController / BS-SMC / PI: randomized property tests (fixed seeds), hold logic,
+// setpoint interpolation, sign conventions, anti-windup.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <stdexcept>
+
+#include "hexa/core/leg_controller.hpp"
+
+namespace hexa {
+namespace {
+
+LegControllerConfig MakeConfig(LegControllerKind kind) {
+  return LegControllerConfig::FromRig(MakeReferenceRig(), LegControllerParams{}, kind);
+}
+
+LegControllerInput RestInput(double length_m, double desired_m) {
+  LegControllerInput in;
+  in.tick = 0;
+  in.time_s = 0.0;
+  in.length_m = length_m;
+  in.cap_pressure_pa = 4.0e5;
+  in.rod_pressure_pa = 4.0e5;
+  in.supply_pressure_pa = 7.0e5;
+  in.has_setpoint = true;
+  in.setpoint_time_s = 0.0;
+  in.setpoint_length_m = desired_m;
+  return in;
+}
+
+// At least 100,000 random cases per controller: pressures 1-7 bar abs, the full stroke,
+// leg speeds +-1 m/s, random setpoints (length in the stroke, velocity +-1 m/s, acceleration
+// +-20 m/s^2, correction +-5 mm). Each case is a burst of ticks of a leg moving at constant
+// speed (with sensor-like noise) so that the differentiator sees realistic and extreme
+// histories. Every output must be finite, within 0-10 V, status ok.
+void RunProperty(LegControllerKind kind, std::uint64_t seed) {
+  const LegControllerConfig config = MakeConfig(kind);
+  LegController controller(config);
+  const CylinderParams& cyl = config.model.cylinder;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  auto uniform = [&](double lo, double hi) { return lo + (hi - lo) * u01(rng); };
+  const double lo_m = cyl.mid_stroke_length_m - 0.5 * cyl.stroke_m;
+  const double hi_m = cyl.mid_stroke_length_m + 0.5 * cyl.stroke_m;
+  const int kCases = 100000;
+  const int kTicksPerCase = 4;
+  int checked = 0;
+  std::uint64_t tick = 0;
+  for (int c = 0; c < kCases; ++c) {
+    const double speed = uniform(-1.0, 1.0);
+    double length = uniform(lo_m, hi_m);
+    LegControllerInput in;
+    in.has_setpoint = true;
+    in.setpoint_tick = tick;
+    in.setpoint_time_s = tick * 0.001;
+    in.setpoint_length_m = uniform(lo_m, hi_m);
+    in.setpoint_velocity_m_s = uniform(-1.0, 1.0);
+    in.setpoint_acceleration_m_s2 = uniform(-20.0, 20.0);
+    in.correction_m = uniform(-0.005, 0.005);
+    // keep the interpolated setpoint inside the plausible range for an "ok" case
+    in.setpoint_length_m = std::clamp(in.setpoint_length_m, lo_m + 0.015, hi_m - 0.015);
+    in.hold = u01(rng) < 0.02;
+    for (int k = 0; k < kTicksPerCase; ++k, ++tick) {
+      in.tick = tick;
+      in.time_s = tick * 0.001;
+      length = std::clamp(length + speed * 0.001 + uniform(-1e-4, 1e-4), lo_m, hi_m);
+      in.length_m = length;
+      in.cap_pressure_pa = uniform(1.0e5, 7.0e5);
+      in.rod_pressure_pa = uniform(1.0e5, 7.0e5);
+      in.supply_pressure_pa = uniform(1.0e5, 7.0e5);
+      LegControllerOutput out;
+      controller.Update(in, out);
+      ASSERT_TRUE(std::isfinite(out.valve_v)) << "case " << c;
+      ASSERT_GE(out.valve_v, 0.0) << "case " << c;
+      ASSERT_LE(out.valve_v, 10.0) << "case " << c;
+      ASSERT_TRUE(std::isfinite(out.desired_length_m));
+      ASSERT_TRUE(std::isfinite(out.sliding_surface_m_s));
+      ASSERT_EQ(out.status, in.hold ? LegControlStatus::kHoldSupervisor : LegControlStatus::kOk)
+          << "case " << c << " " << ToString(out.status);
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, kCases * kTicksPerCase);
+}
+
+TEST(LegControllerProperty, BsSmcOutputFiniteAndInRangeOver100kRandomCases) {
+  RunProperty(LegControllerKind::kBsSmc, 20240601);
+}
+
+TEST(LegControllerProperty, PiOutputFiniteAndInRangeOver100kRandomCases) {
+  RunProperty(LegControllerKind::kPi, 20240602);
+}
+
+// Any non-finite or out-of-range input field -> hold_bad_input, valve exactly at null, and
+// the controller recovers on the next good sample. 100,000 random cases per controller.
+void RunBadInputProperty(LegControllerKind kind, std::uint64_t seed) {
+  const LegControllerConfig config = MakeConfig(kind);
+  LegController controller(config);
+  const double mid = config.model.cylinder.mid_stroke_length_m;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  const double bad_values[] = {std::numeric_limits<double>::quiet_NaN(),
+                               std::numeric_limits<double>::infinity(),
+                               -std::numeric_limits<double>::infinity(), 1e12, -1e12};
+  for (int c = 0; c < 100000; ++c) {
+    LegControllerInput in = RestInput(mid + 0.1 * (u01(rng) - 0.5), mid + 0.1 * (u01(rng) - 0.5));
+    in.tick = static_cast<std::uint64_t>(c);
+    in.time_s = 0.001 * c;
+    in.setpoint_time_s = in.time_s;
+    in.cap_pressure_pa = 1e5 + 6e5 * u01(rng);
+    in.rod_pressure_pa = 1e5 + 6e5 * u01(rng);
+    double* fields[] = {&in.length_m, &in.cap_pressure_pa, &in.rod_pressure_pa,
+                        &in.supply_pressure_pa, &in.setpoint_length_m, &in.setpoint_velocity_m_s,
+                        &in.setpoint_acceleration_m_s2, &in.correction_m, &in.time_s};
+    const int field = static_cast<int>(u01(rng) * 9) % 9;
+    const double bad = bad_values[static_cast<int>(u01(rng) * 5) % 5];
+    *fields[field] = bad;
+    LegControllerOutput out;
+    controller.Update(in, out);
+    // A finite sensor time far after the setpoint makes the setpoint stale instead.
+    const LegControlStatus expected = (field == 8 && bad == 1e12) ? LegControlStatus::kHoldStaleSetpoint
+                                                                  : LegControlStatus::kHoldBadInput;
+    ASSERT_EQ(out.status, expected) << "case " << c << " field " << field;
+    ASSERT_EQ(out.valve_v, config.model.valve.null_voltage_v);
+    ASSERT_TRUE(std::isfinite(out.desired_length_m));
+    ASSERT_TRUE(std::isfinite(out.sliding_surface_m_s));
+    // next sample is good again -> ok and finite
+    *fields[field] = field == 8 ? 0.001 * c : (field == 0 || field == 4) ? mid
+                     : (field >= 1 && field <= 3) ? 4e5 : 0.0;
+    if (field == 8) in.setpoint_time_s = in.time_s;
+    controller.Update(in, out);
+    ASSERT_EQ(out.status, LegControlStatus::kOk) << "case " << c << " field " << field;
+    ASSERT_TRUE(std::isfinite(out.valve_v));
+  }
+}
+
+TEST(LegControllerProperty, BsSmcBadInputsHoldAtNull) { RunBadInputProperty(LegControllerKind::kBsSmc, 7); }
+TEST(LegControllerProperty, PiBadInputsHoldAtNull) { RunBadInputProperty(LegControllerKind::kPi, 8); }
+
+TEST(LegController, HoldsWithoutSetpoint) {
+  LegController c(MakeConfig(LegControllerKind::kBsSmc));
+  LegControllerInput in = RestInput(0.5, 0.52);
+  in.has_setpoint = false;
+  LegControllerOutput out;
+  c.Update(in, out);
+  EXPECT_EQ(out.status, LegControlStatus::kHoldNoSetpoint);
+  EXPECT_EQ(out.valve_v, 5.0);
+}
+
+TEST(LegController, HoldsOnStaleSetpointAndResumesOnAFreshOne) {
+  const LegControllerConfig config = MakeConfig(LegControllerKind::kBsSmc);
+  LegController c(config);
+  LegControllerInput in = RestInput(0.5, 0.52);
+  LegControllerOutput out;
+  in.time_s = config.params.setpoint_timeout_s * 0.99;
+  c.Update(in, out);
+  EXPECT_EQ(out.status, LegControlStatus::kOk);
+  in.time_s = config.params.setpoint_timeout_s * 1.01;
+  c.Update(in, out);
+  EXPECT_EQ(out.status, LegControlStatus::kHoldStaleSetpoint);
+  EXPECT_EQ(out.valve_v, config.model.valve.null_voltage_v);
+  in.setpoint_time_s = in.time_s;
+  c.Update(in, out);
+  EXPECT_EQ(out.status, LegControlStatus::kOk);
+}
+
+TEST(LegController, SetpointFromTheFutureIsBadInput) {
+  LegController c(MakeConfig(LegControllerKind::kPi));
+  LegControllerInput in = RestInput(0.5, 0.5);
+  in.setpoint_time_s = 0.01;
+  LegControllerOutput out;
+  c.Update(in, out);
+  EXPECT_EQ(out.status, LegControlStatus::kHoldBadInput);
+}
+
+TEST(LegController, InterpolatesTheSetpointInsideItsPeriodAndAddsTheCorrection) {
+  LegController c(MakeConfig(LegControllerKind::kBsSmc));
+  LegControllerInput in = RestInput(0.5, 0.5);
+  in.setpoint_time_s = 1.000;
+  in.setpoint_length_m = 0.51;
+  in.setpoint_velocity_m_s = 0.3;
+  in.setpoint_acceleration_m_s2 = -2.0;
+  in.correction_m = 0.001;
+  LegControllerOutput out;
+  for (int k = 0; k < 5; ++k) {
+    in.time_s = 1.000 + 0.001 * k;
+    c.Update(in, out);
+    const double dt = 0.001 * k;
+    EXPECT_EQ(out.status, LegControlStatus::kOk);
+    EXPECT_NEAR(out.desired_length_m, 0.51 + 0.3 * dt - 1.0 * dt * dt + 0.001, 1e-12);
+    EXPECT_NEAR(out.desired_velocity_m_s, 0.3 - 2.0 * dt, 1e-12);
+  }
+}
+
+TEST(LegController, SupervisorHoldKeepsTheLengthAtRest) {
+  LegController c(MakeConfig(LegControllerKind::kBsSmc));
+  LegControllerInput in = RestInput(0.5, 0.51);
+  in.setpoint_velocity_m_s = 0.3;
+  in.correction_m = -0.002;
+  in.hold = true;
+  in.time_s = 0.004;
+  LegControllerOutput out;
+  c.Update(in, out);
+  EXPECT_EQ(out.status, LegControlStatus::kHoldSupervisor);
+  EXPECT_NEAR(out.desired_length_m, 0.508, 1e-12);
+  EXPECT_EQ(out.desired_velocity_m_s, 0.0);
+}
+
+// Sign convention (ValveParams, eq 42): a leg shorter than its setpoint must be driven to
+// extend, i.e. a voltage below null; longer -> above null. Both controllers.
+TEST(LegController, LegTooShortIsExtendedAndTooLongIsRetracted) {
+  for (LegControllerKind kind : {LegControllerKind::kBsSmc, LegControllerKind::kPi}) {
+    for (double sign : {1.0, -1.0}) {
+      LegController c(MakeConfig(kind));
+      // pressures at the static balance of the nominal load, so that only the error acts
+      LegControllerInput in = RestInput(0.5034, 0.5034 + sign * 0.01);
+      LegControllerOutput out;
+      for (int k = 0; k < 20; ++k) {
+        in.tick = k;
+        in.time_s = 0.001 * k;
+        in.setpoint_time_s = in.time_s;
+        c.Update(in, out);
+      }
+      if (sign > 0) {
+        EXPECT_LT(out.valve_v, 5.0) << static_cast<int>(kind);
+      } else {
+        EXPECT_GT(out.valve_v, 5.0) << static_cast<int>(kind);
+      }
+    }
+  }
+}
+
+TEST(PiController, AntiWindupBoundsTheIntegralAndReleasesSaturationAtOnce) {
+  PiConfig config;
+  config.params.proportional_v_m = 400.0;
+  config.params.integral_v_m_s = 4000.0;
+  config.params.integrator_limit_v = 2.0;
+  PiController pi(config);
+  PiOutput out;
+  // 50 mm error for 2 s: P alone saturates (20 V), so the integral must not wind up at all.
+  for (int k = 0; k < 2000; ++k) pi.Update({0.45, 0.50}, out);
+  EXPECT_EQ(out.valve_v, 0.0);  // extend, saturated low (a < 0)
+  EXPECT_TRUE(out.saturated);
+  EXPECT_LE(std::abs(out.integral_v), 2.0);
+  EXPECT_EQ(out.integral_v, 0.0);  // conditional integration: never integrated
+  // Small error of the other sign: the output leaves saturation on the very next tick.
+  pi.Update({0.501, 0.50}, out);
+  EXPECT_FALSE(out.saturated);
+  EXPECT_GT(out.valve_v, 0.0);
+  // Unsaturated, the integral is clamped at its limit.
+  PiController pi2(config);
+  for (int k = 0; k < 5000; ++k) pi2.Update({0.5, 0.5001}, out);  // 0.1 mm -> 0.04 V P
+  EXPECT_NEAR(out.integral_v, 2.0, 1e-12);
+}
+
+TEST(LegControllerConfig, ValidateNamesTheField) {
+  LegControllerConfig c = MakeConfig(LegControllerKind::kBsSmc);
+  c.params.bssmc.lambda_1_s = -1.0;
+  try {
+    c.Validate();
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("lambda_1_s"), std::string::npos) << e.what();
+  }
+  c = MakeConfig(LegControllerKind::kPi);
+  c.params.setpoint_timeout_s = 0.0;
+  EXPECT_THROW(LegController{c}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace hexa
