@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
 
 #include "hexa/comm/comm.hpp"
@@ -51,6 +52,15 @@ struct CountAllocations {
   std::uint64_t count() const { return t_allocations; }
 };
 
+TEST(CommAlloc, CounterSeesAnAllocation) {
+  // The interposition works: otherwise the zero below would prove nothing.
+  CountAllocations counter;
+  volatile void* p = std::malloc(24);
+  const std::uint64_t n = counter.count();
+  std::free(const_cast<void*>(p));
+  EXPECT_EQ(n, 1u);
+}
+
 TEST(CommAlloc, SteadyStateTakeAndWaitDoNotAllocate) {
   EnsureDdsConfig();
   Participant p(47);
@@ -86,6 +96,8 @@ TEST(CommAlloc, SteadyStateTakeAndWaitDoNotAllocate) {
               static_cast<unsigned long long>(reader_allocs),
               static_cast<unsigned long long>(writer_allocs));
   EXPECT_EQ(reader_allocs, 0u);
+  // Cyclone 0.10 recycles serdata through a freelist: writes of this flat type measured 0
+  // too, reported but not asserted (not a promise of this layer).
   EXPECT_EQ(out.header.tick, 1099u);
 }
 
