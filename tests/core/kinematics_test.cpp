@@ -3,6 +3,7 @@
 // rotations +-15 deg, every leg inside its stroke).
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <random>
 #include <set>
@@ -268,8 +269,11 @@ TEST(Kinematics, NewtonRaphsonFkFromHomeRecoversEveryWorkspacePose) {
   }
   EXPECT_LT(worst_position_m, 1e-9);
   EXPECT_LT(worst_rotation_rad, 1e-9);
-  RecordProperty("worst_position_m", std::to_string(worst_position_m));
-  RecordProperty("worst_rotation_rad", std::to_string(worst_rotation_rad));
+  char text[64];
+  std::snprintf(text, sizeof text, "%.3g", worst_position_m);
+  RecordProperty("worst_position_m", text);
+  std::snprintf(text, sizeof text, "%.3g", worst_rotation_rad);
+  RecordProperty("worst_rotation_rad", text);
   RecordProperty("worst_iterations", worst_iterations);
 }
 
