@@ -1,7 +1,7 @@
 // Integration tests over loopback between processes: every topic exchanged field by field,
 // deadline counters per leg, liveliness after kill -9, exclusive-ownership failover, SIGTERM
 // shutdown of a process blocked in a waitset, and proof that Cyclone used lo only.
-// Domain ids 40-44. Every helper is started by PID and killed / reaped by ChildProcess.
+// Domain ids 40-44 and 48. Every helper is started by PID and killed / reaped by ChildProcess.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -30,6 +30,7 @@ constexpr dds_domainid_t kDomainDeadline = 41;
 constexpr dds_domainid_t kDomainLiveliness = 42;
 constexpr dds_domainid_t kDomainOwnership = 43;
 constexpr dds_domainid_t kDomainShutdown = 44;
+constexpr dds_domainid_t kDomainHungWriter = 48;  // ctest -j runs tests concurrently
 
 const std::string kHelper = HEXA_COMM_TEST_HELPER;
 
@@ -226,6 +227,66 @@ TEST_F(CommProcess, KilledValveWriterLosesLiveliness) {
     }
   }
   EXPECT_TRUE(slot_found);
+}
+
+// A hung control thread (process alive, writes stopped): MANUAL_BY_TOPIC liveliness
+// notices it, AUTOMATIC does not (Cyclone's own threads keep asserting it); when the
+// writes resume the writer is alive again.
+TEST_F(CommProcess, ManualByTopicLivelinessCatchesHungWriterAutomaticDoesNot) {
+  for (const char* kind : {"manual", "auto"}) {
+    SCOPED_TRACE(kind);
+    const bool manual = std::string(kind) == "manual";
+    Participant p(kDomainHungWriter);
+    QosParams params;
+    params.deadline_period_s = std::numeric_limits<double>::infinity();
+    params.valve_liveliness_lease_s = 0.050;
+    Topic<hexa_msg_ValveCommand> topic(p);
+    Reader<hexa_msg_ValveCommand> reader(p, topic, EndpointRole::kControlReader, params);
+    ChildProcess writer(kHelper,
+                        {"pub-valve", "--domain", std::to_string(kDomainHungWriter), "--leg",
+                         "5", "--period-ms", "5", "--deadline-ms", "1000000", "--lease-ms",
+                         "50", "--liveliness", kind, "--max-s", "30"},
+                        EnvironmentWithoutCycloneUri());
+    ASSERT_TRUE(writer.WaitForLine("READY", milliseconds(10000)));
+    WaitSet ws(p);
+    ws.Attach(reader.data_condition(), 1);
+    hexa_msg_ValveCommand cmd{};
+    bool got = false;
+    const dds_time_t give_up = dds_time() + DDS_SECS(10);
+    while (!got && dds_time() < give_up) {
+      ws.WaitUntil(give_up);
+      got = reader.TakeLatestForLeg(5, cmd) == 1;
+    }
+    ASSERT_TRUE(got);
+    ASSERT_EQ(reader.Snapshot().liveliness_alive_count, 1u);
+
+    writer.Signal(SIGUSR1);  // hang: no more writes
+    const int64_t hang_ns = MonotonicNow_ns();
+    StatusSnapshot s = reader.Snapshot();
+    while (s.liveliness_lost_events == 0 && MonotonicNow_ns() - hang_ns < 600000000LL) {
+      ws.Wait(DDS_MSECS(10));
+      reader.Take();
+      s = reader.Snapshot();
+    }
+    if (manual) {
+      EXPECT_EQ(s.liveliness_lost_events, 1u) << "hung MANUAL_BY_TOPIC writer not noticed";
+      std::printf("  manual_by_topic: hung writer noticed after %.1f ms (lease 50 ms)\n",
+                  (s.last_liveliness_change_mono_ns - hang_ns) * 1e-6);
+    } else {
+      EXPECT_EQ(s.liveliness_lost_events, 0u) << "AUTOMATIC is asserted by Cyclone's threads";
+    }
+    writer.Signal(SIGUSR1);  // resume writing
+    got = false;
+    const dds_time_t until = dds_time() + DDS_SECS(2);
+    while (!got && dds_time() < until) {
+      ws.WaitUntil(until);
+      got = reader.TakeLatestForLeg(5, cmd) == 1;
+    }
+    ASSERT_TRUE(got) << "writes did not resume";
+    EXPECT_EQ(reader.Snapshot().liveliness_alive_count, 1u);
+    writer.Signal(SIGTERM);
+    EXPECT_TRUE(ExitedWith(writer.WaitExit(milliseconds(5000)), 0));
+  }
 }
 
 // Exclusive ownership: strong (20) and weak (10) writers of leg 1; the reader sees only the

@@ -272,6 +272,13 @@ int PubValve(const Args& a) {
                                 : LivelinessKind::kAutomatic;
   params.ownership_strength = static_cast<int32_t>(a.Num("strength", 20));
   const bool standby = a.Num("standby", 0) != 0;
+  // SIGUSR1 toggles a "hung control thread": the process and Cyclone's threads live on,
+  // only the writes stop.
+  struct sigaction action {};
+  action.sa_handler = OnUsr1;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESTART;
+  sigaction(SIGUSR1, &action, nullptr);
   const uint8_t leg = static_cast<uint8_t>(a.Num("leg", 1));
   Topic<hexa_msg_ValveCommand> topic(p);
   Writer<hexa_msg_ValveCommand> writer(p, topic, params);
@@ -286,7 +293,7 @@ int PubValve(const Args& a) {
     s.leg_id = leg;
     s.standby = standby;
     s.valve_v = standby ? 4.0 : 6.0;
-    if (writer.WriteNow(s) != DDS_RETCODE_OK) return 1;
+    if (!g_pause_leg.load() && writer.WriteNow(s) != DDS_RETCODE_OK) return 1;
     SleepUntil(next, period_ns);
   }
   return 0;
