@@ -19,8 +19,8 @@ struct BsSmcParams {
   double switching_gain_n = 30.0;       // K (eq 22, 30), as a force
   double boundary_layer_xi_s_m = 10.0;  // xi in tanh(xi S) (eq 45); paper: 10
   double backstepping_beta_1_s = 100.0; // beta (eq 38)
-  double effective_mass_kg = 1.25;      // load the leg moves (piston + share of platform)
-  double gravity_load_n = 11.0;         // static load along the leg at home (compressive > 0)
+  double effective_mass_kg = 1.50;      // piston+rod 0.25 + platform 6/(6 cos^2 26.6deg) (docs)
+  double gravity_load_n = 13.2;         // along the leg at home: 6 g/(6 cos) + 0.25 g cos (docs)
   double viscous_estimate_scale = 1.0;  // B_hat = scale * Table 8 B (eq 21)
   double friction_estimate_scale = 1.0; // F_s, F_c estimate = scale * Table 8 (eq 14)
   double friction_smoothing_velocity_m_s = 0.005;  // sgn(v) -> tanh(v / this) in eq 14
