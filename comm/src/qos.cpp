@@ -167,6 +167,9 @@ Qos MakeQos(TopicKind kind, EndpointRole role, const QosParams& params) {
       // A primary that exits cleanly unregisters its leg without disposing it, so the
       // instance stays alive and ownership passes to the standby.
       dds_qset_writer_data_lifecycle(q, false);
+    } else if (recorder) {
+      // The recorder must match every writer whatever lease it offers (requested >= offered).
+      dds_qset_liveliness(q, DDS_LIVELINESS_AUTOMATIC, DDS_INFINITY);
     } else {
       dds_qset_liveliness(q, DDS_LIVELINESS_AUTOMATIC, lease);
     }

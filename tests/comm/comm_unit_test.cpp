@@ -79,6 +79,17 @@ TEST_F(CommUnit, QosProfilesMatchTheTopicTable) {
     EXPECT_FALSE(autodispose);
   }
   {
+    // The recorder matches a valve writer of any lease: it requests an infinite one.
+    const Qos q = MakeQos(TopicKind::kValveCommand, EndpointRole::kRecorderReader);
+    dds_liveliness_kind_t live;
+    dds_duration_t lease = 0;
+    ASSERT_TRUE(dds_qget_liveliness(q.get(), &live, &lease));
+    EXPECT_EQ(lease, DDS_INFINITY);
+    dds_ownership_kind_t own;
+    ASSERT_TRUE(dds_qget_ownership(q.get(), &own));
+    EXPECT_EQ(own, DDS_OWNERSHIP_EXCLUSIVE);
+  }
+  {
     const Qos q = MakeQos(TopicKind::kNodeStatus, EndpointRole::kControlReader);
     dds_durability_kind_t dur;
     ASSERT_TRUE(dds_qget_durability(q.get(), &dur));
