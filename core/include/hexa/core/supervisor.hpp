@@ -1,0 +1,160 @@
+// Task-space supervisor (DESIGN.md "Safety", paper Sec. 4.1): a pure state machine run every
+// 5 ms with the measured leg lengths and IMU orientation. It owns the trajectory, the pose
+// estimator (eq 47 / six-leg least squares), the Jacobian outer loop (eq 48) and the safety
+// logic, and produces the six leg setpoints. No clock, no DDS: time is SupervisorInput.time_s.
+//
+//            start (feasible)        blend done         tracking done       stop done
+//   IDLE ------------------> BLENDING ---------> TRACKING ---------> STOPPING ---------> IDLE
+//    |  home (blend to home) ^   |  stop               | stop                               ^
+//    +-----------------------+   +---------------------+---> STOPPING                       |
+//   any state --fault / rejected trajectory--> HOLD --reset (only command accepted)--------+
+//
+// Faults (checked every tick outside HOLD): a leg fault reported by a leg / the plant, lost
+// liveliness of a leg controller, more consecutive deadline misses than configured, invalid
+// sensors or estimate, estimate outside the workspace; a rejected trajectory on start.
+// In HOLD every setpoint is frozen (last length and correction, zero velocity and
+// acceleration, hold flag set) and the fault is reported until an operator reset.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <string>
+
+#include "hexa/core/control_params.hpp"
+#include "hexa/core/feasibility.hpp"
+#include "hexa/core/outer_loop.hpp"
+#include "hexa/core/pose_estimator.hpp"
+#include "hexa/core/rig.hpp"
+#include "hexa/core/trajectory.hpp"
+
+namespace hexa {
+
+// Same enumerators, in the same order, as idl/hexa.idl SupervisorState (static_cast maps).
+enum class SupervisorState { kIdle, kBlending, kTracking, kStopping, kHold };
+const char* ToString(SupervisorState state);  // "SUPERVISOR_IDLE", ...
+
+// Same enumerators, in the same order, as idl/hexa.idl FaultReason (static_cast maps).
+enum class FaultReason {
+  kNone,
+  kCommandDeadlineMissed,
+  kCommandStale,
+  kCommandNotFinite,
+  kCommandOutOfRange,
+  kSetpointStale,
+  kLivelinessLost,
+  kDeadlineMissesExceeded,
+  kStateNotFinite,
+  kEstimateOutsideWorkspace,
+  kSensorInvalid,
+  kTrajectoryRejected,
+};
+const char* ToString(FaultReason reason);  // "FAULT_NONE", ...
+
+enum class OperatorCommandKind { kNone, kStart, kStop, kReset, kHome };
+const char* ToString(OperatorCommandKind kind);
+
+enum class CommandResult {
+  kNone,      // no command this tick
+  kAccepted,
+  kRefused,   // not allowed in the current state (e.g. anything but reset in HOLD)
+  kRejected,  // start with an infeasible trajectory: the supervisor went to HOLD
+};
+const char* ToString(CommandResult result);
+
+// A start command prepared outside the 5 ms cycle (feasibility takes milliseconds).
+struct StartRequest {
+  Trajectory trajectory;
+  FeasibilityReport feasibility;
+};
+
+struct SupervisorInput {
+  double time_s = 0.0;                                   // simulated time of this tick
+  LegArray<double> length_m{};                           // measured leg lengths
+  std::array<double, 4> orientation_wxyz{1.0, 0.0, 0.0, 0.0};  // IMU R_BP
+  LegArray<FaultReason> leg_fault{};                     // reported per leg, kNone = healthy
+  LegArray<bool> leg_alive{true, true, true, true, true, true};  // leg controller liveliness
+  LegArray<int> deadline_misses_consecutive{};           // per leg input topic
+  int imu_deadline_misses_consecutive = 0;
+  OperatorCommandKind command = OperatorCommandKind::kNone;
+  const StartRequest* start = nullptr;                   // for kStart; copied, not kept
+};
+
+struct SupervisorLegSetpoint {
+  double length_m = 0.0;           // IK (eq 46) of the desired pose, without correction
+  double velocity_m_s = 0.0;
+  double acceleration_m_s2 = 0.0;
+  double correction_m = 0.0;       // outer loop (Sec. 4.1); the leg tracks length + correction
+  bool hold = false;
+};
+
+struct SupervisorOutput {
+  SupervisorState state = SupervisorState::kIdle;
+  double trajectory_time_s = 0.0;
+  LegArray<SupervisorLegSetpoint> setpoint{};
+  TrajectorySample desired;            // desired pose, twist and rate (frozen in HOLD)
+  Vector6d desired_xyz_rpy = Vector6d::Zero();
+  PoseEstimatorOutput estimate;
+  OuterLoopOutput outer_loop;          // error = desired - estimated, corrections
+  FaultReason fault = FaultReason::kNone;  // active fault (kept while in HOLD)
+  int fault_leg = 0;                   // 1-based, 0 when no leg is concerned
+  std::array<char, 160> fault_detail{};  // NUL-terminated, as idl FaultEvent.detail
+  bool fault_raised = false;           // the fault was raised at this tick (publish an event)
+  CommandResult command_result = CommandResult::kNone;
+};
+
+class Supervisor {
+ public:
+  // Throws std::invalid_argument for inconsistent parameters (values named).
+  Supervisor(const RigParams& rig, const SupervisorParams& params);
+
+  // One 5 ms tick. Neither throws nor allocates.
+  void Update(const SupervisorInput& input, SupervisorOutput& output) noexcept;
+
+  SupervisorState state() const { return state_; }
+  bool initialized() const { return initialized_; }
+  // Where the platform rests when idle: the start pose of the next trajectory.
+  const Vector6d& rest_xyz_rpy() const { return rest_; }
+  const Vector6d& home_xyz_rpy() const { return home_; }
+  TrajectoryTiming timing() const { return TimingFrom(params_); }
+  const RigParams& rig() const { return rig_; }
+  const SupervisorParams& params() const { return params_; }
+
+  // Outside the cycle: build a start request from the current rest pose and check it.
+  StartRequest PrepareStart(Trajectory trajectory) const;
+  StartRequest PreparePaperStart(PaperMotion motion, int periods = 0,
+                                 double amplitude_scale = 1.0) const;
+  // A malformed CSV yields a rejected request whose message is the parser's
+  // ("<file>:<line>: ..."); the CSV trajectory returns to home at its end.
+  StartRequest PrepareCsvStart(const std::string& csv_path) const;
+
+ private:
+  void EnterHold(FaultReason reason, int leg, const char* detail, SupervisorOutput& output);
+  FaultReason CheckFaults(const SupervisorInput& input, const PoseEstimatorOutput& estimate,
+                          int& leg, std::array<char, 160>& detail) const;
+  void HandleCommand(const SupervisorInput& input, SupervisorOutput& output);
+  void StartTrajectory(const Trajectory& trajectory, double time_s);
+
+  RigParams rig_;
+  SupervisorParams params_;
+  PoseEstimator estimator_;
+  OuterLoop outer_loop_;
+  LegEnvelope envelope_;
+  Vector6d home_;
+  std::shared_ptr<const ConstantMotion> home_motion_;  // preallocated for the home command
+
+  SupervisorState state_ = SupervisorState::kIdle;
+  bool initialized_ = false;
+  Vector6d rest_ = Vector6d::Zero();
+  Trajectory trajectory_;
+  double trajectory_start_time_s_ = 0.0;
+  double stop_at_s_ = 0.0;  // trajectory time at which the stop law starts
+  double trajectory_time_s_ = 0.0;
+
+  FaultReason fault_ = FaultReason::kNone;
+  int fault_leg_ = 0;
+  std::array<char, 160> fault_detail_{};
+  LegArray<SupervisorLegSetpoint> last_setpoint_{};
+  TrajectorySample last_desired_;
+};
+
+}  // namespace hexa

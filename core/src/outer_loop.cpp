@@ -1,0 +1,55 @@
+// Task-space outer loop: Jacobian (eq 48) mapping of the pose error, bounded integration.
+#include "hexa/core/outer_loop.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "hexa/core/kinematics.hpp"
+
+namespace hexa {
+
+OuterLoop::OuterLoop(const GeometryParams& geometry, const OuterLoopParams& params)
+    : geometry_(geometry), params_(params) {
+  if (!(params_.gain >= 0.0) || !std::isfinite(params_.gain)) {
+    throw std::invalid_argument("OuterLoopParams.gain = " + std::to_string(params_.gain) +
+                                " must be finite and >= 0");
+  }
+  if (!(params_.max_correction_m >= 0.0) || !std::isfinite(params_.max_correction_m)) {
+    throw std::invalid_argument("OuterLoopParams.max_correction_m = " +
+                                std::to_string(params_.max_correction_m) +
+                                " must be finite and >= 0");
+  }
+}
+
+void OuterLoop::Update(const OuterLoopInput& input, OuterLoopOutput& output) noexcept {
+  output.saturated.fill(false);
+  if (!params_.enabled) {
+    correction_m_.fill(0.0);
+  }
+  if (!input.estimate_valid) {
+    output.error.setZero();
+    output.mapped_error_m.fill(0.0);
+    output.correction_m = correction_m_;
+    return;
+  }
+  output.error = PoseError(input.desired, input.estimated);
+  // eq 48 at the desired pose: to first order a small pose displacement e changes the leg
+  // lengths by J e. The desired pose is noise-free and is where the legs should be.
+  Matrix6d J;
+  LegJacobian(geometry_, input.desired, J);
+  const Vector6d mapped = J * output.error;
+  const bool integrate = params_.enabled && !input.freeze && mapped.allFinite();
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    output.mapped_error_m[i] = mapped[static_cast<Eigen::Index>(i)];
+    if (integrate) {
+      const double next = correction_m_[i] + params_.gain * output.mapped_error_m[i];
+      correction_m_[i] = std::clamp(next, -params_.max_correction_m, params_.max_correction_m);
+    }
+    output.saturated[i] = std::abs(correction_m_[i]) >= params_.max_correction_m &&
+                          params_.max_correction_m > 0.0;
+  }
+  output.correction_m = correction_m_;
+}
+
+}  // namespace hexa

@@ -1,0 +1,400 @@
+// Task-space supervisor state machine (see supervisor.hpp).
+#include "hexa/core/supervisor.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "hexa/core/csv_trajectory.hpp"
+
+namespace hexa {
+namespace {
+
+constexpr double kStartPoseTolerance = 1e-6;  // m and rad: a trajectory must start at rest_
+
+void Require(bool ok, const char* field, double value, const char* rule) {
+  if (!ok) {
+    throw std::invalid_argument(std::string("SupervisorParams.") + field + " = " +
+                                std::to_string(value) + ": " + rule);
+  }
+}
+
+void CopyDetail(std::array<char, 160>& dst, const char* src) {
+  std::snprintf(dst.data(), dst.size(), "%s", src);
+}
+
+}  // namespace
+
+const char* ToString(SupervisorState state) {
+  switch (state) {
+    case SupervisorState::kIdle: return "SUPERVISOR_IDLE";
+    case SupervisorState::kBlending: return "SUPERVISOR_BLENDING";
+    case SupervisorState::kTracking: return "SUPERVISOR_TRACKING";
+    case SupervisorState::kStopping: return "SUPERVISOR_STOPPING";
+    case SupervisorState::kHold: return "SUPERVISOR_HOLD";
+  }
+  return "?";
+}
+
+const char* ToString(FaultReason reason) {
+  switch (reason) {
+    case FaultReason::kNone: return "FAULT_NONE";
+    case FaultReason::kCommandDeadlineMissed: return "FAULT_COMMAND_DEADLINE_MISSED";
+    case FaultReason::kCommandStale: return "FAULT_COMMAND_STALE";
+    case FaultReason::kCommandNotFinite: return "FAULT_COMMAND_NOT_FINITE";
+    case FaultReason::kCommandOutOfRange: return "FAULT_COMMAND_OUT_OF_RANGE";
+    case FaultReason::kSetpointStale: return "FAULT_SETPOINT_STALE";
+    case FaultReason::kLivelinessLost: return "FAULT_LIVELINESS_LOST";
+    case FaultReason::kDeadlineMissesExceeded: return "FAULT_DEADLINE_MISSES_EXCEEDED";
+    case FaultReason::kStateNotFinite: return "FAULT_STATE_NOT_FINITE";
+    case FaultReason::kEstimateOutsideWorkspace: return "FAULT_ESTIMATE_OUTSIDE_WORKSPACE";
+    case FaultReason::kSensorInvalid: return "FAULT_SENSOR_INVALID";
+    case FaultReason::kTrajectoryRejected: return "FAULT_TRAJECTORY_REJECTED";
+  }
+  return "?";
+}
+
+const char* ToString(OperatorCommandKind kind) {
+  switch (kind) {
+    case OperatorCommandKind::kNone: return "none";
+    case OperatorCommandKind::kStart: return "start";
+    case OperatorCommandKind::kStop: return "stop";
+    case OperatorCommandKind::kReset: return "reset";
+    case OperatorCommandKind::kHome: return "home";
+  }
+  return "?";
+}
+
+const char* ToString(CommandResult result) {
+  switch (result) {
+    case CommandResult::kNone: return "none";
+    case CommandResult::kAccepted: return "accepted";
+    case CommandResult::kRefused: return "refused";
+    case CommandResult::kRejected: return "rejected";
+  }
+  return "?";
+}
+
+Supervisor::Supervisor(const RigParams& rig, const SupervisorParams& params)
+    : rig_(rig),
+      params_(params),
+      estimator_(rig.geometry, PoseEstimatorConfig{params.least_squares_estimator,
+                                                   params.estimator_outlier_threshold_m,
+                                                   kGqfkDefaultLegs, 0.01}),
+      outer_loop_(rig.geometry, params.outer_loop),
+      envelope_(MakeLegEnvelope(rig, params)),
+      home_(HomePoseVector(rig.geometry.home_position_m)),
+      home_motion_(std::make_shared<const ConstantMotion>(home_)) {
+  Require(params.period_s > 0.0, "period_s", params.period_s, "must be > 0");
+  Require(params.blend_duration_s > 0.0, "blend_duration_s", params.blend_duration_s,
+          "must be > 0 (a zero blend would step the setpoints)");
+  Require(params.stop_duration_s > 0.0, "stop_duration_s", params.stop_duration_s,
+          "must be > 0 (a zero stop would step the velocity)");
+  Require(params.max_consecutive_deadline_misses >= 0, "max_consecutive_deadline_misses",
+          params.max_consecutive_deadline_misses, "must be >= 0");
+  Require(params.workspace_radius_m > 0.0, "workspace_radius_m", params.workspace_radius_m,
+          "must be > 0");
+  Require(params.workspace_max_rotation_rad > 0.0, "workspace_max_rotation_rad",
+          params.workspace_max_rotation_rad, "must be > 0");
+  Require(envelope_.max_length_m > envelope_.min_length_m, "stroke_margin_m",
+          params.stroke_margin_m, "leaves no usable stroke");
+  rest_ = home_;
+  last_desired_.pose = PoseFromVector(home_);
+  last_desired_.vector.q = home_;
+}
+
+StartRequest Supervisor::PrepareStart(Trajectory trajectory) const {
+  StartRequest request;
+  request.trajectory = std::move(trajectory);
+  request.feasibility = CheckFeasibility(rig_, params_, request.trajectory);
+  return request;
+}
+
+StartRequest Supervisor::PreparePaperStart(PaperMotion motion, int periods,
+                                           double amplitude_scale) const {
+  return PrepareStart(
+      MakePaperTrajectory(motion, rest_, home_, timing(), periods, amplitude_scale));
+}
+
+StartRequest Supervisor::PrepareCsvStart(const std::string& csv_path) const {
+  try {
+    return PrepareStart(MakeCsvTrajectory(LoadCsvTrajectory(csv_path), rest_, home_, timing()));
+  } catch (const CsvTrajectoryError& error) {
+    StartRequest request;
+    request.feasibility.feasible = false;
+    request.feasibility.message = error.what();
+    return request;
+  }
+}
+
+void Supervisor::StartTrajectory(const Trajectory& trajectory, double time_s) {
+  trajectory_ = trajectory;
+  trajectory_start_time_s_ = time_s;
+  stop_at_s_ = trajectory_.tracking_end_s();
+  state_ = SupervisorState::kBlending;
+}
+
+void Supervisor::EnterHold(FaultReason reason, int leg, const char* detail,
+                           SupervisorOutput& output) {
+  state_ = SupervisorState::kHold;
+  fault_ = reason;
+  fault_leg_ = leg;
+  CopyDetail(fault_detail_, detail);
+  output.fault_raised = true;
+  // Freeze what the legs were last told: same lengths and corrections, at rest.
+  for (auto& sp : last_setpoint_) {
+    sp.velocity_m_s = 0.0;
+    sp.acceleration_m_s2 = 0.0;
+    sp.hold = true;
+  }
+  last_desired_.vector.q_dot.setZero();
+  last_desired_.vector.q_ddot.setZero();
+  last_desired_.twist_B.setZero();
+  last_desired_.twist_rate_B.setZero();
+}
+
+void Supervisor::HandleCommand(const SupervisorInput& input, SupervisorOutput& output) {
+  const OperatorCommandKind cmd = input.command;
+  if (cmd == OperatorCommandKind::kNone) return;
+  CommandResult& result = output.command_result;
+  if (state_ == SupervisorState::kHold) {
+    if (cmd != OperatorCommandKind::kReset) {
+      result = CommandResult::kRefused;
+      return;
+    }
+    // Leave HOLD at rest where the setpoints were frozen; faults still present are detected
+    // again in this same tick.
+    state_ = SupervisorState::kIdle;
+    rest_ = last_desired_.vector.q;
+    fault_ = FaultReason::kNone;
+    fault_leg_ = 0;
+    fault_detail_[0] = '\0';
+    result = CommandResult::kAccepted;
+    return;
+  }
+  if (!initialized_) {
+    result = CommandResult::kRefused;  // no pose to start from yet
+    return;
+  }
+  switch (cmd) {
+    case OperatorCommandKind::kStart: {
+      if (state_ != SupervisorState::kIdle || input.start == nullptr) {
+        result = CommandResult::kRefused;
+        return;
+      }
+      const StartRequest& req = *input.start;
+      if (!req.feasibility.feasible || !req.trajectory.valid()) {
+        result = CommandResult::kRejected;
+        EnterHold(FaultReason::kTrajectoryRejected, req.feasibility.leg,
+                  req.feasibility.message.empty() ? "trajectory rejected"
+                                                  : req.feasibility.message.c_str(),
+                  output);
+        return;
+      }
+      const double mismatch = (req.trajectory.start_xyz_rpy() - rest_).cwiseAbs().maxCoeff();
+      if (!(mismatch <= kStartPoseTolerance)) {
+        char detail[160];
+        std::snprintf(detail, sizeof(detail),
+                      "trajectory starts %.6g away from the rest pose (prepare it from "
+                      "rest_xyz_rpy())",
+                      mismatch);
+        result = CommandResult::kRejected;
+        EnterHold(FaultReason::kTrajectoryRejected, 0, detail, output);
+        return;
+      }
+      StartTrajectory(req.trajectory, input.time_s);
+      result = CommandResult::kAccepted;
+      return;
+    }
+    case OperatorCommandKind::kHome: {
+      if (state_ != SupervisorState::kIdle) {
+        result = CommandResult::kRefused;
+        return;
+      }
+      // Blend to home; the stop phase is empty because the reference is already at rest.
+      // Parameters were validated in the constructor, so this does not throw.
+      TrajectoryTiming home_timing{params_.blend_duration_s, 0.0};
+      StartTrajectory(Trajectory(home_motion_, rest_, home_, home_timing), input.time_s);
+      result = CommandResult::kAccepted;
+      return;
+    }
+    case OperatorCommandKind::kStop: {
+      if (state_ == SupervisorState::kBlending || state_ == SupervisorState::kTracking) {
+        const double t = input.time_s - trajectory_start_time_s_;
+        if (t < stop_at_s_) stop_at_s_ = std::max(t, 0.0);
+        state_ = SupervisorState::kStopping;
+      }
+      result = CommandResult::kAccepted;  // stop is always honoured (no-op at rest)
+      return;
+    }
+    case OperatorCommandKind::kReset:
+      result = CommandResult::kRefused;  // reset only leaves HOLD
+      return;
+    case OperatorCommandKind::kNone: return;
+  }
+}
+
+FaultReason Supervisor::CheckFaults(const SupervisorInput& input,
+                                    const PoseEstimatorOutput& estimate, int& leg,
+                                    std::array<char, 160>& detail) const {
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    if (input.leg_fault[i] != FaultReason::kNone) {
+      leg = static_cast<int>(i) + 1;
+      std::snprintf(detail.data(), detail.size(), "leg %d reports %s", leg,
+                    ToString(input.leg_fault[i]));
+      return input.leg_fault[i];
+    }
+  }
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    if (!input.leg_alive[i]) {
+      leg = static_cast<int>(i) + 1;
+      std::snprintf(detail.data(), detail.size(), "leg %d controller liveliness lost", leg);
+      return FaultReason::kLivelinessLost;
+    }
+  }
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    if (input.deadline_misses_consecutive[i] > params_.max_consecutive_deadline_misses) {
+      leg = static_cast<int>(i) + 1;
+      std::snprintf(detail.data(), detail.size(),
+                    "leg %d: %d consecutive deadline misses (limit %d)", leg,
+                    input.deadline_misses_consecutive[i], params_.max_consecutive_deadline_misses);
+      return FaultReason::kDeadlineMissesExceeded;
+    }
+  }
+  if (input.imu_deadline_misses_consecutive > params_.max_consecutive_deadline_misses) {
+    leg = 0;
+    std::snprintf(detail.data(), detail.size(), "IMU: %d consecutive deadline misses (limit %d)",
+                  input.imu_deadline_misses_consecutive, params_.max_consecutive_deadline_misses);
+    return FaultReason::kDeadlineMissesExceeded;
+  }
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    const double l = input.length_m[i];
+    if (!std::isfinite(l) || l <= 0.0) {
+      leg = static_cast<int>(i) + 1;
+      std::snprintf(detail.data(), detail.size(), "leg %d: measured length %g m is invalid", leg,
+                    l);
+      return FaultReason::kSensorInvalid;
+    }
+  }
+  if (estimate.status != KinStatus::kOk) {
+    leg = 0;
+    std::snprintf(detail.data(), detail.size(), "pose estimate failed: %s (IMU or lengths)",
+                  hexa::ToString(estimate.status));
+    return FaultReason::kSensorInvalid;
+  }
+  const double distance_m = (estimate.pose.p_BP_B_m - home_.head<3>()).norm();
+  const double rotation_rad =
+      PoseError(PoseFromVector(home_), estimate.pose).tail<3>().norm();
+  if (distance_m > params_.workspace_radius_m || rotation_rad > params_.workspace_max_rotation_rad) {
+    leg = 0;
+    std::snprintf(detail.data(), detail.size(),
+                  "estimate %.1f mm / %.2f deg from home exceeds the workspace %.1f mm / %.2f deg",
+                  distance_m * 1e3, rotation_rad * 180.0 / 3.14159265358979323846,
+                  params_.workspace_radius_m * 1e3,
+                  params_.workspace_max_rotation_rad * 180.0 / 3.14159265358979323846);
+    return FaultReason::kEstimateOutsideWorkspace;
+  }
+  return FaultReason::kNone;
+}
+
+void Supervisor::Update(const SupervisorInput& input, SupervisorOutput& output) noexcept {
+  output.command_result = CommandResult::kNone;
+  output.fault_raised = false;
+
+  // 1. Estimate (IMU orientation + GQFK / LSQ position).
+  PoseEstimatorInput est_in;
+  est_in.length_m = input.length_m;
+  est_in.orientation_wxyz = input.orientation_wxyz;
+  estimator_.Update(est_in, output.estimate);
+
+  // 2. Latch the first valid estimate as the rest pose ("blend from the current pose").
+  if (!initialized_ && output.estimate.status == KinStatus::kOk) {
+    initialized_ = true;
+    rest_ = output.estimate.xyz_rpy;
+    // What a fault at this very tick freezes: the legs where they are.
+    for (std::size_t i = 0; i < kNumLegs; ++i) {
+      last_setpoint_[i] = SupervisorLegSetpoint{input.length_m[i], 0.0, 0.0, 0.0, false};
+    }
+    last_desired_ = TrajectorySample{};
+    last_desired_.vector.q = rest_;
+    last_desired_.pose = output.estimate.pose;
+  }
+
+  // 3. Operator command.
+  HandleCommand(input, output);
+
+  // 4. Desired pose for this tick.
+  TrajectorySample desired;
+  if (state_ == SupervisorState::kBlending || state_ == SupervisorState::kTracking ||
+      state_ == SupervisorState::kStopping) {
+    trajectory_time_s_ = input.time_s - trajectory_start_time_s_;
+    trajectory_.EvaluateStopped(trajectory_time_s_, stop_at_s_, desired);
+    switch (desired.phase) {
+      case TrajectoryPhase::kBlend: state_ = SupervisorState::kBlending; break;
+      case TrajectoryPhase::kTracking: state_ = SupervisorState::kTracking; break;
+      case TrajectoryPhase::kStop: state_ = SupervisorState::kStopping; break;
+      case TrajectoryPhase::kDone:
+        state_ = SupervisorState::kIdle;
+        rest_ = trajectory_.rest_xyz_rpy();
+        break;
+    }
+  }
+  if (state_ == SupervisorState::kIdle) {
+    desired.phase = TrajectoryPhase::kDone;
+    desired.vector.q = rest_;
+    desired.vector.q_dot.setZero();
+    desired.vector.q_ddot.setZero();
+    desired.pose = PoseFromVector(rest_);
+    desired.twist_B.setZero();
+    desired.twist_rate_B.setZero();
+  }
+
+  // 5. Safety checks (HOLD latches until reset).
+  if (state_ != SupervisorState::kHold && initialized_) {
+    int leg = 0;
+    std::array<char, 160> detail{};
+    const FaultReason fault = CheckFaults(input, output.estimate, leg, detail);
+    if (fault != FaultReason::kNone) EnterHold(fault, leg, detail.data(), output);
+  }
+
+  // 6. Outer loop and setpoints.
+  const bool estimate_ok = output.estimate.status == KinStatus::kOk;
+  OuterLoopInput ol_in;
+  ol_in.estimated = output.estimate.pose;
+  ol_in.estimate_valid = estimate_ok;
+  if (state_ == SupervisorState::kHold) {
+    ol_in.desired = last_desired_.pose;
+    ol_in.freeze = true;
+    outer_loop_.Update(ol_in, output.outer_loop);
+    output.setpoint = last_setpoint_;
+    output.desired = last_desired_;
+  } else if (!initialized_) {
+    // No pose yet: hold the legs where they are.
+    for (std::size_t i = 0; i < kNumLegs; ++i) {
+      output.setpoint[i] = SupervisorLegSetpoint{input.length_m[i], 0.0, 0.0, 0.0, true};
+    }
+    output.outer_loop = OuterLoopOutput{};
+    output.desired = desired;
+  } else {
+    ol_in.desired = desired.pose;
+    outer_loop_.Update(ol_in, output.outer_loop);
+    LegArray<double> length_m{}, speed_m_s{}, accel_m_s2{};
+    LegKinematicsOf(rig_.geometry, desired, length_m, speed_m_s, accel_m_s2);  // eq 46
+    for (std::size_t i = 0; i < kNumLegs; ++i) {
+      output.setpoint[i] = SupervisorLegSetpoint{length_m[i], speed_m_s[i], accel_m_s2[i],
+                                                 output.outer_loop.correction_m[i], false};
+    }
+    last_setpoint_ = output.setpoint;
+    last_desired_ = desired;
+    output.desired = desired;
+  }
+
+  output.state = state_;
+  output.trajectory_time_s = state_ == SupervisorState::kIdle ? 0.0 : trajectory_time_s_;
+  output.desired_xyz_rpy = output.desired.vector.q;
+  output.fault = fault_;
+  output.fault_leg = fault_leg_;
+  output.fault_detail = fault_detail_;
+}
+
+}  // namespace hexa

@@ -1,0 +1,361 @@
+// Supervisor state machine: nominal run through every state, operator stop and home, and
+// HOLD on each fault cause with frozen setpoints, refused commands and reset-only exit.
+// The "plant" is a perfect kinematic one: each leg reaches its setpoint (length +
+// correction) by the next tick and the IMU reads the commanded orientation.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <vector>
+
+#include "hexa/core/kinematics.hpp"
+#include "hexa/core/supervisor.hpp"
+
+namespace hexa {
+namespace {
+
+std::array<double, 4> Quat(const Eigen::Matrix3d& R) {
+  const Eigen::Quaterniond q(R);
+  return {q.w(), q.x(), q.y(), q.z()};
+}
+
+class Bench {
+ public:
+  explicit Bench(const Vector6d& initial_pose = Vector6d::Zero(),
+                 SupervisorParams params = SupervisorParams{})
+      : rig_(MakeReferenceRig()), sup_(rig_, params) {
+    const Vector6d q = initial_pose.isZero() ? sup_.home_xyz_rpy() : initial_pose;
+    const Pose pose = PoseFromVector(q);
+    InverseKinematics(rig_.geometry, pose, in.length_m);
+    in.orientation_wxyz = Quat(pose.R_BP);
+  }
+
+  // One 5 ms tick; the perfect plant then follows the setpoints.
+  void Tick(OperatorCommandKind cmd = OperatorCommandKind::kNone,
+            const StartRequest* start = nullptr) {
+    in.time_s = time_s_;
+    in.command = cmd;
+    in.start = start;
+    sup_.Update(in, out);
+    time_s_ += 0.005;
+    if (follow_) {
+      for (std::size_t i = 0; i < kNumLegs; ++i) {
+        in.length_m[i] = out.setpoint[i].length_m + out.setpoint[i].correction_m;
+      }
+      in.orientation_wxyz = Quat(out.desired.pose.R_BP);
+    }
+  }
+  void RunFor(double duration_s) {
+    const int n = static_cast<int>(std::lround(duration_s / 0.005));
+    for (int k = 0; k < n; ++k) Tick();
+  }
+
+  Supervisor& sup() { return sup_; }
+  bool follow_ = true;
+  SupervisorInput in;
+  SupervisorOutput out;
+
+ private:
+  RigParams rig_;
+  Supervisor sup_;
+  double time_s_ = 0.0;
+};
+
+// Start a one-period x trajectory and run into the tracking window.
+void StartAndTrack(Bench& bench, StartRequest& request) {
+  bench.Tick();
+  ASSERT_TRUE(bench.sup().initialized());
+  request = bench.sup().PreparePaperStart(PaperMotion::kX, 1);
+  ASSERT_TRUE(request.feasibility.feasible) << request.feasibility.message;
+  bench.Tick(OperatorCommandKind::kStart, &request);
+  ASSERT_EQ(bench.out.command_result, CommandResult::kAccepted);
+  bench.RunFor(3.0);
+  ASSERT_EQ(bench.out.state, SupervisorState::kTracking);
+}
+
+TEST(Supervisor, NominalRunVisitsEveryStateInOrderWithContinuousSetpoints) {
+  Bench bench;
+  bench.Tick();
+  EXPECT_EQ(bench.out.state, SupervisorState::kIdle);
+  const StartRequest request = bench.sup().PreparePaperStart(PaperMotion::kCombined, 2);
+  ASSERT_TRUE(request.feasibility.feasible) << request.feasibility.message;
+  bench.Tick(OperatorCommandKind::kStart, &request);
+  EXPECT_EQ(bench.out.command_result, CommandResult::kAccepted);
+  std::vector<SupervisorState> states{SupervisorState::kIdle};
+  LegArray<SupervisorLegSetpoint> prev = bench.out.setpoint;
+  const SupervisorParams params;
+  double max_error = 0.0;
+  for (int k = 0; k < 1200; ++k) {
+    bench.Tick();
+    if (bench.out.state != states.back()) states.push_back(bench.out.state);
+    for (std::size_t i = 0; i < kNumLegs; ++i) {
+      const auto& sp = bench.out.setpoint[i];
+      EXPECT_FALSE(sp.hold);
+      // No steps: per 5 ms the length moves at most v_max dt, the velocity a_max dt.
+      EXPECT_LE(std::abs(sp.length_m - prev[i].length_m), params.max_leg_speed_m_s * 0.005);
+      EXPECT_LE(std::abs(sp.velocity_m_s - prev[i].velocity_m_s),
+                params.max_leg_acceleration_m_s2 * 0.005);
+    }
+    max_error = std::max(max_error, bench.out.outer_loop.error.norm());
+    prev = bench.out.setpoint;
+  }
+  const std::vector<SupervisorState> expected{SupervisorState::kIdle, SupervisorState::kBlending,
+                                              SupervisorState::kTracking,
+                                              SupervisorState::kStopping, SupervisorState::kIdle};
+  EXPECT_EQ(states, expected);
+  EXPECT_EQ(bench.out.fault, FaultReason::kNone);
+  EXPECT_LT((bench.out.desired_xyz_rpy - bench.sup().home_xyz_rpy()).cwiseAbs().maxCoeff(), 1e-9);
+  // Perfect plant with the nominal geometry: the estimate lags the desired pose by one tick.
+  EXPECT_LT(max_error, 0.01);
+}
+
+TEST(Supervisor, OperatorStopDuringTrackingStopsSmoothlyAtHome) {
+  Bench bench;
+  StartRequest request;
+  StartAndTrack(bench, request);
+  bench.Tick(OperatorCommandKind::kStop);
+  EXPECT_EQ(bench.out.command_result, CommandResult::kAccepted);
+  EXPECT_EQ(bench.out.state, SupervisorState::kStopping);
+  LegArray<SupervisorLegSetpoint> prev = bench.out.setpoint;
+  for (int k = 0; k < 210; ++k) {
+    bench.Tick();
+    for (std::size_t i = 0; i < kNumLegs; ++i) {
+      EXPECT_LE(std::abs(bench.out.setpoint[i].velocity_m_s - prev[i].velocity_m_s), 0.04);
+    }
+    prev = bench.out.setpoint;
+  }
+  EXPECT_EQ(bench.out.state, SupervisorState::kIdle);
+  EXPECT_LT((bench.out.desired_xyz_rpy - bench.sup().home_xyz_rpy()).cwiseAbs().maxCoeff(), 1e-9);
+  for (const auto& sp : bench.out.setpoint) EXPECT_EQ(sp.velocity_m_s, 0.0);
+}
+
+TEST(Supervisor, HomeCommandBringsAnOffHomeRestPoseHome) {
+  Vector6d start = HomePoseVector(MakeReferenceRig().geometry.home_position_m);
+  start += (Vector6d() << 0.02, 0.01, -0.03, 0.05, 0.0, -0.1).finished();
+  Bench bench(start);
+  bench.Tick();
+  EXPECT_LT((bench.sup().rest_xyz_rpy() - start).cwiseAbs().maxCoeff(), 1e-9)
+      << "the rest pose is latched from the first estimate";
+  bench.Tick(OperatorCommandKind::kHome);
+  EXPECT_EQ(bench.out.command_result, CommandResult::kAccepted);
+  EXPECT_EQ(bench.out.state, SupervisorState::kBlending);
+  bench.Tick(OperatorCommandKind::kStart);  // refused while moving
+  EXPECT_EQ(bench.out.command_result, CommandResult::kRefused);
+  bench.RunFor(2.1);
+  EXPECT_EQ(bench.out.state, SupervisorState::kIdle);
+  EXPECT_LT((bench.out.desired_xyz_rpy - bench.sup().home_xyz_rpy()).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((bench.out.estimate.xyz_rpy - bench.sup().home_xyz_rpy()).cwiseAbs().maxCoeff(), 1e-6);
+}
+
+// Fault causes: how to inject one into the input, and how to clear it.
+struct FaultCase {
+  const char* name;
+  FaultReason reason;
+  int leg;  // expected fault_leg
+  std::function<void(SupervisorInput&)> inject;
+  std::function<void(SupervisorInput&)> clear;
+};
+
+std::vector<FaultCase> FaultCases() {
+  const RigParams rig = MakeReferenceRig();
+  Vector6d far = HomePoseVector(rig.geometry.home_position_m);
+  far[0] += 0.16;  // beyond workspace_radius_m = 0.15
+  LegArray<double> far_lengths{};
+  InverseKinematics(rig.geometry, PoseFromVector(far), far_lengths);
+  Vector6d tilted = HomePoseVector(rig.geometry.home_position_m);
+  tilted[4] = 0.55;  // beyond workspace_max_rotation_rad = 0.5236
+  const Pose tilted_pose = PoseFromVector(tilted);
+  LegArray<double> tilted_lengths{};
+  InverseKinematics(rig.geometry, tilted_pose, tilted_lengths);
+  return {
+      {"LegFault", FaultReason::kCommandStale, 4,
+       [](SupervisorInput& in) { in.leg_fault[3] = FaultReason::kCommandStale; },
+       [](SupervisorInput& in) { in.leg_fault[3] = FaultReason::kNone; }},
+      {"LegCommandNotFinite", FaultReason::kCommandNotFinite, 1,
+       [](SupervisorInput& in) { in.leg_fault[0] = FaultReason::kCommandNotFinite; },
+       [](SupervisorInput& in) { in.leg_fault[0] = FaultReason::kNone; }},
+      {"LivelinessLost", FaultReason::kLivelinessLost, 2,
+       [](SupervisorInput& in) { in.leg_alive[1] = false; },
+       [](SupervisorInput& in) { in.leg_alive[1] = true; }},
+      {"DeadlineMissesExceeded", FaultReason::kDeadlineMissesExceeded, 5,
+       [](SupervisorInput& in) { in.deadline_misses_consecutive[4] = 6; },
+       [](SupervisorInput& in) { in.deadline_misses_consecutive[4] = 0; }},
+      {"ImuDeadlineMissesExceeded", FaultReason::kDeadlineMissesExceeded, 0,
+       [](SupervisorInput& in) { in.imu_deadline_misses_consecutive = 6; },
+       [](SupervisorInput& in) { in.imu_deadline_misses_consecutive = 0; }},
+      {"LengthNotFinite", FaultReason::kSensorInvalid, 6,
+       [](SupervisorInput& in) { in.length_m[5] = NAN; },
+       [](SupervisorInput& in) { in.length_m[5] = 0.5034; }},
+      {"ImuQuaternionInvalid", FaultReason::kSensorInvalid, 0,
+       [](SupervisorInput& in) { in.orientation_wxyz = {0.3, 0.0, 0.0, 0.0}; },
+       [](SupervisorInput& in) { in.orientation_wxyz = {1.0, 0.0, 0.0, 0.0}; }},
+      {"EstimateOutsideWorkspaceRadius", FaultReason::kEstimateOutsideWorkspace, 0,
+       [far_lengths](SupervisorInput& in) {
+         in.length_m = far_lengths;
+         in.orientation_wxyz = {1.0, 0.0, 0.0, 0.0};
+       },
+       [](SupervisorInput&) {}},
+      {"EstimateOutsideWorkspaceRotation", FaultReason::kEstimateOutsideWorkspace, 0,
+       [tilted_lengths, tilted_pose](SupervisorInput& in) {
+         in.length_m = tilted_lengths;
+         in.orientation_wxyz = Quat(tilted_pose.R_BP);
+       },
+       [](SupervisorInput&) {}},
+  };
+}
+
+class SupervisorFault : public ::testing::TestWithParam<FaultCase> {};
+
+TEST_P(SupervisorFault, HoldsWithFrozenSetpointsRefusesCommandsAndLeavesOnlyOnReset) {
+  const FaultCase& c = GetParam();
+  Bench bench;
+  StartRequest request;
+  StartAndTrack(bench, request);
+  const LegArray<SupervisorLegSetpoint> before = bench.out.setpoint;
+  const Vector6d desired_before = bench.out.desired_xyz_rpy;
+
+  bench.follow_ = false;  // the plant holds still; the fault input stays as injected
+  c.inject(bench.in);
+  bench.Tick();
+  EXPECT_EQ(bench.out.state, SupervisorState::kHold);
+  EXPECT_EQ(bench.out.fault, c.reason) << ToString(bench.out.fault);
+  EXPECT_EQ(bench.out.fault_leg, c.leg);
+  EXPECT_TRUE(bench.out.fault_raised);
+  EXPECT_GT(std::strlen(bench.out.fault_detail.data()), 0u);
+  // Frozen: the last lengths and corrections, at rest, hold flag set.
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    EXPECT_EQ(bench.out.setpoint[i].length_m, before[i].length_m);
+    EXPECT_EQ(bench.out.setpoint[i].correction_m, before[i].correction_m);
+    EXPECT_EQ(bench.out.setpoint[i].velocity_m_s, 0.0);
+    EXPECT_EQ(bench.out.setpoint[i].acceleration_m_s2, 0.0);
+    EXPECT_TRUE(bench.out.setpoint[i].hold);
+  }
+  EXPECT_EQ(bench.out.desired_xyz_rpy, desired_before);
+
+  // Every command but reset is refused; the hold and the fault persist, setpoints stay.
+  const StartRequest again = request;
+  for (OperatorCommandKind cmd : {OperatorCommandKind::kStart, OperatorCommandKind::kStop,
+                                  OperatorCommandKind::kHome}) {
+    bench.Tick(cmd, &again);
+    EXPECT_EQ(bench.out.command_result, CommandResult::kRefused) << ToString(cmd);
+    EXPECT_EQ(bench.out.state, SupervisorState::kHold);
+    EXPECT_EQ(bench.out.fault, c.reason);
+    EXPECT_FALSE(bench.out.fault_raised);
+    for (std::size_t i = 0; i < kNumLegs; ++i) {
+      EXPECT_EQ(bench.out.setpoint[i].length_m, before[i].length_m);
+      EXPECT_TRUE(bench.out.setpoint[i].hold);
+    }
+  }
+  bench.RunFor(1.0);  // time alone does not leave HOLD
+  EXPECT_EQ(bench.out.state, SupervisorState::kHold);
+
+  // Reset while the cause persists: accepted, but the fault is raised again at once.
+  bench.Tick(OperatorCommandKind::kReset);
+  EXPECT_EQ(bench.out.command_result, CommandResult::kAccepted);
+  EXPECT_EQ(bench.out.state, SupervisorState::kHold);
+  EXPECT_EQ(bench.out.fault, c.reason);
+
+  // Clear the cause (the platform is where the setpoints held it), then reset -> IDLE.
+  c.clear(bench.in);
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    bench.in.length_m[i] = before[i].length_m + before[i].correction_m;
+  }
+  bench.in.orientation_wxyz = Quat(PoseFromVector(desired_before).R_BP);
+  bench.follow_ = true;
+  bench.Tick();
+  EXPECT_EQ(bench.out.state, SupervisorState::kHold);
+  bench.Tick(OperatorCommandKind::kReset);
+  EXPECT_EQ(bench.out.command_result, CommandResult::kAccepted);
+  EXPECT_EQ(bench.out.state, SupervisorState::kIdle);
+  EXPECT_EQ(bench.out.fault, FaultReason::kNone);
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    EXPECT_FALSE(bench.out.setpoint[i].hold);
+    EXPECT_NEAR(bench.out.setpoint[i].length_m, before[i].length_m, 1e-9);  // no jump
+  }
+  // And a new trajectory can start from where it rests.
+  const StartRequest next = bench.sup().PreparePaperStart(PaperMotion::kZ, 1);
+  ASSERT_TRUE(next.feasibility.feasible) << next.feasibility.message;
+  bench.Tick(OperatorCommandKind::kStart, &next);
+  EXPECT_EQ(bench.out.command_result, CommandResult::kAccepted);
+  EXPECT_EQ(bench.out.state, SupervisorState::kBlending);
+}
+
+INSTANTIATE_TEST_SUITE_P(EachCause, SupervisorFault, ::testing::ValuesIn(FaultCases()),
+                         [](const ::testing::TestParamInfo<FaultCase>& info) {
+                           return std::string(info.param.name);
+                         });
+
+TEST(Supervisor, DeadlineMissesUpToTheLimitAreTolerated) {
+  Bench bench;
+  StartRequest request;
+  StartAndTrack(bench, request);
+  bench.in.deadline_misses_consecutive[2] = SupervisorParams{}.max_consecutive_deadline_misses;
+  bench.in.imu_deadline_misses_consecutive = SupervisorParams{}.max_consecutive_deadline_misses;
+  bench.RunFor(0.5);
+  EXPECT_EQ(bench.out.state, SupervisorState::kTracking);
+  EXPECT_EQ(bench.out.fault, FaultReason::kNone);
+}
+
+TEST(Supervisor, RejectedTrajectoryHoldsWithTheFeasibilityMessage) {
+  Bench bench;
+  bench.Tick();
+  const StartRequest request = bench.sup().PreparePaperStart(PaperMotion::kRoll, 1, 3.0);
+  ASSERT_FALSE(request.feasibility.feasible);
+  const LegArray<SupervisorLegSetpoint> before = bench.out.setpoint;
+  bench.Tick(OperatorCommandKind::kStart, &request);
+  EXPECT_EQ(bench.out.command_result, CommandResult::kRejected);
+  EXPECT_EQ(bench.out.state, SupervisorState::kHold);
+  EXPECT_EQ(bench.out.fault, FaultReason::kTrajectoryRejected);
+  EXPECT_EQ(bench.out.fault_leg, request.feasibility.leg);
+  EXPECT_EQ(std::string(bench.out.fault_detail.data()), request.feasibility.message);
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    EXPECT_EQ(bench.out.setpoint[i].length_m, before[i].length_m);
+    EXPECT_TRUE(bench.out.setpoint[i].hold);
+  }
+  bench.Tick(OperatorCommandKind::kHome);
+  EXPECT_EQ(bench.out.command_result, CommandResult::kRefused);
+  bench.Tick(OperatorCommandKind::kReset);
+  EXPECT_EQ(bench.out.state, SupervisorState::kIdle);
+}
+
+TEST(Supervisor, MalformedCsvIsRejectedWithItsLineNumberedMessage) {
+  Bench bench;
+  bench.Tick();
+  const std::string path = std::string(HEXA_TASK_SPACE_CSV_DIR) + "/nan_value.csv";
+  const StartRequest request = bench.sup().PrepareCsvStart(path);
+  ASSERT_FALSE(request.feasibility.feasible);
+  EXPECT_EQ(request.feasibility.message, path + ":3: column 5 (roll_rad): \"nan\" is not finite");
+  bench.Tick(OperatorCommandKind::kStart, &request);
+  EXPECT_EQ(bench.out.state, SupervisorState::kHold);
+  EXPECT_EQ(bench.out.fault, FaultReason::kTrajectoryRejected);
+}
+
+TEST(Supervisor, TrajectoryNotStartingAtTheRestPoseIsRejected) {
+  Bench bench;
+  bench.Tick();
+  Vector6d elsewhere = bench.sup().rest_xyz_rpy();
+  elsewhere[0] += 0.01;
+  const StartRequest request = bench.sup().PrepareStart(MakePaperTrajectory(
+      PaperMotion::kZ, elsewhere, bench.sup().home_xyz_rpy(), bench.sup().timing(), 1));
+  ASSERT_TRUE(request.feasibility.feasible);
+  bench.Tick(OperatorCommandKind::kStart, &request);
+  EXPECT_EQ(bench.out.command_result, CommandResult::kRejected);
+  EXPECT_EQ(bench.out.fault, FaultReason::kTrajectoryRejected);
+}
+
+TEST(Supervisor, ResetOutsideHoldAndStartWhileMovingAreRefused) {
+  Bench bench;
+  StartRequest request;
+  StartAndTrack(bench, request);
+  bench.Tick(OperatorCommandKind::kReset);
+  EXPECT_EQ(bench.out.command_result, CommandResult::kRefused);
+  bench.Tick(OperatorCommandKind::kStart, &request);
+  EXPECT_EQ(bench.out.command_result, CommandResult::kRefused);
+  bench.Tick(OperatorCommandKind::kHome);
+  EXPECT_EQ(bench.out.command_result, CommandResult::kRefused);
+  EXPECT_EQ(bench.out.state, SupervisorState::kTracking);
+}
+
+}  // namespace
+}  // namespace hexa
