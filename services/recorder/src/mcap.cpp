@@ -606,7 +606,8 @@ McapScanResult McapReader::Scan(const McapVisitor& visitor, const McapScanOption
       defect("record at offset " + std::to_string(rec_start) + " (opcode " + Hex(op) + " " +
              McapOpcodeName(op) + ") claims " + std::to_string(len) + " bytes but only " +
              std::to_string(file_size_ - pos - 9) +
-             " remain in the file: length runs past end of file (truncated or corrupt)");
+             " remain in the file: length runs past end of file (truncated or corrupt; "
+             "`hexa_recorder recover` keeps the intact chunks)");
       break;
     }
     if (!seen_header && op != static_cast<uint8_t>(McapOpcode::kHeader)) {
