@@ -128,6 +128,7 @@ TEST(OuterLoop, MapsAPoseErrorToTheLegLengthChangeAndSaturates) {
 struct KinematicLoopResult {
   double initial_estimated_error = 0.0, final_estimated_error = 0.0;
   double initial_true_rotation_error = 0.0, final_true_rotation_error = 0.0;
+  double initial_true_position_error = 0.0, final_true_position_error = 0.0;
   LegArray<double> correction_m{};
 };
 
@@ -167,10 +168,13 @@ KinematicLoopResult RunKinematicLoop(bool enabled, bool least_squares, const Vec
     loop.Update({desired, est.pose, true, false}, out);
     const double estimated_error = out.error.norm();
     const double true_rot = PoseError(desired, true_pose).tail<3>().norm();
+    const double true_pos = PoseError(desired, true_pose).head<3>().norm();
     if (step == 0) {
       result.initial_estimated_error = estimated_error;
       result.initial_true_rotation_error = true_rot;
+      result.initial_true_position_error = true_pos;
     }
+    result.final_true_position_error = true_pos;
     result.final_estimated_error = estimated_error;
     result.final_true_rotation_error = true_rot;
   }
@@ -196,10 +200,14 @@ TEST_P(KinematicCalibrationLoop, OuterLoopDrivesTheEstimatedErrorToZero) {
     EXPECT_GT(on.initial_true_rotation_error, 1e-4);
     EXPECT_LT(on.final_true_rotation_error, 1e-3 * on.initial_true_rotation_error);
     for (double c : on.correction_m) EXPECT_LT(std::abs(c), 0.005);
-    std::printf("%s: estimated error %.3g -> %.3g, true rotation error %.3g -> %.3g rad\n",
+    // Not asserted: the position part of a base-joint error is not observable from the
+    // lengths and the IMU alone (docs/task_space.md); reported for the record.
+    std::printf("%s: estimated error %.3g -> %.3g, true rotation error %.3g -> %.3g rad, "
+                "true position error %.3g -> %.3g m\n",
                 GetParam() ? "lsq " : "gqfk", on.initial_estimated_error,
                 on.final_estimated_error, on.initial_true_rotation_error,
-                on.final_true_rotation_error);
+                on.final_true_rotation_error, on.initial_true_position_error,
+                on.final_true_position_error);
   }
 }
 
