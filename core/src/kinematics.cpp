@@ -70,7 +70,7 @@ Vector6d LengthResiduals(const GeometryParams& geometry, const Pose& pose,
 // averaged spheres do not reach the centre plane); p is always finite.
 KinStatus SolveSpheres(const LegArray<Eigen::Vector3d>& centre,
                        const LegArray<double>& length_m, const std::array<bool, kNumLegs>& used,
-                       Eigen::Vector3d& p) {
+                       int max_gauss_newton_steps, Eigen::Vector3d& p) {
   int n_used = 0;
   Eigen::Vector3d mean_centre = Eigen::Vector3d::Zero();
   double mean_c = 0.0;  // mean of |O_i|^2 - l_i^2
@@ -126,10 +126,10 @@ KinStatus SolveSpheres(const LegArray<Eigen::Vector3d>& centre,
   const double t = (normal.z() >= 0.0) ? -m + root : -m - root;
   p = p_plane + t * normal;
 
-  // Gauss-Newton on r_i = |p - O_i| - l_i. From the exact linear start it converges in a
-  // few steps; the cap only bounds the work when the data are inconsistent.
-  constexpr int kMaxGaussNewtonSteps = 12;
-  for (int step = 0; step < kMaxGaussNewtonSteps; ++step) {
+  // Gauss-Newton on r_i = |p - O_i| - l_i. From the exact linear start it converges in one
+  // step; with inconsistent data (non-zero residual) convergence is only linear, and the
+  // cap bounds the work.
+  for (int step = 0; step < max_gauss_newton_steps; ++step) {
     Eigen::Matrix3d JtJ = Eigen::Matrix3d::Zero();
     Eigen::Vector3d Jtr = Eigen::Vector3d::Zero();
     for (std::size_t i = 0; i < kNumLegs; ++i) {
@@ -285,8 +285,14 @@ KinStatus GqfkLeastSquares(const GeometryParams& geometry, const Eigen::Matrix3d
 
   std::array<bool, kNumLegs> used;
   used.fill(true);
+  // 12 steps: enough for the linear convergence of Gauss-Newton on one bad leg to settle
+  // below a micrometre; consistent data need one.
+  constexpr int kFullSteps = 12;
+  // Leave-one-out fits only have to be ranked by RMS: the fit without the faulty leg is
+  // exact after one step, the others stay centimetres off, so 3 steps rank them reliably.
+  constexpr int kRankingSteps = 3;
   Eigen::Vector3d p;
-  KinStatus status = SolveSpheres(centre, length_m, used, p);
+  KinStatus status = SolveSpheres(centre, length_m, used, kFullSteps, p);
   if (status == KinStatus::kDegenerate) {
     result.p_BP_B_m = p;
     return status;
@@ -311,7 +317,7 @@ KinStatus GqfkLeastSquares(const GeometryParams& geometry, const Eigen::Matrix3d
     used.fill(true);
     used[k] = false;
     Eigen::Vector3d p_k;
-    const KinStatus status_k = SolveSpheres(centre, length_m, used, p_k);
+    const KinStatus status_k = SolveSpheres(centre, length_m, used, kRankingSteps, p_k);
     if (status_k == KinStatus::kDegenerate) continue;
     LegArray<double> residual_k;
     residuals_of(p_k, residual_k);
@@ -323,6 +329,13 @@ KinStatus GqfkLeastSquares(const GeometryParams& geometry, const Eigen::Matrix3d
       best_residual_m = residual_k;
       best_status = status_k;
     }
+  }
+  if (best_leg >= 0) {  // finish the winning fit
+    used.fill(true);
+    used[best_leg] = false;
+    best_status = SolveSpheres(centre, length_m, used, kFullSteps, best_p);
+    residuals_of(best_p, best_residual_m);
+    best_rms_m = rms_of(best_residual_m, best_leg);
   }
   if (best_leg < 0 || std::abs(best_residual_m[best_leg]) <= outlier_threshold_m) {
     // No single leg explains the disagreement: keep the six-leg fit and say so.

@@ -344,6 +344,9 @@ TEST(Kinematics, GqfkLeastSquaresExcludesOneBadLeg) {
     worst_m = std::max(worst_m, (result.p_BP_B_m - samples[n].pose.p_BP_B_m).norm());
   }
   EXPECT_LT(worst_m, 1e-3);
+  char text[64];
+  std::snprintf(text, sizeof text, "%.3g", worst_m);
+  RecordProperty("worst_position_m", text);
   for (int count : named) EXPECT_GT(count, kNumRandomPoses / 7);
 }
 
