@@ -9,6 +9,8 @@ namespace hexa::config::internal {
 
 // Shortest text that reads back to the same double ("0.00031416", "inf", "nan").
 std::string FormatDouble(double value);
+// Ten significant digits, for values computed from the file (leg lengths, limits).
+std::string FormatDerived(double value);
 
 // The plant's tick (DESIGN.md "Time"): periods must be whole multiples of it.
 inline constexpr double kPlantTick_s = 0.001;

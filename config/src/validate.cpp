@@ -3,7 +3,8 @@
 // the file, line and column. Comparisons are written as !(value OK) so that NaN fails too.
 #include <Eigen/SVD>
 #include <algorithm>
-#include <charconv>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -18,9 +19,24 @@ namespace internal {
 std::string FormatDouble(double value) {
   if (std::isnan(value)) return "nan";
   if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+  // The fewest %g digits that read back to the same double: "0.00031416", "1e-05".
   char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
+  // Start at the number of integer digits so that 10 prints as "10", not "1e+01".
+  const double magnitude = std::abs(value);
+  const int integer_digits = magnitude >= 1.0 && magnitude < 1e17 ? static_cast<int>(std::log10(magnitude)) + 1 : 1;
+  for (int precision = integer_digits; precision <= 17; ++precision) {
+    std::snprintf(buffer, sizeof(buffer), "%.*g", precision, value);
+    if (std::strtod(buffer, nullptr) == value) break;
+  }
+  return buffer;
+}
+
+std::string FormatDerived(double value) {
+  if (!std::isfinite(value)) return FormatDouble(value);
+  std::ostringstream out;
+  out.precision(10);
+  out << value;
+  return out.str();
 }
 
 HomeGeometry ComputeHomeGeometry(const GeometryParams& geometry) {
@@ -57,6 +73,7 @@ HomeGeometry ComputeHomeGeometry(const GeometryParams& geometry) {
 namespace {
 
 using internal::FormatDouble;
+using internal::FormatDerived;
 
 // Joints closer than this are the same joint (a real spherical joint is ~20 mm across).
 constexpr double kMinJointSeparation_m = 1e-3;
@@ -202,15 +219,28 @@ void CheckGeometry(Checker& c, const SystemConfig& config) {
       std::isfinite(margin_m) && margin_m >= 0.0 && margin_m < 0.5 * cyl.stroke_m) {
     const double lo_m = cyl.mid_stroke_length_m - 0.5 * cyl.stroke_m + margin_m;
     const double hi_m = cyl.mid_stroke_length_m + 0.5 * cyl.stroke_m - margin_m;
+    // One message for the pose, naming the leg furthest outside and every leg outside.
+    std::string legs_outside;
+    std::size_t worst = kNumLegs;
+    double worst_excess_m = 0.0;
     for (std::size_t i = 0; i < kNumLegs; ++i) {
       const double l = home.length_m[i];
-      if (!(l >= lo_m && l <= hi_m)) {
-        c.Fail("geometry.home_position_m",
-               "at home leg " + std::to_string(i + 1) + " is " + FormatDouble(l) +
-                   " m long, outside the usable stroke (mid_stroke_length_m +- stroke_m/2, "
-                   "less supervisor.stroke_margin_m)",
-               FormatDouble(l), "[" + FormatDouble(lo_m) + ", " + FormatDouble(hi_m) + "] m");
+      const double excess_m = std::max(lo_m - l, l - hi_m);
+      if (!(excess_m <= 0.0)) {
+        legs_outside += (legs_outside.empty() ? "" : ",") + std::to_string(i + 1);
+        if (worst == kNumLegs || excess_m > worst_excess_m) {
+          worst = i;
+          worst_excess_m = excess_m;
+        }
       }
+    }
+    if (worst < kNumLegs) {
+      c.Fail("geometry.home_position_m",
+             "home pose puts leg(s) " + legs_outside + " outside the usable stroke " +
+                 "(cylinder.mid_stroke_length_m +- cylinder.stroke_m / 2, less supervisor.stroke_margin_m); "
+                 "leg " + std::to_string(worst + 1) + " is " + FormatDerived(home.length_m[worst]) + " m long",
+             FormatDerived(home.length_m[worst]) + " m",
+             "[" + FormatDerived(lo_m) + ", " + FormatDerived(hi_m) + "] m");
     }
   }
 
@@ -223,8 +253,8 @@ void CheckGeometry(Checker& c, const SystemConfig& config) {
     c.Fail("geometry",
            "not a proper 6-6 platform: the leg Jacobian (eq 48) at the home pose is badly "
            "conditioned (rotation columns scaled by the platform radius " +
-               FormatDouble(home.characteristic_length_m) + " m)",
-           "condition number " + FormatDouble(home.jacobian_condition),
+               FormatDerived(home.characteristic_length_m) + " m)",
+           "condition number " + FormatDerived(home.jacobian_condition),
            "<= " + FormatDouble(kMaxJacobianCondition));
   }
 }

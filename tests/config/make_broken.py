@@ -1,0 +1,120 @@
+#!/usr/bin/env python3
+"""Writes tests/config/broken/*.textproto: each a copy of deploy/rigs/hexataar_r.textproto
+with ONE defect. The line that the loader must report carries the comment `# DEFECT`
+(for a block removed from the top level: the last line of the file); the test finds the
+expected line from that marker, independently of the loader.
+
+Rerun after changing the reference file:  /usr/bin/python3 tests/config/make_broken.py
+"""
+import math
+import pathlib
+import re
+
+HERE = pathlib.Path(__file__).resolve().parent
+ROOT = HERE.parent.parent
+REFERENCE = (ROOT / "deploy/rigs/hexataar_r.textproto").read_text().splitlines()
+
+
+def fmt(v):
+    s = ("%.12f" % v).rstrip("0").rstrip(".")
+    return "0" if s in ("-0", "") else s
+
+
+def find(lines, pattern, occurrence=0):
+    hits = [i for i, l in enumerate(lines) if re.search(pattern, l)]
+    return hits[occurrence]
+
+
+def replace(pattern, new_text, note, occurrence=0):
+    """Replace the value after `pattern` on its (occurrence-th) line and mark that line."""
+    def edit(lines):
+        i = find(lines, pattern, occurrence)
+        indent = re.match(r"\s*", lines[i]).group(0)
+        lines[i] = indent + new_text + "  # DEFECT: " + note
+    return edit
+
+
+def delete_line(pattern, block_pattern, note):
+    """Delete a field; the expected line is the start of its block."""
+    def edit(lines):
+        i = find(lines, pattern)
+        del lines[i]
+        j = max(k for k in range(i) if re.search(block_pattern, lines[k]))
+        lines[j] += "  # DEFECT: " + note
+    return edit
+
+
+def delete_block(block_start, note):
+    """Delete a whole top-level block; the expected line is the end of the file."""
+    def edit(lines):
+        i = find(lines, block_start)
+        j = next(k for k in range(i, len(lines)) if lines[k].startswith("}"))
+        del lines[i:j + 1]
+        lines.append("# DEFECT: " + note)
+    return edit
+
+
+def platform_joints(azimuths_deg, note):
+    """Rewrite every platform joint at the given azimuths (0.25 m circle); mark geometry."""
+    def edit(lines):
+        for k, az in enumerate(azimuths_deg):
+            i = find(lines, r"p_PB_P_m \{", k)
+            a = math.radians(az)
+            indent = re.match(r"\s*", lines[i]).group(0)
+            lines[i] = (indent + "p_PB_P_m { x: %s y: %s z: 0 }" %
+                        (fmt(0.25 * math.cos(a)), fmt(0.25 * math.sin(a))))
+        lines[find(lines, r"^geometry \{")] += "  # DEFECT: " + note
+    return edit
+
+
+def base_joints_on_line(note):
+    def edit(lines):
+        for k in range(6):
+            i = find(lines, r"p_BA_B_m \{", k)
+            lines[i] = re.sub(r"x: [-0-9.e]+", "x: 0", lines[i])
+        lines[find(lines, r"^geometry \{")] += "  # DEFECT: " + note
+    return edit
+
+
+CASES = {
+    "syntax_error": replace(r"moving_mass_kg:", "moving_mass_kg 0.25", "colon missing"),
+    "unknown_field": replace(r"cap_area_m2:", "cap_aera_m2: 3.1416e-4", "misspelt field name"),
+    "missing_field": delete_line(r"rod_area_m2:", r"^cylinder \{", "rod_area_m2 removed"),
+    "missing_block": delete_block(r"^valve \{", "valve block removed"),
+    "negative_mass": replace(r"mass_kg: 6", "mass_kg: -6", "negative platform mass"),
+    "zero_area": replace(r"cap_area_m2:", "cap_area_m2: 0", "non-positive area"),
+    "annulus_ge_cap": replace(r"annulus_area_m2:", "annulus_area_m2: 3.5e-4", "annulus >= cap"),
+    "valve_null_outside": replace(r"null_voltage_v:", "null_voltage_v: 12", "null above max"),
+    "non_finite": replace(r"bristle_damping_n_s_m:", "bristle_damping_n_s_m: inf", "infinite value"),
+    "coincident_joints": replace(r"p_BA_B_m \{", "p_BA_B_m { x: 0.344682713554 y: -0.060776862183 z: 0 }",
+                                 "leg 2 base joint = leg 1 base joint", occurrence=1),
+    "collinear_base": base_joints_on_line("all base joints on the y axis"),
+    "singular_geometry": platform_joints([350, 10, 110, 130, 230, 250],
+                                         "platform joints at the base joints' azimuths"),
+    "ill_conditioned_geometry": platform_joints([349.5, 10.5, 109.5, 130.5, 229.5, 250.5],
+                                                "platform joints 0.5 deg from the base azimuths"),
+    "home_outside_stroke": replace(r"home_position_m \{", "home_position_m { x: 0 y: 0 z: 0.62 }",
+                                   "home too high"),
+    "window_too_small": replace(r"window:", "window: 1", "differentiator window < 2"),
+    "sigma_zero": replace(r"sigma: 0.85", "sigma: 0", "differentiator sigma <= 0"),
+    "unknown_profile": replace(r"^default_profile:", 'default_profile: "realsitic"', "misspelt profile"),
+    "duplicate_profile": replace(r'name: "ideal"', 'name: "realistic"', "profile defined twice"),
+    "duplicate_leg_id": replace(r"id: 6", "id: 5", "leg 5 twice"),
+}
+
+
+def main():
+    out_dir = HERE / "broken"
+    out_dir.mkdir(exist_ok=True)
+    for name, edit in CASES.items():
+        lines = list(REFERENCE)
+        lines[0:0] = ["# BROKEN COPY of deploy/rigs/hexataar_r.textproto (tests/config/make_broken.py): "
+                      + name]
+        edit(lines)
+        assert sum("DEFECT" in l for l in lines) == 1, name
+        (out_dir / (name + ".textproto")).write_text("\n".join(lines) + "\n")
+    print("wrote %d files to %s" % (len(CASES), out_dir))
+
+
+if __name__ == "__main__":
+    main()
