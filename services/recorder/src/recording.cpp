@@ -346,6 +346,12 @@ std::string FormatInfo(const RecordingInfo& info) {
                   static_cast<double>(c.max_log_gap_ns) * 1e-6, missing.c_str(), loss);
     o << line;
   }
+  o << "\nchannel metadata (QoS of the topic's writers and of the recorder's reader):\n";
+  for (const auto& c : info.channels) {
+    o << "  " << c.topic << ":";
+    for (const auto& [k, v] : c.metadata) o << " " << k << "=" << v << ";";
+    o << "\n";
+  }
   bool header = false;
   for (const auto& c : info.channels) {
     for (const auto& l : c.streams) {
