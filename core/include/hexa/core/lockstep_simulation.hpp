@@ -1,0 +1,117 @@
+// The whole control system in one process, in lockstep, without DDS: the plant, six leg
+// controllers and the supervisor exchange exactly what the services exchange over DDS and
+// follow the same protocol (docs/architecture.md, "Lockstep"):
+//   tick n: the supervisor (every 5th tick) sees the sensors of tick n and the IMU sample
+//   of tick n; leg i sees its sensor sample of tick n and the newest setpoint issued at a
+//   tick strictly before n; the plant then advances one tick with the six valve voltages.
+// A DDS lockstep session with the same configuration and seed must produce the same
+// numbers (tests/integration checks it). Used for batch studies, tuning and tests. Pure:
+// no clock, no I/O; randomness from the seed only.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "hexa/core/command_hygiene.hpp"
+#include "hexa/core/control_params.hpp"
+#include "hexa/core/leg_controller.hpp"
+#include "hexa/core/metrics.hpp"
+#include "hexa/core/platform_plant.hpp"
+#include "hexa/core/supervisor.hpp"
+
+namespace hexa {
+
+struct LockstepConfig {
+  RigParams rig = MakeReferenceRig();
+  LegControllerParams leg_controller;
+  SupervisorParams supervisor;
+  DisturbanceProfile disturbance = MakeRealisticDisturbanceProfile();
+  std::uint64_t seed = 1;
+  LegControllerKind controller = LegControllerKind::kBsSmc;
+  double tick_s = 0.001;
+  int supervisor_every_ticks = 5;
+  void Validate() const;  // throws std::invalid_argument naming the field and value
+};
+
+// Issued at tick `tick`; what LegSetpoint carries on the wire.
+struct IssuedSetpoint {
+  bool valid = false;
+  std::uint64_t tick = 0;
+  double time_s = 0.0;
+  SupervisorLegSetpoint value;
+};
+
+// Index of the setpoint a leg controller uses at tick n: the newest issued strictly before
+// n, i.e. at 5 * floor((n - 1) / 5); none at tick 0.
+bool RequiredSetpointTick(std::uint64_t tick, int supervisor_every_ticks,
+                          std::uint64_t& setpoint_tick);
+
+class LockstepSimulation {
+ public:
+  explicit LockstepSimulation(const LockstepConfig& config);  // validates (throws)
+
+  // Runs tick n = tick(): supervisor (when due, with `command`/`start`), the six leg
+  // controllers, command hygiene, one plant step. Returns the plant status.
+  PlantStatus Tick(OperatorCommandKind command = OperatorCommandKind::kNone,
+                   const StartRequest* start = nullptr);
+
+  std::uint64_t tick() const { return tick_; }
+  double time_s() const { return static_cast<double>(tick_) * config_.tick_s; }
+  bool supervisor_due() const { return tick_ % config_.supervisor_every_ticks == 0; }
+
+  // Results of the last Tick(): sensors/truth it used (before the step), leg outputs, and
+  // the supervisor output (valid when supervisor_ran()).
+  const PlatformPlantOutput& plant_before_step() const { return plant_before_; }
+  const LegArray<LegControllerOutput>& leg_outputs() const { return leg_out_; }
+  const LegArray<double>& applied_valve_v() const { return applied_v_; }
+  bool supervisor_ran() const { return supervisor_ran_; }
+  const SupervisorOutput& supervisor_output() const { return sup_out_; }
+
+  const PlatformPlant& plant() const { return *plant_; }
+  const Supervisor& supervisor() const { return *supervisor_; }
+  const LockstepConfig& config() const { return config_; }
+
+ private:
+  LockstepConfig config_;
+  std::unique_ptr<PlatformPlant> plant_;
+  std::unique_ptr<Supervisor> supervisor_;
+  LegArray<std::unique_ptr<LegController>> legs_;
+  CommandHygieneParams hygiene_;
+  std::uint64_t tick_ = 0;
+  LegArray<IssuedSetpoint> newest_{};    // issued at the last supervisor tick
+  LegArray<IssuedSetpoint> previous_{};  // issued at the supervisor tick before it
+  PlatformPlantOutput plant_before_;
+  LegArray<LegControllerOutput> leg_out_{};
+  LegArray<double> applied_v_{};
+  bool supervisor_ran_ = false;
+  SupervisorOutput sup_out_;
+};
+
+// Figures of merit of a session (paper Tables 9, 10), accumulated over the supervisor's
+// TRACKING window: task-space error against ground truth and against the measured pose
+// (GQFK + IMU, as the paper did), and leg-length error (desired incl. correction vs the
+// potentiometer) per leg.
+struct SessionMetrics {
+  AxisErrorAccumulator vs_truth;
+  AxisErrorAccumulator vs_measured;
+  LegArray<ScalarErrorAccumulator> leg_length;
+  void AddPose(const Vector6d& desired, const Vector6d& measured, const Vector6d& truth) {
+    vs_truth.Add(desired, truth);
+    vs_measured.Add(desired, measured);
+  }
+};
+
+struct PaperSessionResult {
+  bool completed = false;          // trajectory ran to its end and the supervisor is idle
+  SupervisorState final_state = SupervisorState::kIdle;
+  PlantStatus plant_status = PlantStatus::kOk;
+  std::uint64_t ticks = 0;
+  SessionMetrics metrics;
+};
+
+// Runs a paper trajectory from rest to rest: initialise (one supervisor tick), start, run
+// until the supervisor is idle again or `max_time_s`. Metrics over the TRACKING window.
+PaperSessionResult RunPaperSession(const LockstepConfig& config, PaperMotion motion,
+                                   int periods = 0, double max_time_s = 600.0);
+
+}  // namespace hexa

@@ -1,0 +1,48 @@
+#include "hexa/core/command_hygiene.hpp"
+
+#include <cmath>
+
+namespace hexa {
+
+const char* ToString(CommandCheck check) {
+  switch (check) {
+    case CommandCheck::kOk: return "ok";
+    case CommandCheck::kMissing: return "missing";
+    case CommandCheck::kStale: return "stale";
+    case CommandCheck::kNotFinite: return "not finite";
+    case CommandCheck::kOutOfRange: return "out of range";
+  }
+  return "unknown";
+}
+
+CommandHygieneParams CommandHygieneParams::FromValve(const ValveParams& valve,
+                                                     std::uint64_t stale_tolerance_ticks) {
+  CommandHygieneParams p;
+  p.min_voltage_v = valve.min_voltage_v;
+  p.max_voltage_v = valve.max_voltage_v;
+  p.null_voltage_v = valve.null_voltage_v;
+  p.stale_tolerance_ticks = stale_tolerance_ticks;
+  return p;
+}
+
+CommandCheck CheckCommand(const LatestCommand& command, std::uint64_t current_tick,
+                          const CommandHygieneParams& params) {
+  if (!command.received) return CommandCheck::kMissing;
+  // A command from the future (tick beyond the plant's) is as wrong as an old one.
+  if (command.answered_tick > current_tick ||
+      current_tick - command.answered_tick > params.stale_tolerance_ticks) {
+    return CommandCheck::kStale;
+  }
+  if (!std::isfinite(command.valve_v)) return CommandCheck::kNotFinite;
+  if (command.valve_v < params.min_voltage_v || command.valve_v > params.max_voltage_v) {
+    return CommandCheck::kOutOfRange;
+  }
+  return CommandCheck::kOk;
+}
+
+double SafeValveVoltage(const LatestCommand& command, CommandCheck check,
+                        const CommandHygieneParams& params) {
+  return check == CommandCheck::kOk ? command.valve_v : params.null_voltage_v;
+}
+
+}  // namespace hexa

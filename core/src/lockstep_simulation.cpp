@@ -1,0 +1,144 @@
+#include "hexa/core/lockstep_simulation.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace hexa {
+
+void LockstepConfig::Validate() const {
+  if (!(tick_s > 0.0 && tick_s <= 0.01)) {
+    throw std::invalid_argument("LockstepConfig.tick_s = " + std::to_string(tick_s) +
+                                " s: must be in (0, 0.01]");
+  }
+  if (supervisor_every_ticks < 1) {
+    throw std::invalid_argument("LockstepConfig.supervisor_every_ticks = " +
+                                std::to_string(supervisor_every_ticks) + ": must be >= 1");
+  }
+}
+
+bool RequiredSetpointTick(std::uint64_t tick, int supervisor_every_ticks,
+                          std::uint64_t& setpoint_tick) {
+  if (tick == 0) return false;
+  const auto every = static_cast<std::uint64_t>(supervisor_every_ticks);
+  setpoint_tick = every * ((tick - 1) / every);
+  return true;
+}
+
+LockstepSimulation::LockstepSimulation(const LockstepConfig& config) : config_(config) {
+  config_.Validate();
+  PlatformPlantConfig plant_config;
+  plant_config.rig = config_.rig;
+  plant_config.disturbance = config_.disturbance;
+  plant_config.seed = config_.seed;
+  plant_ = std::make_unique<PlatformPlant>(plant_config);
+  supervisor_ = std::make_unique<Supervisor>(config_.rig, config_.supervisor);
+  const LegControllerConfig leg_config =
+      LegControllerConfig::FromRig(config_.rig, config_.leg_controller, config_.controller);
+  for (auto& leg : legs_) leg = std::make_unique<LegController>(leg_config);
+  hygiene_ = CommandHygieneParams::FromValve(config_.rig.valve, 0);
+}
+
+PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartRequest* start) {
+  plant_before_ = plant_->output();
+  const double now_s = time_s();
+
+  // Supervisor: sensors and IMU of this tick.
+  supervisor_ran_ = supervisor_due();
+  if (supervisor_ran_) {
+    SupervisorInput in;
+    in.time_s = now_s;
+    for (std::size_t i = 0; i < kNumLegs; ++i) in.length_m[i] = plant_before_.legs[i].length_m;
+    const auto& q = plant_before_.imu.q_BP_measured;
+    in.orientation_wxyz = {q.w(), q.x(), q.y(), q.z()};
+    in.command = command;
+    in.start = start;
+    supervisor_->Update(in, sup_out_);
+    for (std::size_t i = 0; i < kNumLegs; ++i) {
+      previous_[i] = newest_[i];
+      newest_[i] = IssuedSetpoint{true, tick_, now_s, sup_out_.setpoint[i]};
+    }
+  }
+
+  // Legs: sensor sample of this tick, newest setpoint issued strictly before it.
+  std::uint64_t required = 0;
+  const bool has_required = RequiredSetpointTick(tick_, config_.supervisor_every_ticks, required);
+  LegArray<double> valve_v{};
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    LegControllerInput in;
+    in.tick = tick_;
+    in.time_s = now_s;
+    const LegSensorReading& s = plant_before_.legs[i];
+    in.length_m = s.length_m;
+    in.cap_pressure_pa = s.chamber1_pressure_pa;
+    in.rod_pressure_pa = s.chamber2_pressure_pa;
+    in.supply_pressure_pa = s.supply_pressure_pa;
+    const IssuedSetpoint* sp = nullptr;
+    if (has_required) {
+      if (newest_[i].valid && newest_[i].tick == required) sp = &newest_[i];
+      else if (previous_[i].valid && previous_[i].tick == required) sp = &previous_[i];
+    }
+    if (sp != nullptr) {
+      in.has_setpoint = true;
+      in.setpoint_tick = sp->tick;
+      in.setpoint_time_s = sp->time_s;
+      in.setpoint_length_m = sp->value.length_m;
+      in.setpoint_velocity_m_s = sp->value.velocity_m_s;
+      in.setpoint_acceleration_m_s2 = sp->value.acceleration_m_s2;
+      in.correction_m = sp->value.correction_m;
+      in.hold = sp->value.hold;
+    }
+    legs_[i]->Update(in, leg_out_[i]);
+    // Command hygiene exactly as the plant service applies it.
+    LatestCommand cmd{true, leg_out_[i].tick, leg_out_[i].valve_v};
+    const CommandCheck check = CheckCommand(cmd, tick_, hygiene_);
+    valve_v[i] = SafeValveVoltage(cmd, check, hygiene_);
+  }
+  applied_v_ = valve_v;
+  const PlantStatus status = plant_->Step(valve_v, config_.tick_s);
+  if (status == PlantStatus::kOk) ++tick_;
+  return status;
+}
+
+PaperSessionResult RunPaperSession(const LockstepConfig& config, PaperMotion motion,
+                                   int periods, double max_time_s) {
+  PaperSessionResult result;
+  LockstepSimulation sim(config);
+  // Tick 0: the supervisor latches the rest pose.
+  result.plant_status = sim.Tick();
+  if (result.plant_status != PlantStatus::kOk) return result;
+  const StartRequest start = sim.supervisor().PreparePaperStart(motion, periods);
+  bool started = false;
+  bool left_idle = false;
+  SupervisorState state = SupervisorState::kIdle;
+  while (sim.time_s() < max_time_s) {
+    const bool due = sim.supervisor_due();
+    OperatorCommandKind cmd = OperatorCommandKind::kNone;
+    if (due && !started) cmd = OperatorCommandKind::kStart;
+    result.plant_status = sim.Tick(cmd, cmd == OperatorCommandKind::kStart ? &start : nullptr);
+    if (result.plant_status != PlantStatus::kOk) break;
+    if (due) {
+      started = true;
+      const SupervisorOutput& out = sim.supervisor_output();
+      state = out.state;
+      if (state == SupervisorState::kTracking) {
+        result.metrics.AddPose(out.desired_xyz_rpy, out.estimate.xyz_rpy,
+                               VectorFromPose(sim.plant_before_step().truth.pose));
+      }
+      if (state != SupervisorState::kIdle) left_idle = true;
+      if (state == SupervisorState::kHold || (left_idle && state == SupervisorState::kIdle)) break;
+    }
+    if (state == SupervisorState::kTracking) {
+      for (std::size_t i = 0; i < kNumLegs; ++i) {
+        result.metrics.leg_length[i].Add(sim.leg_outputs()[i].desired_length_m,
+                                         sim.plant_before_step().legs[i].length_m);
+      }
+    }
+  }
+  result.final_state = state;
+  result.completed = left_idle && state == SupervisorState::kIdle &&
+                     result.plant_status == PlantStatus::kOk;
+  result.ticks = sim.tick();
+  return result;
+}
+
+}  // namespace hexa
