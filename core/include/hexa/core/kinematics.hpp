@@ -35,8 +35,12 @@ KinStatus GqfkPosition(const GeometryParams& geometry, const Eigen::Matrix3d& R_
 inline constexpr std::array<int, 3> kGqfkDefaultLegs{0, 2, 4};  // legs 1, 3, 5
 
 // Beyond the paper: least squares over all six spheres (linear after differencing the
-// sphere equations, then refined), tolerant of one bad leg. A leg whose residual exceeds
-// `outlier_threshold_m` is reported and excluded, and the solution is recomputed.
+// sphere equations, then Gauss-Newton), tolerant of one bad leg. If any residual exceeds
+// `outlier_threshold_m`, the fit is repeated without each leg in turn; the leg whose removal
+// leaves the most consistent five is reported in `excluded_leg` (if its own residual exceeds
+// the threshold) and the five-leg solution is returned. kOk when the legs used agree within
+// the threshold; kUnreachable when they do not (e.g. two bad legs), with a finite best
+// effort in `p_BP_B_m`. docs/kinematics.md has the details.
 struct GqfkLsqResult {
   Eigen::Vector3d p_BP_B_m = Eigen::Vector3d::Zero();
   LegArray<double> residual_m{};  // measured length - length implied by the solution
