@@ -5,10 +5,13 @@ with ONE defect. The line that the loader must report carries the comment `# DEF
 expected line from that marker, independently of the loader.
 
 Rerun after changing the reference file:  /usr/bin/python3 tests/config/make_broken.py
+`--check` writes nothing and exits 1 if a stored file differs from what would be written
+(ctest runs it, so a reference edit without regenerating is caught).
 """
 import math
 import pathlib
 import re
+import sys
 
 HERE = pathlib.Path(__file__).resolve().parent
 ROOT = HERE.parent.parent
@@ -104,17 +107,32 @@ CASES = {
 
 
 def main():
+    check = "--check" in sys.argv[1:]
     out_dir = HERE / "broken"
     out_dir.mkdir(exist_ok=True)
+    stale = []
     for name, edit in CASES.items():
         lines = list(REFERENCE)
         lines[0:0] = ["# BROKEN COPY of deploy/rigs/hexataar_r.textproto (tests/config/make_broken.py): "
                       + name]
         edit(lines)
         assert sum("DEFECT" in l for l in lines) == 1, name
-        (out_dir / (name + ".textproto")).write_text("\n".join(lines) + "\n")
+        text = "\n".join(lines) + "\n"
+        path = out_dir / (name + ".textproto")
+        if check:
+            if not path.exists() or path.read_text() != text:
+                stale.append(path.name)
+        else:
+            path.write_text(text)
+    if check:
+        if stale:
+            print("stale broken files (rerun tests/config/make_broken.py): " + ", ".join(stale))
+            return 1
+        print("all %d broken files match the reference" % len(CASES))
+        return 0
     print("wrote %d files to %s" % (len(CASES), out_dir))
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
