@@ -126,11 +126,16 @@ void LegModel::Evaluate(const LegPneumaticState& s, double x, double v,
   rate.spool_m = (spool_target_m - s.spool_m) / params_.valve.spool_time_constant_s;
 
   // Friction (LuGre, steady state = eq 3 with the Table 8 magnitudes of v's direction).
-  const LugreOutput lugre =
-      params_.friction_enabled
-          ? EvaluateLugre(params_.friction, params_.lugre_damping_fade_velocity_m_s,
-                          s.bristle_m, v)
-          : LugreOutput{};
+  LugreOutput lugre;
+  if (params_.friction_enabled) {
+    if (params_.friction_model == LegModelParams::FrictionModel::kLugre) {
+      lugre = EvaluateLugre(params_.friction, params_.lugre_damping_fade_velocity_m_s,
+                            s.bristle_m, v);
+    } else {
+      lugre.force_n = StribeckFrictionN(params_.friction, v);  // eq 3
+      lugre.dissipation_w = lugre.force_n * v;
+    }
+  }
   rate.bristle_m = lugre.bristle_rate_m_s;
 
   // End stops: a stiff spring-damper beyond either end of the stroke; it only pushes.

@@ -43,6 +43,11 @@ struct LegModelParams {
   bool chambers_vented = false;
   // false: no friction force at all (energy-conservation tests only).
   bool friction_enabled = true;
+  // kLugre: the plant's dynamic friction (default). kStatic: eq 3 itself, F = g(v) sgn(v) +
+  // B v with sgn(0) = 0 (no stiction, cannot hold a load at rest): the instantaneous
+  // Coulomb + viscous friction that Appendix B's free-fall model (eq 66) assumes.
+  enum class FrictionModel { kLugre, kStatic };
+  FrictionModel friction_model = FrictionModel::kLugre;
 
   // Throws std::invalid_argument naming the field, value and limit.
   void Validate() const;

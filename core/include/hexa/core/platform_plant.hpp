@@ -1,0 +1,127 @@
+// The simulated 6-DoF rig (DESIGN.md "Plant model"): rigid platform (Newton-Euler,
+// quaternion orientation) driven by six pneumatic legs (LegModel, the same code path as
+// SingleLegPlant) acting along the legs, gravity, leg moving mass lumped into the platform
+// dynamics through the Jacobian (eq 48), sensors (SensorModel) and a DisturbanceProfile
+// drawn from an explicit seed. No clock: Step() advances simulated time by its argument.
+// docs/plant.md gives the equations, assumptions and measured figures.
+#pragma once
+
+#include <cstdint>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "hexa/core/leg_model.hpp"
+#include "hexa/core/pose.hpp"
+#include "hexa/core/rig.hpp"
+#include "hexa/core/sensor_model.hpp"
+
+namespace hexa {
+
+// `ideal`: the plant equals the controllers' model, perfect sensors.
+DisturbanceProfile MakeIdealDisturbanceProfile();
+// `realistic` (the default, DESIGN.md): friction x1.2, polytropic x1.1, payload +20 %,
+// supply ripple +-0.2 bar at 0.5 Hz, joints off by up to 2 mm, potentiometer offset up to
+// 1 mm and gain error up to 0.5 %, sensor noise.
+DisturbanceProfile MakeRealisticDisturbanceProfile();
+
+struct PlatformPlantConfig {
+  RigParams rig = MakeReferenceRig();   // what the controllers know (nominal)
+  DisturbanceProfile disturbance = MakeRealisticDisturbanceProfile();
+  std::uint64_t seed = 1;
+  double integrator_step_s = 2.5e-4;    // fixed RK4 substep (docs/plant.md, "Integrator")
+  // Rod-side pressure of the holding equilibrium at Reset; <= 0: (P_s + P_a) / 2.
+  double home_chamber2_pressure_pa = -1.0;
+  // Leg model extras (laminar band, LuGre damping fade, polytropic blend).
+  double laminar_pressure_ratio = 0.995;
+  double lugre_damping_fade_velocity_m_s = 0.05;
+  bool friction_enabled = true;  // false only for energy-conservation tests
+
+  void Validate() const;  // throws std::invalid_argument naming field, value and limit
+};
+
+// True state of the rig (ground truth, for evaluation only).
+struct PlatformTrueState {
+  Pose pose;                                 // p_BP_B, R_BP
+  Eigen::Quaterniond q_BP = Eigen::Quaterniond::Identity();
+  Vector6d twist_B = Vector6d::Zero();       // [v_BP_B; w_BP_B]
+  LegArray<double> length_m{};               // true leg lengths (true geometry, eq 46)
+  LegArray<double> piston_position_m{};      // x = length - mid_stroke_length (eq 64)
+  LegArray<double> piston_velocity_m_s{};    // l_dot = J twist (eq 48)
+  LegArray<LegPneumaticState> legs{};        // P1, P2, spool, bristle
+  LegArray<double> applied_valve_v{};        // valve voltages of the last step (clamped)
+  double supply_pressure_pa = 0.0;           // with ripple
+  double time_s = 0.0;
+  std::uint64_t tick = 0;
+};
+
+struct PlatformPlantOutput {
+  PlantStatus status = PlantStatus::kOk;
+  PlatformTrueState truth;
+  LegArray<LegSensorReading> legs{};
+  ImuReading imu;
+  LegArray<LegForces> leg_forces{};
+};
+
+class PlatformPlant {
+ public:
+  explicit PlatformPlant(const PlatformPlantConfig& config);  // validates, then Reset()
+
+  // Home pose, at rest, valves at null, every leg's chambers at the pressures that hold the
+  // loaded platform (static force balance J^T f = -gravity wrench, P2 fixed). Sensors and
+  // the RNG are re-seeded: a reset run repeats bit for bit.
+  void Reset();
+
+  // Advances dt_s (one 1 ms tick in the system) with the valve voltages held, in fixed RK4
+  // substeps of at most integrator_step_s, then samples the sensors. Voltages outside
+  // 0-10 V are clamped (the coil driver saturates). A non-finite voltage or dt ->
+  // kInvalidInput and nothing advances; a non-finite result -> kNonFiniteState and the
+  // last good state is kept. Never throws, never allocates.
+  PlantStatus Step(const LegArray<double>& valve_v, double dt_s);
+
+  const PlatformPlantOutput& output() const { return output_; }
+  const PlatformTrueState& truth() const { return output_.truth; }
+  const PlatformPlantConfig& config() const { return config_; }
+
+  // The plant's TRUE geometry (nominal + per-seed joint errors) and leg model.
+  const GeometryParams& true_geometry() const { return true_geometry_; }
+  const LegModel& leg_model() const { return leg_model_; }
+  const SensorModel& sensors() const { return sensors_; }
+  double platform_mass_kg() const { return platform_mass_kg_; }
+
+  // Kinetic (platform + axial leg mass) + gravitational + sum of LegModel::StoredEnergyJ.
+  double TotalEnergyJ() const;
+  // Smallest friction dissipation seen at any RK stage since Reset (>= 0 expected).
+  double min_friction_dissipation_w() const { return min_dissipation_w_; }
+
+  // Replaces the dynamic state (tests: perturbations, energy checks). Pose/twist/legs are
+  // taken from `state`; derived fields are recomputed.
+  void SetState(const PlatformTrueState& state);
+
+  static constexpr int kStateSize = 13 + 4 * static_cast<int>(kNumLegs);
+  using StateVector = Eigen::Matrix<double, kStateSize, 1>;
+
+ private:
+  void Derivative(const StateVector& x, double time_s, StateVector& dxdt, bool record);
+  double SupplyPressurePa(double time_s) const;
+  void FillTruth();
+  void SampleSensors();
+
+  PlatformPlantConfig config_;
+  GeometryParams true_geometry_;
+  LegModel leg_model_;
+  SensorModel sensors_;
+  double platform_mass_kg_ = 0.0;
+  Eigen::Matrix3d platform_inertia_P_ = Eigen::Matrix3d::Identity();
+  double leg_mass_kg_ = 0.0;
+  double gravity_m_s2_ = 9.81;
+
+  StateVector state_ = StateVector::Zero();
+  LegArray<double> spool_target_m_{};
+  double time_s_ = 0.0;
+  std::uint64_t tick_ = 0;
+  double min_dissipation_w_ = 0.0;
+  PlatformPlantOutput output_;
+};
+
+}  // namespace hexa

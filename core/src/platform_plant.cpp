@@ -1,0 +1,357 @@
+#include "hexa/core/platform_plant.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+#include <Eigen/Cholesky>
+
+#include "hexa/core/kinematics.hpp"
+
+namespace hexa {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// State layout: p (0..2), q wxyz (3..6), v (7..9), w (10..12), then per leg
+// P1, P2, spool, bristle (13 + 4 i ...).
+constexpr int kP = 0, kQ = 3, kV = 7, kW = 10, kLeg0 = 13;
+
+void Require(bool ok, const char* field, double value, const char* limit) {
+  if (!ok) {
+    std::ostringstream msg;
+    msg << "PlatformPlantConfig." << field << " = " << value << " violates " << limit;
+    throw std::invalid_argument(msg.str());
+  }
+}
+
+Eigen::Vector3d UniformInBall(std::mt19937_64& rng, double radius) {
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (;;) {  // rejection sampling, deterministic for a given rng state
+    const Eigen::Vector3d u(unit(rng), unit(rng), unit(rng));
+    if (u.squaredNorm() <= 1.0) return radius * u;
+  }
+}
+
+Eigen::Quaterniond QuatOf(const PlatformPlant::StateVector& x) {
+  return Eigen::Quaterniond(x[kQ], x[kQ + 1], x[kQ + 2], x[kQ + 3]);
+}
+
+}  // namespace
+
+DisturbanceProfile MakeIdealDisturbanceProfile() {
+  DisturbanceProfile p;
+  p.sensor_noise = false;
+  p.friction_scale = 1.0;
+  p.polytropic_scale = 1.0;
+  p.payload_scale = 1.0;
+  p.supply_ripple_amplitude_pa = 0.0;
+  p.supply_ripple_frequency_hz = 0.5;
+  p.joint_position_error_max_m = 0.0;
+  p.potentiometer_offset_max_m = 0.0;
+  p.potentiometer_gain_error_max = 0.0;
+  return p;
+}
+
+DisturbanceProfile MakeRealisticDisturbanceProfile() { return DisturbanceProfile{}; }
+
+void PlatformPlantConfig::Validate() const {
+  Require(integrator_step_s > 0.0 && integrator_step_s <= 1.0e-3, "integrator_step_s",
+          integrator_step_s, "(0, 1e-3]");
+  Require(disturbance.friction_scale > 0.0, "disturbance.friction_scale",
+          disturbance.friction_scale, "> 0");
+  Require(disturbance.polytropic_scale > 0.0, "disturbance.polytropic_scale",
+          disturbance.polytropic_scale, "> 0");
+  Require(disturbance.payload_scale > 0.0, "disturbance.payload_scale",
+          disturbance.payload_scale, "> 0");
+  Require(disturbance.supply_ripple_amplitude_pa >= 0.0 &&
+              disturbance.supply_ripple_amplitude_pa <
+                  rig.air.supply_pressure_pa - rig.air.atmosphere_pressure_pa,
+          "disturbance.supply_ripple_amplitude_pa", disturbance.supply_ripple_amplitude_pa,
+          "[0, P_s - P_a)");
+  Require(disturbance.joint_position_error_max_m >= 0.0,
+          "disturbance.joint_position_error_max_m", disturbance.joint_position_error_max_m,
+          ">= 0");
+  Require(rig.platform.mass_kg > 0.0, "rig.platform.mass_kg", rig.platform.mass_kg, "> 0");
+  Require(rig.platform.inertia_diag_kg_m2.minCoeff() > 0.0, "rig.platform.inertia_diag_kg_m2",
+          rig.platform.inertia_diag_kg_m2.minCoeff(), "> 0");
+  Require(rig.sensors.imu_period_s > 0.0, "rig.sensors.imu_period_s", rig.sensors.imu_period_s,
+          "> 0");
+  Require(rig.sensors.length_bits >= 1 && rig.sensors.length_bits <= 24,
+          "rig.sensors.length_bits", rig.sensors.length_bits, "[1, 24]");
+  LegModelParams leg = MakeLegModelParams(rig, disturbance.friction_scale,
+                                          disturbance.polytropic_scale);
+  leg.laminar_pressure_ratio = laminar_pressure_ratio;
+  leg.lugre_damping_fade_velocity_m_s = lugre_damping_fade_velocity_m_s;
+  leg.Validate();
+}
+
+PlatformPlant::PlatformPlant(const PlatformPlantConfig& config)
+    : config_(config), sensors_(config.rig, config.disturbance, config.seed) {
+  config_.Validate();
+  const RigParams& rig = config_.rig;
+  const DisturbanceProfile& dist = config_.disturbance;
+
+  LegModelParams leg = MakeLegModelParams(rig, dist.friction_scale, dist.polytropic_scale);
+  leg.laminar_pressure_ratio = config_.laminar_pressure_ratio;
+  leg.lugre_damping_fade_velocity_m_s = config_.lugre_damping_fade_velocity_m_s;
+  leg.friction_enabled = config_.friction_enabled;
+  leg_model_ = LegModel(leg);
+
+  // The plant's true geometry: every joint off by up to joint_position_error_max_m
+  // (uniform in a ball), drawn from the seed; the controllers keep the nominal one.
+  true_geometry_ = rig.geometry;
+  std::mt19937_64 geometry_rng(DeriveSeed(config_.seed, 3));
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    true_geometry_.p_BA_B[i] += UniformInBall(geometry_rng, dist.joint_position_error_max_m);
+    true_geometry_.p_PB_P[i] += UniformInBall(geometry_rng, dist.joint_position_error_max_m);
+  }
+
+  platform_mass_kg_ = rig.platform.mass_kg * dist.payload_scale;
+  platform_inertia_P_ = (rig.platform.inertia_diag_kg_m2 * dist.payload_scale).asDiagonal();
+  leg_mass_kg_ = rig.cylinder.moving_mass_kg;
+  gravity_m_s2_ = rig.platform.gravity_m_s2;
+  Reset();
+}
+
+double PlatformPlant::SupplyPressurePa(double time_s) const {
+  const DisturbanceProfile& d = config_.disturbance;
+  return config_.rig.air.supply_pressure_pa +
+         d.supply_ripple_amplitude_pa * std::sin(2.0 * kPi * d.supply_ripple_frequency_hz * time_s);
+}
+
+void PlatformPlant::Reset() {
+  sensors_.Reset();
+  time_s_ = 0.0;
+  tick_ = 0;
+  min_dissipation_w_ = std::numeric_limits<double>::infinity();
+  spool_target_m_.fill(0.0);
+
+  // Home pose, at rest.
+  Pose home;
+  home.p_BP_B_m = config_.rig.geometry.home_position_m;
+  home.R_BP.setIdentity();
+  state_.setZero();
+  state_.segment<3>(kP) = home.p_BP_B_m;
+  state_[kQ] = 1.0;
+
+  // Static balance at home: J^T f = -(gravity wrench), J of the TRUE geometry (eq 48).
+  Matrix6d J;
+  LegJacobian(true_geometry_, home, J);
+  const double g = gravity_m_s2_;
+  Vector6d gravity_wrench = Vector6d::Zero();
+  gravity_wrench[2] = -(platform_mass_kg_ + kNumLegs * leg_mass_kg_) * g;
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    // Leg moving mass weight acts at the platform joint (docs/plant.md).
+    const Eigen::Vector3d r = true_geometry_.p_PB_P[i];
+    gravity_wrench.segment<3>(3) += r.cross(Eigen::Vector3d(0, 0, -leg_mass_kg_ * g));
+  }
+  const Vector6d f = J.transpose().partialPivLu().solve(-gravity_wrench);
+  const AirParams& air = config_.rig.air;
+  const double p2 = config_.home_chamber2_pressure_pa > 0.0
+                        ? config_.home_chamber2_pressure_pa
+                        : 0.5 * (air.supply_pressure_pa + air.atmosphere_pressure_pa);
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    const LegPneumaticState s = leg_model_.Equilibrium(f[static_cast<int>(i)], p2);
+    const int o = kLeg0 + 4 * static_cast<int>(i);
+    state_[o] = s.chamber1_pressure_pa;
+    state_[o + 1] = s.chamber2_pressure_pa;
+    state_[o + 2] = s.spool_m;
+    state_[o + 3] = s.bristle_m;
+  }
+  output_ = PlatformPlantOutput{};
+  output_.truth.applied_valve_v.fill(config_.rig.valve.null_voltage_v);
+  StateVector scratch;
+  Derivative(state_, time_s_, scratch, true);
+  FillTruth();
+  SampleSensors();
+}
+
+void PlatformPlant::Derivative(const StateVector& x, double time_s, StateVector& dxdt,
+                               bool record) {
+  const Eigen::Quaterniond q = QuatOf(x).normalized();
+  Pose pose;
+  pose.p_BP_B_m = x.segment<3>(kP);
+  pose.R_BP = q.toRotationMatrix();
+  const Eigen::Vector3d v = x.segment<3>(kV);
+  const Eigen::Vector3d w = x.segment<3>(kW);
+
+  LegArray<double> length;
+  LegArray<Eigen::Vector3d> unit;
+  InverseKinematics(true_geometry_, pose, length, &unit);  // eq 46
+
+  const double supply = SupplyPressurePa(time_s);
+  const double g = gravity_m_s2_;
+  const double mid = config_.rig.cylinder.mid_stroke_length_m;
+
+  // Generalised force on the twist [v; w] and mass matrix (docs/plant.md):
+  //   (M_p + m_leg sum J_i^T J_i) twist_dot = sum J_i^T (f_i - m_leg c_i) + W_g - [0; w x I w]
+  const Eigen::Matrix3d inertia_B = pose.R_BP * platform_inertia_P_ * pose.R_BP.transpose();
+  Matrix6d M = Matrix6d::Zero();
+  M.topLeftCorner<3, 3>().diagonal().setConstant(platform_mass_kg_);
+  M.bottomRightCorner<3, 3>() = inertia_B;
+  Vector6d rhs = Vector6d::Zero();
+  rhs[2] = -(platform_mass_kg_ + kNumLegs * leg_mass_kg_) * g;
+  rhs.tail<3>() = -w.cross(inertia_B * w);
+
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    const int ii = static_cast<int>(i);
+    const Eigen::Vector3d r = pose.R_BP * true_geometry_.p_PB_P[i];
+    const Eigen::Vector3d& s = unit[i];
+    Vector6d Ji;
+    Ji.head<3>() = s;
+    Ji.tail<3>() = r.cross(s);  // eq 48 row
+    const Eigen::Vector3d v_joint = v + w.cross(r);
+    const double l_dot = s.dot(v_joint);
+    // l_ddot = J_i twist_dot + c_i, c_i = s.(w x (w x r)) + |v_joint, perpendicular|^2 / l
+    const double c = s.dot(w.cross(w.cross(r))) + (v_joint - l_dot * s).squaredNorm() / length[i];
+
+    const int o = kLeg0 + 4 * ii;
+    const LegPneumaticState ls{x[o], x[o + 1], x[o + 2], x[o + 3]};
+    LegPneumaticState rate;
+    LegForces forces;
+    const double xp = length[i] - mid;
+    leg_model_.Evaluate(ls, xp, l_dot, spool_target_m_[i], supply, rate, forces);
+    dxdt[o] = rate.chamber1_pressure_pa;
+    dxdt[o + 1] = rate.chamber2_pressure_pa;
+    dxdt[o + 2] = rate.spool_m;
+    dxdt[o + 3] = rate.bristle_m;
+    min_dissipation_w_ = std::min(min_dissipation_w_, forces.friction_dissipation_w);
+
+    rhs += Ji * (forces.total_n - leg_mass_kg_ * c);
+    M.noalias() += leg_mass_kg_ * Ji * Ji.transpose();
+    // Weight of the leg's moving mass, applied at the platform joint.
+    rhs.tail<3>() += r.cross(Eigen::Vector3d(0, 0, -leg_mass_kg_ * g));
+
+    if (record) {
+      PlatformTrueState& t = output_.truth;
+      t.length_m[i] = length[i];
+      t.piston_position_m[i] = xp;
+      t.piston_velocity_m_s[i] = l_dot;
+      output_.leg_forces[i] = forces;
+    }
+  }
+  const Vector6d twist_dot = M.llt().solve(rhs);
+
+  dxdt.segment<3>(kP) = v;
+  // q_dot = 1/2 [0, w] (x) q, w in B (spatial angular velocity).
+  const Eigen::Quaterniond wq(0.0, w.x(), w.y(), w.z());
+  const Eigen::Quaterniond qd = wq * QuatOf(x);
+  dxdt[kQ] = 0.5 * qd.w();
+  dxdt[kQ + 1] = 0.5 * qd.x();
+  dxdt[kQ + 2] = 0.5 * qd.y();
+  dxdt[kQ + 3] = 0.5 * qd.z();
+  dxdt.segment<6>(kV) = twist_dot;
+  if (record) output_.truth.supply_pressure_pa = supply;
+}
+
+void PlatformPlant::FillTruth() {
+  PlatformTrueState& t = output_.truth;
+  const Eigen::Quaterniond q = QuatOf(state_).normalized();
+  t.q_BP = q;
+  t.pose.p_BP_B_m = state_.segment<3>(kP);
+  t.pose.R_BP = q.toRotationMatrix();
+  t.twist_B = state_.segment<6>(kV);
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    const int o = kLeg0 + 4 * static_cast<int>(i);
+    t.legs[i] = LegPneumaticState{state_[o], state_[o + 1], state_[o + 2], state_[o + 3]};
+  }
+  t.time_s = time_s_;
+  t.tick = tick_;
+}
+
+void PlatformPlant::SampleSensors() {
+  SensorTruth st;
+  st.piston_position_m = output_.truth.piston_position_m;
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    st.chamber1_pressure_pa[i] = output_.truth.legs[i].chamber1_pressure_pa;
+    st.chamber2_pressure_pa[i] = output_.truth.legs[i].chamber2_pressure_pa;
+  }
+  st.supply_pressure_pa = output_.truth.supply_pressure_pa;
+  st.q_BP = output_.truth.q_BP;
+  st.angular_rate_B_rad_s = output_.truth.twist_B.tail<3>();
+  sensors_.Sample(st, time_s_, output_.legs, output_.imu);
+}
+
+PlantStatus PlatformPlant::Step(const LegArray<double>& valve_v, double dt_s) {
+  if (!std::isfinite(dt_s) || dt_s < 0.0) return output_.status = PlantStatus::kInvalidInput;
+  for (double u : valve_v) {
+    if (!std::isfinite(u)) return output_.status = PlantStatus::kInvalidInput;
+  }
+  const ValveParams& valve = config_.rig.valve;
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    spool_target_m_[i] = SpoolTargetM(valve, valve_v[i]);  // eq 42 (clamped 0-10 V)
+  }
+  const int n = std::max(1, static_cast<int>(std::ceil(dt_s / config_.integrator_step_s - 1e-9)));
+  const double h = dt_s / n;
+  StateVector x = state_;
+  StateVector k1, k2, k3, k4;
+  double t = time_s_;
+  for (int s = 0; s < n; ++s) {
+    // Classical RK4 (docs/plant.md "Integrator"), quaternion renormalised per substep.
+    Derivative(x, t, k1, false);
+    Derivative(x + 0.5 * h * k1, t + 0.5 * h, k2, false);
+    Derivative(x + 0.5 * h * k2, t + 0.5 * h, k3, false);
+    Derivative(x + h * k3, t + h, k4, false);
+    x += (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4);
+    x.segment<4>(kQ).normalize();
+    t = time_s_ + (s + 1) * h;
+  }
+  if (!x.allFinite()) {
+    // Keep the last good state; report. (Derivative evaluation above wrote nothing.)
+    return output_.status = PlantStatus::kNonFiniteState;
+  }
+  state_ = x;
+  time_s_ += dt_s;
+  ++tick_;
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    output_.truth.applied_valve_v[i] =
+        std::clamp(valve_v[i], valve.min_voltage_v, valve.max_voltage_v);
+  }
+  StateVector scratch;
+  Derivative(state_, time_s_, scratch, true);  // lengths, rates, forces at the new state
+  FillTruth();
+  SampleSensors();
+  return output_.status = PlantStatus::kOk;
+}
+
+void PlatformPlant::SetState(const PlatformTrueState& s) {
+  state_.segment<3>(kP) = s.pose.p_BP_B_m;
+  const Eigen::Quaterniond q = s.q_BP.normalized();
+  state_[kQ] = q.w();
+  state_[kQ + 1] = q.x();
+  state_[kQ + 2] = q.y();
+  state_[kQ + 3] = q.z();
+  state_.segment<6>(kV) = s.twist_B;
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    const int o = kLeg0 + 4 * static_cast<int>(i);
+    state_[o] = s.legs[i].chamber1_pressure_pa;
+    state_[o + 1] = s.legs[i].chamber2_pressure_pa;
+    state_[o + 2] = s.legs[i].spool_m;
+    state_[o + 3] = s.legs[i].bristle_m;
+  }
+  StateVector scratch;
+  Derivative(state_, time_s_, scratch, true);
+  FillTruth();
+}
+
+double PlatformPlant::TotalEnergyJ() const {
+  const PlatformTrueState& t = output_.truth;
+  const Eigen::Vector3d v = t.twist_B.head<3>();
+  const Eigen::Vector3d w = t.twist_B.tail<3>();
+  const Eigen::Matrix3d inertia_B = t.pose.R_BP * platform_inertia_P_ * t.pose.R_BP.transpose();
+  double e = 0.5 * platform_mass_kg_ * v.squaredNorm() + 0.5 * w.dot(inertia_B * w);
+  e += platform_mass_kg_ * gravity_m_s2_ * t.pose.p_BP_B_m.z();
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    e += 0.5 * leg_mass_kg_ * t.piston_velocity_m_s[i] * t.piston_velocity_m_s[i];
+    const Eigen::Vector3d joint = t.pose.p_BP_B_m + t.pose.R_BP * true_geometry_.p_PB_P[i];
+    e += leg_mass_kg_ * gravity_m_s2_ * joint.z();
+    e += leg_model_.StoredEnergyJ(t.legs[i], t.piston_position_m[i]);
+  }
+  return e;
+}
+
+}  // namespace hexa
