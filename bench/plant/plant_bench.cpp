@@ -1,0 +1,46 @@
+// Simulated seconds per wall-clock second of the 6-DoF plant alone, valves moving.
+// Run: build/bench/plant/plant_bench --benchmark_repetitions=5
+//        --benchmark_report_aggregates_only=true
+// The counter "realtime_factor" is simulated time / wall time (target >= 200).
+#include <cmath>
+
+#include <benchmark/benchmark.h>
+
+#include "hexa/core/platform_plant.hpp"
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+void BM_PlatformPlantOneSecond(benchmark::State& state) {
+  hexa::PlatformPlantConfig config;  // realistic profile, default integrator step
+  config.integrator_step_s = static_cast<double>(state.range(0)) * 1e-6;
+  hexa::PlatformPlant plant(config);
+  long ticks = 0;
+  for (auto _ : state) {
+    // One simulated second: 1000 ticks of 1 ms, valves swept around null so that flows,
+    // friction and pressures are all active.
+    for (int k = 0; k < 1000; ++k) {
+      hexa::LegArray<double> v;
+      const double t = plant.truth().time_s;
+      for (std::size_t i = 0; i < hexa::kNumLegs; ++i) {
+        v[i] = 5.0 + 1.2 * std::sin(2.0 * kPi * (0.5 + 0.2 * i) * t);
+      }
+      benchmark::DoNotOptimize(plant.Step(v, 1e-3));
+      ++ticks;
+    }
+    if (plant.truth().time_s > 20.0) {
+      state.PauseTiming();
+      plant.Reset();
+      state.ResumeTiming();
+    }
+  }
+  state.counters["realtime_factor"] =
+      benchmark::Counter(static_cast<double>(ticks) * 1e-3, benchmark::Counter::kIsRate);
+}
+// Argument: RK4 substep in microseconds (250 = default).
+BENCHMARK(BM_PlatformPlantOneSecond)->Arg(250)->Arg(500)->Arg(1000)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
