@@ -1,0 +1,133 @@
+// What every control service shares: the common command-line options, the QoS parameters
+// of each time mode, status and fault publishing, the peer tracker used for start-up
+// readiness, and the optional real-time scheduling attempt. Setup code: may allocate and
+// throw; the per-cycle calls (Publish*) do not allocate.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <spdlog/spdlog.h>
+
+#include "hexa/comm/comm.hpp"
+#include "hexa/config/rig_config.hpp"
+#include "hexa/services/cli.hpp"
+
+namespace hexa::node {
+
+enum class TimeMode { kLockstep, kRealtime };
+
+struct CommonOptions {
+  std::string rig_path;
+  int domain_id = 0;
+  TimeMode mode = TimeMode::kLockstep;
+  std::optional<std::string> dds_config;  // --dds-config; else CYCLONEDDS_URI; else loopback
+  std::string log_file;
+  std::string log_level = "info";
+  double lockstep_timeout_s = 10.0;       // a peer silent this long in lockstep is a fault
+  // Deadline period of the 1 ms topics in real time: the nominal rate is 1 ms, but this
+  // VM's scheduling jitter (PLATFORM_NOTES.md) makes a bare 1 ms deadline fire spuriously;
+  // the deadline still states the rate and every miss is counted and reported.
+  double realtime_deadline_1ms_topics_s = 0.001;
+  double realtime_deadline_5ms_topics_s = 0.005;
+  bool try_realtime_scheduling = true;
+};
+
+// Adds --rig --domain --mode --dds-config --log-file --log-level --lockstep-timeout
+// --rt-deadline-1ms --rt-deadline-5ms --no-rt-sched.
+void AddCommonOptions(cli::Parser& parser);
+// Reads them back; false with parser.error() set on a bad value.
+bool ReadCommonOptions(cli::Parser& parser, CommonOptions& options);
+
+// QoS parameters for a topic in this mode: lockstep readers are reliable and the deadline
+// is the lockstep timeout (a stall detector); real time uses the nominal rates.
+comm::QosParams QosFor(const CommonOptions& options, comm::TopicKind kind);
+
+// Loads and validates the rig file; logs and returns nullopt on error (message names
+// file, line, field, value and limit).
+std::optional<config::SystemConfig> LoadConfig(const std::string& path, spdlog::logger& log);
+
+// SCHED_FIFO + mlockall when allowed (root); logs the outcome, never fails.
+void TryRealtimeScheduling(int priority, spdlog::logger& log);
+
+// NodeStatus writer for one node name.
+class StatusPublisher {
+ public:
+  StatusPublisher(const comm::Participant& participant, const std::string& node_name);
+  // `detail` is truncated to the wire size.
+  void Publish(hexa_msg_NodeState state, std::uint64_t tick, double sim_time_s,
+               std::uint32_t deadline_missed, std::uint32_t liveliness_changes,
+               std::uint64_t cycles, double cycle_median_s, double cycle_max_s,
+               const char* detail);
+  comm::Writer<hexa_msg_NodeStatus>& writer() { return writer_; }
+
+ private:
+  comm::Topic<hexa_msg_NodeStatus> topic_;
+  comm::Writer<hexa_msg_NodeStatus> writer_;
+  hexa_msg_NodeStatus sample_{};
+};
+
+// FaultEvent writer.
+class FaultPublisher {
+ public:
+  FaultPublisher(const comm::Participant& participant, const std::string& node_name);
+  void Publish(std::uint8_t leg_id, std::uint64_t tick, hexa_msg_FaultReason reason,
+               const char* detail);
+
+ private:
+  comm::Topic<hexa_msg_FaultEvent> topic_;
+  comm::Writer<hexa_msg_FaultEvent> writer_;
+  hexa_msg_FaultEvent sample_{};
+};
+
+// Tracks the NodeStatus of other nodes (transient-local: late joiners see the last one).
+class PeerTracker {
+ public:
+  explicit PeerTracker(const comm::Participant& participant);
+  // Takes new NodeStatus samples; call from the service loop or while waiting at start-up.
+  void Poll();
+  // State of a node by name; nullopt if never seen.
+  std::optional<hexa_msg_NodeState> StateOf(const std::string& name) const;
+  // Names from `expected` that are not RUNNING (empty = all ready).
+  std::vector<std::string> NotRunning(const std::vector<std::string>& expected) const;
+  dds_entity_t data_condition() const { return reader_.data_condition(); }
+
+ private:
+  comm::Topic<hexa_msg_NodeStatus> topic_;
+  comm::Reader<hexa_msg_NodeStatus> reader_;
+  std::vector<std::pair<std::string, hexa_msg_NodeState>> states_;
+};
+
+// Fixed-size window of cycle times with allocation-free median / max.
+class CycleTimeWindow {
+ public:
+  void Add(double seconds);
+  double Median();  // of the samples in the window
+  double Max() const;
+  std::uint64_t total() const { return total_; }
+
+ private:
+  static constexpr std::size_t kSize = 1000;
+  std::array<double, kSize> samples_{};
+  std::array<double, kSize> scratch_{};
+  std::size_t count_ = 0;
+  std::size_t next_ = 0;
+  std::uint64_t total_ = 0;
+};
+
+// CLOCK_MONOTONIC in ns, for measuring compute time (never to decide what to compute).
+std::int64_t MonotonicNow_ns();
+
+// Copies a C string into a bounded char array of the wire types, always NUL-terminated.
+template <std::size_t N>
+void CopyBounded(char (&dst)[N], const char* src) {
+  std::size_t i = 0;
+  for (; src != nullptr && src[i] != '\0' && i + 1 < N; ++i) dst[i] = src[i];
+  dst[i] = '\0';
+}
+
+}  // namespace hexa::node

@@ -1,0 +1,193 @@
+#include "hexa/services/node.hpp"
+
+#include <sched.h>
+#include <sys/mman.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <ctime>
+#include <limits>
+
+namespace hexa::node {
+
+void AddCommonOptions(cli::Parser& p) {
+  p.AddOption("rig", "file", "rig file (protobuf text format)", config::DefaultRigFile());
+  p.AddOption("domain", "id", "DDS domain id", "0");
+  p.AddChoice("mode", {"lockstep", "realtime"}, "time base (docs/architecture.md)", "lockstep");
+  p.AddOption("dds-config", "file",
+              "Cyclone DDS configuration (default: $CYCLONEDDS_URI, else loopback only)");
+  p.AddOption("log-file", "file", "also log to this file");
+  p.AddChoice("log-level", {"trace", "debug", "info", "warn", "error"}, "log level", "info");
+  p.AddOption("lockstep-timeout", "s", "lockstep: a peer silent this long is a fault", "10");
+  p.AddOption("rt-deadline-1ms", "s", "real time: deadline of the 1 ms topics", "0.001");
+  p.AddOption("rt-deadline-5ms", "s", "real time: deadline of the 5 ms topics", "0.005");
+  p.AddFlag("no-rt-sched", "do not try SCHED_FIFO / mlockall in real time");
+}
+
+bool ReadCommonOptions(cli::Parser& p, CommonOptions& o) {
+  o.rig_path = p.Get("rig");
+  const auto domain = p.GetInt("domain", 0, 230);
+  const auto timeout = p.GetDouble("lockstep-timeout", 0.1, 3600);
+  const auto d1 = p.GetDouble("rt-deadline-1ms", 0.001, 1.0);
+  const auto d5 = p.GetDouble("rt-deadline-5ms", 0.005, 1.0);
+  if (!domain || !timeout || !d1 || !d5) return false;
+  o.domain_id = static_cast<int>(*domain);
+  o.lockstep_timeout_s = *timeout;
+  o.realtime_deadline_1ms_topics_s = *d1;
+  o.realtime_deadline_5ms_topics_s = *d5;
+  o.mode = p.Get("mode") == "realtime" ? TimeMode::kRealtime : TimeMode::kLockstep;
+  if (p.Has("dds-config")) o.dds_config = p.Get("dds-config");
+  o.log_file = p.Get("log-file");
+  o.log_level = p.Get("log-level");
+  o.try_realtime_scheduling = !p.Flag("no-rt-sched");
+  return true;
+}
+
+comm::QosParams QosFor(const CommonOptions& o, comm::TopicKind kind) {
+  comm::QosParams q;
+  if (o.mode == TimeMode::kLockstep) {
+    q.lockstep = true;
+    // Simulated time runs at whatever pace the slowest process allows: the deadline is a
+    // stall detector at the lockstep timeout, and the leg's liveliness is AUTOMATIC (a
+    // lockstep pause is not a dead controller).
+    if (comm::NominalPeriod_s(kind)) q.deadline_period_s = o.lockstep_timeout_s;
+    q.valve_liveliness = comm::LivelinessKind::kAutomatic;
+    q.valve_liveliness_lease_s = 0.05;
+  } else {
+    const auto nominal = comm::NominalPeriod_s(kind);
+    if (nominal) {
+      q.deadline_period_s = *nominal < 0.002 ? o.realtime_deadline_1ms_topics_s
+                                             : o.realtime_deadline_5ms_topics_s;
+    }
+    // MANUAL_BY_TOPIC catches a hung control thread; 20 ms lease (3 ms gave false drops
+    // on this VM, PLATFORM_NOTES.md).
+    q.valve_liveliness = comm::LivelinessKind::kManualByTopic;
+    q.valve_liveliness_lease_s = 0.02;
+  }
+  return q;
+}
+
+std::optional<config::SystemConfig> LoadConfig(const std::string& path, spdlog::logger& log) {
+  auto result = config::LoadSystemConfig(path);
+  if (!result.ok) {
+    log.error("rig file rejected:\n{}", result.error);
+    return std::nullopt;
+  }
+  log.info("rig file {} loaded (rig '{}')", path, result.config.rig_name);
+  return std::move(result.config);
+}
+
+void TryRealtimeScheduling(int priority, spdlog::logger& log) {
+  sched_param sp{};
+  sp.sched_priority = priority;
+  if (sched_setscheduler(0, SCHED_FIFO, &sp) == 0) {
+    log.info("SCHED_FIFO priority {} enabled", priority);
+  } else {
+    log.warn("SCHED_FIFO not available ({}): running with normal scheduling",
+             std::strerror(errno));
+  }
+  if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
+    log.info("memory locked (mlockall)");
+  } else {
+    log.warn("mlockall not available ({})", std::strerror(errno));
+  }
+}
+
+StatusPublisher::StatusPublisher(const comm::Participant& participant,
+                                 const std::string& node_name)
+    : topic_(participant), writer_(participant, topic_) {
+  CopyBounded(sample_.node_name, node_name.c_str());
+}
+
+void StatusPublisher::Publish(hexa_msg_NodeState state, std::uint64_t tick, double sim_time_s,
+                              std::uint32_t deadline_missed, std::uint32_t liveliness_changes,
+                              std::uint64_t cycles, double cycle_median_s, double cycle_max_s,
+                              const char* detail) {
+  sample_.header.tick = tick;
+  sample_.header.sim_time_s = sim_time_s;
+  sample_.state = state;
+  sample_.deadline_missed_total = deadline_missed;
+  sample_.liveliness_changes_total = liveliness_changes;
+  sample_.cycles_total = cycles;
+  sample_.cycle_time_median_s = cycle_median_s;
+  sample_.cycle_time_max_s = cycle_max_s;
+  CopyBounded(sample_.detail, detail);
+  writer_.WriteNow(sample_);
+}
+
+FaultPublisher::FaultPublisher(const comm::Participant& participant,
+                               const std::string& node_name)
+    : topic_(participant), writer_(participant, topic_) {
+  CopyBounded(sample_.source_node, node_name.c_str());
+}
+
+void FaultPublisher::Publish(std::uint8_t leg_id, std::uint64_t tick, hexa_msg_FaultReason reason,
+                             const char* detail) {
+  sample_.leg_id = leg_id;
+  sample_.tick = tick;
+  sample_.reason = reason;
+  CopyBounded(sample_.detail, detail);
+  writer_.WriteNow(sample_);
+}
+
+PeerTracker::PeerTracker(const comm::Participant& participant)
+    : topic_(participant),
+      reader_(participant, topic_, comm::EndpointRole::kControlReader, comm::QosParams{}, 64) {}
+
+void PeerTracker::Poll() {
+  while (reader_.Take() > 0) {
+    for (std::size_t i = 0; i < reader_.count(); ++i) {
+      if (!reader_.info(i).valid_data) continue;
+      const auto& s = reader_.sample(i);
+      const std::string name = s.node_name;
+      auto it = std::find_if(states_.begin(), states_.end(),
+                             [&](const auto& e) { return e.first == name; });
+      if (it == states_.end()) states_.emplace_back(name, s.state);
+      else it->second = s.state;
+    }
+  }
+}
+
+std::optional<hexa_msg_NodeState> PeerTracker::StateOf(const std::string& name) const {
+  for (const auto& [n, s] : states_)
+    if (n == name) return s;
+  return std::nullopt;
+}
+
+std::vector<std::string> PeerTracker::NotRunning(const std::vector<std::string>& expected) const {
+  std::vector<std::string> missing;
+  for (const auto& name : expected) {
+    const auto s = StateOf(name);
+    if (!s || *s != hexa_msg_NODE_RUNNING) missing.push_back(name);
+  }
+  return missing;
+}
+
+void CycleTimeWindow::Add(double seconds) {
+  samples_[next_] = seconds;
+  next_ = (next_ + 1) % kSize;
+  count_ = std::min(count_ + 1, kSize);
+  ++total_;
+}
+
+double CycleTimeWindow::Median() {
+  if (count_ == 0) return 0.0;
+  std::copy_n(samples_.begin(), count_, scratch_.begin());
+  auto mid = scratch_.begin() + static_cast<std::ptrdiff_t>(count_ / 2);
+  std::nth_element(scratch_.begin(), mid, scratch_.begin() + static_cast<std::ptrdiff_t>(count_));
+  return *mid;
+}
+
+double CycleTimeWindow::Max() const {
+  if (count_ == 0) return 0.0;
+  return *std::max_element(samples_.begin(), samples_.begin() + static_cast<std::ptrdiff_t>(count_));
+}
+
+std::int64_t MonotonicNow_ns() {
+  timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+}  // namespace hexa::node

@@ -1,0 +1,279 @@
+#include "leg_node.hpp"
+
+#include <signal.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <limits>
+
+#include "hexa/core/lockstep_simulation.hpp"
+
+namespace hexa::leg_ctrl {
+namespace {
+
+constexpr dds_attach_t kTokenShutdown = 1;
+constexpr dds_attach_t kTokenSensors = 2;
+constexpr dds_attach_t kTokenSetpoints = 3;
+constexpr int kSupervisorEveryTicks = 5;
+
+comm::QosParams ValveQos(const LegNodeOptions& o) {
+  comm::QosParams q = node::QosFor(o.common, comm::TopicKind::kValveCommand);
+  q.ownership_strength = o.standby ? comm::kStandbyOwnershipStrength
+                                   : comm::kPrimaryOwnershipStrength;
+  return q;
+}
+
+hexa_msg_LegCtrlStatus ToWire(LegControlStatus s) {
+  return static_cast<hexa_msg_LegCtrlStatus>(static_cast<int>(s));
+}
+
+void SleepFor(double seconds) {
+  timespec ts{static_cast<time_t>(seconds), static_cast<long>(std::fmod(seconds, 1.0) * 1e9)};
+  nanosleep(&ts, nullptr);
+}
+
+}  // namespace
+
+bool ParseFaultKind(const std::string& text, FaultKind& kind) {
+  static const std::pair<const char*, FaultKind> kKinds[] = {
+      {"none", FaultKind::kNone},       {"crash", FaultKind::kCrash},
+      {"hang", FaultKind::kHang},       {"slow", FaultKind::kSlow},
+      {"garbage", FaultKind::kGarbage}, {"silence", FaultKind::kSilence}};
+  for (const auto& [name, k] : kKinds) {
+    if (text == name) {
+      kind = k;
+      return true;
+    }
+  }
+  return false;
+}
+
+const char* ToString(FaultKind kind) {
+  switch (kind) {
+    case FaultKind::kNone: return "none";
+    case FaultKind::kCrash: return "crash";
+    case FaultKind::kHang: return "hang";
+    case FaultKind::kSlow: return "slow";
+    case FaultKind::kGarbage: return "garbage";
+    case FaultKind::kSilence: return "silence";
+  }
+  return "?";
+}
+
+LegNode::LegNode(const LegNodeOptions& options, const config::SystemConfig& config,
+                 std::shared_ptr<spdlog::logger> log)
+    : options_(options),
+      log_(std::move(log)),
+      name_("leg" + std::to_string(options.leg) + (options.standby ? "_standby" : "")),
+      controller_(LegControllerConfig::FromRig(config.rig, config.leg_controller,
+                                               options.controller)),
+      participant_(static_cast<dds_domainid_t>(options.common.domain_id)),
+      shutdown_(participant_),
+      sensors_topic_(comm::Topic<hexa_msg_LegSensors>::FilteredByLeg(
+          participant_, static_cast<uint8_t>(options.leg))),
+      setpoint_topic_(comm::Topic<hexa_msg_LegSetpoint>::FilteredByLeg(
+          participant_, static_cast<uint8_t>(options.leg))),
+      valve_topic_(participant_),
+      sensors_reader_(participant_, sensors_topic_, comm::EndpointRole::kControlReader,
+                      node::QosFor(options.common, comm::TopicKind::kLegSensors)),
+      setpoint_reader_(participant_, setpoint_topic_, comm::EndpointRole::kControlReader,
+                       node::QosFor(options.common, comm::TopicKind::kLegSetpoint)),
+      valve_writer_(participant_, valve_topic_, ValveQos(options)),
+      status_(participant_, name_),
+      waitset_(participant_) {
+  waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
+  waitset_.Attach(sensors_reader_.data_condition(), kTokenSensors);
+  waitset_.Attach(setpoint_reader_.data_condition(), kTokenSetpoints);
+  last_command_.leg_id = static_cast<uint8_t>(options.leg);
+  last_command_.controller =
+      options.controller == LegControllerKind::kPi ? hexa_msg_CONTROLLER_PI : hexa_msg_CONTROLLER_BSSMC;
+  last_command_.standby = options.standby;
+}
+
+void LegNode::PublishStatus(hexa_msg_NodeState state, const char* detail) {
+  const auto s = sensors_reader_.Snapshot();
+  status_.Publish(state, last_command_.header.tick, last_command_.header.sim_time_s,
+                  s.requested_deadline_missed_total, valve_writer_.Snapshot().liveliness_lost_total,
+                  cycles_, cycle_times_.Median(), cycle_times_.Max(), detail);
+}
+
+bool LegNode::WaitUntilMatched() {
+  const int64_t end = node::MonotonicNow_ns() + static_cast<int64_t>(options_.startup_timeout_s * 1e9);
+  while (!shutdown_.requested()) {
+    const bool sensors = sensors_reader_.Snapshot().subscription_matched_current >= 1;
+    const bool plant = valve_writer_.Snapshot().publication_matched_current >= 1;
+    if (sensors && plant) return true;
+    if (node::MonotonicNow_ns() > end) {
+      log_->error("no plant after {} s (sensor writer matched: {}, valve reader matched: {})",
+                  options_.startup_timeout_s, sensors, plant);
+      return false;
+    }
+    waitset_.Wait(DDS_MSECS(20));  // match counts change without data: bounded re-check
+    valve_writer_.AssertLiveliness();
+  }
+  return false;
+}
+
+void LegNode::TakeSetpoints() {
+  while (setpoint_reader_.Take() > 0) {
+    for (std::size_t k = 0; k < setpoint_reader_.count(); ++k) {
+      if (!setpoint_reader_.info(k).valid_data) continue;
+      const auto& s = setpoint_reader_.sample(k);
+      if (newest_.valid && s.header.tick <= newest_.sample.header.tick) continue;
+      previous_ = newest_;
+      newest_ = Setpoint{true, s};
+    }
+  }
+}
+
+const LegNode::Setpoint* LegNode::SetpointFor(std::uint64_t tick) const {
+  if (options_.common.mode == node::TimeMode::kLockstep) {
+    // The protocol of docs/architecture.md: the setpoint issued at 5 * floor((n - 1) / 5).
+    std::uint64_t required = 0;
+    if (!RequiredSetpointTick(tick, kSupervisorEveryTicks, required)) return nullptr;
+    if (newest_.valid && newest_.sample.header.tick == required) return &newest_;
+    if (previous_.valid && previous_.sample.header.tick == required) return &previous_;
+    return nullptr;
+  }
+  // Real time: the newest setpoint not from the future.
+  if (newest_.valid && newest_.sample.header.tick <= tick) return &newest_;
+  if (previous_.valid && previous_.sample.header.tick <= tick) return &previous_;
+  return nullptr;
+}
+
+bool LegNode::CanAnswer(std::uint64_t tick) const {
+  if (options_.common.mode == node::TimeMode::kRealtime) return true;
+  std::uint64_t required = 0;
+  if (!RequiredSetpointTick(tick, kSupervisorEveryTicks, required)) return true;  // tick 0
+  // Setpoints come in tick order: once a newer one is here, the required one will never come
+  // (the supervisor skipped it): answer without, the core holds on a stale setpoint.
+  return SetpointFor(tick) != nullptr || (newest_.valid && newest_.sample.header.tick > required);
+}
+
+bool LegNode::InjectFault(double sim_time_s) {
+  if (options_.fault.kind == FaultKind::kNone || sim_time_s < options_.fault.at_sim_time_s)
+    return false;
+  if (!fault_active_) {
+    fault_active_ = true;
+    log_->warn("FAULT INJECTION: '{}' from t = {:.3f} s", ToString(options_.fault.kind), sim_time_s);
+  }
+  switch (options_.fault.kind) {
+    case FaultKind::kCrash:
+      log_->flush();
+      kill(getpid(), SIGKILL);  // a sudden death, no clean-up
+      return true;
+    case FaultKind::kHang:
+      // The control thread stops; only a shutdown request (or SIGKILL) ends it.
+      while (!shutdown_.requested()) SleepFor(0.05);
+      return true;
+    case FaultKind::kSlow:
+      SleepFor(options_.fault.slow_extra_s);
+      return false;  // still answers, late
+    case FaultKind::kGarbage:
+    case FaultKind::kSilence:
+    case FaultKind::kNone:
+      return false;
+  }
+  return false;
+}
+
+void LegNode::Answer(const hexa_msg_LegSensors& s) {
+  const int64_t t0 = node::MonotonicNow_ns();
+  if (InjectFault(s.header.sim_time_s)) return;
+  input_ = LegControllerInput{};  // nothing carries over from the previous tick
+  input_.tick = s.header.tick;
+  input_.time_s = s.header.sim_time_s;
+  input_.length_m = s.length_m;
+  input_.cap_pressure_pa = s.cap_pressure_pa;
+  input_.rod_pressure_pa = s.rod_pressure_pa;
+  input_.supply_pressure_pa = s.supply_pressure_pa;
+  const Setpoint* sp = SetpointFor(s.header.tick);
+  input_.has_setpoint = sp != nullptr;
+  if (sp != nullptr) {
+    const auto& p = sp->sample;
+    input_.setpoint_tick = p.header.tick;
+    input_.setpoint_time_s = p.header.sim_time_s;
+    input_.setpoint_length_m = p.length_m;
+    input_.setpoint_velocity_m_s = p.velocity_m_s;
+    input_.setpoint_acceleration_m_s2 = p.acceleration_m_s2;
+    input_.correction_m = p.correction_m;
+    input_.hold = p.hold;
+  }
+  controller_.Update(input_, output_);
+  const double compute_s = static_cast<double>(node::MonotonicNow_ns() - t0) * 1e-9;
+  cycle_times_.Add(compute_s);
+  ++cycles_;
+
+  hexa_msg_ValveCommand& c = last_command_;
+  comm::FillHeader(c.header, s.header.tick, s.header.sim_time_s, 0);
+  c.valve_v = output_.valve_v;
+  c.status = ToWire(output_.status);
+  c.setpoint_tick = output_.setpoint_tick;
+  c.desired_length_m = output_.desired_length_m;
+  c.sliding_surface_m_s = output_.sliding_surface_m_s;
+  c.compute_time_s = compute_s;
+  if (fault_active_ && options_.fault.kind == FaultKind::kGarbage) {
+    c.valve_v = (cycles_ % 2 == 0) ? std::numeric_limits<double>::quiet_NaN() : 42.0;
+  }
+  answered_any_ = true;
+  if (fault_active_ && options_.fault.kind == FaultKind::kSilence) return;
+  valve_writer_.WriteNow(c);
+}
+
+int LegNode::Run() {
+  const bool realtime = options_.common.mode == node::TimeMode::kRealtime;
+  if (realtime && options_.common.try_realtime_scheduling) node::TryRealtimeScheduling(70, *log_);
+  PublishStatus(hexa_msg_NODE_STARTING, "waiting for the plant");
+  if (!WaitUntilMatched()) {
+    PublishStatus(hexa_msg_NODE_FAULT, "no plant");
+    return shutdown_.requested() ? 0 : 3;
+  }
+  PublishStatus(hexa_msg_NODE_RUNNING, options_.standby ? "standby" : "primary");
+  log_->info("{} running: leg {}, {}, {}", name_, options_.leg,
+             options_.controller == LegControllerKind::kPi ? "PI" : "BS-SMC",
+             options_.standby ? "hot standby (ownership strength 10)" : "primary (strength 20)");
+  // Real time: wake at least every 5 ms to assert MANUAL_BY_TOPIC liveliness while idle.
+  const dds_duration_t idle_wait = realtime ? DDS_MSECS(5) : DDS_SECS(1);
+  while (!shutdown_.requested()) {
+    const dds_return_t n = waitset_.Wait(idle_wait);
+    if (n < 0) {
+      log_->error("waitset failed: {}", dds_strretcode(n));
+      return 1;
+    }
+    if (n == 0 && realtime && !(fault_active_ && options_.fault.kind == FaultKind::kSilence)) {
+      valve_writer_.AssertLiveliness();
+    }
+    TakeSetpoints();
+    hexa_msg_LegSensors s{};
+    if (sensors_reader_.TakeLatestForLeg(static_cast<uint8_t>(options_.leg), s) == 1) {
+      if (answered_any_ && s.header.tick == last_command_.header.tick) {
+        // The plant asked again for a tick already answered (lost sample or ownership
+        // hand-over): repeat the cached answer, the controller state must not advance twice.
+        if (!(fault_active_ && options_.fault.kind == FaultKind::kSilence)) {
+          valve_writer_.WriteNow(last_command_);
+          ++resent_;
+        }
+      } else if (!answered_any_ || s.header.tick > last_command_.header.tick) {
+        pending_ = s;
+        has_pending_ = true;
+      }
+    }
+    if (has_pending_ && CanAnswer(pending_.header.tick)) {
+      has_pending_ = false;
+      Answer(pending_);
+      if (cycles_ % 100 == 0) {
+        PublishStatus(hexa_msg_NODE_RUNNING, ToString(output_.status));
+      }
+    }
+  }
+  const auto sensors = sensors_reader_.Snapshot();
+  log_->info("{} stopped after {} cycles (last tick {}): sensor deadline misses {}, repeated "
+             "answers {}, compute median {:.1f} us max {:.1f} us",
+             name_, cycles_, last_command_.header.tick, sensors.requested_deadline_missed_total,
+             resent_, cycle_times_.Median() * 1e6, cycle_times_.Max() * 1e6);
+  PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
+  return 0;
+}
+
+}  // namespace hexa::leg_ctrl

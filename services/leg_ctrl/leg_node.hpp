@@ -1,0 +1,84 @@
+// The leg controller service: one process per leg. Event-driven on its own leg's sensor
+// sample; answers each tick with a valve command computed by the core LegController
+// (BS-SMC or PI). Knows nothing of the other legs. Optional hot standby (lower ownership
+// strength) and fault injection for safety tests.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "hexa/comm/comm.hpp"
+#include "hexa/core/leg_controller.hpp"
+#include "hexa/services/node.hpp"
+
+namespace hexa::leg_ctrl {
+
+enum class FaultKind { kNone, kCrash, kHang, kSlow, kGarbage, kSilence };
+bool ParseFaultKind(const std::string& text, FaultKind& kind);
+const char* ToString(FaultKind kind);
+
+struct FaultInjection {
+  FaultKind kind = FaultKind::kNone;
+  double at_sim_time_s = 0.0;  // the fault starts at this simulated time
+  double slow_extra_s = 0.005; // kSlow: added to every cycle
+};
+
+struct LegNodeOptions {
+  node::CommonOptions common;
+  int leg = 1;                 // 1..6
+  LegControllerKind controller = LegControllerKind::kBsSmc;
+  bool standby = false;
+  FaultInjection fault;
+  double startup_timeout_s = 30.0;
+};
+
+class LegNode {
+ public:
+  LegNode(const LegNodeOptions& options, const config::SystemConfig& config,
+          std::shared_ptr<spdlog::logger> log);
+  int Run();
+
+ private:
+  struct Setpoint {
+    bool valid = false;
+    hexa_msg_LegSetpoint sample{};
+  };
+  bool WaitUntilMatched();
+  void TakeSetpoints();
+  const Setpoint* SetpointFor(std::uint64_t tick) const;
+  bool CanAnswer(std::uint64_t tick) const;
+  void Answer(const hexa_msg_LegSensors& sensors);
+  bool InjectFault(double sim_time_s);
+  void PublishStatus(hexa_msg_NodeState state, const char* detail);
+
+  LegNodeOptions options_;
+  std::shared_ptr<spdlog::logger> log_;
+  std::string name_;
+  LegController controller_;
+  comm::Participant participant_;
+  comm::ShutdownGuard shutdown_;
+  comm::Topic<hexa_msg_LegSensors> sensors_topic_;
+  comm::Topic<hexa_msg_LegSetpoint> setpoint_topic_;
+  comm::Topic<hexa_msg_ValveCommand> valve_topic_;
+  comm::Reader<hexa_msg_LegSensors> sensors_reader_;
+  comm::Reader<hexa_msg_LegSetpoint> setpoint_reader_;
+  comm::Writer<hexa_msg_ValveCommand> valve_writer_;
+  node::StatusPublisher status_;
+  comm::WaitSet waitset_;
+
+  Setpoint newest_;
+  Setpoint previous_;
+  bool has_pending_ = false;
+  hexa_msg_LegSensors pending_{};
+  bool answered_any_ = false;
+  hexa_msg_ValveCommand last_command_{};
+  LegControllerInput input_;
+  LegControllerOutput output_;
+  node::CycleTimeWindow cycle_times_;
+  std::uint64_t cycles_ = 0;
+  std::uint64_t resent_ = 0;
+  bool fault_active_ = false;
+};
+
+}  // namespace hexa::leg_ctrl

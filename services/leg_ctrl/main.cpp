@@ -1,0 +1,57 @@
+// hexa_leg_ctrl: the position controller of one leg (BS-SMC, Sec. 3.2, or the PI baseline).
+#include <cstdio>
+#include <exception>
+
+#include "hexa/services/logging.hpp"
+#include "leg_node.hpp"
+
+int main(int argc, char** argv) {
+  hexa::cli::Parser cli("hexa_leg_ctrl",
+                        "Position controller of one leg: answers each sensor sample of its leg "
+                        "with a valve command (1 kHz).");
+  hexa::node::AddCommonOptions(cli);
+  cli.AddOption("leg", "1..6", "the leg this process controls");
+  cli.AddChoice("controller", {"bssmc", "pi"}, "control law", "bssmc");
+  cli.AddFlag("standby", "hot standby: same law, lower ownership strength");
+  cli.AddChoice("fault", {"none", "crash", "hang", "slow", "garbage", "silence"},
+                "fault injection (safety tests)", "none");
+  cli.AddOption("fault-at", "s", "simulated time at which the fault starts", "0");
+  cli.AddOption("fault-slow", "s", "extra time per cycle for --fault slow", "0.005");
+  cli.AddOption("startup-timeout", "s", "the plant must appear within this", "30");
+  const bool parsed = cli.Parse(argc, argv);
+  if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
+  if (!cli.Has("leg")) {
+    std::fprintf(stderr, "error: --leg is required (1..6)\n(see --help)\n");
+    return 2;
+  }
+  hexa::leg_ctrl::LegNodeOptions o;
+  const auto leg = cli.GetInt("leg", 1, 6);
+  const auto at = cli.GetDouble("fault-at", 0, 1e7);
+  const auto slow = cli.GetDouble("fault-slow", 0, 10);
+  const auto startup = cli.GetDouble("startup-timeout", 0.1, 3600);
+  if (!hexa::node::ReadCommonOptions(cli, o.common) || !leg || !at || !slow || !startup) {
+    std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
+    return 2;
+  }
+  o.leg = static_cast<int>(*leg);
+  o.controller = cli.Get("controller") == "pi" ? hexa::LegControllerKind::kPi
+                                                : hexa::LegControllerKind::kBsSmc;
+  o.standby = cli.Flag("standby");
+  hexa::leg_ctrl::ParseFaultKind(cli.Get("fault"), o.fault.kind);
+  o.fault.at_sim_time_s = *at;
+  o.fault.slow_extra_s = *slow;
+  o.startup_timeout_s = *startup;
+
+  const std::string name = "leg" + std::to_string(o.leg) + (o.standby ? "_standby" : "");
+  auto log = hexa::logging::Init(name, o.common.log_file, o.common.log_level);
+  try {
+    hexa::comm::EnsureDdsConfig(o.common.dds_config);
+    auto config = hexa::node::LoadConfig(o.common.rig_path, *log);
+    if (!config) return 1;
+    hexa::leg_ctrl::LegNode node(o, *config, log);
+    return node.Run();
+  } catch (const std::exception& e) {
+    log->error("{}", e.what());
+    return 1;
+  }
+}

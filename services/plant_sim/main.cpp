@@ -1,0 +1,63 @@
+// hexa_plant_sim: the simulated HexaTaar rig and clock master (docs/architecture.md).
+#include <cstdio>
+#include <exception>
+
+#include "hexa/services/logging.hpp"
+#include "plant_node.hpp"
+
+int main(int argc, char** argv) {
+  hexa::cli::Parser cli("hexa_plant_sim",
+                        "Simulated rig: publishes leg sensors (1 kHz), IMU (200 Hz) and ground "
+                        "truth; applies the leg controllers' valve commands.");
+  hexa::node::AddCommonOptions(cli);
+  cli.AddOption("profile", "name", "disturbance profile of the rig file (realistic, ideal)",
+                "realistic");
+  cli.AddOption("seed", "N", "seed of noise and calibration errors", "1");
+  cli.AddOption("legs", "N", "leg controllers that must answer (lockstep)", "6");
+  cli.AddFlag("supervisor", "lockstep: also wait for the supervisor's setpoints every 5 ms");
+  cli.AddFlag("expect-recorder", "wait for the recorder before the first tick");
+  cli.AddOption("duration", "s", "stop after this simulated time (0 = until stopped)", "0");
+  cli.AddOption("startup-timeout", "s", "peers must be ready within this", "30");
+  cli.AddOption("stale-ticks", "N", "real time: ticks a command may lag before null", "3");
+  const bool parsed = cli.Parse(argc, argv);
+  if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
+
+  hexa::plant_sim::PlantNodeOptions o;
+  const auto seed = cli.GetInt("seed", 0, 1LL << 62);
+  const auto legs = cli.GetInt("legs", 0, 6);
+  const auto duration = cli.GetDouble("duration", 0, 1e7);
+  const auto startup = cli.GetDouble("startup-timeout", 0.1, 3600);
+  const auto stale = cli.GetInt("stale-ticks", 0, 1000);
+  if (!hexa::node::ReadCommonOptions(cli, o.common) || !seed || !legs || !duration || !startup ||
+      !stale) {
+    std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
+    return 2;
+  }
+  o.profile = cli.Get("profile");
+  o.seed = static_cast<std::uint64_t>(*seed);
+  o.expected_legs = static_cast<int>(*legs);
+  o.expect_supervisor = cli.Flag("supervisor");
+  o.expect_recorder = cli.Flag("expect-recorder");
+  o.duration_s = *duration;
+  o.startup_timeout_s = *startup;
+  o.realtime_stale_ticks = static_cast<std::uint64_t>(*stale);
+
+  auto log = hexa::logging::Init("plant", o.common.log_file, o.common.log_level);
+  try {
+    hexa::comm::EnsureDdsConfig(o.common.dds_config);
+    auto config = hexa::node::LoadConfig(o.common.rig_path, *log);
+    if (!config) return 1;
+    if (config->profiles.count(o.profile) == 0) {
+      std::string names;
+      for (const auto& [name, p] : config->profiles) names += " " + name;
+      log->error("--profile '{}' is not defined in {} (defined:{})", o.profile,
+                 o.common.rig_path, names);
+      return 1;
+    }
+    hexa::plant_sim::PlantNode node(o, *config, log);
+    return node.Run();
+  } catch (const std::exception& e) {
+    log->error("{}", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,51 @@
+// hexa_task_space: the task-space supervisor (trajectory, GQFK pose estimate, Jacobian outer
+// loop, safety state machine) at 5 ms.
+#include <cstdio>
+#include <exception>
+
+#include "hexa/services/logging.hpp"
+#include "supervisor_node.hpp"
+
+int main(int argc, char** argv) {
+  hexa::cli::Parser cli("hexa_task_space",
+                        "Task-space supervisor: trajectories, pose estimate (IMU + GQFK, eq 47), "
+                        "Jacobian outer loop (eq 48), safety state machine; 5 ms.");
+  hexa::node::AddCommonOptions(cli);
+  cli.AddOption("trajectory", "name|file.csv",
+                "trajectory for --autostart: x y z roll pitch yaw combined, or a CSV file",
+                "combined");
+  cli.AddOption("periods", "N", "periods to track (0 = the trajectory's default)", "0");
+  cli.AddFlag("autostart", "start the trajectory as soon as the pose is known");
+  cli.AddFlag("exit-when-done", "exit 0 when the trajectory has finished (5 on HOLD)");
+  cli.AddFlag("no-outer-loop", "disable the task-space outer loop");
+  cli.AddFlag("least-squares", "six-leg least-squares position estimate instead of GQFK");
+  cli.AddOption("startup-timeout", "s", "peers must match within this", "30");
+  const bool parsed = cli.Parse(argc, argv);
+  if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
+  hexa::task_space::SupervisorNodeOptions o;
+  const auto periods = cli.GetInt("periods", 0, 1000);
+  const auto startup = cli.GetDouble("startup-timeout", 0.1, 3600);
+  if (!hexa::node::ReadCommonOptions(cli, o.common) || !periods || !startup) {
+    std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
+    return 2;
+  }
+  o.trajectory = cli.Get("trajectory");
+  o.periods = static_cast<int>(*periods);
+  o.autostart = cli.Flag("autostart");
+  o.exit_when_done = cli.Flag("exit-when-done");
+  o.outer_loop = !cli.Flag("no-outer-loop");
+  o.least_squares = cli.Flag("least-squares");
+  o.startup_timeout_s = *startup;
+
+  auto log = hexa::logging::Init("supervisor", o.common.log_file, o.common.log_level);
+  try {
+    hexa::comm::EnsureDdsConfig(o.common.dds_config);
+    auto config = hexa::node::LoadConfig(o.common.rig_path, *log);
+    if (!config) return 1;
+    hexa::task_space::SupervisorNode node(o, *config, log);
+    return node.Run();
+  } catch (const std::exception& e) {
+    log->error("{}", e.what());
+    return 1;
+  }
+}

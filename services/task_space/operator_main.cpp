@@ -1,0 +1,74 @@
+// hexa_operator: sends one operator command to the supervisor (reliable, keep-all).
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+
+#include "hexa/comm/comm.hpp"
+#include "hexa/services/cli.hpp"
+#include "hexa/services/logging.hpp"
+#include "hexa/services/node.hpp"
+
+int main(int argc, char** argv) {
+  hexa::cli::Parser cli("hexa_operator",
+                        "Sends an operator command to the supervisor: hexa_operator [options] "
+                        "start|stop|reset|home|shutdown");
+  cli.AddOption("domain", "id", "DDS domain id", "0");
+  cli.AddOption("dds-config", "file", "Cyclone DDS configuration (default: loopback only)");
+  cli.AddOption("trajectory", "name|file.csv", "for start: x y z roll pitch yaw combined or CSV",
+                "combined");
+  cli.AddOption("wait", "s", "how long to wait for the supervisor to match", "5");
+  const bool parsed = cli.Parse(argc, argv);
+  if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
+  const auto domain = cli.GetInt("domain", 0, 230);
+  const auto wait_s = cli.GetDouble("wait", 0, 600);
+  if (!domain || !wait_s || cli.positional().size() != 1) {
+    std::fprintf(stderr, "error: %s\n(see --help)\n",
+                 cli.error().empty() ? "exactly one command is required" : cli.error().c_str());
+    return 2;
+  }
+  const std::string what = cli.positional()[0];
+  hexa_msg_OperatorCommand cmd{};
+  if (what == "start") cmd.kind = hexa_msg_OPERATOR_START;
+  else if (what == "stop") cmd.kind = hexa_msg_OPERATOR_STOP;
+  else if (what == "reset") cmd.kind = hexa_msg_OPERATOR_RESET;
+  else if (what == "home") cmd.kind = hexa_msg_OPERATOR_HOME;
+  else if (what == "shutdown") cmd.kind = hexa_msg_OPERATOR_SHUTDOWN;
+  else {
+    std::fprintf(stderr, "error: unknown command '%s' (start stop reset home shutdown)\n",
+                 what.c_str());
+    return 2;
+  }
+  auto log = hexa::logging::Init("operator");
+  try {
+    std::optional<std::string> dds;
+    if (cli.Has("dds-config")) dds = cli.Get("dds-config");
+    hexa::comm::EnsureDdsConfig(dds);
+    hexa::comm::Participant participant(static_cast<dds_domainid_t>(*domain));
+    hexa::comm::Topic<hexa_msg_OperatorCommand> topic(participant);
+    hexa::comm::Writer<hexa_msg_OperatorCommand> writer(participant, topic);
+    const std::string traj = cli.Get("trajectory");
+    const bool is_named = traj == "x" || traj == "y" || traj == "z" || traj == "roll" ||
+                          traj == "pitch" || traj == "yaw" || traj == "combined";
+    hexa::node::CopyBounded(cmd.trajectory, is_named ? traj.c_str() : "csv");
+    if (!is_named) hexa::node::CopyBounded(cmd.csv_path, traj.c_str());
+    cmd.sequence = static_cast<uint32_t>(hexa::comm::RealtimeNow_ns() & 0xffffffff);
+    hexa::comm::WaitSet ws(participant);
+    const int64_t end = hexa::node::MonotonicNow_ns() + static_cast<int64_t>(*wait_s * 1e9);
+    while (writer.Snapshot().publication_matched_current == 0) {
+      if (hexa::node::MonotonicNow_ns() > end) {
+        log->error("no supervisor on domain {} within {} s", *domain, *wait_s);
+        return 1;
+      }
+      ws.Wait(DDS_MSECS(20));
+    }
+    writer.WriteNow(cmd);
+    // Reliable delivery before the participant goes away.
+    dds_wait_for_acks(writer.get(), DDS_SECS(2));
+    log->info("sent {} to domain {}", what, *domain);
+    return 0;
+  } catch (const std::exception& e) {
+    log->error("{}", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,356 @@
+#include "supervisor_node.hpp"
+
+#include <cmath>
+#include <cstring>
+
+namespace hexa::task_space {
+namespace {
+
+constexpr dds_attach_t kTokenShutdown = 1;
+constexpr dds_attach_t kTokenImu = 2;
+constexpr dds_attach_t kTokenSensors = 3;
+constexpr dds_attach_t kTokenOperator = 4;
+constexpr dds_attach_t kTokenFault = 5;
+constexpr int kSupervisorEveryTicks = 5;
+
+SupervisorParams ParamsFrom(const SupervisorNodeOptions& o, const config::SystemConfig& c) {
+  SupervisorParams p = c.supervisor;
+  if (!o.outer_loop) p.outer_loop.enabled = false;
+  if (o.least_squares) p.least_squares_estimator = true;
+  return p;
+}
+
+FaultReason FromWire(hexa_msg_FaultReason r) {
+  return static_cast<FaultReason>(static_cast<int>(r));
+}
+
+}  // namespace
+
+SupervisorNode::SupervisorNode(const SupervisorNodeOptions& options,
+                               const config::SystemConfig& config,
+                               std::shared_ptr<spdlog::logger> log)
+    : options_(options),
+      log_(std::move(log)),
+      supervisor_(config.rig, ParamsFrom(options, config)),
+      participant_(static_cast<dds_domainid_t>(options.common.domain_id)),
+      shutdown_(participant_),
+      sensors_topic_(participant_),
+      imu_topic_(participant_),
+      setpoint_topic_(participant_),
+      pose_topic_(participant_),
+      operator_topic_(participant_),
+      fault_topic_(participant_),
+      valve_topic_(participant_),
+      sensors_reader_(participant_, sensors_topic_, comm::EndpointRole::kControlReader,
+                      node::QosFor(options.common, comm::TopicKind::kLegSensors), 64),
+      imu_reader_(participant_, imu_topic_, comm::EndpointRole::kControlReader,
+                  node::QosFor(options.common, comm::TopicKind::kImuSample)),
+      operator_reader_(participant_, operator_topic_, comm::EndpointRole::kControlReader,
+                       node::QosFor(options.common, comm::TopicKind::kOperatorCommand)),
+      fault_reader_(participant_, fault_topic_, comm::EndpointRole::kControlReader,
+                    node::QosFor(options.common, comm::TopicKind::kFaultEvent), 64),
+      valve_reader_(participant_, valve_topic_, comm::EndpointRole::kControlReader,
+                    node::QosFor(options.common, comm::TopicKind::kValveCommand), 64),
+      setpoint_writer_(participant_, setpoint_topic_,
+                       node::QosFor(options.common, comm::TopicKind::kLegSetpoint)),
+      pose_writer_(participant_, pose_topic_,
+                   node::QosFor(options.common, comm::TopicKind::kPoseReport)),
+      status_(participant_, "supervisor"),
+      faults_(participant_, "supervisor"),
+      waitset_(participant_) {
+  waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
+  waitset_.Attach(imu_reader_.data_condition(), kTokenImu);
+  // The sensor reader is attached only while a lockstep tick waits for its leg samples:
+  // waking on every 1 kHz sample would cost CPU the 2-core machine needs elsewhere.
+  waitset_.Attach(operator_reader_.data_condition(), kTokenOperator);
+  waitset_.Attach(fault_reader_.data_condition(), kTokenFault);
+  leg_fault_.fill(FaultReason::kNone);
+}
+
+void SupervisorNode::PublishStatus(hexa_msg_NodeState state, const char* detail) {
+  const auto imu = imu_reader_.Snapshot();
+  status_.Publish(state, last_run_tick_, static_cast<double>(last_run_tick_) * 0.001,
+                  imu.requested_deadline_missed_total, valve_reader_.Snapshot().liveliness_lost_events,
+                  cycles_, cycle_times_.Median(), cycle_times_.Max(), detail);
+}
+
+bool SupervisorNode::WaitUntilMatched() {
+  const int64_t end = node::MonotonicNow_ns() + static_cast<int64_t>(options_.startup_timeout_s * 1e9);
+  while (!shutdown_.requested()) {
+    const bool sensors = sensors_reader_.Snapshot().subscription_matched_current >= 1;
+    const bool imu = imu_reader_.Snapshot().subscription_matched_current >= 1;
+    // Every leg controller reads the setpoints (plus the plant in lockstep).
+    const bool legs = setpoint_writer_.Snapshot().publication_matched_current >= kNumLegs;
+    if (sensors && imu && legs) return true;
+    if (node::MonotonicNow_ns() > end) {
+      log_->error("peers not matched after {} s: sensors {}, imu {}, setpoint readers {}",
+                  options_.startup_timeout_s, sensors, imu,
+                  setpoint_writer_.Snapshot().publication_matched_current);
+      return false;
+    }
+    waitset_.Wait(DDS_MSECS(20));  // match counts change without data: bounded re-check
+  }
+  return false;
+}
+
+void SupervisorNode::TakeSensors() {
+  while (sensors_reader_.Take() > 0) {
+    for (std::size_t k = 0; k < sensors_reader_.count(); ++k) {
+      if (!sensors_reader_.info(k).valid_data) continue;
+      const auto& s = sensors_reader_.sample(k);
+      if (s.leg_id < 1 || s.leg_id > kNumLegs) continue;
+      const std::size_t i = s.leg_id - 1;
+      if (sensors_seen_[i] && s.header.tick < sensors_[i].header.tick) continue;
+      sensors_[i] = s;
+      sensors_seen_[i] = true;
+    }
+  }
+}
+
+bool SupervisorNode::TakeImu() {
+  bool fresh = false;
+  while (imu_reader_.Take() > 0) {
+    for (std::size_t k = 0; k < imu_reader_.count(); ++k) {
+      if (!imu_reader_.info(k).valid_data) continue;
+      const auto& s = imu_reader_.sample(k);
+      if (imu_seen_ && s.header.tick <= imu_.header.tick) continue;
+      imu_ = s;
+      imu_seen_ = true;
+      fresh = true;
+    }
+  }
+  return fresh;
+}
+
+bool SupervisorNode::PrepareStart(const std::string& trajectory, int periods) {
+  PaperMotion motion;
+  StartRequest request = ParsePaperMotion(trajectory, motion)
+                             ? supervisor_.PreparePaperStart(motion, periods)
+                             : supervisor_.PrepareCsvStart(trajectory);
+  if (!request.feasibility.feasible) {
+    log_->error("trajectory '{}' rejected before any motion: {}", trajectory,
+                request.feasibility.message);
+  } else {
+    log_->info("trajectory '{}' accepted: {:.3f} s, tracking window [{:.3f}, {:.3f}) s",
+               trajectory, request.trajectory.duration_s(), request.trajectory.tracking_start_s(),
+               request.trajectory.tracking_end_s());
+  }
+  pending_start_ = std::move(request);
+  pending_command_ = OperatorCommandKind::kStart;
+  return pending_start_->feasibility.feasible;
+}
+
+void SupervisorNode::TakeOperatorCommands() {
+  while (operator_reader_.Take() > 0) {
+    for (std::size_t k = 0; k < operator_reader_.count(); ++k) {
+      if (!operator_reader_.info(k).valid_data) continue;
+      const auto& c = operator_reader_.sample(k);
+      log_->info("operator command #{}: kind {} trajectory '{}'", c.sequence,
+                 static_cast<int>(c.kind), c.trajectory);
+      switch (c.kind) {
+        case hexa_msg_OPERATOR_START: {
+          if (!supervisor_.initialized()) {
+            log_->warn("start refused: no pose estimate yet");
+            break;
+          }
+          const std::string traj = std::strcmp(c.trajectory, "csv") == 0 ? c.csv_path : c.trajectory;
+          PrepareStart(traj, options_.periods);
+          break;
+        }
+        case hexa_msg_OPERATOR_STOP: pending_command_ = OperatorCommandKind::kStop; break;
+        case hexa_msg_OPERATOR_RESET:
+          pending_command_ = OperatorCommandKind::kReset;
+          leg_fault_.fill(FaultReason::kNone);  // re-latched if the cause is still reported
+          break;
+        case hexa_msg_OPERATOR_HOME: pending_command_ = OperatorCommandKind::kHome; break;
+        case hexa_msg_OPERATOR_SHUTDOWN: shutdown_.RequestShutdown(); break;
+      }
+    }
+  }
+}
+
+void SupervisorNode::TakeFaults() {
+  while (fault_reader_.Take() > 0) {
+    for (std::size_t k = 0; k < fault_reader_.count(); ++k) {
+      if (!fault_reader_.info(k).valid_data) continue;
+      const auto& f = fault_reader_.sample(k);
+      if (std::strcmp(f.source_node, "supervisor") == 0) continue;  // our own
+      log_->warn("fault from {}: leg {} tick {} reason {}: {}", f.source_node, f.leg_id, f.tick,
+                 ToString(FromWire(f.reason)), f.detail);
+      if (f.leg_id >= 1 && f.leg_id <= kNumLegs) leg_fault_[f.leg_id - 1] = FromWire(f.reason);
+    }
+  }
+}
+
+void SupervisorNode::TakeValveCommands() {
+  // Which writer drives each leg, for the liveliness check (real time only).
+  const int64_t now = node::MonotonicNow_ns();
+  while (valve_reader_.Take() > 0) {
+    for (std::size_t k = 0; k < valve_reader_.count(); ++k) {
+      if (!valve_reader_.info(k).valid_data) continue;
+      const auto& c = valve_reader_.sample(k);
+      if (c.leg_id < 1 || c.leg_id > kNumLegs) continue;
+      leg_writer_[c.leg_id - 1] = valve_reader_.info(k).publication_handle;
+      leg_last_sample_ns_[c.leg_id - 1] = now;
+    }
+  }
+}
+
+void SupervisorNode::RunTick(std::uint64_t tick, double time_s) {
+  const int64_t t0 = node::MonotonicNow_ns();
+  input_ = SupervisorInput{};
+  input_.time_s = time_s;
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    input_.length_m[i] = sensors_seen_[i] ? sensors_[i].length_m : std::nan("");
+    // A leg whose sensor sample did not advance since the previous supervisor tick.
+    if (ran_once_ && sensors_[i].header.tick <= sensor_tick_at_last_run_[i]) ++leg_misses_consecutive_[i];
+    else leg_misses_consecutive_[i] = 0;
+    sensor_tick_at_last_run_[i] = sensors_[i].header.tick;
+    input_.deadline_misses_consecutive[i] = leg_misses_consecutive_[i];
+    input_.leg_fault[i] = leg_fault_[i];
+  }
+  input_.imu_deadline_misses_consecutive = imu_misses_consecutive_;
+  for (int k = 0; k < 4; ++k) input_.orientation_wxyz[k] = imu_.orientation_wxyz[k];
+  if (options_.common.mode == node::TimeMode::kRealtime) {
+    // Lost liveliness: the writer that drove the leg is no longer alive and nothing newer
+    // arrived within the grace (a hot standby that took over keeps the leg alive).
+    const auto& slots = valve_reader_.status().writers();
+    for (std::size_t i = 0; i < kNumLegs; ++i) {
+      if (leg_writer_[i] == 0) continue;
+      for (const auto& slot : slots) {
+        if (slot.publication.load() != leg_writer_[i]) continue;
+        const auto state = static_cast<comm::WriterLiveliness>(slot.state.load());
+        const bool dead = state == comm::WriterLiveliness::kNotAlive ||
+                          state == comm::WriterLiveliness::kGone;
+        const bool quiet = t0 - leg_last_sample_ns_[i] >
+                           static_cast<int64_t>(options_.leg_lost_grace_s * 1e9);
+        if (dead && quiet) input_.leg_alive[i] = false;
+      }
+    }
+  }
+  input_.command = pending_command_;
+  input_.start = pending_start_ ? &*pending_start_ : nullptr;
+  supervisor_.Update(input_, output_);
+  if (pending_command_ != OperatorCommandKind::kNone) {
+    log_->info("command {}: {}", ToString(pending_command_), ToString(output_.command_result));
+    pending_command_ = OperatorCommandKind::kNone;
+  }
+  cycle_times_.Add(static_cast<double>(node::MonotonicNow_ns() - t0) * 1e-9);
+  ++cycles_;
+  ran_once_ = true;
+  last_run_tick_ = tick;
+  Publish(tick, time_s);
+
+  if (output_.fault_raised) {
+    log_->error("HOLD: {} (leg {}): {}", ToString(output_.fault), output_.fault_leg,
+                output_.fault_detail.data());
+    faults_.Publish(static_cast<uint8_t>(output_.fault_leg), tick,
+                    static_cast<hexa_msg_FaultReason>(static_cast<int>(output_.fault)),
+                    output_.fault_detail.data());
+    PublishStatus(hexa_msg_NODE_HOLD, output_.fault_detail.data());
+    if (options_.exit_when_done) exit_code_ = 5;
+  }
+  if (autostart_pending_ && supervisor_.initialized()) {
+    autostart_pending_ = false;
+    // A rejected trajectory is passed on all the same: the core goes to HOLD with the
+    // rejection message at the next tick (and the service exits with --exit-when-done).
+    PrepareStart(options_.trajectory, options_.periods);
+  }
+  if (output_.state != SupervisorState::kIdle) left_idle_ = true;
+  if (options_.exit_when_done && left_idle_ && output_.state == SupervisorState::kIdle &&
+      exit_code_ < 0) {
+    log_->info("trajectory finished at t = {:.3f} s", time_s);
+    exit_code_ = 0;
+  }
+  if (cycles_ % 20 == 0) PublishStatus(output_.state == SupervisorState::kHold ? hexa_msg_NODE_HOLD
+                                                                             : hexa_msg_NODE_RUNNING,
+                                       ToString(output_.state));
+}
+
+void SupervisorNode::Publish(std::uint64_t tick, double time_s) {
+  const int64_t now_ns = comm::RealtimeNow_ns();
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    hexa_msg_LegSetpoint s{};
+    s.leg_id = static_cast<uint8_t>(i + 1);
+    comm::FillHeader(s.header, tick, time_s, now_ns);
+    const SupervisorLegSetpoint& sp = output_.setpoint[i];
+    s.length_m = sp.length_m;
+    s.velocity_m_s = sp.velocity_m_s;
+    s.acceleration_m_s2 = sp.acceleration_m_s2;
+    s.correction_m = sp.correction_m;
+    s.hold = sp.hold;
+    setpoint_writer_.Write(s, now_ns);
+  }
+  hexa_msg_PoseReport r{};
+  comm::FillHeader(r.header, tick, time_s, now_ns);
+  r.state = static_cast<hexa_msg_SupervisorState>(static_cast<int>(output_.state));
+  r.trajectory_time_s = output_.trajectory_time_s;
+  for (int k = 0; k < 6; ++k) {
+    r.desired_pose[k] = output_.desired_xyz_rpy[k];
+    r.estimated_pose[k] = output_.estimate.xyz_rpy[k];
+    r.error_pose[k] = output_.desired_xyz_rpy[k] - output_.estimate.xyz_rpy[k];
+  }
+  r.estimator_status = static_cast<uint8_t>(output_.estimate.status);
+  r.excluded_leg = static_cast<int8_t>(output_.estimate.excluded_leg);
+  pose_writer_.Write(r, now_ns);
+}
+
+int SupervisorNode::Run() {
+  const bool realtime = options_.common.mode == node::TimeMode::kRealtime;
+  if (realtime && options_.common.try_realtime_scheduling) node::TryRealtimeScheduling(75, *log_);
+  PublishStatus(hexa_msg_NODE_STARTING, "waiting for peers");
+  if (!WaitUntilMatched()) {
+    PublishStatus(hexa_msg_NODE_FAULT, "peers not matched");
+    return shutdown_.requested() ? 0 : 3;
+  }
+  PublishStatus(hexa_msg_NODE_RUNNING, "idle");
+  autostart_pending_ = options_.autostart;
+  log_->info("supervisor running ({}, outer loop {}, estimator {})",
+             realtime ? "real time" : "lockstep", options_.outer_loop ? "on" : "off",
+             options_.least_squares ? "six-leg least squares" : "GQFK (eq 47)");
+  // Real time: the IMU is due every 5 ms; a wait that times out counts a miss and the
+  // state machine runs on what it has (it holds after the configured count).
+  const dds_duration_t wait = realtime ? DDS_MSECS(5) * 2 : DDS_SECS(1);
+  bool sensors_attached = false;
+  while (!shutdown_.requested() && exit_code_ < 0) {
+    const dds_return_t n = waitset_.Wait(wait);
+    if (n < 0) return 1;
+    TakeOperatorCommands();
+    TakeFaults();
+    if (realtime) TakeValveCommands();
+    TakeSensors();
+    const bool fresh_imu = TakeImu();
+    if (!imu_seen_) continue;
+    const std::uint64_t m = imu_.header.tick;
+    if (realtime) {
+      if (fresh_imu) {
+        imu_misses_consecutive_ = 0;
+        RunTick(m, imu_.header.sim_time_s);
+      } else if (n == 0 && ran_once_) {
+        ++imu_misses_consecutive_;
+        RunTick(last_run_tick_, imu_.header.sim_time_s);
+      }
+      continue;
+    }
+    // Lockstep: the IMU of tick m and the six legs' samples of tick m.
+    if (ran_once_ && m <= last_run_tick_) continue;
+    bool complete = true;
+    for (std::size_t i = 0; i < kNumLegs; ++i)
+      complete = complete && sensors_seen_[i] && sensors_[i].header.tick == m;
+    if (complete) {
+      RunTick(m, imu_.header.sim_time_s);
+      if (sensors_attached) waitset_.Detach(sensors_reader_.data_condition());
+      sensors_attached = false;
+    } else if (!sensors_attached) {
+      waitset_.Attach(sensors_reader_.data_condition(), kTokenSensors);
+      sensors_attached = true;
+    }
+  }
+  PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
+  log_->info("supervisor stopped after {} cycles (state {}), compute median {:.1f} us max {:.1f} us",
+             cycles_, ToString(output_.state), cycle_times_.Median() * 1e6,
+             cycle_times_.Max() * 1e6);
+  return exit_code_ < 0 ? 0 : exit_code_;
+}
+
+}  // namespace hexa::task_space

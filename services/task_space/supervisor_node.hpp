@@ -1,0 +1,95 @@
+// The supervisor service: every 5 ms (on the IMU sample of tick n, with the six legs'
+// sensor samples), estimate the pose (IMU + GQFK), run the outer loop and the safety state
+// machine of the core Supervisor, and publish the six leg setpoints and the pose report.
+// Operator commands arrive on their topic; faults reported by other nodes put it in HOLD.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "hexa/comm/comm.hpp"
+#include "hexa/core/supervisor.hpp"
+#include "hexa/services/node.hpp"
+
+namespace hexa::task_space {
+
+struct SupervisorNodeOptions {
+  node::CommonOptions common;
+  std::string trajectory = "combined";  // paper motion name or CSV path (for --autostart)
+  int periods = 0;
+  bool autostart = false;
+  bool exit_when_done = false;
+  bool outer_loop = true;
+  bool least_squares = false;
+  double startup_timeout_s = 30.0;
+  double leg_lost_grace_s = 0.02;       // real time: a leg without samples this long + lease lost
+};
+
+class SupervisorNode {
+ public:
+  SupervisorNode(const SupervisorNodeOptions& options, const config::SystemConfig& config,
+                 std::shared_ptr<spdlog::logger> log);
+  int Run();
+
+ private:
+  bool WaitUntilMatched();
+  void TakeSensors();
+  bool TakeImu();
+  void TakeOperatorCommands();
+  void TakeFaults();
+  void TakeValveCommands();
+  void RunTick(std::uint64_t tick, double time_s);
+  void Publish(std::uint64_t tick, double time_s);
+  bool PrepareStart(const std::string& trajectory, int periods);
+  void PublishStatus(hexa_msg_NodeState state, const char* detail);
+
+  SupervisorNodeOptions options_;
+  std::shared_ptr<spdlog::logger> log_;
+  Supervisor supervisor_;
+  comm::Participant participant_;
+  comm::ShutdownGuard shutdown_;
+  comm::Topic<hexa_msg_LegSensors> sensors_topic_;
+  comm::Topic<hexa_msg_ImuSample> imu_topic_;
+  comm::Topic<hexa_msg_LegSetpoint> setpoint_topic_;
+  comm::Topic<hexa_msg_PoseReport> pose_topic_;
+  comm::Topic<hexa_msg_OperatorCommand> operator_topic_;
+  comm::Topic<hexa_msg_FaultEvent> fault_topic_;
+  comm::Topic<hexa_msg_ValveCommand> valve_topic_;
+  comm::Reader<hexa_msg_LegSensors> sensors_reader_;
+  comm::Reader<hexa_msg_ImuSample> imu_reader_;
+  comm::Reader<hexa_msg_OperatorCommand> operator_reader_;
+  comm::Reader<hexa_msg_FaultEvent> fault_reader_;
+  comm::Reader<hexa_msg_ValveCommand> valve_reader_;
+  comm::Writer<hexa_msg_LegSetpoint> setpoint_writer_;
+  comm::Writer<hexa_msg_PoseReport> pose_writer_;
+  node::StatusPublisher status_;
+  node::FaultPublisher faults_;
+  comm::WaitSet waitset_;
+
+  LegArray<hexa_msg_LegSensors> sensors_{};
+  LegArray<bool> sensors_seen_{};
+  LegArray<std::uint64_t> sensor_tick_at_last_run_{};
+  hexa_msg_ImuSample imu_{};
+  bool imu_seen_ = false;
+  std::uint64_t last_run_tick_ = 0;
+  bool ran_once_ = false;
+  int imu_misses_consecutive_ = 0;
+  LegArray<int> leg_misses_consecutive_{};
+  LegArray<FaultReason> leg_fault_{};
+  LegArray<dds_instance_handle_t> leg_writer_{};
+  LegArray<std::int64_t> leg_last_sample_ns_{};
+
+  SupervisorInput input_;
+  SupervisorOutput output_;
+  std::optional<StartRequest> pending_start_;
+  OperatorCommandKind pending_command_ = OperatorCommandKind::kNone;
+  bool autostart_pending_ = false;
+  bool left_idle_ = false;
+  int exit_code_ = -1;  // set when the service should exit
+  node::CycleTimeWindow cycle_times_;
+  std::uint64_t cycles_ = 0;
+};
+
+}  // namespace hexa::task_space
