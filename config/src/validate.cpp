@@ -449,6 +449,8 @@ void CheckSupervisor(Checker& c, const SupervisorParams& s, const CylinderParams
   c.Positive("supervisor.estimator_outlier_threshold_m", s.estimator_outlier_threshold_m, "outlier threshold");
   c.InClosed("supervisor.outer_loop.gain", s.outer_loop.gain, 0.0, 1.0, "outer-loop gain (fraction per step)");
   c.NonNegative("supervisor.outer_loop.max_correction_m", s.outer_loop.max_correction_m, "correction bound");
+  c.InClosed("supervisor.outer_loop.translation_gain_scale", s.outer_loop.translation_gain_scale, 0.0, 1.0,
+             "translation share of the outer-loop gain");
 }
 
 void CheckProfile(Checker& c, const DisturbanceProfile& p, const std::string& path, const AirParams& air) {

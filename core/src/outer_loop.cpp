@@ -15,6 +15,11 @@ OuterLoop::OuterLoop(const GeometryParams& geometry, const OuterLoopParams& para
     throw std::invalid_argument("OuterLoopParams.gain = " + std::to_string(params_.gain) +
                                 " must be finite and >= 0");
   }
+  if (!(params_.translation_gain_scale >= 0.0) || !std::isfinite(params_.translation_gain_scale)) {
+    throw std::invalid_argument("OuterLoopParams.translation_gain_scale = " +
+                                std::to_string(params_.translation_gain_scale) +
+                                " must be finite and >= 0");
+  }
   if (!(params_.max_correction_m >= 0.0) || !std::isfinite(params_.max_correction_m)) {
     throw std::invalid_argument("OuterLoopParams.max_correction_m = " +
                                 std::to_string(params_.max_correction_m) +
@@ -39,11 +44,17 @@ void OuterLoop::Update(const OuterLoopInput& input, OuterLoopOutput& output) noe
   Matrix6d J;
   LegJacobian(geometry_, input.desired, J);
   const Vector6d mapped = J * output.error;
-  const bool integrate = params_.enabled && !input.freeze && mapped.allFinite();
+  // What is integrated: translation and orientation errors weighted separately
+  // (docs/tuning.md, "Outer loop"); mapped_error_m stays the plain J e.
+  Vector6d weighted = output.error;
+  weighted.head<3>() *= params_.translation_gain_scale;
+  const Vector6d step = J * weighted;
+  const bool integrate = params_.enabled && !input.freeze && step.allFinite();
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     output.mapped_error_m[i] = mapped[static_cast<Eigen::Index>(i)];
     if (integrate) {
-      const double next = correction_m_[i] + params_.gain * output.mapped_error_m[i];
+      const double next =
+          correction_m_[i] + params_.gain * step[static_cast<Eigen::Index>(i)];
       correction_m_[i] = std::clamp(next, -params_.max_correction_m, params_.max_correction_m);
     }
     output.saturated[i] = std::abs(correction_m_[i]) >= params_.max_correction_m &&

@@ -153,6 +153,7 @@ void ExpectSupervisorEq(const hexa::SupervisorParams& a, const hexa::SupervisorP
   EXPECT_EQ(a.outer_loop.enabled, b.outer_loop.enabled);
   EXPECT_EQ(a.outer_loop.gain, b.outer_loop.gain);
   EXPECT_EQ(a.outer_loop.max_correction_m, b.outer_loop.max_correction_m);
+  EXPECT_EQ(a.outer_loop.translation_gain_scale, b.outer_loop.translation_gain_scale);
 }
 
 void ExpectProfileEq(const hexa::DisturbanceProfile& a, const hexa::DisturbanceProfile& b) {
@@ -228,8 +229,8 @@ TEST(RigConfigReference, CoreStructsHaveNotGrownPastTheSchema) {
   EXPECT_EQ(sizeof(hexa::BsSmcParams), 9 * sizeof(double));
   EXPECT_EQ(sizeof(hexa::PiParams), 3 * sizeof(double));
   EXPECT_EQ(sizeof(hexa::LegControllerParams), 16 * sizeof(double));
-  EXPECT_EQ(sizeof(hexa::OuterLoopParams), 3 * sizeof(double));
-  EXPECT_EQ(sizeof(hexa::SupervisorParams), 14 * sizeof(double));
+  EXPECT_EQ(sizeof(hexa::OuterLoopParams), 4 * sizeof(double));
+  EXPECT_EQ(sizeof(hexa::SupervisorParams), 15 * sizeof(double));
 }
 
 TEST(RigConfigReference, DefaultsBuiltInCodeAreValid) {

@@ -16,10 +16,10 @@ struct DifferentiatorParams {
 // Backstepping-sliding mode controller (Sec. 3.2, eq 19-45).
 struct BsSmcParams {
   double lambda_1_s = 120.0;            // sliding surface slope (eq 19)
-  double switching_gain_n = 30.0;       // K (eq 22, 30), as a force
+  double switching_gain_n = 90.0;       // K (eq 22, 30), as a force; platform grid (docs/tuning.md)
   double boundary_layer_xi_s_m = 10.0;  // xi in tanh(xi S) (eq 45); paper: 10
   double backstepping_beta_1_s = 100.0; // beta (eq 38)
-  double effective_mass_kg = 1.50;      // piston+rod 0.25 + platform 6/(6 cos^2 26.6deg) (docs)
+  double effective_mass_kg = 3.0;       // platform grid (docs/tuning.md); vertical-motion value 1.50
   double gravity_load_n = 13.2;         // along the leg at home: 6 g/(6 cos) + 0.25 g cos (docs)
   double viscous_estimate_scale = 1.0;  // B_hat = scale * Table 8 B (eq 21)
   double friction_estimate_scale = 1.0; // F_s, F_c estimate = scale * Table 8 (eq 14)
@@ -28,8 +28,8 @@ struct BsSmcParams {
 
 // PI baseline (paper ref [11]) with anti-windup.
 struct PiParams {
-  double proportional_v_m = 1600.0;      // valve volts per metre of length error
-  double integral_v_m_s = 250.0;         // valve volts per metre-second
+  double proportional_v_m = 100.0;       // valve volts per metre; platform grid (docs/tuning.md)
+  double integral_v_m_s = 30.0;          // valve volts per metre-second
   double integrator_limit_v = 2.0;      // anti-windup clamp of the integral term
 };
 
@@ -44,6 +44,11 @@ struct LegControllerParams {
 struct OuterLoopParams {
   bool enabled = true;
   double gain = 0.2;                    // fraction of the mapped error added per 5 ms step
+  // Scale of the TRANSLATION part of the pose error before the Jacobian mapping (the
+  // orientation part always uses `gain`). The position estimate (GQFK with the nominal
+  // geometry) is biased by the joint / potentiometer calibration errors it cannot observe,
+  // the orientation (IMU) is not: docs/tuning.md, "Outer loop".
+  double translation_gain_scale = 1.0;
   double max_correction_m = 0.005;      // per-leg bound of the accumulated correction
 };
 
