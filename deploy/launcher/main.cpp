@@ -154,8 +154,8 @@ int main(int argc, char** argv) {
   if (o.recorder) {
     ChildSpec r;
     r.name = "recorder";
-    r.argv = {bin + "/services/recorder/hexa_recorder", "record", "--out", mcap, "--domain",
-              std::to_string(o.domain), "--log-file", o.out_dir + "/recorder.log"};
+    r.argv = {bin + "/services/recorder/hexa_recorder", "record", "--output", mcap, "--domain",
+              std::to_string(o.domain)};
     r.env = env;
     r.log_path = o.out_dir + "/recorder.console.log";
     specs.push_back(r);
@@ -237,7 +237,11 @@ int main(int argc, char** argv) {
   if (completed && o.recorder) {
     ChildSpec r;
     r.name = "report";
-    r.argv = {bin + "/services/recorder/hexa_recorder", "report", mcap, "--out", o.out_dir};
+    r.argv = {bin + "/services/recorder/hexa_recorder", "report", mcap, "--out", o.out_dir,
+              "--meta", "trajectory=" + o.trajectory, "--meta", "controller=" + o.controller,
+              "--meta", "profile=" + o.profile, "--meta", "mode=" + o.mode,
+              "--meta", "seed=" + std::to_string(o.seed),
+              "--meta", std::string("outer_loop=") + (o.outer_loop ? "on" : "off")};
     r.env = env;
     r.log_path = o.out_dir + "/report.console.log";
     std::string err;

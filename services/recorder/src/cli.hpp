@@ -43,5 +43,6 @@ int RunRecover(const std::vector<std::string>& argv);
 int RunDiff(const std::vector<std::string>& argv);
 int RunRecord(const std::vector<std::string>& argv);
 int RunPlay(const std::vector<std::string>& argv);
+int RunReport(const std::vector<std::string>& argv);
 
 }  // namespace hexa::recorder::cli

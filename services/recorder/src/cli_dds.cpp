@@ -224,6 +224,15 @@ int RunRecord(const std::vector<std::string>& argv) {
   for (size_t i = 0; i < topics.size(); ++i)
     waitset.Attach(topics[i]->condition(), static_cast<dds_attach_t>(i + 1));
   writer.mcap().FlushChunk();  // header, schemas and channels reach the disk before any data
+  // Announce ourselves: the plant waits for a RUNNING recorder before its first tick when a
+  // session asks for one (docs/architecture.md), so nothing is missed at the start.
+  comm::Topic<hexa_msg_NodeStatus> status_topic(participant);
+  comm::Writer<hexa_msg_NodeStatus> status_writer(participant, status_topic);
+  hexa_msg_NodeStatus status{};
+  std::snprintf(status.node_name, sizeof status.node_name, "recorder");
+  std::snprintf(status.detail, sizeof status.detail, "recording %zu topics", topics.size());
+  status.state = hexa_msg_NODE_RUNNING;
+  status_writer.WriteNow(status);
   if (!quiet)
     std::fprintf(stderr, "record: domain %d, %zu topics -> %s\n",
                  static_cast<int>(participant.domain_id()), topics.size(), out.c_str());
@@ -250,6 +259,8 @@ int RunRecord(const std::vector<std::string>& argv) {
     }
   }
   for (auto& t : topics) t->Drain(writer);  // what arrived before the stop
+  status.state = hexa_msg_NODE_STOPPING;
+  status_writer.WriteNow(status);
   writer.Close();
 
   const double elapsed_s = static_cast<double>(comm::RealtimeNow_ns() - start_ns) * 1e-9;

@@ -1,0 +1,59 @@
+// The session report, computed from a recording alone: task-space RMSE per axis against
+// ground truth and against the measured pose (GQFK + IMU) over the supervisor's TRACKING
+// window (paper Tables 9 / 10), leg-length RMSE per leg, deadline misses per topic, control
+// round-trip latency (sensor sample written -> valve command written, same leg and tick),
+// wall and simulated time, faults. Same definitions as hexa::RunPaperSession.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "hexa/core/metrics.hpp"
+
+namespace hexa::recorder {
+
+struct SessionReport {
+  std::string recording;
+  std::map<std::string, std::string> meta;  // trajectory, controller, profile, mode, seed...
+  bool complete_file = false;
+  std::uint64_t pose_samples_tracking = 0;
+  std::array<double, 6> rmse_vs_truth{};      // m, m, m, rad, rad, rad
+  std::array<double, 6> relative_vs_truth{};  // RMSE / desired peak-to-peak; < 0: no motion
+  std::array<double, 6> rmse_vs_measured{};
+  std::array<double, 6> relative_vs_measured{};
+  std::array<double, 6> leg_length_rmse_m{};
+  std::array<double, 6> leg_length_max_abs_m{};
+  Percentiles latency_s;                      // sensor written -> command written
+  std::uint64_t latency_pairs = 0;
+  std::map<std::string, std::uint64_t> deadline_misses;  // per topic (from NodeStatus)
+  std::map<std::string, std::uint64_t> messages;         // per topic
+  std::map<std::string, std::uint64_t> missing;          // per periodic topic, from ticks
+  std::vector<std::string> faults;                       // FaultEvent lines
+  double wall_time_s = 0.0;   // first to last log time
+  double sim_time_s = 0.0;    // last ground-truth tick
+  std::string final_supervisor_state;
+  // Per-tick series for the plots (pose every 5 ms, legs every 1 ms).
+  struct PoseRow {
+    double time_s;
+    std::array<double, 6> desired, truth, measured;
+  };
+  struct LegRow {
+    double time_s;
+    std::array<double, 6> desired_length_m, measured_length_m, valve_v;
+  };
+  std::vector<PoseRow> pose_rows;
+  std::vector<LegRow> leg_rows;
+  // Valve voltages the plant applied, per tick (from GroundTruth), for bit-exact comparisons.
+  std::vector<std::array<double, 6>> applied_valve_v;
+};
+
+// Throws McapError / std::runtime_error with a message naming the file on a bad recording.
+SessionReport ComputeSessionReport(const std::string& recording_path);
+
+// Writes report.json, report.md, pose.csv, legs.csv into `out_dir`.
+void WriteSessionReport(const SessionReport& report, const std::string& out_dir);
+
+}  // namespace hexa::recorder

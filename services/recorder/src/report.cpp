@@ -1,0 +1,410 @@
+#include "hexa/recorder/report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include <Eigen/Geometry>
+
+#include "hexa/core/pose.hpp"
+#include "hexa/recorder/recording.hpp"
+#include "recording.pb.h"
+
+namespace hexa::recorder {
+namespace {
+
+constexpr double kTickS = 0.001;
+constexpr double kRadToDeg = 57.29577951308232;
+
+template <typename T>
+T Parse(const McapMessageView& view, const std::string& topic) {
+  T msg;
+  if (!msg.ParseFromArray(view.data.data(), static_cast<int>(view.data.size())))
+    throw std::runtime_error("cannot parse a message of " + topic);
+  return msg;
+}
+
+template <typename Rep>
+std::array<double, 6> Six(const Rep& r) {
+  std::array<double, 6> a{};
+  for (int i = 0; i < 6 && i < r.size(); ++i) a[i] = r.Get(i);
+  return a;
+}
+
+Vector6d ToVec(const std::array<double, 6>& a) {
+  Vector6d v;
+  for (int i = 0; i < 6; ++i) v[i] = a[i];
+  return v;
+}
+
+std::string SupervisorStateName(int s) {
+  static const char* kNames[] = {"IDLE", "BLENDING", "TRACKING", "STOPPING", "HOLD"};
+  return s >= 0 && s < 5 ? kNames[s] : "UNKNOWN";
+}
+
+struct TickSlot {
+  bool truth = false;
+  std::array<double, 6> truth_pose{};
+  std::array<double, 6> applied_v{};
+  std::array<bool, 6> sensor{};
+  std::array<double, 6> sensor_length_m{};
+  std::array<int64_t, 6> sensor_time_ns{};
+  std::array<bool, 6> command{};
+  std::array<double, 6> command_desired_m{};
+  std::array<double, 6> command_v{};
+  std::array<int64_t, 6> command_time_ns{};
+};
+
+}  // namespace
+
+SessionReport ComputeSessionReport(const std::string& path) {
+  SessionReport r;
+  r.recording = path;
+  std::vector<TickSlot> ticks;
+  auto slot = [&](uint64_t tick) -> TickSlot& {
+    if (tick > 50'000'000) throw std::runtime_error(path + ": tick " + std::to_string(tick) + " is implausible");
+    if (ticks.size() <= tick) ticks.resize(tick + 1);
+    return ticks[tick];
+  };
+  struct PoseSample {
+    uint64_t tick;
+    int state;
+    std::array<double, 6> desired, estimated;
+  };
+  std::vector<PoseSample> poses;
+  std::map<std::string, rec::NodeStatus> last_status;
+  uint64_t first_log = UINT64_MAX, last_log = 0;
+
+  const McapScanResult scan = ReadRecording(
+      path, [&](const McapChannel& ch, const McapMessageView& view, const google::protobuf::Message&) {
+        first_log = std::min(first_log, view.log_time_ns);
+        last_log = std::max(last_log, view.log_time_ns);
+        ++r.messages[ch.topic];
+        if (ch.topic == "hexa_GroundTruth") {
+          const auto g = Parse<rec::GroundTruth>(view, ch.topic);
+          TickSlot& s = slot(g.header().tick());
+          const Eigen::Quaterniond q(g.orientation_wxyz(0), g.orientation_wxyz(1),
+                                     g.orientation_wxyz(2), g.orientation_wxyz(3));
+          Pose pose;
+          pose.p_BP_B_m = {g.position_m(0), g.position_m(1), g.position_m(2)};
+          pose.R_BP = q.toRotationMatrix();
+          const Vector6d v = VectorFromPose(pose);
+          for (int i = 0; i < 6; ++i) s.truth_pose[i] = v[i];
+          s.applied_v = Six(g.applied_valve_v());
+          s.truth = true;
+        } else if (ch.topic == "hexa_LegSensors") {
+          const auto m = Parse<rec::LegSensors>(view, ch.topic);
+          if (m.leg_id() < 1 || m.leg_id() > 6) return;
+          TickSlot& s = slot(m.header().tick());
+          const int i = static_cast<int>(m.leg_id()) - 1;
+          if (s.sensor[i]) return;  // a lockstep re-send of the same tick: keep the first
+          s.sensor[i] = true;
+          s.sensor_length_m[i] = m.length_m();
+          s.sensor_time_ns[i] = m.header().source_time_ns();
+        } else if (ch.topic == "hexa_ValveCommand") {
+          const auto m = Parse<rec::ValveCommand>(view, ch.topic);
+          if (m.leg_id() < 1 || m.leg_id() > 6) return;
+          TickSlot& s = slot(m.header().tick());
+          const int i = static_cast<int>(m.leg_id()) - 1;
+          if (s.command[i]) return;
+          s.command[i] = true;
+          s.command_desired_m[i] = m.desired_length_m();
+          s.command_v[i] = m.valve_v();
+          s.command_time_ns[i] = m.header().source_time_ns();
+        } else if (ch.topic == "hexa_PoseReport") {
+          const auto m = Parse<rec::PoseReport>(view, ch.topic);
+          poses.push_back({m.header().tick(), static_cast<int>(m.state()), Six(m.desired_pose()),
+                           Six(m.estimated_pose())});
+        } else if (ch.topic == "hexa_NodeStatus") {
+          const auto m = Parse<rec::NodeStatus>(view, ch.topic);
+          last_status[m.node_name()] = m;
+        } else if (ch.topic == "hexa_FaultEvent") {
+          const auto m = Parse<rec::FaultEvent>(view, ch.topic);
+          std::ostringstream os;
+          os << m.source_node() << ": leg " << m.leg_id() << " tick " << m.tick() << " "
+             << rec::FaultReason_Name(m.reason()) << ": " << m.detail();
+          r.faults.push_back(os.str());
+        }
+      });
+  r.complete_file = scan.complete;
+  if (first_log <= last_log) r.wall_time_s = static_cast<double>(last_log - first_log) * 1e-9;
+
+  // Task space over the TRACKING window, at the supervisor ticks.
+  std::sort(poses.begin(), poses.end(), [](const auto& a, const auto& b) { return a.tick < b.tick; });
+  AxisErrorAccumulator vs_truth, vs_measured;
+  for (const auto& p : poses) {
+    if (p.tick < ticks.size() && ticks[p.tick].truth) {
+      r.pose_rows.push_back({p.tick * kTickS, p.desired, ticks[p.tick].truth_pose, p.estimated});
+      if (p.state == 2) {
+        vs_truth.Add(ToVec(p.desired), ToVec(ticks[p.tick].truth_pose));
+        vs_measured.Add(ToVec(p.desired), ToVec(p.estimated));
+      }
+    }
+  }
+  if (!poses.empty()) r.final_supervisor_state = SupervisorStateName(poses.back().state);
+  r.pose_samples_tracking = vs_truth.count();
+  r.rmse_vs_truth = vs_truth.Rmse();
+  r.relative_vs_truth = vs_truth.RelativeError();
+  r.rmse_vs_measured = vs_measured.Rmse();
+  r.relative_vs_measured = vs_measured.RelativeError();
+
+  // Joint space: each tick takes the supervisor state of the newest pose report at or
+  // before it (the state the legs' setpoints came from).
+  std::array<ScalarErrorAccumulator, 6> legs;
+  std::vector<double> latencies;
+  std::size_t pose_index = 0;
+  int state = -1;
+  for (uint64_t tick = 0; tick < ticks.size(); ++tick) {
+    while (pose_index < poses.size() && poses[pose_index].tick <= tick) state = poses[pose_index++].state;
+    const TickSlot& s = ticks[tick];
+    SessionReport::LegRow row{tick * kTickS, {}, {}, {}};
+    bool any = false;
+    for (int i = 0; i < 6; ++i) {
+      if (s.command[i] && s.sensor[i]) {
+        latencies.push_back(static_cast<double>(s.command_time_ns[i] - s.sensor_time_ns[i]) * 1e-9);
+        if (state == 2) legs[i].Add(s.command_desired_m[i], s.sensor_length_m[i]);
+      }
+      row.desired_length_m[i] = s.command[i] ? s.command_desired_m[i] : std::nan("");
+      row.measured_length_m[i] = s.sensor[i] ? s.sensor_length_m[i] : std::nan("");
+      row.valve_v[i] = s.truth ? s.applied_v[i] : std::nan("");
+      any = any || s.sensor[i] || s.command[i];
+    }
+    if (any) r.leg_rows.push_back(row);
+    if (s.truth) {
+      r.applied_valve_v.resize(tick + 1);
+      r.applied_valve_v[tick] = s.applied_v;
+      r.sim_time_s = tick * kTickS;
+    }
+  }
+  for (int i = 0; i < 6; ++i) {
+    r.leg_length_rmse_m[i] = legs[i].Rmse();
+    r.leg_length_max_abs_m[i] = legs[i].MaxAbs();
+  }
+  r.latency_pairs = latencies.size();
+  r.latency_s = ComputePercentiles(std::move(latencies));
+
+  // Deadline misses as each reader counted them (NodeStatus of the reading node).
+  for (const auto& [node, st] : last_status) {
+    std::string topic;
+    if (node == "plant") topic = "hexa_ValveCommand (plant)";
+    else if (node.rfind("leg", 0) == 0) topic = "hexa_LegSensors (leg controllers)";
+    else if (node == "supervisor") topic = "hexa_ImuSample (supervisor)";
+    else continue;
+    r.deadline_misses[topic] += st.deadline_missed_total();
+  }
+  const RecordingInfo info = Inspect(path, McapScanOptions{true, true});
+  for (const auto& ch : info.channels)
+    if (ch.loss_analysed) r.missing[ch.topic] = ch.missing;
+  return r;
+}
+
+namespace {
+
+const char* kAxes[6] = {"x", "y", "z", "roll", "pitch", "yaw"};
+
+// Paper Table 9 (pure motions, the moving axis) and Table 10 (combined), in cm and deg.
+bool PaperValue(const std::string& trajectory, int axis, double& value) {
+  static const double kTable9[6] = {0.782, 0.841, 0.197, 1.012, 1.346, 1.836};
+  static const double kTable10[6] = {0.845, 1.205, 0.296, 1.193, 1.817, 2.433};
+  if (trajectory == "combined") {
+    value = kTable10[axis];
+    return true;
+  }
+  for (int i = 0; i < 6; ++i) {
+    if (trajectory == kAxes[i] && i == axis) {
+      value = kTable9[i];
+      return true;
+    }
+  }
+  return false;
+}
+
+std::string Json(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+
+std::string JsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) {
+      out += ' ';
+      continue;
+    }
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string AxisJson(const std::array<double, 6>& a, bool relative) {
+  std::ostringstream os;
+  os << "{";
+  for (int i = 0; i < 6; ++i) {
+    os << (i ? ", " : "") << "\"" << kAxes[i] << (relative ? "" : (i < 3 ? "_m" : "_rad"))
+       << "\": " << (relative && a[i] < 0 ? "null" : Json(a[i]));
+  }
+  return os.str() + "}";
+}
+
+}  // namespace
+
+void WriteSessionReport(const SessionReport& r, const std::string& dir) {
+  const auto meta = [&](const char* k) {
+    auto it = r.meta.find(k);
+    return it == r.meta.end() ? std::string() : it->second;
+  };
+  const std::string trajectory = meta("trajectory");
+  {
+    std::ofstream j(dir + "/report.json");
+    if (!j) throw std::runtime_error("cannot write " + dir + "/report.json");
+    j << "{\n  \"recording\": " << JsonString(r.recording) << ",\n  \"session\": {";
+    bool first = true;
+    for (const auto& [k, v] : r.meta) {
+      j << (first ? "" : ", ") << JsonString(k) << ": " << JsonString(v);
+      first = false;
+    }
+    j << "},\n  \"recording_complete\": " << (r.complete_file ? "true" : "false")
+      << ",\n  \"final_supervisor_state\": " << JsonString(r.final_supervisor_state)
+      << ",\n  \"tracking_pose_samples\": " << r.pose_samples_tracking
+      << ",\n  \"rmse_vs_ground_truth\": " << AxisJson(r.rmse_vs_truth, false)
+      << ",\n  \"relative_error_vs_ground_truth\": " << AxisJson(r.relative_vs_truth, true)
+      << ",\n  \"rmse_vs_measured_pose\": " << AxisJson(r.rmse_vs_measured, false)
+      << ",\n  \"relative_error_vs_measured_pose\": " << AxisJson(r.relative_vs_measured, true)
+      << ",\n  \"leg_length_rmse_m\": [";
+    for (int i = 0; i < 6; ++i) j << (i ? ", " : "") << Json(r.leg_length_rmse_m[i]);
+    j << "],\n  \"leg_length_max_abs_error_m\": [";
+    for (int i = 0; i < 6; ++i) j << (i ? ", " : "") << Json(r.leg_length_max_abs_m[i]);
+    j << "],\n  \"deadline_misses\": {";
+    first = true;
+    for (const auto& [k, v] : r.deadline_misses) {
+      j << (first ? "" : ", ") << JsonString(k) << ": " << v;
+      first = false;
+    }
+    j << "},\n  \"missing_samples\": {";
+    first = true;
+    for (const auto& [k, v] : r.missing) {
+      j << (first ? "" : ", ") << JsonString(k) << ": " << v;
+      first = false;
+    }
+    j << "},\n  \"messages\": {";
+    first = true;
+    for (const auto& [k, v] : r.messages) {
+      j << (first ? "" : ", ") << JsonString(k) << ": " << v;
+      first = false;
+    }
+    j << "},\n  \"control_round_trip_latency_s\": {\"count\": " << r.latency_pairs
+      << ", \"median\": " << Json(r.latency_s.median) << ", \"p99\": " << Json(r.latency_s.p99)
+      << ", \"max\": " << Json(r.latency_s.max) << "},\n  \"wall_time_s\": " << Json(r.wall_time_s)
+      << ",\n  \"sim_time_s\": " << Json(r.sim_time_s) << ",\n  \"faults\": [";
+    for (std::size_t i = 0; i < r.faults.size(); ++i) j << (i ? ", " : "") << JsonString(r.faults[i]);
+    j << "]\n}\n";
+  }
+  {
+    std::ofstream m(dir + "/report.md");
+    if (!m) throw std::runtime_error("cannot write " + dir + "/report.md");
+    m << "# Session report\n\n";
+    for (const auto& [k, v] : r.meta) m << "- " << k << ": " << v << "\n";
+    m << "- recording: `" << r.recording << "`" << (r.complete_file ? "" : " (INCOMPLETE FILE)")
+      << "\n- simulated time " << Json(r.sim_time_s) << " s, wall time " << Json(r.wall_time_s)
+      << " s\n- final supervisor state: " << r.final_supervisor_state
+      << "\n- tracking window: " << r.pose_samples_tracking << " pose samples (5 ms)\n\n";
+    m << "## Task-space RMSE over the tracking window (paper Table 9 / 10 layout)\n\n";
+    m << "| | X cm | Y cm | Z cm | rot X deg | rot Y deg | rot Z deg |\n|---|---|---|---|---|---|---|\n";
+    auto row = [&](const char* name, const std::array<double, 6>& a, bool rel) {
+      m << "| " << name;
+      for (int i = 0; i < 6; ++i) {
+        char buf[32];
+        if (rel) {
+          if (a[i] < 0) std::snprintf(buf, sizeof buf, "-");
+          else std::snprintf(buf, sizeof buf, "%.2f%%", 100 * a[i]);
+        } else {
+          std::snprintf(buf, sizeof buf, "%.3f", a[i] * (i < 3 ? 100.0 : kRadToDeg));
+        }
+        m << " | " << buf;
+      }
+      m << " |\n";
+    };
+    row("RMSE vs ground truth", r.rmse_vs_truth, false);
+    row("relative error vs ground truth", r.relative_vs_truth, true);
+    row("RMSE vs measured pose (GQFK + IMU)", r.rmse_vs_measured, false);
+    row("relative error vs measured pose", r.relative_vs_measured, true);
+    bool any_paper = false;
+    std::array<double, 6> paper{};
+    for (int i = 0; i < 6; ++i) {
+      double v = 0;
+      if (PaperValue(trajectory, i, v)) {
+        paper[i] = v / (i < 3 ? 100.0 : kRadToDeg);
+        any_paper = true;
+      } else {
+        paper[i] = std::nan("");
+      }
+    }
+    if (any_paper) {
+      m << "| paper (Table " << (trajectory == "combined" ? "10" : "9") << ")";
+      for (int i = 0; i < 6; ++i) {
+        char buf[32];
+        if (std::isnan(paper[i])) std::snprintf(buf, sizeof buf, "-");
+        else std::snprintf(buf, sizeof buf, "%.3f", paper[i] * (i < 3 ? 100.0 : kRadToDeg));
+        m << " | " << buf;
+      }
+      m << " |\n";
+    }
+    m << "\nRelative error = RMSE / peak-to-peak of the desired motion on that axis (the paper "
+         "does not define its own); '-' = no motion on that axis.\n\n";
+    m << "## Leg-length RMSE (desired incl. outer-loop correction vs potentiometer)\n\n"
+         "| leg | 1 | 2 | 3 | 4 | 5 | 6 |\n|---|---|---|---|---|---|---|\n| RMSE mm";
+    for (double v : r.leg_length_rmse_m) m << " | " << Json(1000 * v).substr(0, 6);
+    m << " |\n| max mm";
+    for (double v : r.leg_length_max_abs_m) m << " | " << Json(1000 * v).substr(0, 6);
+    m << " |\n\n## Timing\n\n";
+    m << "- control round trip (sensor sample written -> valve command written, same leg and "
+         "tick): median "
+      << Json(r.latency_s.median * 1e6) << " us, p99 " << Json(r.latency_s.p99 * 1e6) << " us, max "
+      << Json(r.latency_s.max * 1e6) << " us over " << r.latency_pairs << " pairs\n";
+    for (const auto& [k, v] : r.deadline_misses) m << "- deadline misses " << k << ": " << v << "\n";
+    for (const auto& [k, v] : r.missing) m << "- samples missing (from tick numbers) " << k << ": " << v << "\n";
+    m << "\n## Faults\n\n";
+    if (r.faults.empty()) m << "none\n";
+    for (const auto& f : r.faults) m << "- " << f << "\n";
+    m << "\n## Plots\n\npose_tracking.png, pose_error.png, leg_lengths.png, valve_voltages.png, "
+         "path_3d.png\n";
+  }
+  {
+    std::ofstream p(dir + "/pose.csv");
+    p << "time_s";
+    for (const char* w : {"desired", "true", "measured"})
+      for (const char* a : kAxes) p << "," << w << "_" << a;
+    p << "\n";
+    char buf[32];
+    for (const auto& row : r.pose_rows) {
+      std::snprintf(buf, sizeof buf, "%.3f", row.time_s);
+      p << buf;
+      for (const auto* arr : {&row.desired, &row.truth, &row.measured})
+        for (double v : *arr) p << "," << Json(v);
+      p << "\n";
+    }
+  }
+  {
+    std::ofstream l(dir + "/legs.csv");
+    l << "time_s";
+    for (const char* w : {"desired_length_m_", "measured_length_m_", "valve_v_"})
+      for (int i = 1; i <= 6; ++i) l << "," << w << i;
+    l << "\n";
+    char buf[32];
+    for (const auto& row : r.leg_rows) {
+      std::snprintf(buf, sizeof buf, "%.3f", row.time_s);
+      l << buf;
+      for (const auto* arr : {&row.desired_length_m, &row.measured_length_m, &row.valve_v})
+        for (double v : *arr) l << "," << (std::isnan(v) ? "nan" : Json(v));
+      l << "\n";
+    }
+  }
+}
+
+}  // namespace hexa::recorder
