@@ -1,6 +1,7 @@
 // Issue "One command runs a whole session": a short session end to end in lockstep, through
 // the launcher (nine processes + recorder over DDS), checked against fixed bounds, and
 // checked bit for bit against the in-process lockstep simulation of the same configuration.
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -9,8 +10,6 @@
 #include <fstream>
 #include <sstream>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "hexa/config/rig_config.hpp"
 #include "hexa/core/lockstep_simulation.hpp"
@@ -32,11 +31,13 @@ std::string Slurp(const std::string& path) {
   return ss.str();
 }
 
-class SessionTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    dir_ = ::testing::TempDir() + "/session_" + std::to_string(getpid());
-    std::filesystem::create_directories(dir_);
+// One session, three checks (one process: a second session on the same domain id would
+// meet this one).
+TEST(Session, CombinedLockstepEndToEnd) {
+  const std::string dir_ = ::testing::TempDir() + "/session_" + std::to_string(getpid());
+  std::filesystem::create_directories(dir_);
+  int exit_code_ = -1;
+  {
     ProcessGroup group;
     std::string err;
     ChildSpec s{"session",
@@ -48,53 +49,43 @@ class SessionTest : public ::testing::Test {
     auto ev = group.WaitEvent(300s);
     ASSERT_EQ(ev.kind, ProcessGroup::Event::kChildExited) << "session did not end";
     exit_code_ = ev.exit.signal == 0 ? ev.exit.exit_code : 128 + ev.exit.signal;
-    if (std::filesystem::exists(dir_ + "/session.mcap"))
-      report_ = hexa::recorder::ComputeSessionReport(dir_ + "/session.mcap");
   }
-  static std::string dir_;
-  static int exit_code_;
-  static hexa::recorder::SessionReport report_;
-};
-std::string SessionTest::dir_;
-int SessionTest::exit_code_ = -1;
-hexa::recorder::SessionReport SessionTest::report_;
-
-TEST_F(SessionTest, CompletesAndWritesEveryOutput) {
   ASSERT_EQ(exit_code_, 0) << Slurp(dir_ + "/session.log");
-  for (const char* f : {"session.mcap", "report.md", "report.json", "pose.csv", "legs.csv",
-                        "pose_tracking.png", "pose_error.png", "leg_lengths.png",
-                        "valve_voltages.png", "path_3d.png", "plant.log", "leg1.log",
-                        "supervisor.log", "session.log"}) {
-    EXPECT_TRUE(std::filesystem::exists(dir_ + "/" + f)) << f;
+  const auto report_ = hexa::recorder::ComputeSessionReport(dir_ + "/session.mcap");
+  {
+    SCOPED_TRACE("every output is written");
+    for (const char* f :
+         {"session.mcap", "report.md", "report.json", "pose.csv", "legs.csv", "pose_tracking.png",
+          "pose_error.png", "leg_lengths.png", "valve_voltages.png", "path_3d.png", "plant.log",
+          "leg1.log", "supervisor.log", "session.log"}) {
+      EXPECT_TRUE(std::filesystem::exists(dir_ + "/" + f)) << f;
+    }
+    const std::string json = Slurp(dir_ + "/report.json");
+    for (const char* key :
+         {"\"rmse_vs_ground_truth\"", "\"rmse_vs_measured_pose\"", "\"leg_length_rmse_m\"",
+          "\"deadline_misses\"", "\"control_round_trip_latency_s\"", "\"wall_time_s\"",
+          "\"sim_time_s\""}) {
+      EXPECT_NE(json.find(key), std::string::npos) << key;
+    }
   }
-  const std::string json = Slurp(dir_ + "/report.json");
-  for (const char* key : {"\"rmse_vs_ground_truth\"", "\"rmse_vs_measured_pose\"",
-                          "\"leg_length_rmse_m\"", "\"deadline_misses\"",
-                          "\"control_round_trip_latency_s\"", "\"wall_time_s\"", "\"sim_time_s\""}) {
-    EXPECT_NE(json.find(key), std::string::npos) << key;
+  {
+    SCOPED_TRACE("report figures within bounds");
+    const auto& r = report_;
+    EXPECT_TRUE(r.complete_file);
+    EXPECT_EQ(r.final_supervisor_state, "IDLE");
+    // One 1 s period of eq 49 at 5 ms: 200 tracking samples.
+    EXPECT_EQ(r.pose_samples_tracking, 200u);
+    // Bounds: a working loop tracks the 8 cm circle to about a centimetre (docs/results.md has
+    // the measured figures); a broken one is off by the full amplitude.
+    for (int i = 0; i < 3; ++i) EXPECT_LT(r.rmse_vs_truth[i], 0.025) << "axis " << i;
+    for (int i = 3; i < 6; ++i) EXPECT_LT(r.rmse_vs_truth[i], 0.06) << "axis " << i;
+    for (int i = 0; i < 6; ++i) EXPECT_LT(r.leg_length_rmse_m[i], 0.03) << "leg " << i + 1;
+    for (const auto& [topic, missing] : r.missing) EXPECT_EQ(missing, 0u) << topic;
+    EXPECT_TRUE(r.faults.empty()) << r.faults.front();
+    EXPECT_GT(r.latency_pairs, 6u * 3000u);
+    EXPECT_GT(r.sim_time_s, 3.5);
   }
-}
-
-TEST_F(SessionTest, ReportFiguresWithinBounds) {
-  ASSERT_EQ(exit_code_, 0);
-  const auto& r = report_;
-  EXPECT_TRUE(r.complete_file);
-  EXPECT_EQ(r.final_supervisor_state, "IDLE");
-  // One 1 s period of eq 49 at 5 ms: 200 tracking samples.
-  EXPECT_EQ(r.pose_samples_tracking, 200u);
-  // Bounds: a working loop tracks the 8 cm circle to about a centimetre (docs/results.md has
-  // the measured figures); a broken one is off by the full amplitude.
-  for (int i = 0; i < 3; ++i) EXPECT_LT(r.rmse_vs_truth[i], 0.025) << "axis " << i;
-  for (int i = 3; i < 6; ++i) EXPECT_LT(r.rmse_vs_truth[i], 0.06) << "axis " << i;
-  for (int i = 0; i < 6; ++i) EXPECT_LT(r.leg_length_rmse_m[i], 0.03) << "leg " << i + 1;
-  for (const auto& [topic, missing] : r.missing) EXPECT_EQ(missing, 0u) << topic;
-  EXPECT_TRUE(r.faults.empty()) << r.faults.front();
-  EXPECT_GT(r.latency_pairs, 6u * 3000u);
-  EXPECT_GT(r.sim_time_s, 3.5);
-}
-
-TEST_F(SessionTest, DdsLockstepEqualsTheInProcessSimulationBitForBit) {
-  ASSERT_EQ(exit_code_, 0);
+  SCOPED_TRACE("the DDS session equals the in-process lockstep simulation bit for bit");
   const auto cfg = hexa::config::LoadSystemConfigOrThrow(hexa::config::DefaultRigFile());
   hexa::LockstepConfig lc;
   lc.rig = cfg.rig;
@@ -104,7 +95,8 @@ TEST_F(SessionTest, DdsLockstepEqualsTheInProcessSimulationBitForBit) {
   lc.seed = 3;
   hexa::LockstepSimulation sim(lc);
   sim.Tick();  // tick 0: the supervisor latches the rest pose (as the service does)
-  const hexa::StartRequest start = sim.supervisor().PreparePaperStart(hexa::PaperMotion::kCombined, 1);
+  const hexa::StartRequest start =
+      sim.supervisor().PreparePaperStart(hexa::PaperMotion::kCombined, 1);
   // GroundTruth(n + 1) carries the voltages the plant applied during step n.
   const auto& applied = report_.applied_valve_v;
   ASSERT_GT(applied.size(), 3000u);
