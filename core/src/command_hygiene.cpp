@@ -7,6 +7,7 @@ namespace hexa {
 const char* ToString(CommandCheck check) {
   switch (check) {
     case CommandCheck::kOk: return "ok";
+    case CommandCheck::kAwaitingFirst: return "awaiting first command";
     case CommandCheck::kMissing: return "missing";
     case CommandCheck::kStale: return "stale";
     case CommandCheck::kNotFinite: return "not finite";
@@ -27,7 +28,10 @@ CommandHygieneParams CommandHygieneParams::FromValve(const ValveParams& valve,
 
 CommandCheck CheckCommand(const LatestCommand& command, std::uint64_t current_tick,
                           const CommandHygieneParams& params) {
-  if (!command.received) return CommandCheck::kMissing;
+  if (!command.received) {
+    return current_tick <= params.stale_tolerance_ticks ? CommandCheck::kAwaitingFirst
+                                                        : CommandCheck::kMissing;
+  }
   // A command from the future (tick beyond the plant's) is as wrong as an old one.
   if (command.answered_tick > current_tick ||
       current_tick - command.answered_tick > params.stale_tolerance_ticks) {

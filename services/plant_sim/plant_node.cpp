@@ -21,7 +21,8 @@ hexa_msg_FaultReason FaultOf(CommandCheck check) {
     case CommandCheck::kStale: return hexa_msg_FAULT_COMMAND_STALE;
     case CommandCheck::kNotFinite: return hexa_msg_FAULT_COMMAND_NOT_FINITE;
     case CommandCheck::kOutOfRange: return hexa_msg_FAULT_COMMAND_OUT_OF_RANGE;
-    case CommandCheck::kOk: break;
+    case CommandCheck::kOk:
+    case CommandCheck::kAwaitingFirst: break;
   }
   return hexa_msg_FAULT_NONE;
 }
@@ -259,7 +260,9 @@ void PlantNode::ApplyAndStep(std::uint64_t stale_tolerance) {
     const CommandCheck check = CheckCommand(latest_[i], tick_, hygiene_);
     valve_v[i] = SafeValveVoltage(latest_[i], check, hygiene_);
     if (check != last_check_[i]) {
-      if (check != CommandCheck::kOk) {
+      if (check == CommandCheck::kAwaitingFirst) {
+        // Start-up: the controller has not had its tolerance to answer yet.
+      } else if (check != CommandCheck::kOk) {
         char detail[160];
         std::snprintf(detail, sizeof detail, "valve command %s (%.6g V, answers tick %llu): valve held at null",
                       ToString(check), latest_[i].valve_v,
@@ -333,7 +336,17 @@ int PlantNode::Run() {
     }
     ++tick_;
     if (!realtime) cycle_times_.Add(static_cast<double>(node::MonotonicNow_ns() - t0) * 1e-9);
-    if (tick_ % 100 == 0) PublishStatus(hexa_msg_NODE_RUNNING, realtime ? "real time" : "lockstep");
+    if (tick_ % 100 == 0) {
+      PublishStatus(hexa_msg_NODE_RUNNING, realtime ? "real time" : "lockstep");
+      // Faults still in effect are repeated at the status rate, so that a supervisor reset
+      // while the cause persists sees the fault again.
+      for (std::size_t i = 0; i < kNumLegs; ++i) {
+        if (last_check_[i] == CommandCheck::kOk || last_check_[i] == CommandCheck::kAwaitingFirst)
+          continue;
+        faults_.Publish(static_cast<uint8_t>(i + 1), tick_, FaultOf(last_check_[i]),
+                        "valve command still invalid: valve held at null");
+      }
+    }
   }
   uint32_t faults = 0;
   for (auto f : faults_per_leg_) faults += f;

@@ -250,6 +250,20 @@ void SupervisorNode::RunTick(std::uint64_t tick, double time_s) {
     PublishStatus(hexa_msg_NODE_HOLD, output_.fault_detail.data());
     if (options_.exit_when_done) exit_code_ = 5;
   }
+  if (!was_initialized_ && supervisor_.initialized()) {
+    was_initialized_ = true;
+    const Vector6d& rest = supervisor_.rest_xyz_rpy();
+    log_->info("pose estimate available at t = {:.3f} s: rest pose ({:.4f}, {:.4f}, {:.4f}) m, "
+               "({:.3f}, {:.3f}, {:.3f}) deg", time_s, rest[0], rest[1], rest[2],
+               rest[3] * 57.29577951308232, rest[4] * 57.29577951308232, rest[5] * 57.29577951308232);
+  } else if (!supervisor_.initialized() && cycles_ % 200 == 1) {
+    log_->warn("no valid pose estimate yet ({}): IMU q = ({:.4f} {:.4f} {:.4f} {:.4f}), leg "
+               "lengths [{:.4f} {:.4f} {:.4f} {:.4f} {:.4f} {:.4f}] m",
+               ToString(output_.estimate.status), input_.orientation_wxyz[0],
+               input_.orientation_wxyz[1], input_.orientation_wxyz[2], input_.orientation_wxyz[3],
+               input_.length_m[0], input_.length_m[1], input_.length_m[2], input_.length_m[3],
+               input_.length_m[4], input_.length_m[5]);
+  }
   if (autostart_pending_ && supervisor_.initialized()) {
     autostart_pending_ = false;
     // A rejected trajectory is passed on all the same: the core goes to HOLD with the

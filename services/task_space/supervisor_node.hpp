@@ -87,6 +87,7 @@ class SupervisorNode {
   OperatorCommandKind pending_command_ = OperatorCommandKind::kNone;
   bool autostart_pending_ = false;
   bool left_idle_ = false;
+  bool was_initialized_ = false;
   int exit_code_ = -1;  // set when the service should exit
   node::CycleTimeWindow cycle_times_;
   std::uint64_t cycles_ = 0;

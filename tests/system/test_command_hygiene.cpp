@@ -31,6 +31,7 @@ TEST(CommandHygiene, EveryBadCommandGivesNull) {
   const double inf = std::numeric_limits<double>::infinity();
   const Case cases[] = {
       {{false, 0, 6.0}, 10, CommandCheck::kMissing},
+      {{false, 0, 6.0}, 3, CommandCheck::kAwaitingFirst},  // start-up, within tolerance
       {{true, 6, 6.0}, 10, CommandCheck::kStale},       // 4 ticks old, tolerance 3
       {{true, 11, 6.0}, 10, CommandCheck::kStale},      // from the future
       {{true, 10, nan}, 10, CommandCheck::kNotFinite},

@@ -12,7 +12,8 @@ namespace hexa {
 
 enum class CommandCheck : std::uint8_t {
   kOk,
-  kMissing,     // no command for this leg yet / beyond the deadline tolerance
+  kAwaitingFirst,  // no command yet, still within the tolerance after start: null, no fault
+  kMissing,     // no command for this leg beyond the tolerance after start
   kStale,       // the command answers a tick older than the tolerance
   kNotFinite,   // NaN or infinite voltage
   kOutOfRange,  // outside [min_voltage_v, max_voltage_v]
