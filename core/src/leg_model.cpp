@@ -113,7 +113,11 @@ LegModelParams MakeLegModelParams(const RigParams& rig, double friction_scale,
 
 LegModel::LegModel(const LegModelParams& params)
     : params_(params),
-      orifice_(params.air, params.valve.discharge_coefficient, params.laminar_pressure_ratio) {}
+      orifice_(params.air, params.valve.discharge_coefficient, params.laminar_pressure_ratio),
+      inv_stribeck_extend_s_m_(1.0 / params.friction.extend.stribeck_velocity_m_s),
+      inv_stribeck_retract_s_m_(1.0 / params.friction.retract.stribeck_velocity_m_s),
+      inv_fade_velocity_s_m_(1.0 / params.lugre_damping_fade_velocity_m_s),
+      gas_rt_j_kg_(params.air.gas_constant_j_kg_k * params.air.temperature_k) {}
 
 void LegModel::Evaluate(const LegPneumaticState& s, double x, double v,
                         double spool_target_m, double supply_pressure_pa,
@@ -129,8 +133,20 @@ void LegModel::Evaluate(const LegPneumaticState& s, double x, double v,
   LugreOutput lugre;
   if (params_.friction_enabled) {
     if (params_.friction_model == LegModelParams::FrictionModel::kLugre) {
-      lugre = EvaluateLugre(params_.friction, params_.lugre_damping_fade_velocity_m_s,
-                            s.bristle_m, v);
+      // EvaluateLugre (friction.hpp) with the reciprocals precomputed: the same LuGre
+      // equations, two exp and one division per call.
+      const bool extend = v >= 0.0;
+      const FrictionDirectionParams& d = extend ? params_.friction.extend
+                                                : params_.friction.retract;
+      const double qs = v * (extend ? inv_stribeck_extend_s_m_ : inv_stribeck_retract_s_m_);
+      const double g = d.coulomb_n + (d.static_n - d.coulomb_n) * std::exp(-qs * qs);
+      const double sigma0 = params_.friction.bristle_stiffness_n_m;
+      const double qd = v * inv_fade_velocity_s_m_;
+      const double sigma1 = params_.friction.bristle_damping_n_s_m * std::exp(-qd * qd);
+      lugre.bristle_rate_m_s = v - sigma0 * std::abs(v) * s.bristle_m / g;
+      lugre.force_n = sigma0 * s.bristle_m + sigma1 * lugre.bristle_rate_m_s +
+                      d.viscous_n_s_m * v;
+      lugre.dissipation_w = lugre.force_n * v - sigma0 * s.bristle_m * lugre.bristle_rate_m_s;
     } else {
       lugre.force_n = StribeckFrictionN(params_.friction, v);  // eq 3
       lugre.dissipation_w = lugre.force_n * v;
@@ -183,7 +199,7 @@ void LegModel::Evaluate(const LegPneumaticState& s, double x, double v,
     // Eq 7 / 65: P_i' = RT/V_i (gamma_i m_in - gamma_o m_out) - gamma_k P_i/V_i dV_i/dt.
     // (dV_i/dt is the true volume rate here; eq 7 writes +gamma_k P2/V2 V2' for chamber 2
     // with V2' meaning A2 x', see docs/plant.md.)
-    const double rt = air.gas_constant_j_kg_k * air.temperature_k;
+    const double rt = gas_rt_j_kg_;
     const auto weighted = [&](double m) { return m >= 0.0 ? gamma_in * m : gamma_out * m; };
     rate.chamber1_pressure_pa =
         (rt * weighted(flows.chamber1_kg_s) - gamma_vol * p1 * dvol1) / vol1;
@@ -197,6 +213,25 @@ void LegModel::Evaluate(const LegPneumaticState& s, double x, double v,
   forces.end_stop_n = stop;
   forces.total_n = forces.pneumatic_n + forces.friction_n + forces.end_stop_n;
   forces.friction_dissipation_w = lugre.dissipation_w;
+}
+
+double LegModel::PressureStiffnessBound1S(const LegPneumaticState& s, double x, double v,
+                                          double spool_target_m, double horizon_s) const {
+  if (params_.chambers_vented) return 0.0;
+  const CylinderParams& cyl = params_.cylinder;
+  // The spool moves monotonically towards its target (first-order lag): the largest
+  // opening over the horizon is the larger of the two.
+  const double area = OrificeAreaM2(params_.valve,
+                                    std::max(std::abs(s.spool_m), std::abs(spool_target_m)));
+  if (area <= 0.0) return 0.0;
+  const double travel = std::abs(v) * horizon_s;
+  const double v0_min = kMinVolumeFraction * cyl.dead_volume_m3;
+  const double vol1 = std::max(Chamber1VolumeM3(cyl, x - travel), v0_min);
+  const double vol2 = std::max(Chamber2VolumeM3(cyl, x + travel), v0_min);
+  const PolytropicSet& g = params_.polytropic;
+  const double gamma = std::max({g.extend.inflow, g.extend.outflow, g.retract.inflow,
+                                 g.retract.outflow});
+  return gas_rt_j_kg_ * gamma * orifice_.MaxPressureSlopeKgSPa(area) / std::min(vol1, vol2);
 }
 
 LegPneumaticState LegModel::Equilibrium(double axial_force_n,

@@ -61,6 +61,8 @@ DisturbanceProfile MakeRealisticDisturbanceProfile() { return DisturbanceProfile
 void PlatformPlantConfig::Validate() const {
   Require(integrator_step_s > 0.0 && integrator_step_s <= 1.0e-3, "integrator_step_s",
           integrator_step_s, "(0, 1e-3]");
+  Require(stiffness_step_limit > 0.0 && stiffness_step_limit <= 2.5, "stiffness_step_limit",
+          stiffness_step_limit, "(0, 2.5]");
   Require(disturbance.friction_scale > 0.0, "disturbance.friction_scale",
           disturbance.friction_scale, "> 0");
   Require(disturbance.polytropic_scale > 0.0, "disturbance.polytropic_scale",
@@ -164,56 +166,107 @@ void PlatformPlant::Reset() {
   }
   output_ = PlatformPlantOutput{};
   output_.truth.applied_valve_v.fill(config_.rig.valve.null_voltage_v);
-  StateVector scratch;
-  Derivative(state_, time_s_, scratch, true);
+  Derivative(state_, time_s_, rate_at_state_, true);
   FillTruth();
   SampleSensors();
 }
 
+namespace {
+
+// Solves M x = b for the symmetric positive definite 6x6 mass matrix, given its lower
+// triangle, by an unrolled Cholesky factorisation (M = L L^T). Eigen's generic LLT costs
+// several times more for this fixed size (docs/plant.md, "Speed").
+Vector6d SolveSpd6(double m[6][6], const Vector6d& b) {
+  double inv_diag[6];
+#pragma GCC unroll 6
+  for (int j = 0; j < 6; ++j) {
+    double d = m[j][j];
+#pragma GCC unroll 6
+    for (int k = 0; k < j; ++k) d -= m[j][k] * m[j][k];
+    const double ljj = std::sqrt(d);
+    inv_diag[j] = 1.0 / ljj;
+    m[j][j] = ljj;
+#pragma GCC unroll 6
+    for (int i = j + 1; i < 6; ++i) {
+      double a = m[i][j];
+#pragma GCC unroll 6
+      for (int k = 0; k < j; ++k) a -= m[i][k] * m[j][k];
+      m[i][j] = a * inv_diag[j];
+    }
+  }
+  double y[6];
+#pragma GCC unroll 6
+  for (int i = 0; i < 6; ++i) {  // L y = b
+    double a = b[i];
+#pragma GCC unroll 6
+    for (int k = 0; k < i; ++k) a -= m[i][k] * y[k];
+    y[i] = a * inv_diag[i];
+  }
+  Vector6d x;
+#pragma GCC unroll 6
+  for (int i = 5; i >= 0; --i) {  // L^T x = y
+    double a = y[i];
+#pragma GCC unroll 6
+    for (int k = i + 1; k < 6; ++k) a -= m[k][i] * x[k];
+    x[i] = a * inv_diag[i];
+  }
+  return x;
+}
+
+}  // namespace
+
 void PlatformPlant::Derivative(const StateVector& x, double time_s, StateVector& dxdt,
                                bool record) {
   const Eigen::Quaterniond q = QuatOf(x).normalized();
-  Pose pose;
-  pose.p_BP_B_m = x.segment<3>(kP);
-  pose.R_BP = q.toRotationMatrix();
+  const Eigen::Matrix3d R_BP = q.toRotationMatrix();
+  const Eigen::Vector3d p = x.segment<3>(kP);
   const Eigen::Vector3d v = x.segment<3>(kV);
   const Eigen::Vector3d w = x.segment<3>(kW);
-
-  LegArray<double> length;
-  LegArray<Eigen::Vector3d> unit;
-  InverseKinematics(true_geometry_, pose, length, &unit);  // eq 46
+  const double w_sq = w.squaredNorm();
 
   const double supply = SupplyPressurePa(time_s);
   const double g = gravity_m_s2_;
   const double mid = config_.rig.cylinder.mid_stroke_length_m;
+  const double m_leg = leg_mass_kg_;
 
   // Generalised force on the twist [v; w] and mass matrix (docs/plant.md):
   //   (M_p + m_leg sum J_i^T J_i) twist_dot = sum J_i^T (f_i - m_leg c_i) + W_g - [0; w x I w]
-  const Eigen::Matrix3d inertia_B = pose.R_BP * platform_inertia_P_ * pose.R_BP.transpose();
-  Matrix6d M = Matrix6d::Zero();
-  M.topLeftCorner<3, 3>().diagonal().setConstant(platform_mass_kg_);
-  M.bottomRightCorner<3, 3>() = inertia_B;
+  // Only the lower triangle of the symmetric M is assembled.
+  const Eigen::Matrix3d inertia_B = R_BP * platform_inertia_P_ * R_BP.transpose();
+  double M[6][6] = {};
+  for (int a = 0; a < 3; ++a) {
+    M[a][a] = platform_mass_kg_;
+    for (int b = 0; b <= a; ++b) M[3 + a][3 + b] = inertia_B(a, b);
+  }
   Vector6d rhs = Vector6d::Zero();
-  rhs[2] = -(platform_mass_kg_ + kNumLegs * leg_mass_kg_) * g;
+  rhs[2] = -(platform_mass_kg_ + kNumLegs * m_leg) * g;
   rhs.tail<3>() = -w.cross(inertia_B * w);
+  Eigen::Vector3d sum_r = Eigen::Vector3d::Zero();
 
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     const int ii = static_cast<int>(i);
-    const Eigen::Vector3d r = pose.R_BP * true_geometry_.p_PB_P[i];
-    const Eigen::Vector3d& s = unit[i];
-    Vector6d Ji;
-    Ji.head<3>() = s;
-    Ji.tail<3>() = r.cross(s);  // eq 48 row
+    // eq 46: l_i = |p + R b_i - a_i| on the TRUE geometry, unit vector s_i.
+    const Eigen::Vector3d r = R_BP * true_geometry_.p_PB_P[i];
+    const Eigen::Vector3d leg = p + r - true_geometry_.p_BA_B[i];
+    const double length = leg.norm();
+    const Eigen::Vector3d s = leg / length;
+    sum_r += r;
+    double Ji[6];  // eq 48 row: [s^T, (r x s)^T]
+    const Eigen::Vector3d r_x_s = r.cross(s);
+    Ji[0] = s.x(); Ji[1] = s.y(); Ji[2] = s.z();
+    Ji[3] = r_x_s.x(); Ji[4] = r_x_s.y(); Ji[5] = r_x_s.z();
     const Eigen::Vector3d v_joint = v + w.cross(r);
     const double l_dot = s.dot(v_joint);
-    // l_ddot = J_i twist_dot + c_i, c_i = s.(w x (w x r)) + |v_joint, perpendicular|^2 / l
-    const double c = s.dot(w.cross(w.cross(r))) + (v_joint - l_dot * s).squaredNorm() / length[i];
+    // l_ddot = J_i twist_dot + c_i, c_i = s.(w x (w x r)) + |v_joint, perpendicular|^2 / l,
+    // with w x (w x r) = w (w.r) - r |w|^2.
+    const double c = s.dot(w) * w.dot(r) - s.dot(r) * w_sq +
+                     (v_joint - l_dot * s).squaredNorm() / length;
 
     const int o = kLeg0 + 4 * ii;
     const LegPneumaticState ls{x[o], x[o + 1], x[o + 2], x[o + 3]};
     LegPneumaticState rate;
     LegForces forces;
-    const double xp = length[i] - mid;
+    const double xp = length - mid;
     leg_model_.Evaluate(ls, xp, l_dot, spool_target_m_[i], supply, rate, forces);
     dxdt[o] = rate.chamber1_pressure_pa;
     dxdt[o + 1] = rate.chamber2_pressure_pa;
@@ -221,20 +274,26 @@ void PlatformPlant::Derivative(const StateVector& x, double time_s, StateVector&
     dxdt[o + 3] = rate.bristle_m;
     min_dissipation_w_ = std::min(min_dissipation_w_, forces.friction_dissipation_w);
 
-    rhs += Ji * (forces.total_n - leg_mass_kg_ * c);
-    M.noalias() += leg_mass_kg_ * Ji * Ji.transpose();
-    // Weight of the leg's moving mass, applied at the platform joint.
-    rhs.tail<3>() += r.cross(Eigen::Vector3d(0, 0, -leg_mass_kg_ * g));
+    const double f_axial = forces.total_n - m_leg * c;
+#pragma GCC unroll 6
+    for (int a = 0; a < 6; ++a) {
+      rhs[a] += Ji[a] * f_axial;
+      const double mj = m_leg * Ji[a];
+#pragma GCC unroll 6
+      for (int b = 0; b <= a; ++b) M[a][b] += mj * Ji[b];
+    }
 
     if (record) {
       PlatformTrueState& t = output_.truth;
-      t.length_m[i] = length[i];
+      t.length_m[i] = length;
       t.piston_position_m[i] = xp;
       t.piston_velocity_m_s[i] = l_dot;
       output_.leg_forces[i] = forces;
     }
   }
-  const Vector6d twist_dot = M.llt().solve(rhs);
+  // Weight of every leg's moving mass, applied at its platform joint.
+  rhs.tail<3>() += sum_r.cross(Eigen::Vector3d(0, 0, -m_leg * g));
+  const Vector6d twist_dot = SolveSpd6(M, rhs);
 
   dxdt.segment<3>(kP) = v;
   // q_dot = 1/2 [0, w] (x) q, w in B (spatial angular velocity).
@@ -285,14 +344,26 @@ PlantStatus PlatformPlant::Step(const LegArray<double>& valve_v, double dt_s) {
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     spool_target_m_[i] = SpoolTargetM(valve, valve_v[i]);  // eq 42 (clamped 0-10 V)
   }
-  const int n = std::max(1, static_cast<int>(std::ceil(dt_s / config_.integrator_step_s - 1e-9)));
+  const int n = SubstepCount(dt_s);
   const double h = dt_s / n;
   StateVector x = state_;
   StateVector k1, k2, k3, k4;
   double t = time_s_;
   for (int s = 0; s < n; ++s) {
     // Classical RK4 (docs/plant.md "Integrator"), quaternion renormalised per substep.
-    Derivative(x, t, k1, false);
+    if (s == 0) {
+      // rate_at_state_ = Derivative(state_, time_s_) from the end of the last Step / Reset /
+      // SetState, evaluated with the previous spool targets; only the spool rates depend on
+      // the target (eq 42 lag), recomputed here exactly as LegModel::Evaluate does.
+      k1 = rate_at_state_;
+      const double tau = leg_model_.params().valve.spool_time_constant_s;
+      for (std::size_t i = 0; i < kNumLegs; ++i) {
+        const int o = kLeg0 + 4 * static_cast<int>(i);
+        k1[o + 2] = (spool_target_m_[i] - x[o + 2]) / tau;
+      }
+    } else {
+      Derivative(x, t, k1, false);
+    }
     Derivative(x + 0.5 * h * k1, t + 0.5 * h, k2, false);
     Derivative(x + 0.5 * h * k2, t + 0.5 * h, k3, false);
     Derivative(x + h * k3, t + h, k4, false);
@@ -306,16 +377,39 @@ PlantStatus PlatformPlant::Step(const LegArray<double>& valve_v, double dt_s) {
   }
   state_ = x;
   time_s_ += dt_s;
+  last_substep_count_ = n;
   ++tick_;
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     output_.truth.applied_valve_v[i] =
         std::clamp(valve_v[i], valve.min_voltage_v, valve.max_voltage_v);
   }
-  StateVector scratch;
-  Derivative(state_, time_s_, scratch, true);  // lengths, rates, forces at the new state
+  // Lengths, rates and forces at the new state; the rate is also the next step's first RK
+  // stage (same state and time), so every tick costs 4 evaluations per substep, not 4 + 1.
+  Derivative(state_, time_s_, rate_at_state_, true);
   FillTruth();
   SampleSensors();
   return output_.status = PlantStatus::kOk;
+}
+
+int PlatformPlant::SubstepCount(double dt_s) const {
+  // Largest step allowed at the present state (docs/plant.md, "Integrator"): the nominal
+  // step, reduced where the pressure ODE is stiff (wide-open valve, small chamber). Depends
+  // on the state only, so lockstep runs stay bit-reproducible.
+  double h_max = config_.integrator_step_s;
+  const PlatformTrueState& t = output_.truth;  // lengths and rates at state_
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    const double xp = t.piston_position_m[i];
+    const double v = t.piston_velocity_m_s[i];
+    const double lambda = leg_model_.PressureStiffnessBound1S(t.legs[i], xp, v,
+                                                              spool_target_m_[i], dt_s);
+    if (lambda * h_max > config_.stiffness_step_limit) {
+      h_max = config_.stiffness_step_limit / lambda;
+    }
+  }
+  const double n = std::ceil(dt_s / h_max - 1e-9);
+  // At most 1000 substeps per call (h >= 1 us for a 1 ms tick): a bound, never reached
+  // by the rig's parameters (the stiffest pressure mode is ~1e4 1/s).
+  return static_cast<int>(std::clamp(n, 1.0, 1000.0));
 }
 
 void PlatformPlant::SetState(const PlatformTrueState& s) {
@@ -333,8 +427,7 @@ void PlatformPlant::SetState(const PlatformTrueState& s) {
     state_[o + 2] = s.legs[i].spool_m;
     state_[o + 3] = s.legs[i].bristle_m;
   }
-  StateVector scratch;
-  Derivative(state_, time_s_, scratch, true);
+  Derivative(state_, time_s_, rate_at_state_, true);
   FillTruth();
 }
 

@@ -93,6 +93,14 @@ class LegModel {
                 double spool_target_m, double supply_pressure_pa, LegPneumaticState& rate,
                 LegForces& forces) const;
 
+  // Bound of the fastest decay rate (1/s) of the leg's pressure ODE over the next
+  // `horizon_s` with the spool moving towards `spool_target_m`: R T gamma_in |dm/dP| / V at
+  // the smallest chamber volume reachable at speed |v|. The plant picks its RK4 substep so
+  // that this rate times the step stays inside RK4's stability interval (docs/plant.md).
+  double PressureStiffnessBound1S(const LegPneumaticState& state, double position_m,
+                                  double velocity_m_s, double spool_target_m,
+                                  double horizon_s) const;
+
   // State at rest with valve closed (spool 0, bristle 0) whose pneumatic force equals
   // `axial_force_n` (the force the rod must push along +x) with the rod-side pressure
   // given: P1 = (F + P2 A2 + P_a A_r) / A1.
@@ -107,6 +115,12 @@ class LegModel {
  private:
   LegModelParams params_;
   OrificeFlowModel orifice_;
+  // Constants of Evaluate, precomputed once (docs/plant.md, "Speed"): reciprocals of the
+  // Stribeck velocities (extend, retract) and of the LuGre damping fade velocity, R T.
+  double inv_stribeck_extend_s_m_ = 0.0;
+  double inv_stribeck_retract_s_m_ = 0.0;
+  double inv_fade_velocity_s_m_ = 0.0;
+  double gas_rt_j_kg_ = 0.0;
 };
 
 // ---------------------------------------------------------------------------------------

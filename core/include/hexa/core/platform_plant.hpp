@@ -29,7 +29,12 @@ struct PlatformPlantConfig {
   RigParams rig = MakeReferenceRig();   // what the controllers know (nominal)
   DisturbanceProfile disturbance = MakeRealisticDisturbanceProfile();
   std::uint64_t seed = 1;
-  double integrator_step_s = 2.5e-4;    // fixed RK4 substep (docs/plant.md, "Integrator")
+  // Largest RK4 substep (docs/plant.md, "Integrator"). A tick is split into
+  // ceil(dt / integrator_step_s) equal substeps, or more when the pressure ODE is stiff:
+  double integrator_step_s = 5.0e-4;
+  // ... the substep is reduced so that (bound of the fastest pressure decay rate) x h stays
+  // below this (RK4 is stable on the negative real axis up to 2.78).
+  double stiffness_step_limit = 1.5;
   // Rod-side pressure of the holding equilibrium at Reset; <= 0: (P_s + P_a) / 2.
   double home_chamber2_pressure_pa = -1.0;
   // Leg model extras (laminar band, LuGre damping fade, polytropic blend).
@@ -93,6 +98,8 @@ class PlatformPlant {
   double TotalEnergyJ() const;
   // Smallest friction dissipation seen at any RK stage since Reset (>= 0 expected).
   double min_friction_dissipation_w() const { return min_dissipation_w_; }
+  // RK4 substeps taken by the last successful Step (step control, docs/plant.md).
+  int last_substep_count() const { return last_substep_count_; }
 
   // Replaces the dynamic state (tests: perturbations, energy checks). Pose/twist/legs are
   // taken from `state`; derived fields are recomputed.
@@ -104,6 +111,7 @@ class PlatformPlant {
  private:
   void Derivative(const StateVector& x, double time_s, StateVector& dxdt, bool record);
   double SupplyPressurePa(double time_s) const;
+  int SubstepCount(double dt_s) const;  // RK4 substeps for the next tick (step control)
   void FillTruth();
   void SampleSensors();
 
@@ -117,10 +125,14 @@ class PlatformPlant {
   double gravity_m_s2_ = 9.81;
 
   StateVector state_ = StateVector::Zero();
+  // Derivative at (state_, time_s_), kept from the last evaluation that recorded the
+  // outputs; reused as the first RK stage of the next Step (spool rates refreshed).
+  StateVector rate_at_state_ = StateVector::Zero();
   LegArray<double> spool_target_m_{};
   double time_s_ = 0.0;
   std::uint64_t tick_ = 0;
   double min_dissipation_w_ = 0.0;
+  int last_substep_count_ = 0;
   PlatformPlantOutput output_;
 };
 

@@ -74,8 +74,10 @@ class OrificeFlowModel {
                          : 0.0;
   }
 
-  // Eq 4 for P_u >= P_d >= 0 (mass flow from upstream to downstream, >= 0).
-  double ForwardKgS(double area_m2, double upstream_pa, double downstream_pa) const {
+  // Eq 4 for P_u >= P_d >= 0 (mass flow from upstream to downstream, >= 0). Inlined into
+  // the plant's derivative (called twice per leg and RK stage).
+  [[gnu::always_inline]] double ForwardKgS(double area_m2, double upstream_pa,
+                                           double downstream_pa) const {
     if (!(upstream_pa > 0.0) || area_m2 <= 0.0) return 0.0;
     const double r = std::max(downstream_pa, 0.0) / upstream_pa;
     if (r <= critical_ratio_) return choked_coeff_ * area_m2 * upstream_pa;
@@ -89,10 +91,16 @@ class OrificeFlowModel {
   // Signed flow through an orifice between ports a and b: > 0 from a to b. The side with
   // the higher pressure is the upstream of eq 4 (Tables 4, 5 name the usual direction;
   // backflow, e.g. a chamber compressed above supply, is physical and kept).
-  double SignedKgS(double area_m2, double a_pa, double b_pa) const {
+  [[gnu::always_inline]] double SignedKgS(double area_m2, double a_pa, double b_pa) const {
     return a_pa >= b_pa ? ForwardKgS(area_m2, a_pa, b_pa) : -ForwardKgS(area_m2, b_pa, a_pa);
   }
 
+  // Upper bound of |d m_dot / d P| (kg/s/Pa) over both pressures for the orifice area: the
+  // steepest point of the flow curve is the laminar band (secant to the band edge), twice
+  // the slope of eq 4 just below it. Used to bound the pressure ODE's stiffness.
+  double MaxPressureSlopeKgSPa(double area_m2) const {
+    return unchoked_coeff_ * area_m2 * laminar_slope_;
+  }
   double critical_ratio() const { return critical_ratio_; }
   double laminar_ratio() const { return laminar_ratio_; }
 
