@@ -223,7 +223,6 @@ void LegNode::Answer(const hexa_msg_LegSensors& s) {
 
 int LegNode::Run() {
   const bool realtime = options_.common.mode == node::TimeMode::kRealtime;
-  if (realtime && options_.common.try_realtime_scheduling) node::TryRealtimeScheduling(70, *log_);
   PublishStatus(hexa_msg_NODE_STARTING, "waiting for the plant");
   if (!WaitUntilMatched()) {
     PublishStatus(hexa_msg_NODE_FAULT, "no plant");

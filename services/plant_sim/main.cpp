@@ -56,6 +56,9 @@ int main(int argc, char** argv) {
                  o.common.rig_path, names);
       return 1;
     }
+    // Before the participant exists: Cyclone's threads inherit the policy (PLATFORM_NOTES).
+    if (o.common.mode == hexa::node::TimeMode::kRealtime && o.common.try_realtime_scheduling)
+      hexa::node::TryRealtimeScheduling(80, *log);
     hexa::plant_sim::PlantNode node(o, *config, log);
     return node.Run();
   } catch (const std::exception& e) {

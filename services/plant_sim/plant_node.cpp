@@ -291,7 +291,6 @@ void PlantNode::LogLastGoodState() const {
 
 int PlantNode::Run() {
   const bool realtime = options_.common.mode == node::TimeMode::kRealtime;
-  if (realtime && options_.common.try_realtime_scheduling) node::TryRealtimeScheduling(80, *log_);
   if (!WaitForPeers()) {
     PublishStatus(hexa_msg_NODE_FAULT, "peers not ready");
     return shutdown_.requested() ? 0 : 3;

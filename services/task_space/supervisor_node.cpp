@@ -311,7 +311,6 @@ void SupervisorNode::Publish(std::uint64_t tick, double time_s) {
 
 int SupervisorNode::Run() {
   const bool realtime = options_.common.mode == node::TimeMode::kRealtime;
-  if (realtime && options_.common.try_realtime_scheduling) node::TryRealtimeScheduling(75, *log_);
   PublishStatus(hexa_msg_NODE_STARTING, "waiting for peers");
   if (!WaitUntilMatched()) {
     PublishStatus(hexa_msg_NODE_FAULT, "peers not matched");
