@@ -428,9 +428,12 @@ SystemConfig Translate(const pb::RigFile& f) {
   c.leg_controller.bssmc.viscous_estimate_scale = b.viscous_estimate_scale();
   c.leg_controller.bssmc.friction_estimate_scale = b.friction_estimate_scale();
   c.leg_controller.bssmc.friction_smoothing_velocity_m_s = b.friction_smoothing_velocity_m_s();
+  c.leg_controller.bssmc.reaching_proportional_n_s_m = b.reaching_proportional_n_s_m();
   c.leg_controller.pi.proportional_v_m = lc.pi().proportional_v_m();
   c.leg_controller.pi.integral_v_m_s = lc.pi().integral_v_m_s();
   c.leg_controller.pi.integrator_limit_v = lc.pi().integrator_limit_v();
+  c.leg_controller.pi.velocity_feedforward_v_s_m = lc.pi().velocity_feedforward_v_s_m();
+  c.leg_controller.pi.rate_damping_v_s_m = lc.pi().rate_damping_v_s_m();
   c.leg_controller.setpoint_timeout_s = lc.setpoint_timeout_s();
 
   const pb::SupervisorConfig& sv = f.supervisor();
@@ -678,9 +681,12 @@ std::string ToTextFormat(const SystemConfig& c) {
   b->set_viscous_estimate_scale(c.leg_controller.bssmc.viscous_estimate_scale);
   b->set_friction_estimate_scale(c.leg_controller.bssmc.friction_estimate_scale);
   b->set_friction_smoothing_velocity_m_s(c.leg_controller.bssmc.friction_smoothing_velocity_m_s);
+  b->set_reaching_proportional_n_s_m(c.leg_controller.bssmc.reaching_proportional_n_s_m);
   lc->mutable_pi()->set_proportional_v_m(c.leg_controller.pi.proportional_v_m);
   lc->mutable_pi()->set_integral_v_m_s(c.leg_controller.pi.integral_v_m_s);
   lc->mutable_pi()->set_integrator_limit_v(c.leg_controller.pi.integrator_limit_v);
+  lc->mutable_pi()->set_velocity_feedforward_v_s_m(c.leg_controller.pi.velocity_feedforward_v_s_m);
+  lc->mutable_pi()->set_rate_damping_v_s_m(c.leg_controller.pi.rate_damping_v_s_m);
   lc->set_setpoint_timeout_s(c.leg_controller.setpoint_timeout_s);
 
   pb::SupervisorConfig* sv = f.mutable_supervisor();

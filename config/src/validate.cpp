@@ -419,9 +419,13 @@ void CheckLegController(Checker& c, const LegControllerParams& p, const Supervis
   c.NonNegative("leg_controller.bssmc.friction_estimate_scale", b.friction_estimate_scale, "scale");
   c.Positive("leg_controller.bssmc.friction_smoothing_velocity_m_s", b.friction_smoothing_velocity_m_s,
              "smoothing velocity");
+  c.NonNegative("leg_controller.bssmc.reaching_proportional_n_s_m", b.reaching_proportional_n_s_m,
+                "reaching-law gain");
   c.NonNegative("leg_controller.pi.proportional_v_m", p.pi.proportional_v_m, "gain");
   c.NonNegative("leg_controller.pi.integral_v_m_s", p.pi.integral_v_m_s, "gain");
   c.NonNegative("leg_controller.pi.integrator_limit_v", p.pi.integrator_limit_v, "limit");
+  c.NonNegative("leg_controller.pi.velocity_feedforward_v_s_m", p.pi.velocity_feedforward_v_s_m, "gain");
+  c.NonNegative("leg_controller.pi.rate_damping_v_s_m", p.pi.rate_damping_v_s_m, "gain");
   if (c.Finite("leg_controller.setpoint_timeout_s", p.setpoint_timeout_s) &&
       std::isfinite(sup.period_s) && !(p.setpoint_timeout_s >= sup.period_s && p.setpoint_timeout_s > 0.0)) {
     // Setpoints arrive once per supervisor period: a shorter timeout holds every cycle.

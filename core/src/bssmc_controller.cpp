@@ -54,6 +54,8 @@ void BsSmcConfig::Validate() const {
           "friction_estimate_scale", p.friction_estimate_scale, "finite and >= 0");
   Require(std::isfinite(p.friction_smoothing_velocity_m_s) && p.friction_smoothing_velocity_m_s > 0,
           "friction_smoothing_velocity_m_s", p.friction_smoothing_velocity_m_s, "finite and > 0");
+  Require(std::isfinite(p.reaching_proportional_n_s_m) && p.reaching_proportional_n_s_m >= 0,
+          "reaching_proportional_n_s_m", p.reaching_proportional_n_s_m, "finite and >= 0");
   Require(std::isfinite(period_s) && period_s > 0, "period_s", period_s, "finite and > 0");
   const ValveParams& v = model.valve;
   Require(std::isfinite(v.spool_gain_m_v) && v.spool_gain_m_v != 0, "valve.spool_gain_m_v",
@@ -134,7 +136,9 @@ void BsSmcController::Update(const BsSmcInput& in, BsSmcOutput& out) {
                        FrictionEstimateN(vd);  // eq 14
   const double phi_hat = p.effective_mass_kg * (in.desired_acceleration_m_s2 - p.lambda_1_s * edot_m_s) +
                          b_hat * vd - c_hat;                                    // eq 25
-  const double phi = phi_hat - p.switching_gain_n * std::tanh(p.boundary_layer_xi_s_m * s_m_s);  // eq 45
+  // eq 45, plus the proportional reaching term -k_s S (not in the paper, see the header).
+  const double phi = phi_hat - p.switching_gain_n * std::tanh(p.boundary_layer_xi_s_m * s_m_s) -
+                     p.reaching_proportional_n_s_m * s_m_s;
   // phi_dot (eq 38): the paper differentiates phi numerically (eq 40). Only its model part
   // is differentiated here: the feedback part (lambda e_dot, K tanh(xi S)) is sensor noise
   // at 1 kHz and its derivative drove a 34 Hz limit cycle (docs/controller.md); beta z

@@ -27,6 +27,7 @@ BsSmcConfig MakeBsSmcConfig(const LegControllerConfig& c) {
 PiConfig MakePiConfig(const LegControllerConfig& c) {
   PiConfig p;
   p.params = c.params.pi;
+  p.differentiator = c.params.differentiator;
   p.valve = c.model.valve;
   p.period_s = c.period_s;
   return p;
@@ -172,11 +173,12 @@ void LegController::Update(const LegControllerInput& in, LegControllerOutput& ou
     PiInput p;
     p.length_m = in.length_m;
     p.desired_length_m = ld_m;
+    p.desired_velocity_m_s = vd_m_s;
     PiOutput o;
     pi_.Update(p, o);
     out.valve_v = o.valve_v;
     out.sliding_surface_m_s = 0.0;
-    out.velocity_m_s = 0.0;
+    out.velocity_m_s = std::isfinite(o.velocity_m_s) ? o.velocity_m_s : 0.0;
     out.desired_force_n = 0.0;
   }
   // Last line of defence: never emit a non-finite or out-of-range voltage.

@@ -24,6 +24,10 @@ void PiConfig::Validate() const {
           params.integral_v_m_s, "finite and >= 0");
   Require(std::isfinite(params.integrator_limit_v) && params.integrator_limit_v >= 0,
           "integrator_limit_v", params.integrator_limit_v, "finite and >= 0");
+  Require(std::isfinite(params.velocity_feedforward_v_s_m) && params.velocity_feedforward_v_s_m >= 0,
+          "velocity_feedforward_v_s_m", params.velocity_feedforward_v_s_m, "finite and >= 0");
+  Require(std::isfinite(params.rate_damping_v_s_m) && params.rate_damping_v_s_m >= 0,
+          "rate_damping_v_s_m", params.rate_damping_v_s_m, "finite and >= 0");
   Require(std::isfinite(period_s) && period_s > 0, "period_s", period_s, "finite and > 0");
   Require(std::isfinite(valve.spool_gain_m_v) && valve.spool_gain_m_v != 0, "valve.spool_gain_m_v",
           valve.spool_gain_m_v, "finite and != 0");
@@ -33,24 +37,44 @@ void PiConfig::Validate() const {
           "valve.null_voltage_v", valve.null_voltage_v, "inside [min_voltage_v, max_voltage_v]");
 }
 
-PiController::PiController(const PiConfig& config) : config_((config.Validate(), config)) {}
+namespace {
+DifferentiatorConfig PiDiffConfig(const PiConfig& c) {
+  DifferentiatorConfig d;
+  d.params = c.differentiator;
+  d.sample_period_s = c.period_s;
+  return d;
+}
+}  // namespace
 
-void PiController::Reset() { integral_v_ = 0.0; }
+PiController::PiController(const PiConfig& config)
+    : config_((config.Validate(), config)), velocity_diff_(PiDiffConfig(config)) {}
+
+void PiController::Reset() {
+  integral_v_ = 0.0;
+  velocity_diff_.Reset();
+}
 
 void PiController::Update(const PiInput& in, PiOutput& out) {
   const PiParams& p = config_.params;
   const ValveParams& valve = config_.valve;
   const double direction = valve.spool_gain_m_v < 0.0 ? -1.0 : 1.0;  // sign(a), eq 42
   const double e_m = in.desired_length_m - in.length_m;
-  if (!std::isfinite(e_m)) {
+  if (!std::isfinite(e_m) || !std::isfinite(in.desired_velocity_m_s)) {
+    Reset();  // a non-finite sample would poison the differentiator window
     out.valve_v = valve.null_voltage_v;
     out.error_m = e_m;
     out.integral_v = integral_v_;
+    out.velocity_m_s = 0.0;
     out.saturated = false;
     return;
   }
+  const double v_m_s = velocity_diff_.Update(in.length_m);  // eq 40
+  // Velocity terms: the valve opening sets a flow, i.e. roughly a piston speed, so the
+  // setpoint speed is fed forward and the velocity error is damped.
+  const double rate_v = p.velocity_feedforward_v_s_m * in.desired_velocity_m_s +
+                        p.rate_damping_v_s_m * (in.desired_velocity_m_s - v_m_s);
   auto voltage = [&](double integral_v) {
-    return valve.null_voltage_v + direction * (p.proportional_v_m * e_m + integral_v);
+    return valve.null_voltage_v + direction * (p.proportional_v_m * e_m + integral_v + rate_v);
   };
   const double candidate =
       std::clamp(integral_v_ + p.integral_v_m_s * e_m * config_.period_s, -p.integrator_limit_v,
@@ -68,6 +92,7 @@ void PiController::Update(const PiInput& in, PiOutput& out) {
   out.saturated = u_clamped != u;
   out.error_m = e_m;
   out.integral_v = integral_v_;
+  out.velocity_m_s = v_m_s;
 }
 
 }  // namespace hexa

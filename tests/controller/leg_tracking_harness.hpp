@@ -82,10 +82,16 @@ inline LegControllerConfig SingleLegControllerConfig(const RigParams& rig, LegCo
   // The single-leg rig keeps the gains tuned on it (docs/controller.md); the shipped
   // defaults are tuned on the full platform (docs/tuning.md) whose legs carry coupled
   // loads and a ~10x larger horizontal reflected inertia.
+  c.params.bssmc.lambda_1_s = 120.0;
   c.params.bssmc.switching_gain_n = 30.0;
+  c.params.bssmc.boundary_layer_xi_s_m = 10.0;
+  c.params.bssmc.backstepping_beta_1_s = 100.0;
+  c.params.bssmc.reaching_proportional_n_s_m = 0.0;  // the paper's reaching law
   c.params.pi.proportional_v_m = 1600.0;
   c.params.pi.integral_v_m_s = 250.0;
   c.params.pi.integrator_limit_v = 2.0;
+  c.params.pi.velocity_feedforward_v_s_m = 0.0;  // plain ref [11] PI
+  c.params.pi.rate_damping_v_s_m = 0.0;
   return c;
 }
 

@@ -2,7 +2,7 @@
 // in-process lockstep simulation (RunPaperSession, same protocol as the DDS system).
 // Not a test. docs/tuning.md gives the grids run with it and the figures.
 //
-//   platform_study [--seed N] [--controller bssmc|pi] [--ideal] [--traj all|x,y,...]
+//   platform_study [--rig file|default] [--seed N] [--controller bssmc|pi] [--ideal] [--traj all|x,y,...]
 //                  [--periods N] [key=value ...]
 //   platform_study trace <traj> [options]      per-tick CSV of the legs (stdout)
 //
@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "hexa/config/rig_config.hpp"
 #include "hexa/core/lockstep_simulation.hpp"
 
 namespace {
@@ -40,12 +41,13 @@ std::vector<Key> Keys() {
       {"Fg", [](auto& c, double v) { c.leg_controller.bssmc.gravity_load_n = v; }},
       {"visc", [](auto& c, double v) { c.leg_controller.bssmc.viscous_estimate_scale = v; }},
       {"fric", [](auto& c, double v) { c.leg_controller.bssmc.friction_estimate_scale = v; }},
-      // {"ki_s", [](auto& c, double v) { c.leg_controller.bssmc.integral_gain_1_s = v; }},
-      // {"ilim_n", [](auto& c, double v) { c.leg_controller.bssmc.integral_limit_n = v; }},
+      {"ks", [](auto& c, double v) { c.leg_controller.bssmc.reaching_proportional_n_s_m = v; }},
       {"lag", [](auto& c, double v) { c.leg_controller.differentiator.centre_lag_samples = v; }},
       {"kp", [](auto& c, double v) { c.leg_controller.pi.proportional_v_m = v; }},
       {"ki", [](auto& c, double v) { c.leg_controller.pi.integral_v_m_s = v; }},
       {"ilim", [](auto& c, double v) { c.leg_controller.pi.integrator_limit_v = v; }},
+      {"kv", [](auto& c, double v) { c.leg_controller.pi.velocity_feedforward_v_s_m = v; }},
+      {"kd", [](auto& c, double v) { c.leg_controller.pi.rate_damping_v_s_m = v; }},
       {"ol", [](auto& c, double v) { c.supervisor.outer_loop.enabled = v != 0.0; }},
       {"ol_gain", [](auto& c, double v) { c.supervisor.outer_loop.gain = v; }},
       {"ol_pos", [](auto& c, double v) { c.supervisor.outer_loop.translation_gain_scale = v; }},
@@ -72,7 +74,7 @@ std::vector<int> MovingAxes(PaperMotion m) {
 
 int Usage() {
   std::fprintf(stderr,
-               "usage: platform_study [trace <traj>] [--seed N] [--controller bssmc|pi] [--ideal]\n"
+               "usage: platform_study [trace <traj>] [--rig file|default] [--seed N] [--controller bssmc|pi] [--ideal]\n"
                "       [--traj all|x,y,z,roll,pitch,yaw,combined] [--periods N] [key=value ...]\n"
                "keys:");
   for (const auto& k : Keys()) std::fprintf(stderr, " %s", k.name);
@@ -147,6 +149,20 @@ int main(int argc, char** argv) {
     } else if (arg == "--controller") {
       const std::string c = next();
       config.controller = c == "pi" ? hexa::LegControllerKind::kPi : hexa::LegControllerKind::kBsSmc;
+    } else if (arg == "--rig") {
+      // Start from a rig file (as hexa_sim does) instead of the struct defaults; overrides
+      // given AFTER --rig apply on top of it.
+      std::string path = next();
+      if (path == "default") path = hexa::config::DefaultRigFile();
+      const auto loaded = hexa::config::LoadSystemConfig(path);
+      if (!loaded.ok) {
+        std::fprintf(stderr, "%s\n", loaded.error.c_str());
+        return 1;
+      }
+      config.rig = loaded.config.rig;
+      config.leg_controller = loaded.config.leg_controller;
+      config.supervisor = loaded.config.supervisor;
+      config.disturbance = loaded.config.profiles.at(loaded.config.default_profile);
     } else if (arg == "--ideal") {
       config.disturbance = hexa::MakeIdealDisturbanceProfile();
     } else if (arg == "--periods") {

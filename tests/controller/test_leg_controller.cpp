@@ -237,6 +237,8 @@ TEST(PiController, AntiWindupBoundsTheIntegralAndReleasesSaturationAtOnce) {
   config.params.proportional_v_m = 400.0;
   config.params.integral_v_m_s = 4000.0;
   config.params.integrator_limit_v = 2.0;
+  config.params.velocity_feedforward_v_s_m = 0.0;  // the PI part alone (the jump below
+  config.params.rate_damping_v_s_m = 0.0;          // would be a huge measured velocity)
   PiController pi(config);
   PiOutput out;
   // 50 mm error for 2 s: P alone saturates (20 V), so the integral must not wind up at all.
@@ -253,6 +255,26 @@ TEST(PiController, AntiWindupBoundsTheIntegralAndReleasesSaturationAtOnce) {
   PiController pi2(config);
   for (int k = 0; k < 5000; ++k) pi2.Update({0.5, 0.5001}, out);  // 0.1 mm -> 0.04 V P
   EXPECT_NEAR(out.integral_v, 2.0, 1e-12);
+}
+
+TEST(PiController, RateDampingOpposesTheMeasuredVelocityAndFeedForwardFollowsTheSetpoint) {
+  PiConfig config;
+  config.params.proportional_v_m = 0.0;
+  config.params.integral_v_m_s = 0.0;
+  config.params.velocity_feedforward_v_s_m = 6.0;
+  config.params.rate_damping_v_s_m = 20.0;
+  PiController pi(config);
+  PiOutput out;
+  // The leg extends at 0.1 m/s, setpoint at rest on it: u = 5 + sign(a) Kd (0 - 0.1) = 7 V
+  // (a < 0: above null retracts, i.e. brakes the extension). Exact: the eq 40 estimate is
+  // exact on a line.
+  for (int k = 0; k < 40; ++k) pi.Update({0.5 + 1e-4 * k, 0.5 + 1e-4 * k, 0.0}, out);
+  EXPECT_NEAR(out.velocity_m_s, 0.1, 1e-9);
+  EXPECT_NEAR(out.valve_v, 7.0, 1e-9);
+  // Setpoint moving with the leg at 0.1 m/s: no damping, feed-forward 6 * 0.1 -> 4.4 V.
+  PiController pi2(config);
+  for (int k = 0; k < 40; ++k) pi2.Update({0.5 + 1e-4 * k, 0.5 + 1e-4 * k, 0.1}, out);
+  EXPECT_NEAR(out.valve_v, 4.4, 1e-9);
 }
 
 TEST(LegControllerConfig, ValidateNamesTheField) {

@@ -15,22 +15,33 @@ struct DifferentiatorParams {
 
 // Backstepping-sliding mode controller (Sec. 3.2, eq 19-45).
 struct BsSmcParams {
-  double lambda_1_s = 120.0;            // sliding surface slope (eq 19)
+  double lambda_1_s = 40.0;             // sliding surface slope (eq 19); platform grid (docs/tuning.md)
   double switching_gain_n = 90.0;       // K (eq 22, 30), as a force; platform grid (docs/tuning.md)
-  double boundary_layer_xi_s_m = 10.0;  // xi in tanh(xi S) (eq 45); paper: 10
+  double boundary_layer_xi_s_m = 3.0;   // xi in tanh(xi S) (eq 45); paper: 10; platform grid
   double backstepping_beta_1_s = 100.0; // beta (eq 38)
   double effective_mass_kg = 3.0;       // platform grid (docs/tuning.md); vertical-motion value 1.50
   double gravity_load_n = 13.2;         // along the leg at home: 6 g/(6 cos) + 0.25 g cos (docs)
   double viscous_estimate_scale = 1.0;  // B_hat = scale * Table 8 B (eq 21)
   double friction_estimate_scale = 1.0; // F_s, F_c estimate = scale * Table 8 (eq 14)
   double friction_smoothing_velocity_m_s = 0.005;  // sgn(v) -> tanh(v / this) in eq 14
+  // Proportional term of the reaching law, phi -= k_s S ("constant plus proportional rate"
+  // reaching law, Gao & Hung 1993). NOT in the paper (deviation, docs/controller.md): with
+  // K tanh(xi S) alone the corrective force is capped near K, and a leg held by static
+  // friction or by the platform coupling with a large error gets no more force.
+  double reaching_proportional_n_s_m = 25.0;
 };
 
-// PI baseline (paper ref [11]) with anti-windup.
+// PI baseline (paper ref [11]) with anti-windup, plus two terms that are not in ref [11]
+// and default to what the platform needs (docs/controller.md "PI baseline", docs/tuning.md):
+// a velocity feed-forward of the setpoint and rate damping on the velocity error
+// (velocity from the eq 40 differentiator). Both 0 = the plain PI of ref [11].
+// Gains: platform grid, seed 7 (docs/tuning.md).
 struct PiParams {
-  double proportional_v_m = 100.0;       // valve volts per metre; platform grid (docs/tuning.md)
+  double proportional_v_m = 200.0;       // valve volts per metre; platform grid (docs/tuning.md)
   double integral_v_m_s = 30.0;          // valve volts per metre-second
   double integrator_limit_v = 2.0;      // anti-windup clamp of the integral term
+  double velocity_feedforward_v_s_m = 6.0;  // volts per (m/s) of setpoint velocity
+  double rate_damping_v_s_m = 20.0;         // volts per (m/s) of velocity error v_d - v
 };
 
 struct LegControllerParams {

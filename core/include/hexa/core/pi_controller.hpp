@@ -1,6 +1,8 @@
 // PI baseline (paper ref [11]): joint-space PI on the leg length error, with anti-windup.
 //
-//   e = l_d - l,  u = u_null + sign(a) (Kp e + I),  I = clamp(I + Ki e h, +-I_max)
+//   e = l_d - l,  u = u_null + sign(a) (Kp e + I + Kv v_d + Kd (v_d - v)),
+//   I = clamp(I + Ki e h, +-I_max), v from the eq 40 differentiator on the measured length.
+//   Kv = Kd = 0 is ref [11]'s PI; the two extra terms are ours (docs/controller.md).
 //
 // sign(a) is the sign of the spool gain of eq 42 (a < 0 on the MPYE: a voltage below null
 // extends), so positive gains push the leg towards the setpoint. Anti-windup: the integral
@@ -9,12 +11,14 @@
 #pragma once
 
 #include "hexa/core/control_params.hpp"
+#include "hexa/core/differentiator.hpp"
 #include "hexa/core/rig.hpp"
 
 namespace hexa {
 
 struct PiConfig {
   PiParams params;
+  DifferentiatorParams differentiator;  // for the rate-damping velocity
   ValveParams valve;
   double period_s = 0.001;
   void Validate() const;  // throws std::invalid_argument naming field, value, limit
@@ -23,12 +27,14 @@ struct PiConfig {
 struct PiInput {
   double length_m = 0.0;
   double desired_length_m = 0.0;
+  double desired_velocity_m_s = 0.0;
 };
 
 struct PiOutput {
   double valve_v = 5.0;
   double error_m = 0.0;       // l_d - l
   double integral_v = 0.0;    // integral term, volts (before the spool-sign)
+  double velocity_m_s = 0.0;  // measured-length derivative (eq 40)
   bool saturated = false;
 };
 
@@ -41,6 +47,7 @@ class PiController {
 
  private:
   PiConfig config_;
+  GaussianDifferentiator velocity_diff_;
   double integral_v_ = 0.0;
 };
 
