@@ -48,6 +48,8 @@ struct Options {
   std::string trajectory, controller, profile, mode, out_dir, rig, dds_config;
   long long seed = 1, domain = 0, periods = 0;
   bool recorder = true, standby = false, outer_loop = true;
+  int fault_leg = 0;
+  std::string fault_kind, fault_at;
   double timeout_s = 0;
 };
 
@@ -73,6 +75,9 @@ int main(int argc, char** argv) {
   cli.AddFlag("no-recorder", "do not record (no report)");
   cli.AddFlag("no-outer-loop", "disable the task-space outer loop");
   cli.AddFlag("standby", "also start a hot-standby controller per leg");
+  cli.AddOption("fault", "leg:kind:time_s",
+                "inject a fault into one primary leg controller, e.g. 3:crash:2.0 "
+                "(kinds: crash hang slow garbage silence)");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
 
@@ -113,6 +118,25 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "error: %s '%s' does not exist\n", what, path.c_str());
       return 2;
     }
+  }
+  if (cli.Has("fault")) {
+    const std::string f = cli.Get("fault");
+    const auto a = f.find(':'), b = f.find(':', a == std::string::npos ? a : a + 1);
+    static const std::vector<std::string> kKinds{"crash", "hang", "slow", "garbage", "silence"};
+    const std::string leg = a == std::string::npos ? "" : f.substr(0, a);
+    o.fault_kind = b == std::string::npos ? "" : f.substr(a + 1, b - a - 1);
+    o.fault_at = b == std::string::npos ? "" : f.substr(b + 1);
+    char* end = nullptr;
+    const double at = o.fault_at.empty() ? -1 : std::strtod(o.fault_at.c_str(), &end);
+    if (leg.size() != 1 || leg[0] < '1' || leg[0] > '6' ||
+        std::find(kKinds.begin(), kKinds.end(), o.fault_kind) == kKinds.end() ||
+        end == nullptr || *end != '\0' || !(at >= 0)) {
+      std::fprintf(stderr, "error: --fault '%s': expected leg:kind:time_s with leg 1..6, kind "
+                   "one of crash hang slow garbage silence, time_s >= 0 (e.g. 3:crash:2.0)\n",
+                   f.c_str());
+      return 2;
+    }
+    o.fault_leg = leg[0] - '0';
   }
   o.out_dir = cli.Has("out") ? cli.Get("out") : "out/session-" + Timestamp();
   std::error_code ec;
@@ -161,8 +185,13 @@ int main(int argc, char** argv) {
     specs.push_back(r);
   }
   for (int leg = 1; leg <= 6; ++leg) {
-    specs.push_back(spec("leg" + std::to_string(leg), "/services/leg_ctrl/hexa_leg_ctrl",
-                         {"--leg", std::to_string(leg), "--controller", o.controller}));
+    std::vector<std::string> leg_args{"--leg", std::to_string(leg), "--controller", o.controller};
+    if (leg == o.fault_leg) {
+      leg_args.insert(leg_args.end(), {"--fault", o.fault_kind, "--fault-at", o.fault_at});
+      log->warn("fault injection: leg {} primary controller, '{}' at t = {} s", leg,
+                o.fault_kind, o.fault_at);
+    }
+    specs.push_back(spec("leg" + std::to_string(leg), "/services/leg_ctrl/hexa_leg_ctrl", leg_args));
     if (o.standby)
       specs.push_back(spec("leg" + std::to_string(leg) + "_standby",
                            "/services/leg_ctrl/hexa_leg_ctrl",
@@ -234,14 +263,20 @@ int main(int argc, char** argv) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   log->info("all processes stopped; session wall time {:.1f} s", wall_s);
 
-  if (completed && o.recorder) {
+  // The report is written whenever there is a recording: after a fault it shows what
+  // happened. The session still exits non-zero unless it completed.
+  if (o.recorder && std::filesystem::exists(mcap)) {
     ChildSpec r;
     r.name = "report";
     r.argv = {bin + "/services/recorder/hexa_recorder", "report", mcap, "--out", o.out_dir,
               "--meta", "trajectory=" + o.trajectory, "--meta", "controller=" + o.controller,
               "--meta", "profile=" + o.profile, "--meta", "mode=" + o.mode,
               "--meta", "seed=" + std::to_string(o.seed),
-              "--meta", std::string("outer_loop=") + (o.outer_loop ? "on" : "off")};
+              "--meta", std::string("outer_loop=") + (o.outer_loop ? "on" : "off"),
+              "--meta", std::string("completed=") + (completed ? "yes" : "NO")};
+    if (o.fault_leg != 0)
+      r.argv.insert(r.argv.end(), {"--meta", "fault=leg " + std::to_string(o.fault_leg) + " " +
+                                                 o.fault_kind + " at " + o.fault_at + " s"});
     r.env = env;
     r.log_path = o.out_dir + "/report.console.log";
     std::string err;
@@ -265,6 +300,7 @@ int main(int argc, char** argv) {
         }
       }
       std::ifstream md(o.out_dir + "/report.md");
+      if (!completed) md.setstate(std::ios::failbit);  // the log says why; keep the tail short
       if (md) std::printf("\n%s\n", std::string(std::istreambuf_iterator<char>(md), {}).c_str());
     }
   }

@@ -232,8 +232,9 @@ int LegNode::Run() {
   log_->info("{} running: leg {}, {}, {}", name_, options_.leg,
              options_.controller == LegControllerKind::kPi ? "PI" : "BS-SMC",
              options_.standby ? "hot standby (ownership strength 10)" : "primary (strength 20)");
-  // Real time: wake at least every 5 ms to assert MANUAL_BY_TOPIC liveliness while idle.
-  const dds_duration_t idle_wait = realtime ? DDS_MSECS(5) : DDS_SECS(1);
+  // Real time: wake at least every 3 ms to assert MANUAL_BY_TOPIC liveliness (10 ms lease)
+  // while no sensor sample arrives.
+  const dds_duration_t idle_wait = realtime ? DDS_MSECS(3) : DDS_SECS(1);
   while (!shutdown_.requested()) {
     const dds_return_t n = waitset_.Wait(idle_wait);
     if (n < 0) {

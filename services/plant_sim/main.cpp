@@ -18,9 +18,10 @@ int main(int argc, char** argv) {
   cli.AddFlag("expect-recorder", "wait for the recorder before the first tick");
   cli.AddOption("duration", "s", "stop after this simulated time (0 = until stopped)", "0");
   cli.AddOption("startup-timeout", "s", "peers must be ready within this", "30");
-  // 10 ms: this VM shows scheduling stalls of several ms even under SCHED_FIFO
-  // (PLATFORM_NOTES.md); a late command is still used within it, beyond it the valve closes.
-  cli.AddOption("stale-ticks", "N", "real time: ticks a command may lag before null + fault", "10");
+  // 15 ms: this VM shows scheduling stalls of several ms even under SCHED_FIFO
+  // (PLATFORM_NOTES.md), and a hot-standby hand-over takes the 10 ms liveliness lease + 0.5 ms;
+  // a late command is still used within it, beyond it the valve closes.
+  cli.AddOption("stale-ticks", "N", "real time: ticks a command may lag before null + fault", "15");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
 

@@ -25,7 +25,7 @@ struct PlantNodeOptions {
   bool expect_recorder = false;    // wait for the recorder before tick 0
   double duration_s = 0.0;         // stop after this simulated time (0 = until stopped)
   double startup_timeout_s = 30.0; // peers must be ready within this
-  std::uint64_t realtime_stale_ticks = 10;  // real time: command tolerance (main.cpp)
+  std::uint64_t realtime_stale_ticks = 15;  // real time: command tolerance (main.cpp)
   double resend_after_s = 0.05;    // lockstep: republish sensors of a silent leg after this
 };
 

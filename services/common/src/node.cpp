@@ -60,10 +60,12 @@ comm::QosParams QosFor(const CommonOptions& o, comm::TopicKind kind) {
       q.deadline_period_s = *nominal < 0.002 ? o.realtime_deadline_1ms_topics_s
                                              : o.realtime_deadline_5ms_topics_s;
     }
-    // MANUAL_BY_TOPIC catches a hung control thread; 20 ms lease (3 ms gave false drops
-    // on this VM, PLATFORM_NOTES.md).
+    // MANUAL_BY_TOPIC catches a hung control thread. 10 ms lease: 3 ms gave false drops on
+    // this VM, 5-10 ms none (PLATFORM_NOTES.md); a hot standby takes over after about the
+    // lease + 0.5 ms, inside the plant's 15-tick command tolerance, so the platform does not
+    // notice the hand-over.
     q.valve_liveliness = comm::LivelinessKind::kManualByTopic;
-    q.valve_liveliness_lease_s = 0.02;
+    q.valve_liveliness_lease_s = 0.01;
   }
   return q;
 }

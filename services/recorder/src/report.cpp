@@ -369,6 +369,8 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
       << Json(r.latency_s.max * 1e6) << " us over " << r.latency_pairs << " pairs\n";
     for (const auto& [k, v] : r.deadline_misses) m << "- deadline misses " << k << ": " << v << "\n";
     for (const auto& [k, v] : r.missing) m << "- samples missing (from tick numbers) " << k << ": " << v << "\n";
+    m << "\n(In real time a leg controller answers only the newest sensor sample of its leg, so "
+         "gaps in hexa_ValveCommand there are ticks it skipped, not samples the recorder lost.)\n";
     m << "\n## Faults\n\n";
     if (r.faults.empty()) m << "none\n";
     for (const auto& f : r.faults) m << "- " << f << "\n";
