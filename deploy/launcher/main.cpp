@@ -232,6 +232,14 @@ int main(int argc, char** argv) {
       if (e.name == "supervisor" && e.signal == 0 && e.exit_code == 0) {
         log->info("supervisor finished the trajectory after {:.1f} s wall", elapsed_s);
         completed = true;
+      } else if (o.standby && e.name.rfind("leg", 0) == 0 &&
+                 e.name.find("_standby") == std::string::npos &&
+                 group.Running(e.name + "_standby")) {
+        log->warn("{}; its hot standby {}_standby takes over the valve", e.Describe(), e.name);
+      } else if (o.fault_leg != 0 && e.name == "leg" + std::to_string(o.fault_leg)) {
+        // The death was injected on purpose: let the plant and the supervisor handle it.
+        log->warn("{} (injected fault): watching the plant and the supervisor react",
+                  e.Describe());
       } else {
         log->error("{} before the session completed; its last log lines:\n{}", e.Describe(),
                    TailOf(o.out_dir + "/" + e.name + ".console.log", 15));

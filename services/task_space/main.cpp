@@ -16,7 +16,7 @@ int main(int argc, char** argv) {
                 "combined");
   cli.AddOption("periods", "N", "periods to track (0 = the trajectory's default)", "0");
   cli.AddFlag("autostart", "start the trajectory as soon as the pose is known");
-  cli.AddFlag("exit-when-done", "exit 0 when the trajectory has finished (5 on HOLD)");
+  cli.AddFlag("exit-when-done", "exit 0 when the trajectory has finished (5 after 1 s in HOLD)");
   cli.AddFlag("no-outer-loop", "disable the task-space outer loop");
   cli.AddFlag("least-squares", "six-leg least-squares position estimate instead of GQFK");
   cli.AddOption("startup-timeout", "s", "peers must match within this", "30");

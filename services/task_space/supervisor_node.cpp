@@ -248,7 +248,13 @@ void SupervisorNode::RunTick(std::uint64_t tick, double time_s) {
                     static_cast<hexa_msg_FaultReason>(static_cast<int>(output_.fault)),
                     output_.fault_detail.data());
     PublishStatus(hexa_msg_NODE_HOLD, output_.fault_detail.data());
-    if (options_.exit_when_done) exit_code_ = 5;
+    // With --exit-when-done the session ends in HOLD, but only after holding for a while,
+    // so that the recording shows what the platform did after the fault.
+    if (options_.exit_when_done && hold_exit_tick_ == 0) hold_exit_tick_ = tick + 1000;
+  }
+  if (hold_exit_tick_ != 0 && tick >= hold_exit_tick_ && exit_code_ < 0) {
+    log_->error("leaving after 1 s in HOLD (exit 5): {}", output_.fault_detail.data());
+    exit_code_ = 5;
   }
   if (!was_initialized_ && supervisor_.initialized()) {
     was_initialized_ = true;

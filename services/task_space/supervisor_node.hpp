@@ -89,6 +89,7 @@ class SupervisorNode {
   bool left_idle_ = false;
   bool was_initialized_ = false;
   int exit_code_ = -1;  // set when the service should exit
+  std::uint64_t hold_exit_tick_ = 0;  // --exit-when-done after a fault: leave at this tick
   node::CycleTimeWindow cycle_times_;
   std::uint64_t cycles_ = 0;
 };

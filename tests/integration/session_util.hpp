@@ -1,0 +1,96 @@
+// Helpers of the system tests: run hexa_session as a supervised child (no orphans, even on
+// failure), read its report, replay the same configuration in-process.
+#pragma once
+
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "hexa/config/rig_config.hpp"
+#include "hexa/core/lockstep_simulation.hpp"
+#include "hexa/recorder/report.hpp"
+#include "process_group.hpp"
+
+namespace hexa::testing {
+
+inline std::string Slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+struct SessionRun {
+  std::string dir;
+  int exit_code = -1;
+  bool has_report = false;
+  recorder::SessionReport report;
+};
+
+// Runs hexa_session with `args` (+ --domain, --out) and waits for it.
+inline SessionRun RunSession(const std::string& name, int domain, std::vector<std::string> args) {
+  SessionRun run;
+  run.dir = ::testing::TempDir() + "/" + name + "_" + std::to_string(getpid());
+  std::filesystem::create_directories(run.dir);
+  deploy::ProcessGroup group;
+  deploy::ChildSpec s{"session", {HEXA_SESSION}, {}, run.dir + "/launcher.console.log"};
+  s.argv.insert(s.argv.end(), args.begin(), args.end());
+  s.argv.insert(s.argv.end(), {"--domain", std::to_string(domain), "--out", run.dir,
+                               "--timeout", "240"});
+  std::string err;
+  if (group.Start(s, err) < 0) {
+    ADD_FAILURE() << err;
+    return run;
+  }
+  const auto ev = group.WaitEvent(std::chrono::seconds(300));
+  if (ev.kind != deploy::ProcessGroup::Event::kChildExited) {
+    ADD_FAILURE() << "session did not end in time";
+    return run;
+  }
+  run.exit_code = ev.exit.signal == 0 ? ev.exit.exit_code : 128 + ev.exit.signal;
+  if (std::filesystem::exists(run.dir + "/session.mcap")) {
+    run.report = recorder::ComputeSessionReport(run.dir + "/session.mcap");
+    run.has_report = true;
+  }
+  return run;
+}
+
+// Replays a paper trajectory in the in-process lockstep simulation with the shipped rig
+// file and compares the valve voltages the plant applied at every tick, bit for bit.
+// GroundTruth(n + 1) carries the voltages applied during step n.
+inline void ExpectSameAsInProcess(const recorder::SessionReport& report, PaperMotion motion,
+                                  int periods, std::uint64_t seed,
+                                  LegControllerKind controller = LegControllerKind::kBsSmc) {
+  const auto cfg = config::LoadSystemConfigOrThrow(config::DefaultRigFile());
+  LockstepConfig lc;
+  lc.rig = cfg.rig;
+  lc.leg_controller = cfg.leg_controller;
+  lc.supervisor = cfg.supervisor;
+  lc.disturbance = cfg.profiles.at("realistic");
+  lc.seed = seed;
+  lc.controller = controller;
+  LockstepSimulation sim(lc);
+  sim.Tick();  // tick 0: the supervisor latches the rest pose, as the service does
+  const StartRequest start = sim.supervisor().PreparePaperStart(motion, periods);
+  const auto& applied = report.applied_valve_v;
+  ASSERT_GT(applied.size(), 1000u);
+  for (std::uint64_t n = 1; n + 1 < applied.size(); ++n) {
+    const bool start_now = n == 5;
+    sim.Tick(start_now ? OperatorCommandKind::kStart : OperatorCommandKind::kNone,
+             start_now ? &start : nullptr);
+    for (int i = 0; i < 6; ++i) {
+      ASSERT_EQ(applied[n + 1][i], sim.applied_valve_v()[i])
+          << "tick " << n << " leg " << i + 1
+          << ": the DDS session and the in-process simulation diverge";
+    }
+  }
+}
+
+}  // namespace hexa::testing
