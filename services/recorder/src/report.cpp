@@ -154,6 +154,10 @@ SessionReport ComputeSessionReport(const std::string& path) {
   // Joint space: each tick takes the supervisor state of the newest pose report at or
   // before it (the state the legs' setpoints came from).
   std::array<ScalarErrorAccumulator, 6> legs;
+  std::array<double, 6> valve_step_sum{}, valve_saturated{};
+  std::size_t valve_ticks = 0;
+  std::array<double, 6> prev_v{};
+  bool have_prev_v = false;
   std::vector<double> latencies;
   std::size_t pose_index = 0;
   int state = -1;
@@ -173,7 +177,16 @@ SessionReport ComputeSessionReport(const std::string& path) {
       any = any || s.sensor[i] || s.command[i];
     }
     if (any) r.leg_rows.push_back(row);
+    if (s.truth && state == 2) {
+      for (int i = 0; i < 6; ++i) {
+        if (have_prev_v) valve_step_sum[i] += std::abs(s.applied_v[i] - prev_v[i]);
+        valve_saturated[i] += (s.applied_v[i] < 0.05 || s.applied_v[i] > 9.95) ? 1.0 : 0.0;
+      }
+      if (have_prev_v) ++valve_ticks;
+    }
     if (s.truth) {
+      prev_v = s.applied_v;
+      have_prev_v = true;
       r.applied_valve_v.resize(tick + 1);
       r.applied_valve_v[tick] = s.applied_v;
       r.sim_time_s = tick * kTickS;
@@ -182,6 +195,10 @@ SessionReport ComputeSessionReport(const std::string& path) {
   for (int i = 0; i < 6; ++i) {
     r.leg_length_rmse_m[i] = legs[i].Rmse();
     r.leg_length_max_abs_m[i] = legs[i].MaxAbs();
+  }
+  for (int i = 0; i < 6 && valve_ticks > 0; ++i) {
+    r.valve_mean_abs_step_v[i] = valve_step_sum[i] / static_cast<double>(valve_ticks);
+    r.valve_saturated_fraction[i] = valve_saturated[i] / static_cast<double>(valve_ticks + 1);
   }
   r.latency_pairs = latencies.size();
   r.latency_s = ComputePercentiles(std::move(latencies));
@@ -280,6 +297,10 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
     for (int i = 0; i < 6; ++i) j << (i ? ", " : "") << Json(r.leg_length_rmse_m[i]);
     j << "],\n  \"leg_length_max_abs_error_m\": [";
     for (int i = 0; i < 6; ++i) j << (i ? ", " : "") << Json(r.leg_length_max_abs_m[i]);
+    j << "],\n  \"valve_mean_abs_step_v_per_tick\": [";
+    for (int i = 0; i < 6; ++i) j << (i ? ", " : "") << Json(r.valve_mean_abs_step_v[i]);
+    j << "],\n  \"valve_saturated_fraction\": [";
+    for (int i = 0; i < 6; ++i) j << (i ? ", " : "") << Json(r.valve_saturated_fraction[i]);
     j << "],\n  \"deadline_misses\": {";
     first = true;
     for (const auto& [k, v] : r.deadline_misses) {
@@ -362,7 +383,13 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
     for (double v : r.leg_length_rmse_m) m << " | " << Json(1000 * v).substr(0, 6);
     m << " |\n| max mm";
     for (double v : r.leg_length_max_abs_m) m << " | " << Json(1000 * v).substr(0, 6);
-    m << " |\n\n## Timing\n\n";
+    m << " |\n| valve mean abs step V/tick";
+    for (double v : r.valve_mean_abs_step_v) m << " | " << Json(v).substr(0, 5);
+    m << " |\n| valve saturated %";
+    for (double v : r.valve_saturated_fraction) m << " | " << Json(100 * v).substr(0, 5);
+    m << " |\n\nValve activity is taken over the tracking window from the voltages the plant "
+         "applied: a smooth command moves a few hundredths of a volt per 1 ms tick; chattering "
+         "shows as large steps and time at 0 or 10 V.\n\n## Timing\n\n";
     m << "- control round trip (sensor sample written -> valve command written, same leg and "
          "tick): median "
       << Json(r.latency_s.median * 1e6) << " us, p99 " << Json(r.latency_s.p99 * 1e6) << " us, max "

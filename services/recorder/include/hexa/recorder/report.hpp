@@ -26,6 +26,10 @@ struct SessionReport {
   std::array<double, 6> relative_vs_measured{};
   std::array<double, 6> leg_length_rmse_m{};
   std::array<double, 6> leg_length_max_abs_m{};
+  // Valve activity over the tracking window (applied voltages): mean |u(k) - u(k-1)| per
+  // 1 ms tick, and the fraction of ticks at either end of the range (chattering shows here).
+  std::array<double, 6> valve_mean_abs_step_v{};
+  std::array<double, 6> valve_saturated_fraction{};
   Percentiles latency_s;                      // sensor written -> command written
   std::uint64_t latency_pairs = 0;
   std::map<std::string, std::uint64_t> deadline_misses;  // per topic (from NodeStatus)
