@@ -11,14 +11,24 @@ packages=(
   libspdlog-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3-numpy python3-matplotlib
-  nodejs npm
   iproute2 procps
 )
+# Node.js + npm (one test reads recordings with the MCAP project's own JS library): machines
+# of this kind ship their own Node; Debian's npm conflicts with it, so the Debian packages are
+# only installed when no node/npm is on PATH.
+need_node=0
+command -v node >/dev/null 2>&1 && command -v npm >/dev/null 2>&1 || need_node=1
 
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+
+if [ "$need_node" -eq 1 ]; then
+  for p in nodejs npm; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+fi
 
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install_deps: all ${#packages[@]} Debian packages present"
