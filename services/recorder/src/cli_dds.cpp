@@ -7,8 +7,10 @@
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <optional>
+#include <set>
 
 #include "cli.hpp"
 #include "hexa/comm/comm.hpp"
@@ -102,6 +104,8 @@ struct TopicRecorderBase {
   bool periodic = false;
   uint64_t received = 0;
   TickLossTracker loss;
+  // Called with each recorded message (play --answers-out watches the answers through it).
+  std::function<void(const google::protobuf::Message&)> on_sample;
 };
 
 template <typename T, typename P>
@@ -138,6 +142,7 @@ class TopicRecorder final : public TopicRecorderBase {
         ToProto(s, msg_);
         w.Write(channel, log_ns, static_cast<uint64_t>(SourceTime_ns(s)), msg_);
         ++received;
+        if (on_sample) on_sample(msg_);
         if (periodic) {
           if (auto tick = MessageTick(msg_)) loss.Add(MessageKey(msg_), *tick);
         }
@@ -293,6 +298,12 @@ struct TopicPlayerBase {
   virtual ~TopicPlayerBase() = default;
   // false: the message could not be converted (reported once per channel by the caller).
   virtual bool Publish(std::string_view data) = 0;
+  // The decoded message (reused by the next call), nullptr if the bytes do not parse.
+  virtual const google::protobuf::Message* Parse(std::string_view data) = 0;
+  virtual comm::StatusSnapshot Status() const = 0;
+  // Blocks until every matched reliable reader has acknowledged every sample written.
+  virtual dds_return_t WaitForAcks(dds_duration_t timeout) = 0;
+  std::string topic;
   uint64_t published = 0;
   uint64_t refused = 0;
 };
@@ -300,8 +311,38 @@ struct TopicPlayerBase {
 template <typename T, typename P>
 class TopicPlayer final : public TopicPlayerBase {
  public:
-  TopicPlayer(const comm::Participant& p, const comm::QosParams& params)
-      : topic_(p), writer_(p, topic_, params) {}
+  // The comm profile's writer QoS; `keep_all` (lockstep replay) replaces the keep-last history
+  // by KEEP_ALL so that a reliable reader that falls behind throttles the writer (Cyclone
+  // blocks dds_write while too much is unacknowledged) instead of losing samples that the
+  // keep-last history would have overwritten.
+  TopicPlayer(const comm::Participant& p, const comm::QosParams& params, bool keep_all)
+      : topic_(p) {
+    const comm::TopicKind kind = comm::TopicTraits<T>::kKind;
+    topic = std::string(comm::TopicName(kind));
+    const comm::Qos qos = comm::MakeQos(kind, comm::EndpointRole::kWriter, params);
+    if (keep_all) {
+      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, DDS_LENGTH_UNLIMITED);
+      dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+    }
+    writer_ = comm::OwnedEntity(comm::CheckDds(
+        dds_create_writer(p.get(), topic_.get(), qos.get(), nullptr),
+        "cannot create writer on " + topic));
+  }
+  const google::protobuf::Message* Parse(std::string_view data) override {
+    return msg_.ParseFromArray(data.data(), static_cast<int>(data.size())) ? &msg_ : nullptr;
+  }
+  comm::StatusSnapshot Status() const override {
+    comm::StatusSnapshot s;
+    dds_publication_matched_status_t m{};
+    if (dds_get_publication_matched_status(writer_.get(), &m) == DDS_RETCODE_OK) {
+      s.publication_matched_current = m.current_count;
+      s.publication_matched_total = m.total_count;
+    }
+    return s;
+  }
+  dds_return_t WaitForAcks(dds_duration_t timeout) override {
+    return dds_wait_for_acks(writer_.get(), timeout);
+  }
   bool Publish(std::string_view data) override {
     T sample{};
     if (!msg_.ParseFromArray(data.data(), static_cast<int>(data.size())) ||
@@ -310,27 +351,284 @@ class TopicPlayer final : public TopicPlayerBase {
       return false;
     }
     // The sample keeps its recorded header; DDS gets the replay time as source timestamp.
-    const dds_return_t rc = writer_.Write(sample, comm::RealtimeNow_ns());
-    if (rc < 0) throw std::runtime_error("write failed: " + std::string(dds_strretcode(rc)));
+    // A keep-all writer may time out while a reader catches up: try again (bounded).
+    dds_return_t rc = DDS_RETCODE_TIMEOUT;
+    for (int attempt = 0; attempt < 30 && rc == DDS_RETCODE_TIMEOUT; ++attempt)
+      rc = dds_write_ts(writer_.get(), &sample, comm::RealtimeNow_ns());
+    if (rc < 0) throw std::runtime_error("write on " + topic + " failed: " +
+                                         std::string(dds_strretcode(rc)));
     ++published;
     return true;
   }
 
  private:
   comm::Topic<T> topic_;
-  comm::Writer<T> writer_;
+  comm::OwnedEntity writer_;
   P msg_;
 };
 
 struct StopPlayback {};
+
+// Lockstep playback (play --lockstep): the recording is published tick by tick, in tick order,
+// through keep-all writers (a reliable reader that falls behind throttles the writer, nothing
+// is overwritten) and, with --answers-out, the next tick starts only when every leg controller
+// whose sensors were published has answered this one with its ValveCommand. That is the plant's lockstep
+// protocol (docs/architecture.md), so a controller that keeps only the newest sensor sample
+// (keep-last 1) never has a tick overwritten, whatever the machine's load: the replay is
+// deterministic, unlike pacing by recorded log times (which carry the recorder's batching).
+struct LockstepOptions {
+  uint64_t start_log_ns = 0;
+  std::string answers_out;           // "" = do not wait for answers
+  std::set<uint32_t> answer_legs;    // empty = every leg seen in the sensor stream
+  double answer_timeout_s = 10.0;
+  double wait_readers_s = 30.0;
+  uint64_t reorder_ticks = 10000;    // how far file order may lag tick order
+  uint64_t ack_every_ticks = 0;      // 0 = never wait for acknowledgements (keep-all writers
+                                     // already guarantee delivery to reliable readers)
+  bool progress = true;
+};
+
+int RunLockstepPlayback(const std::string& path, const LockstepOptions& o,
+                        const RecordingCatalog& catalog,
+                        const std::map<uint16_t, TopicPlayerBase*>& players,
+                        const std::vector<std::unique_ptr<TopicPlayerBase>>& owned,
+                        comm::Participant& participant, comm::ShutdownGuard& shutdown) {
+  // Only periodic topics carry the tick that orders the replay.
+  std::map<uint16_t, TopicPlayerBase*> ticked;
+  TopicPlayerBase* sensors_player = nullptr;
+  TopicPlayerBase* setpoint_player = nullptr;
+  for (const auto& [id, player] : players) {
+    const std::string& topic = catalog.channels.at(id).topic;
+    bool periodic = false;
+    for (int k = 0; k < comm::kTopicKindCount; ++k) {
+      const auto kind = static_cast<comm::TopicKind>(k);
+      if (comm::TopicName(kind) == topic) periodic = comm::NominalPeriod_s(kind).has_value();
+    }
+    if (!periodic) {
+      std::fprintf(stderr, "play --lockstep: skipping event topic '%s' (no tick)\n", topic.c_str());
+      continue;
+    }
+    ticked[id] = player;
+    if (topic == comm::kLegSensorsTopic) sensors_player = player;
+    if (topic == comm::kLegSetpointTopic) setpoint_player = player;
+  }
+  if (ticked.empty()) throw UsageError("play --lockstep: no periodic topic selected");
+
+  // The legs whose answers are awaited: --answer-legs, else every leg in the sensor stream.
+  std::set<uint32_t> legs = o.answer_legs;
+  const bool await_answers = !o.answers_out.empty();
+  if (await_answers && legs.empty()) {
+    if (sensors_player == nullptr)
+      throw UsageError("play --answers-out needs hexa_LegSensors among the played topics");
+    ReadRecording(path, [&](const McapChannel& ch, const McapMessageView&,
+                            const google::protobuf::Message& m) {
+      if (ch.topic != comm::kLegSensorsTopic) return;
+      const std::string key = MessageKey(m);  // "leg N"
+      if (key.rfind("leg ", 0) == 0) legs.insert(static_cast<uint32_t>(std::stoul(key.substr(4))));
+    });
+    if (legs.empty()) throw UsageError("play --answers-out: the recording has no leg sensors");
+  }
+
+  // Answers: the ValveCommands of the controllers under test, recorded like `record` does.
+  std::unique_ptr<RecordingWriter> answers_writer;
+  std::unique_ptr<TopicRecorderBase> answers;
+  std::map<uint32_t, uint64_t> answered;  // leg -> newest tick answered
+  uint64_t answers_received = 0;
+  comm::WaitSet waitset(participant, 4);
+  waitset.Attach(shutdown.guard_condition(), 0);
+  if (await_answers) {
+    answers_writer = std::make_unique<RecordingWriter>(McapWriterConfig{});
+    answers_writer->Open(o.answers_out);
+    answers = std::make_unique<TopicRecorder<hexa_msg_ValveCommand, rec::ValveCommand>>(
+        participant, *answers_writer, comm::QosParams{});
+    answers->on_sample = [&](const google::protobuf::Message& m) {
+      ++answers_received;
+      const auto tick = MessageTick(m);
+      const std::string key = MessageKey(m);
+      if (!tick || key.rfind("leg ", 0) != 0) return;
+      uint64_t& newest = answered[static_cast<uint32_t>(std::stoul(key.substr(4)))];
+      newest = std::max(newest, *tick);
+    };
+    answers_writer->mcap().FlushChunk();
+    waitset.Attach(answers->condition(), 1);
+  }
+
+  // Start when the peers are there: with answers, the controllers of every awaited leg (their
+  // ValveCommand writers, sensor and setpoint readers); otherwise one reader per topic.
+  {
+    const int64_t until = comm::RealtimeNow_ns() + static_cast<int64_t>(o.wait_readers_s * 1e9);
+    const uint32_t need = await_answers ? static_cast<uint32_t>(legs.size()) : 1;
+    std::string missing;
+    for (;;) {
+      missing.clear();
+      if (await_answers && answers->Status().subscription_matched_current < need)
+        missing += " ValveCommand writers " +
+                   std::to_string(answers->Status().subscription_matched_current) + "/" +
+                   std::to_string(need);
+      for (const auto& p : owned) {
+        const bool must = !await_answers || p.get() == sensors_player || p.get() == setpoint_player;
+        if (must && p->Status().publication_matched_current < need)
+          missing += " " + p->topic + " readers " +
+                     std::to_string(p->Status().publication_matched_current) + "/" +
+                     std::to_string(need);
+      }
+      if (missing.empty() || shutdown.requested()) break;
+      if (comm::RealtimeNow_ns() > until) {
+        std::fprintf(stderr, "play --lockstep: peers missing after %.1f s:%s\n", o.wait_readers_s,
+                     missing.c_str());
+        if (await_answers) throw std::runtime_error("play --lockstep: the controllers under test "
+                                                    "did not appear (--wait-readers-s)");
+        break;
+      }
+      waitset.Wait(DDS_MSECS(20));  // match counts change without data: bounded re-check
+    }
+  }
+
+  struct Pending {
+    TopicPlayerBase* player;
+    std::string data;
+    uint32_t leg;  // LegSensors: its leg, else 0
+  };
+  std::map<uint64_t, std::vector<Pending>> buffer;
+  uint64_t next_tick = 0;  // every tick below has been played
+  bool started = false;
+  uint64_t ticks_played = 0, published = 0, refused = 0, ack_timeouts = 0;
+  int64_t last_progress_ns = 0;
+  std::set<uint32_t> awaited;
+
+  auto drain_answers = [&] {
+    if (answers) answers->Drain(*answers_writer);
+  };
+  auto play_tick = [&](uint64_t tick, std::vector<Pending>& msgs) {
+    awaited.clear();
+    for (const Pending& m : msgs) {
+      if (!m.player->Publish(m.data)) {
+        ++refused;
+        continue;
+      }
+      ++published;
+      if (m.leg != 0 && (o.answer_legs.empty() || legs.count(m.leg))) awaited.insert(m.leg);
+    }
+    ++ticks_played;
+    if (o.ack_every_ticks > 0 && ticks_played % o.ack_every_ticks == 0) {
+      for (const auto& p : owned) {
+        if (p->WaitForAcks(DDS_SECS(5)) == DDS_RETCODE_TIMEOUT) ++ack_timeouts;
+      }
+    }
+    if (await_answers) {
+      const int64_t until =
+          comm::RealtimeNow_ns() + static_cast<int64_t>(o.answer_timeout_s * 1e9);
+      for (;;) {
+        drain_answers();
+        std::string late;
+        for (uint32_t leg : awaited) {
+          auto it = answered.find(leg);
+          if (it == answered.end() || it->second < tick) late += " " + std::to_string(leg);
+        }
+        if (late.empty()) break;
+        if (shutdown.requested()) throw StopPlayback{};
+        if (comm::RealtimeNow_ns() > until) {
+          throw std::runtime_error("play --lockstep: tick " + std::to_string(tick) +
+                                   " not answered within " + std::to_string(o.answer_timeout_s) +
+                                   " s by leg(s)" + late);
+        }
+        waitset.WaitUntil(static_cast<dds_time_t>(until));
+      }
+    }
+    const int64_t now = comm::RealtimeNow_ns();
+    if (o.progress && now - last_progress_ns > 250'000'000) {
+      last_progress_ns = now;
+      std::fprintf(stderr, "\rplay --lockstep: tick %" PRIu64 "  %" PRIu64 " messages  ", tick,
+                   published);
+    }
+  };
+  auto flush_below = [&](uint64_t limit) {  // plays every buffered tick < limit
+    while (!buffer.empty() && buffer.begin()->first < limit) {
+      if (shutdown.requested()) throw StopPlayback{};
+      auto node = buffer.extract(buffer.begin());
+      play_tick(node.key(), node.mapped());
+      next_tick = node.key() + 1;
+    }
+  };
+
+  bool interrupted = false;
+  std::string error;
+  try {
+    McapReader r;
+    r.Open(path);
+    McapVisitor v;
+    v.on_message = [&](const McapMessageView& m) {
+      if (shutdown.requested()) throw StopPlayback{};
+      if (m.log_time_ns < o.start_log_ns) return;
+      auto it = ticked.find(m.channel_id);
+      if (it == ticked.end()) return;
+      const google::protobuf::Message* msg = it->second->Parse(m.data);
+      const std::optional<uint64_t> tick = msg ? MessageTick(*msg) : std::nullopt;
+      if (!tick) {
+        ++refused;
+        return;
+      }
+      if (started && *tick < next_tick)
+        throw std::runtime_error(
+            "play --lockstep: a message of tick " + std::to_string(*tick) + " on '" +
+            catalog.channels.at(m.channel_id).topic + "' comes after tick " +
+            std::to_string(next_tick - 1) + " was played: raise --reorder-ticks (now " +
+            std::to_string(o.reorder_ticks) + ")");
+      uint32_t leg = 0;
+      if (it->second == sensors_player) {
+        const std::string key = MessageKey(*msg);
+        if (key.rfind("leg ", 0) == 0) leg = static_cast<uint32_t>(std::stoul(key.substr(4)));
+      }
+      buffer[*tick].push_back(Pending{it->second, std::string(m.data), leg});
+      const uint64_t newest = buffer.rbegin()->first;
+      if (newest >= o.reorder_ticks) {
+        const uint64_t limit = newest - o.reorder_ticks;
+        if (!buffer.empty() && buffer.begin()->first < limit) {
+          started = true;
+          flush_below(limit);
+        }
+      }
+    };
+    r.Scan(v);
+    started = true;
+    flush_below(UINT64_MAX);
+    for (const auto& p : owned) {  // the last samples reach every reliable reader
+      if (p->WaitForAcks(DDS_SECS(10)) == DDS_RETCODE_TIMEOUT) ++ack_timeouts;
+    }
+  } catch (const StopPlayback&) {
+    interrupted = true;
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  if (o.progress) std::fputc('\n', stderr);
+  if (answers) {
+    drain_answers();
+    answers_writer->Close();
+  }
+  std::printf("played %" PRIu64 " messages in %" PRIu64 " ticks (%" PRIu64
+              " refused, %" PRIu64 " acknowledgement timeouts)%s\n",
+              published, ticks_played, refused, ack_timeouts, interrupted ? ", interrupted" : "");
+  if (answers) {
+    std::printf("answers: %" PRIu64 " ValveCommands -> %s; newest tick per leg:", answers_received,
+                o.answers_out.c_str());
+    for (const auto& [leg, tick] : answered) std::printf(" %u:%" PRIu64, leg, tick);
+    std::printf("\n");
+  }
+  if (!error.empty()) {
+    std::fprintf(stderr, "error: %s\n", error.c_str());
+    return kExitError;
+  }
+  return kExitOk;
+}
 
 }  // namespace
 
 int RunPlay(const std::vector<std::string>& argv) {
   const Args a = ParseArgs(argv,
                            {"domain", "rate", "start-s", "topics", "exclude", "dds-config",
-                            "deadline-s", "wait-readers-s"},
-                           {"loop", "no-progress"});
+                            "deadline-s", "wait-readers-s", "answers-out", "answer-legs",
+                            "answer-timeout-s", "reorder-ticks", "ack-every"},
+                           {"loop", "no-progress", "lockstep"});
   if (a.help) {
     std::fputs(
         "usage: hexa_recorder play FILE.mcap [--domain N] [--rate X] [--loop] [--start-s S]\n"
@@ -344,7 +642,25 @@ int RunPlay(const std::vector<std::string>& argv) {
         "controller build. --deadline-s sets the writers' offered deadline (as the comm\n"
         "QosParams.deadline_period_s; default the nominal period). --wait-readers-s waits up\n"
         "to S seconds for at least one reader per published topic before starting.\n"
-        "A progress line goes to stderr unless --no-progress.\n",
+        "A progress line goes to stderr unless --no-progress.\n"
+        "\n"
+        "Lockstep replay (deterministic, independent of timing and load):\n"
+        "  --lockstep            publish the periodic topics tick by tick in tick order with\n"
+        "                        keep-all writers: a reliable reader (e.g. record) that falls\n"
+        "                        behind slows playback down instead of losing samples. At the\n"
+        "                        end, waits until every reader has acknowledged everything.\n"
+        "                        --ack-every N also waits for acknowledgements every N ticks.\n"
+        "                        --rate and --loop do not apply; --wait-readers-s (default 30)\n"
+        "                        waits for a reader on every played topic.\n"
+        "  --answers-out F.mcap  also act as the plant: after tick n wait until every leg whose\n"
+        "                        LegSensors(n) was played has answered with ValveCommand(n), and\n"
+        "                        record those ValveCommands to F.mcap (then `diff` it against\n"
+        "                        the original). Waits first for the controllers of every leg.\n"
+        "  --answer-legs L,..    legs to wait for (default: every leg in the sensor stream)\n"
+        "  --answer-timeout-s S  a tick not answered within S (default 10) is an error (exit 2)\n"
+        "  --reorder-ticks N     how far the file order may lag the tick order (default 10000)\n"
+        "e.g. play run.mcap --lockstep --topics hexa_LegSensors,hexa_ImuSample,hexa_LegSetpoint\n"
+        "       --answers-out new.mcap   (with hexa_leg_ctrl --mode lockstep x6 on the domain)\n",
         stdout);
     return kExitOk;
   }
@@ -356,6 +672,28 @@ int RunPlay(const std::vector<std::string>& argv) {
   if (!(start_s >= 0.0)) throw UsageError("--start-s must be >= 0");
   const bool loop = a.Has("loop");
   const bool progress = !a.Has("no-progress");
+  const bool lockstep = a.Has("lockstep") || a.Has("answers-out");
+  LockstepOptions lo;
+  if (lockstep) {
+    if (loop) throw UsageError("--loop does not combine with --lockstep");
+    if (a.Has("rate")) throw UsageError("--rate does not apply to --lockstep (paced by delivery)");
+    lo.answers_out = a.Get("answers-out", "");
+    for (const std::string& l : a.GetAll("answer-legs")) {
+      const long v = std::strtol(l.c_str(), nullptr, 10);
+      if (v < 1 || v > 255) throw UsageError("--answer-legs: '" + l + "' is not a leg id 1..255");
+      lo.answer_legs.insert(static_cast<uint32_t>(v));
+    }
+    lo.answer_timeout_s = a.GetDouble("answer-timeout-s", 10.0);
+    if (!(lo.answer_timeout_s > 0)) throw UsageError("--answer-timeout-s must be > 0");
+    lo.wait_readers_s = a.GetDouble("wait-readers-s", 30.0);
+    const long long reorder = a.GetInt("reorder-ticks", 10000);
+    if (reorder < 0) throw UsageError("--reorder-ticks must be >= 0");
+    lo.reorder_ticks = static_cast<uint64_t>(reorder);
+    const long long ack = a.GetInt("ack-every", 0);
+    if (ack < 0) throw UsageError("--ack-every must be >= 0");
+    lo.ack_every_ticks = static_cast<uint64_t>(ack);
+    lo.progress = progress;
+  }
   const TopicFilter filter{a.GetAll("topics"), a.GetAll("exclude")};
   comm::QosParams params;
   if (a.Has("deadline-s")) params.deadline_period_s = a.GetDouble("deadline-s", 0.0);
@@ -411,7 +749,7 @@ int RunPlay(const std::vector<std::string>& argv) {
       }
       auto& player = by_topic[ch.topic];
       if (player == nullptr) {
-        owned.push_back(std::make_unique<TopicPlayer<T, P>>(participant, params));
+        owned.push_back(std::make_unique<TopicPlayer<T, P>>(participant, params, lockstep));
         player = owned.back().get();
       }
       players[id] = player;
@@ -422,11 +760,23 @@ int RunPlay(const std::vector<std::string>& argv) {
   }
   if (players.empty()) throw UsageError("no channel of the recording is selected for playback");
 
+  if (lockstep) {
+    lo.start_log_ns = start_log;
+    return RunLockstepPlayback(path, lo, catalog, players, owned, participant, shutdown);
+  }
+
   if (a.Has("wait-readers-s")) {
-    // Give late-joining readers (volatile topics) the chance to match before data flows.
+    // Give late-joining readers (volatile topics) the chance to match before data flows: up
+    // to S seconds until every published topic has at least one reader.
     const double wait_s = a.GetDouble("wait-readers-s", 0.0);
     const int64_t until = comm::RealtimeNow_ns() + static_cast<int64_t>(wait_s * 1e9);
-    waitset.WaitUntil(static_cast<dds_time_t>(until));
+    while (!shutdown.requested() && comm::RealtimeNow_ns() < until) {
+      bool all = true;
+      for (const auto& p : owned) all = all && p->Status().publication_matched_current >= 1;
+      if (all) break;
+      waitset.WaitUntil(std::min(static_cast<dds_time_t>(until),
+                                 static_cast<dds_time_t>(comm::RealtimeNow_ns() + 20'000'000)));
+    }
   }
 
   uint64_t total_published = 0, total_refused = 0;
