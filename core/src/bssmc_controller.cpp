@@ -56,6 +56,12 @@ void BsSmcConfig::Validate() const {
           "friction_smoothing_velocity_m_s", p.friction_smoothing_velocity_m_s, "finite and > 0");
   Require(std::isfinite(p.reaching_proportional_n_s_m) && p.reaching_proportional_n_s_m >= 0,
           "reaching_proportional_n_s_m", p.reaching_proportional_n_s_m, "finite and >= 0");
+  Require(std::isfinite(p.null_band_area_fraction) && p.null_band_area_fraction >= 0 &&
+              p.null_band_area_fraction <= 1,
+          "null_band_area_fraction", p.null_band_area_fraction, "finite and in [0, 1]");
+  Require(std::isfinite(p.spool_filter_time_constant_s) && p.spool_filter_time_constant_s >= 0 &&
+              p.spool_filter_time_constant_s <= 1,
+          "spool_filter_time_constant_s", p.spool_filter_time_constant_s, "finite and in [0, 1] s");
   Require(std::isfinite(period_s) && period_s > 0, "period_s", period_s, "finite and > 0");
   const ValveParams& v = model.valve;
   Require(std::isfinite(v.spool_gain_m_v) && v.spool_gain_m_v != 0, "valve.spool_gain_m_v",
@@ -98,6 +104,16 @@ BsSmcController::BsSmcController(const BsSmcConfig& config)
 void BsSmcController::Reset() {
   velocity_diff_.Reset();
   force_diff_.Reset();
+  filtered_spool_m_ = 0.0;
+}
+
+double BsSmcController::SpoolFractionForArea(double area_fraction) const {
+  // eq 43 inverted: A_v / A_max = (X / X_max)^2. Near null the square root has an infinite
+  // slope; inside the band r < r0 it is replaced by its chord r / sqrt(r0) (same value at r0).
+  const double r = std::min(std::max(area_fraction, 0.0), 1.0);
+  const double r0 = config_.params.null_band_area_fraction;
+  if (r < r0) return r / std::sqrt(r0);
+  return std::sqrt(r);
 }
 
 double BsSmcController::FrictionEstimateN(double velocity_m_s) const {
@@ -177,7 +193,7 @@ void BsSmcController::Update(const BsSmcInput& in, BsSmcOutput& out) {
                         (cyl.cap_area_m2 * g.inflow * FlowPerAreaKgSM2(ps, p1, m.air) / v1 +
                          cyl.annulus_area_m2 * g.outflow * FlowPerAreaKgSM2(p2, pa, m.air) / v2);
     const double area = gain > 1e-12 ? flow_rate_required / gain : valve.max_orifice_area_m2;
-    spool_m = valve.max_spool_m * std::sqrt(std::min(area / valve.max_orifice_area_m2, 1.0));  // eq 43
+    spool_m = valve.max_spool_m * SpoolFractionForArea(area / valve.max_orifice_area_m2);  // eq 43
   } else {
     // Retract routing (Table 5): supply -> chamber 2, chamber 1 -> exhaust. Spool < 0.
     const PolytropicParams& g = m.polytropic.retract;
@@ -185,7 +201,14 @@ void BsSmcController::Update(const BsSmcInput& in, BsSmcOutput& out) {
                         (cyl.cap_area_m2 * g.outflow * FlowPerAreaKgSM2(p1, pa, m.air) / v1 +
                          cyl.annulus_area_m2 * g.inflow * FlowPerAreaKgSM2(ps, p2, m.air) / v2);
     const double area = gain > 1e-12 ? -flow_rate_required / gain : valve.max_orifice_area_m2;
-    spool_m = -valve.max_spool_m * std::sqrt(std::min(area / valve.max_orifice_area_m2, 1.0));
+    spool_m = -valve.max_spool_m * SpoolFractionForArea(area / valve.max_orifice_area_m2);
+  }
+  // Optional first-order low-pass on the spool command (backward Euler, stable for any time
+  // constant): bounds the tick-to-tick spool motion the sensor noise still causes.
+  if (p.spool_filter_time_constant_s > 0.0 && std::isfinite(spool_m)) {
+    const double a = config_.period_s / (p.spool_filter_time_constant_s + config_.period_s);
+    filtered_spool_m_ += a * (spool_m - filtered_spool_m_);
+    spool_m = filtered_spool_m_;
   }
   double u_v = (spool_m - valve.spool_offset_m) / valve.spool_gain_m_v;  // eq 42 inverted (eq 44)
   const double u_clamped = std::clamp(u_v, valve.min_voltage_v, valve.max_voltage_v);

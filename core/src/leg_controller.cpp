@@ -124,6 +124,8 @@ void LegController::Hold(LegControlStatus status, LegControllerOutput& out) {
   out.sliding_surface_m_s = 0.0;
   out.velocity_m_s = 0.0;
   out.desired_force_n = 0.0;
+  out.force_error_n = 0.0;
+  out.desired_force_rate_n_s = 0.0;
 }
 
 void LegController::Update(const LegControllerInput& in, LegControllerOutput& out) {
@@ -169,6 +171,8 @@ void LegController::Update(const LegControllerInput& in, LegControllerOutput& ou
     out.sliding_surface_m_s = std::isfinite(o.sliding_surface_m_s) ? o.sliding_surface_m_s : 0.0;
     out.velocity_m_s = std::isfinite(o.velocity_m_s) ? o.velocity_m_s : 0.0;
     out.desired_force_n = std::isfinite(o.desired_force_n) ? o.desired_force_n : 0.0;
+    out.force_error_n = std::isfinite(o.force_error_n) ? o.force_error_n : 0.0;
+    out.desired_force_rate_n_s = std::isfinite(o.desired_force_rate_n_s) ? o.desired_force_rate_n_s : 0.0;
   } else {
     PiInput p;
     p.length_m = in.length_m;
@@ -180,6 +184,8 @@ void LegController::Update(const LegControllerInput& in, LegControllerOutput& ou
     out.sliding_surface_m_s = 0.0;
     out.velocity_m_s = std::isfinite(o.velocity_m_s) ? o.velocity_m_s : 0.0;
     out.desired_force_n = 0.0;
+    out.force_error_n = 0.0;
+    out.desired_force_rate_n_s = 0.0;
   }
   // Last line of defence: never emit a non-finite or out-of-range voltage.
   const ValveParams& v = config_.model.valve;

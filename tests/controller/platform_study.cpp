@@ -11,6 +11,12 @@
 // RMSE (mm), fraction of ticks with a saturated valve, and the score: the mean over the
 // seven trajectories of (moving-axis RMSE / paper's value for that axis), i.e. 1.0 = the
 // paper's Table 9 / Table 10 accuracy on average.
+// Valve activity (docs/tuning.md "Valve chatter"), over the TRACKING window, all six legs:
+//   du   mean |u(k) - u(k-1)| per 1 ms tick, V
+//   sat  fraction of ticks with u < 0.05 V or u > 9.95 V
+//   flip extend <-> retract reversals of the command per leg and second (u below 3 V counts as
+//        extend, above 7 V as retract; a 25 Hz full-swing limit cycle gives 50)
+// and once per run the same figures at IDLE (3 s of idle hold at home, after 0.5 s settling).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -42,6 +48,9 @@ std::vector<Key> Keys() {
       {"visc", [](auto& c, double v) { c.leg_controller.bssmc.viscous_estimate_scale = v; }},
       {"fric", [](auto& c, double v) { c.leg_controller.bssmc.friction_estimate_scale = v; }},
       {"ks", [](auto& c, double v) { c.leg_controller.bssmc.reaching_proportional_n_s_m = v; }},
+      {"band", [](auto& c, double v) { c.leg_controller.bssmc.null_band_area_fraction = v; }},
+      {"tau", [](auto& c, double v) { c.leg_controller.bssmc.spool_filter_time_constant_s = v; }},
+      {"sigma", [](auto& c, double v) { c.leg_controller.differentiator.sigma = v; }},
       {"lag", [](auto& c, double v) { c.leg_controller.differentiator.centre_lag_samples = v; }},
       {"kp", [](auto& c, double v) { c.leg_controller.pi.proportional_v_m = v; }},
       {"ki", [](auto& c, double v) { c.leg_controller.pi.integral_v_m_s = v; }},
@@ -82,14 +91,94 @@ int Usage() {
   return 2;
 }
 
+// Valve activity accumulator (see the header).
+struct ValveActivity {
+  double sum_du_v = 0.0;
+  long saturated = 0;
+  long reversals = 0;
+  long samples = 0;
+  hexa::LegArray<double> prev_v{};
+  hexa::LegArray<int> side{};  // -1 extend, +1 retract, 0 not yet
+  bool primed = false;
+  void Add(const hexa::LegArray<double>& u) {
+    for (std::size_t i = 0; i < 6; ++i) {
+      if (primed) {
+        sum_du_v += std::abs(u[i] - prev_v[i]);
+        saturated += (u[i] < 0.05 || u[i] > 9.95) ? 1 : 0;
+        const int s = u[i] < 3.0 ? -1 : (u[i] > 7.0 ? 1 : 0);
+        if (s != 0 && side[i] != 0 && s != side[i]) ++reversals;
+        if (s != 0) side[i] = s;
+        ++samples;
+      }
+      prev_v[i] = u[i];
+    }
+    primed = true;
+  }
+  double MeanDu() const { return samples ? sum_du_v / samples : 0.0; }
+  double SatFraction() const { return samples ? static_cast<double>(saturated) / samples : 0.0; }
+  // reversals per leg per second (1 ms ticks)
+  double FlipsPerS() const { return samples ? 1000.0 * reversals / samples : 0.0; }
+};
+
+ValveActivity IdleActivity(const hexa::LockstepConfig& config) {
+  hexa::LockstepSimulation sim(config);
+  ValveActivity a;
+  for (int k = 0; k < 3500; ++k) {
+    sim.Tick();
+    if (k >= 500) a.Add(sim.applied_valve_v());
+  }
+  return a;
+}
+
+// RunPaperSession (same loop and metrics) plus the valve activity of the tracking window.
+hexa::PaperSessionResult RunSession(const hexa::LockstepConfig& config, PaperMotion motion, int periods,
+                                    ValveActivity& activity) {
+  hexa::PaperSessionResult result;
+  hexa::LockstepSimulation sim(config);
+  result.plant_status = sim.Tick();
+  if (result.plant_status != hexa::PlantStatus::kOk) return result;
+  const hexa::StartRequest start = sim.supervisor().PreparePaperStart(motion, periods);
+  bool started = false, left_idle = false;
+  hexa::SupervisorState state = hexa::SupervisorState::kIdle;
+  while (sim.time_s() < 600.0) {
+    const bool due = sim.supervisor_due();
+    auto cmd = (due && !started) ? hexa::OperatorCommandKind::kStart : hexa::OperatorCommandKind::kNone;
+    result.plant_status = sim.Tick(cmd, cmd == hexa::OperatorCommandKind::kStart ? &start : nullptr);
+    if (result.plant_status != hexa::PlantStatus::kOk) break;
+    if (due) {
+      started = true;
+      const hexa::SupervisorOutput& out = sim.supervisor_output();
+      state = out.state;
+      if (state == hexa::SupervisorState::kTracking) {
+        result.metrics.AddPose(out.desired_xyz_rpy, out.estimate.xyz_rpy,
+                               hexa::VectorFromPose(sim.plant_before_step().truth.pose));
+      }
+      if (state != hexa::SupervisorState::kIdle) left_idle = true;
+      if (state == hexa::SupervisorState::kHold || (left_idle && state == hexa::SupervisorState::kIdle)) break;
+    }
+    if (state == hexa::SupervisorState::kTracking) {
+      for (std::size_t i = 0; i < 6; ++i) {
+        result.metrics.leg_length[i].Add(sim.leg_outputs()[i].desired_length_m,
+                                         sim.plant_before_step().legs[i].length_m);
+      }
+      activity.Add(sim.applied_valve_v());
+    }
+  }
+  result.final_state = state;
+  result.completed = left_idle && state == hexa::SupervisorState::kIdle &&
+                     result.plant_status == hexa::PlantStatus::kOk;
+  result.ticks = sim.tick();
+  return result;
+}
+
 void Trace(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
   hexa::LockstepSimulation sim(config);
   sim.Tick();
   const hexa::StartRequest start = sim.supervisor().PreparePaperStart(motion, periods);
   std::printf("t,state");
   for (int i = 1; i <= 6; ++i)
-    std::printf(",ld%d,l%d,ltrue%d,vd%d,ad%d,u%d,phi%d,S%d,P1_%d,P2_%d,corr%d", i, i, i, i, i, i, i,
-                i, i, i, i);
+    std::printf(",ld%d,l%d,ltrue%d,vd%d,ad%d,u%d,phi%d,S%d,P1_%d,P2_%d,corr%d,v%d,z%d,phidot%d", i, i, i,
+                i, i, i, i, i, i, i, i, i, i, i);
   std::printf("\n");
   bool started = false, left_idle = false;
   hexa::SupervisorState state = hexa::SupervisorState::kIdle;
@@ -116,10 +205,11 @@ void Trace(const hexa::LockstepConfig& config, PaperMotion motion, int periods) 
     std::printf("%.3f,%d", p.truth.time_s, static_cast<int>(state));
     for (std::size_t i = 0; i < 6; ++i) {
       const auto& o = sim.leg_outputs()[i];
-      std::printf(",%.6f,%.6f,%.6f,%.4f,%.3f,%.3f,%.2f,%.4f,%.0f,%.0f,%.6f", o.desired_length_m,
+      std::printf(",%.6f,%.6f,%.6f,%.4f,%.3f,%.3f,%.2f,%.4f,%.0f,%.0f,%.6f,%.4f,%.2f,%.1f", o.desired_length_m,
                   p.legs[i].length_m, p.truth.length_m[i], o.desired_velocity_m_s, 0.0,
                   sim.applied_valve_v()[i], o.desired_force_n, o.sliding_surface_m_s,
-                  p.legs[i].chamber1_pressure_pa, p.legs[i].chamber2_pressure_pa, corr[i]);
+                  p.legs[i].chamber1_pressure_pa, p.legs[i].chamber2_pressure_pa, corr[i],
+                  o.velocity_m_s, o.force_error_n, o.desired_force_rate_n_s);
     }
     std::printf("\n");
   }
@@ -202,8 +292,14 @@ int main(int argc, char** argv) {
   }
   double score = 0.0;
   int incomplete = 0;
+  {
+    const ValveActivity idle = IdleActivity(config);
+    std::printf("idle     valve du %.3f V/tick sat %.1f %% flip %.1f /s\n", idle.MeanDu(),
+                100.0 * idle.SatFraction(), idle.FlipsPerS());
+  }
   for (const auto motion : motions) {
-    const auto r = hexa::RunPaperSession(config, motion, periods);
+    ValveActivity act;
+    const auto r = RunSession(config, motion, periods, act);
     const auto e = r.metrics.vs_truth.Rmse();
     double v[6];
     for (int k = 0; k < 6; ++k) v[k] = k < 3 ? 100.0 * e[k] : e[k] * 57.29577951308232;
@@ -224,7 +320,8 @@ int main(int argc, char** argv) {
       std::printf(" %6.2f", 1000 * leg.Rmse());
       leg_max = std::max(leg_max, leg.Rmse());
     }
-    std::printf(" | /paper %.3f\n", ratio);
+    std::printf(" | /paper %.3f | du %.3f sat %.1f%% flip %.1f\n", ratio, act.MeanDu(),
+                100.0 * act.SatFraction(), act.FlipsPerS());
   }
   std::printf("SCORE %.4f incomplete %d\n", score / static_cast<double>(motions.size()), incomplete);
   return 0;

@@ -79,10 +79,15 @@ class BsSmcController {
   // Static friction estimate of eq 14 (without the viscous part), signed: opposes v.
   double FrictionEstimateN(double velocity_m_s) const;
 
+  // Spool fraction X / X_max for a required orifice-area fraction A_v / A_max (eq 43
+  // inverted, with the optional linear band near null). Clamped to [0, 1].
+  double SpoolFractionForArea(double area_fraction) const;
+
  private:
   BsSmcConfig config_;
   GaussianDifferentiator velocity_diff_;
   GaussianDifferentiator force_diff_;
+  double filtered_spool_m_ = 0.0;  // state of the spool command filter
 };
 
 // Orifice mass-flow function of eq 4 per unit area and discharge coefficient:

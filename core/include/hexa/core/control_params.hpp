@@ -29,6 +29,15 @@ struct BsSmcParams {
   // K tanh(xi S) alone the corrective force is capped near K, and a leg held by static
   // friction or by the platform coupling with a large error gets no more force.
   double reaching_proportional_n_s_m = 25.0;
+  // Valve-command smoothing (NOT in the paper; docs/controller.md "Valve chatter").
+  // Linearised inversion of the quadratic area law (eq 43) near null: for a required area
+  // fraction r = A_v / A_max below this value the spool fraction is r / sqrt(r0) instead of
+  // sqrt(r) (continuous at r0). 0 = the paper's square root everywhere, whose slope is
+  // infinite at null and turns sensor noise into volt-sized spool jumps.
+  double null_band_area_fraction = 0.0;
+  // First-order low-pass on the commanded spool position (time constant; 0 = off). A lag
+  // inside the force loop, in series with the spool's own (~3 ms) lag.
+  double spool_filter_time_constant_s = 0.0;
 };
 
 // PI baseline (paper ref [11]) with anti-windup, plus two terms that are not in ref [11]

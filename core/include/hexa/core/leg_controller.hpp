@@ -75,6 +75,9 @@ struct LegControllerOutput {
   double sliding_surface_m_s = 0.0; // S (eq 19); 0 for the PI baseline
   double velocity_m_s = 0.0;        // estimated leg velocity (BS-SMC), 0 for PI
   double desired_force_n = 0.0;     // phi (BS-SMC)
+  // Diagnostics of the BS-SMC (0 for the PI baseline): z (eq 35) and the phi_dot used (eq 38).
+  double force_error_n = 0.0;
+  double desired_force_rate_n_s = 0.0;
 };
 
 class LegController {
