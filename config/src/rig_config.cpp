@@ -429,6 +429,8 @@ SystemConfig Translate(const pb::RigFile& f) {
   c.leg_controller.bssmc.friction_estimate_scale = b.friction_estimate_scale();
   c.leg_controller.bssmc.friction_smoothing_velocity_m_s = b.friction_smoothing_velocity_m_s();
   c.leg_controller.bssmc.reaching_proportional_n_s_m = b.reaching_proportional_n_s_m();
+  c.leg_controller.bssmc.null_band_area_fraction = b.null_band_area_fraction();
+  c.leg_controller.bssmc.spool_filter_time_constant_s = b.spool_filter_time_constant_s();
   c.leg_controller.pi.proportional_v_m = lc.pi().proportional_v_m();
   c.leg_controller.pi.integral_v_m_s = lc.pi().integral_v_m_s();
   c.leg_controller.pi.integrator_limit_v = lc.pi().integrator_limit_v();
@@ -682,6 +684,8 @@ std::string ToTextFormat(const SystemConfig& c) {
   b->set_friction_estimate_scale(c.leg_controller.bssmc.friction_estimate_scale);
   b->set_friction_smoothing_velocity_m_s(c.leg_controller.bssmc.friction_smoothing_velocity_m_s);
   b->set_reaching_proportional_n_s_m(c.leg_controller.bssmc.reaching_proportional_n_s_m);
+  b->set_null_band_area_fraction(c.leg_controller.bssmc.null_band_area_fraction);
+  b->set_spool_filter_time_constant_s(c.leg_controller.bssmc.spool_filter_time_constant_s);
   lc->mutable_pi()->set_proportional_v_m(c.leg_controller.pi.proportional_v_m);
   lc->mutable_pi()->set_integral_v_m_s(c.leg_controller.pi.integral_v_m_s);
   lc->mutable_pi()->set_integrator_limit_v(c.leg_controller.pi.integrator_limit_v);

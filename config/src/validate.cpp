@@ -421,6 +421,9 @@ void CheckLegController(Checker& c, const LegControllerParams& p, const Supervis
              "smoothing velocity");
   c.NonNegative("leg_controller.bssmc.reaching_proportional_n_s_m", b.reaching_proportional_n_s_m,
                 "reaching-law gain");
+  c.NonNegative("leg_controller.bssmc.null_band_area_fraction", b.null_band_area_fraction, "area fraction");
+  c.NonNegative("leg_controller.bssmc.spool_filter_time_constant_s", b.spool_filter_time_constant_s,
+                "time constant");
   c.NonNegative("leg_controller.pi.proportional_v_m", p.pi.proportional_v_m, "gain");
   c.NonNegative("leg_controller.pi.integral_v_m_s", p.pi.integral_v_m_s, "gain");
   c.NonNegative("leg_controller.pi.integrator_limit_v", p.pi.integrator_limit_v, "limit");

@@ -87,6 +87,10 @@ inline LegControllerConfig SingleLegControllerConfig(const RigParams& rig, LegCo
   c.params.bssmc.boundary_layer_xi_s_m = 10.0;
   c.params.bssmc.backstepping_beta_1_s = 100.0;
   c.params.bssmc.reaching_proportional_n_s_m = 0.0;  // the paper's reaching law
+  // The valve-command smoothing was tuned on the platform (docs/tuning.md "Valve chatter");
+  // the single-leg gains above were tuned without it: keep the paper's exact inversion here.
+  c.params.bssmc.null_band_area_fraction = 0.0;
+  c.params.bssmc.spool_filter_time_constant_s = 0.0;
   c.params.pi.proportional_v_m = 1600.0;
   c.params.pi.integral_v_m_s = 250.0;
   c.params.pi.integrator_limit_v = 2.0;

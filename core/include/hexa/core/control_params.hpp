@@ -17,9 +17,9 @@ struct DifferentiatorParams {
 struct BsSmcParams {
   double lambda_1_s = 40.0;             // sliding surface slope (eq 19); platform grid (docs/tuning.md)
   double switching_gain_n = 90.0;       // K (eq 22, 30), as a force; platform grid (docs/tuning.md)
-  double boundary_layer_xi_s_m = 3.0;   // xi in tanh(xi S) (eq 45); paper: 10; platform grid
+  double boundary_layer_xi_s_m = 1.0;   // xi in tanh(xi S) (eq 45); paper: 10; chatter study (docs/tuning.md)
   double backstepping_beta_1_s = 100.0; // beta (eq 38)
-  double effective_mass_kg = 3.0;       // platform grid (docs/tuning.md); vertical-motion value 1.50
+  double effective_mass_kg = 1.5;       // vertical-motion value; chatter study (docs/tuning.md)
   double gravity_load_n = 13.2;         // along the leg at home: 6 g/(6 cos) + 0.25 g cos (docs)
   double viscous_estimate_scale = 1.0;  // B_hat = scale * Table 8 B (eq 21)
   double friction_estimate_scale = 1.0; // F_s, F_c estimate = scale * Table 8 (eq 14)
@@ -28,16 +28,16 @@ struct BsSmcParams {
   // reaching law, Gao & Hung 1993). NOT in the paper (deviation, docs/controller.md): with
   // K tanh(xi S) alone the corrective force is capped near K, and a leg held by static
   // friction or by the platform coupling with a large error gets no more force.
-  double reaching_proportional_n_s_m = 25.0;
+  double reaching_proportional_n_s_m = 50.0;  // chatter study (docs/tuning.md)
   // Valve-command smoothing (NOT in the paper; docs/controller.md "Valve chatter").
   // Linearised inversion of the quadratic area law (eq 43) near null: for a required area
   // fraction r = A_v / A_max below this value the spool fraction is r / sqrt(r0) instead of
   // sqrt(r) (continuous at r0). 0 = the paper's square root everywhere, whose slope is
   // infinite at null and turns sensor noise into volt-sized spool jumps.
-  double null_band_area_fraction = 0.0;
+  double null_band_area_fraction = 0.25;  // chatter study (docs/tuning.md)
   // First-order low-pass on the commanded spool position (time constant; 0 = off). A lag
   // inside the force loop, in series with the spool's own (~3 ms) lag.
-  double spool_filter_time_constant_s = 0.0;
+  double spool_filter_time_constant_s = 0.002;  // chatter study (docs/tuning.md)
 };
 
 // PI baseline (paper ref [11]) with anti-windup, plus two terms that are not in ref [11]
