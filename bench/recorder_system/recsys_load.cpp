@@ -7,6 +7,7 @@
 // topics (GroundTruth, ImuSample, PoseReport). One process tops out at ~6x nominal on this VM
 // (single writer thread); several reach the recorder's limit.
 //   recsys_load DOMAIN SECONDS SPEED LEG_OFFSET KEYLESS
+// SECONDS is the intended duration (ticks = SECONDS * 1000 * SPEED).
 // Prints: "sent N ticks T elapsed_s E rate_msg_s R behind_ticks B" (B: ticks that started
 // more than one period late, i.e. the publisher itself could not keep the pace).
 #include <time.h>
@@ -70,7 +71,8 @@ int main(int argc, char** argv) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  const uint64_t ticks = static_cast<uint64_t>(seconds * 1000.0);
+  // SECONDS of publishing at SPEED: SECONDS * 1000 * SPEED ticks.
+  const uint64_t ticks = static_cast<uint64_t>(seconds * 1000.0 * speed);
   const int64_t period_ns = static_cast<int64_t>(1e6 / speed);
   uint64_t sent = 0, behind = 0;
   hexa_msg_LegSensors s{};
