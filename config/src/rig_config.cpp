@@ -431,6 +431,11 @@ SystemConfig Translate(const pb::RigFile& f) {
   c.leg_controller.bssmc.reaching_proportional_n_s_m = b.reaching_proportional_n_s_m();
   c.leg_controller.bssmc.null_band_area_fraction = b.null_band_area_fraction();
   c.leg_controller.bssmc.spool_filter_time_constant_s = b.spool_filter_time_constant_s();
+  c.leg_controller.bssmc.integral_gain_n_m = b.integral_gain_n_m();
+  c.leg_controller.bssmc.integral_limit_n = b.integral_limit_n();
+  c.leg_controller.bssmc.integral_active_below_m_s = b.integral_active_below_m_s();
+  c.leg_controller.bssmc.integral_leak_time_constant_s = b.integral_leak_time_constant_s();
+  c.leg_controller.bssmc.integral_deadband_m = b.integral_deadband_m();
   c.leg_controller.pi.proportional_v_m = lc.pi().proportional_v_m();
   c.leg_controller.pi.integral_v_m_s = lc.pi().integral_v_m_s();
   c.leg_controller.pi.integrator_limit_v = lc.pi().integrator_limit_v();
@@ -686,6 +691,11 @@ std::string ToTextFormat(const SystemConfig& c) {
   b->set_reaching_proportional_n_s_m(c.leg_controller.bssmc.reaching_proportional_n_s_m);
   b->set_null_band_area_fraction(c.leg_controller.bssmc.null_band_area_fraction);
   b->set_spool_filter_time_constant_s(c.leg_controller.bssmc.spool_filter_time_constant_s);
+  b->set_integral_gain_n_m(c.leg_controller.bssmc.integral_gain_n_m);
+  b->set_integral_limit_n(c.leg_controller.bssmc.integral_limit_n);
+  b->set_integral_active_below_m_s(c.leg_controller.bssmc.integral_active_below_m_s);
+  b->set_integral_leak_time_constant_s(c.leg_controller.bssmc.integral_leak_time_constant_s);
+  b->set_integral_deadband_m(c.leg_controller.bssmc.integral_deadband_m);
   lc->mutable_pi()->set_proportional_v_m(c.leg_controller.pi.proportional_v_m);
   lc->mutable_pi()->set_integral_v_m_s(c.leg_controller.pi.integral_v_m_s);
   lc->mutable_pi()->set_integrator_limit_v(c.leg_controller.pi.integrator_limit_v);

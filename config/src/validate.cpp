@@ -424,6 +424,13 @@ void CheckLegController(Checker& c, const LegControllerParams& p, const Supervis
   c.NonNegative("leg_controller.bssmc.null_band_area_fraction", b.null_band_area_fraction, "area fraction");
   c.NonNegative("leg_controller.bssmc.spool_filter_time_constant_s", b.spool_filter_time_constant_s,
                 "time constant");
+  c.NonNegative("leg_controller.bssmc.integral_gain_n_m", b.integral_gain_n_m, "gain");
+  c.NonNegative("leg_controller.bssmc.integral_limit_n", b.integral_limit_n, "force limit");
+  c.NonNegative("leg_controller.bssmc.integral_active_below_m_s", b.integral_active_below_m_s,
+                "speed");
+  c.Positive("leg_controller.bssmc.integral_leak_time_constant_s", b.integral_leak_time_constant_s,
+             "time constant");
+  c.NonNegative("leg_controller.bssmc.integral_deadband_m", b.integral_deadband_m, "deadband");
   c.NonNegative("leg_controller.pi.proportional_v_m", p.pi.proportional_v_m, "gain");
   c.NonNegative("leg_controller.pi.integral_v_m_s", p.pi.integral_v_m_s, "gain");
   c.NonNegative("leg_controller.pi.integrator_limit_v", p.pi.integrator_limit_v, "limit");

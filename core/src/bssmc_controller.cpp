@@ -62,6 +62,16 @@ void BsSmcConfig::Validate() const {
   Require(std::isfinite(p.spool_filter_time_constant_s) && p.spool_filter_time_constant_s >= 0 &&
               p.spool_filter_time_constant_s <= 1,
           "spool_filter_time_constant_s", p.spool_filter_time_constant_s, "finite and in [0, 1] s");
+  Require(std::isfinite(p.integral_gain_n_m) && p.integral_gain_n_m >= 0, "integral_gain_n_m",
+          p.integral_gain_n_m, "finite and >= 0");
+  Require(std::isfinite(p.integral_limit_n) && p.integral_limit_n >= 0, "integral_limit_n",
+          p.integral_limit_n, "finite and >= 0");
+  Require(std::isfinite(p.integral_active_below_m_s) && p.integral_active_below_m_s >= 0,
+          "integral_active_below_m_s", p.integral_active_below_m_s, "finite and >= 0");
+  Require(std::isfinite(p.integral_leak_time_constant_s) && p.integral_leak_time_constant_s > 0,
+          "integral_leak_time_constant_s", p.integral_leak_time_constant_s, "finite and > 0");
+  Require(std::isfinite(p.integral_deadband_m) && p.integral_deadband_m >= 0,
+          "integral_deadband_m", p.integral_deadband_m, "finite and >= 0");
   Require(std::isfinite(period_s) && period_s > 0, "period_s", period_s, "finite and > 0");
   const ValveParams& v = model.valve;
   Require(std::isfinite(v.spool_gain_m_v) && v.spool_gain_m_v != 0, "valve.spool_gain_m_v",
@@ -105,6 +115,7 @@ void BsSmcController::Reset() {
   velocity_diff_.Reset();
   force_diff_.Reset();
   filtered_spool_m_ = 0.0;
+  integral_force_n_ = 0.0;
 }
 
 double BsSmcController::SpoolFractionForArea(double area_fraction) const {
@@ -152,9 +163,21 @@ void BsSmcController::Update(const BsSmcInput& in, BsSmcOutput& out) {
                        FrictionEstimateN(vd);  // eq 14
   const double phi_hat = p.effective_mass_kg * (in.desired_acceleration_m_s2 - p.lambda_1_s * edot_m_s) +
                          b_hat * vd - c_hat;                                    // eq 25
-  // eq 45, plus the proportional reaching term -k_s S (not in the paper, see the header).
+  // Integral of S (not in the paper, control_params.hpp): removes the steady error that
+  // static friction leaves against the bounded terms. The clamp is the anti-windup.
+  if (std::isfinite(s_m_s)) {
+    if (std::abs(in.desired_velocity_m_s) < p.integral_active_below_m_s) {
+      if (std::abs(e_m) >= p.integral_deadband_m)
+      integral_force_n_ += p.integral_gain_n_m * s_m_s * config_.period_s;
+    } else {
+      integral_force_n_ -= integral_force_n_ * config_.period_s /
+                           (p.integral_leak_time_constant_s + config_.period_s);
+    }
+    integral_force_n_ = std::clamp(integral_force_n_, -p.integral_limit_n, p.integral_limit_n);
+  }
+  // eq 45, plus the proportional reaching term -k_s S and the integral term (not in the paper).
   const double phi = phi_hat - p.switching_gain_n * std::tanh(p.boundary_layer_xi_s_m * s_m_s) -
-                     p.reaching_proportional_n_s_m * s_m_s;
+                     p.reaching_proportional_n_s_m * s_m_s - integral_force_n_;
   // phi_dot (eq 38): the paper differentiates phi numerically (eq 40). Only its model part
   // is differentiated here: the feedback part (lambda e_dot, K tanh(xi S)) is sensor noise
   // at 1 kHz and its derivative drove a 34 Hz limit cycle (docs/controller.md); beta z

@@ -135,6 +135,11 @@ void ExpectLegControllerEq(const hexa::LegControllerParams& a, const hexa::LegCo
   EXPECT_EQ(a.bssmc.reaching_proportional_n_s_m, b.bssmc.reaching_proportional_n_s_m);
   EXPECT_EQ(a.bssmc.null_band_area_fraction, b.bssmc.null_band_area_fraction);
   EXPECT_EQ(a.bssmc.spool_filter_time_constant_s, b.bssmc.spool_filter_time_constant_s);
+  EXPECT_EQ(a.bssmc.integral_gain_n_m, b.bssmc.integral_gain_n_m);
+  EXPECT_EQ(a.bssmc.integral_limit_n, b.bssmc.integral_limit_n);
+  EXPECT_EQ(a.bssmc.integral_active_below_m_s, b.bssmc.integral_active_below_m_s);
+  EXPECT_EQ(a.bssmc.integral_leak_time_constant_s, b.bssmc.integral_leak_time_constant_s);
+  EXPECT_EQ(a.bssmc.integral_deadband_m, b.bssmc.integral_deadband_m);
   EXPECT_EQ(a.pi.proportional_v_m, b.pi.proportional_v_m);
   EXPECT_EQ(a.pi.integral_v_m_s, b.pi.integral_v_m_s);
   EXPECT_EQ(a.pi.integrator_limit_v, b.pi.integrator_limit_v);
@@ -231,9 +236,9 @@ TEST(RigConfigReference, CoreStructsHaveNotGrownPastTheSchema) {
   EXPECT_EQ(sizeof(hexa::SensorNoiseParams), 6 * sizeof(double));  // 5 doubles + int (padded)
   EXPECT_EQ(sizeof(hexa::DisturbanceProfile), 9 * sizeof(double));  // bool (padded) + 8 doubles
   EXPECT_EQ(sizeof(hexa::DifferentiatorParams), 3 * sizeof(double));  // int (padded) + 2 doubles
-  EXPECT_EQ(sizeof(hexa::BsSmcParams), 12 * sizeof(double));
+  EXPECT_EQ(sizeof(hexa::BsSmcParams), 17 * sizeof(double));
   EXPECT_EQ(sizeof(hexa::PiParams), 5 * sizeof(double));
-  EXPECT_EQ(sizeof(hexa::LegControllerParams), 21 * sizeof(double));
+  EXPECT_EQ(sizeof(hexa::LegControllerParams), 26 * sizeof(double));
   EXPECT_EQ(sizeof(hexa::OuterLoopParams), 4 * sizeof(double));
   EXPECT_EQ(sizeof(hexa::SupervisorParams), 15 * sizeof(double));
 }

@@ -47,7 +47,8 @@ TEST(Faults, GarbageCommandsAreNulledReportedAndTheSupervisorHolds) {
   for (std::size_t n = 1; n < r.applied_valve_v.size(); ++n) {
     for (int i = 0; i < 6; ++i) {
       const double v = r.applied_valve_v[n][i];
-      ASSERT_TRUE(std::isfinite(v) && v >= 0.0 && v <= 10.0) << "tick " << n << " leg " << i + 1;
+      ASSERT_TRUE(std::isfinite(v) && v >= 0.0 && v <= 10.0) << "tick " << n << " leg " << i + 1
+                                                            << " (lockstep loses no sample)";
     }
     if (n >= first_bad) ASSERT_EQ(r.applied_valve_v[n][2], 5.0) << "tick " << n;
   }
@@ -82,8 +83,13 @@ TEST(Faults, RealTimeCrashWithoutStandbyIsDetectedAndHolds) {
   // After the crash (1.0 s) + the 15 ms tolerance + margin, leg 5's valve is held at null.
   const std::size_t closed_from = 1000 + 15 + 5;
   ASSERT_GT(r.applied_valve_v.size(), closed_from + 500);
-  for (std::size_t n = closed_from; n < r.applied_valve_v.size(); ++n)
+  std::size_t known = 0;
+  for (std::size_t n = closed_from; n < r.applied_valve_v.size(); ++n) {
+    if (std::isnan(r.applied_valve_v[n][4])) continue;  // GroundTruth sample not recorded
     ASSERT_EQ(r.applied_valve_v[n][4], 5.0) << "tick " << n;
+    ++known;
+  }
+  EXPECT_GT(known, 400u);
 }
 
 }  // namespace

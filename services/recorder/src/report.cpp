@@ -187,7 +187,10 @@ SessionReport ComputeSessionReport(const std::string& path) {
     if (s.truth) {
       prev_v = s.applied_v;
       have_prev_v = true;
-      r.applied_valve_v.resize(tick + 1);
+      // Ticks without a GroundTruth sample (lost in real time) stay NaN: unknown, not 0 V.
+      std::array<double, 6> unknown;
+      unknown.fill(std::nan(""));
+      r.applied_valve_v.resize(tick + 1, unknown);
       r.applied_valve_v[tick] = s.applied_v;
       r.sim_time_s = tick * kTickS;
     }

@@ -88,6 +88,7 @@ class BsSmcController {
   GaussianDifferentiator velocity_diff_;
   GaussianDifferentiator force_diff_;
   double filtered_spool_m_ = 0.0;  // state of the spool command filter
+  double integral_force_n_ = 0.0;  // k_i * integral(S dt), clamped
 };
 
 // Orifice mass-flow function of eq 4 per unit area and discharge coefficient:

@@ -50,7 +50,8 @@ struct SessionReport {
   };
   std::vector<PoseRow> pose_rows;
   std::vector<LegRow> leg_rows;
-  // Valve voltages the plant applied, per tick (from GroundTruth), for bit-exact comparisons.
+  // Valve voltages the plant applied, per tick (from GroundTruth), for bit-exact comparisons;
+  // NaN for a tick whose GroundTruth sample is not in the recording.
   std::vector<std::array<double, 6>> applied_valve_v;
 };
 
