@@ -152,8 +152,14 @@ def main():
              "does: on the combined trajectory the BS-SMC's valve-command smoothing (linear "
              "inversion near null, 2 ms spool filter, docs/tuning.md 'Valve chatter') trades "
              "some tracking for valves that do not chatter; on y and roll the two are within the "
-             "seed-to-seed spread. Compare the valve activity columns below: both now keep the "
-             "valves mostly off the end stops.")
+             "seed-to-seed spread. The valve activity columns below are part of the comparison.")
+    cb, cp = res[("combined", "bssmc")]["report"], res[("combined", "pi")]["report"]
+    if cb and cp:
+        L.append("- On the combined trajectory the PI reaches its figures with its valves at an end "
+                 f"stop {100 * statistics.mean(cp['valve_saturated_fraction']):.0f} % of the time "
+                 f"({statistics.mean(cp['valve_mean_abs_step_v_per_tick']):.2f} V per 1 ms tick), "
+                 f"the BS-SMC {100 * statistics.mean(cb['valve_saturated_fraction']):.0f} % "
+                 f"({statistics.mean(cb['valve_mean_abs_step_v_per_tick']):.2f} V per tick).")
     L.append("")
     L.append("## Against the measured pose (GQFK + IMU), as the paper measured\n")
     L.append("| trajectory | X cm | Y cm | Z cm | rot X deg | rot Y deg | rot Z deg |")
