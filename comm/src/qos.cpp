@@ -18,7 +18,13 @@ bool IsPeriodic(TopicKind kind) { return NominalPeriod_s(kind).has_value(); }
 
 // Status and fault topics are the only ones a late joiner must see history of.
 bool IsTransientLocal(TopicKind kind) {
-  return kind == TopicKind::kNodeStatus || kind == TopicKind::kFaultEvent;
+  // LegSetpoint too: a leg controller whose reader matches the supervisor's writer only after
+  // a setpoint was written still gets the newest one per leg. Lockstep depends on it: the
+  // legs wait for the setpoint of tick 0 before answering tick 1, and the supervisor writes
+  // the next one only after that (found by CI with hot standbys: 12 leg readers, a start-up
+  // race, a deadlock at tick 1).
+  return kind == TopicKind::kNodeStatus || kind == TopicKind::kFaultEvent ||
+         kind == TopicKind::kLegSetpoint;
 }
 
 }  // namespace

@@ -67,7 +67,8 @@ inline SessionRun RunSession(const std::string& name, int domain, std::vector<st
 // GroundTruth(n + 1) carries the voltages applied during step n.
 inline void ExpectSameAsInProcess(const recorder::SessionReport& report, PaperMotion motion,
                                   int periods, std::uint64_t seed,
-                                  LegControllerKind controller = LegControllerKind::kBsSmc) {
+                                  LegControllerKind controller = LegControllerKind::kBsSmc,
+                                  std::uint64_t up_to_tick = UINT64_MAX) {
   const auto cfg = config::LoadSystemConfigOrThrow(config::DefaultRigFile());
   LockstepConfig lc;
   lc.rig = cfg.rig;
@@ -81,7 +82,7 @@ inline void ExpectSameAsInProcess(const recorder::SessionReport& report, PaperMo
   const StartRequest start = sim.supervisor().PreparePaperStart(motion, periods);
   const auto& applied = report.applied_valve_v;
   ASSERT_GT(applied.size(), 1000u);
-  for (std::uint64_t n = 1; n + 1 < applied.size(); ++n) {
+  for (std::uint64_t n = 1; n + 1 < applied.size() && n < up_to_tick; ++n) {
     const bool start_now = n == 5;
     sim.Tick(start_now ? OperatorCommandKind::kStart : OperatorCommandKind::kNone,
              start_now ? &start : nullptr);
