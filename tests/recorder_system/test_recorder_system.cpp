@@ -312,18 +312,22 @@ TEST(RecorderSystem, Counts) {
     missing[c.topic] = c.missing;
   }
   // Under load the plant may re-ask a leg for a tick (docs/architecture.md); those second
-  // copies are counted by the plant, and every one of them shows as a duplicate here.
+  // copies of sensor samples are counted by the plant and each shows as a duplicate here. A
+  // leg answers a re-ask a second time only if it had already answered that tick (its first
+  // answer was merely late), so ValveCommand duplicates are at most the re-asks.
   const uint64_t resends = PlantResends();
   EXPECT_EQ(count["hexa_LegSensors"], kLegs * ticks + resends);
-  EXPECT_EQ(count["hexa_ValveCommand"], kLegs * ticks + resends);
+  EXPECT_GE(count["hexa_ValveCommand"], kLegs * ticks);
+  EXPECT_LE(count["hexa_ValveCommand"], kLegs * ticks + resends);
   EXPECT_EQ(count["hexa_GroundTruth"], ticks);
   EXPECT_EQ(count["hexa_ImuSample"], ticks / 5 + (ticks % 5 != 0 ? 1 : 0));
   EXPECT_EQ(count["hexa_LegSetpoint"], kLegs * supervisor_ticks);
   EXPECT_EQ(count["hexa_PoseReport"], supervisor_ticks);
   for (const auto& [topic, m] : missing) EXPECT_EQ(m, 0u) << topic;
   for (const auto& [topic, d] : s.duplicates) {
-    const bool resent = topic == "hexa_LegSensors" || topic == "hexa_ValveCommand";
-    EXPECT_EQ(d, resent ? resends : 0u) << topic;
+    if (topic == "hexa_LegSensors") EXPECT_EQ(d, resends) << topic;
+    else if (topic == "hexa_ValveCommand") EXPECT_LE(d, resends) << topic;
+    else EXPECT_EQ(d, 0u) << topic;
   }
   // Per instance: every tick present, first 0.
   for (uint32_t leg = 1; leg <= kLegs; ++leg) {
@@ -342,7 +346,8 @@ TEST(RecorderSystem, Counts) {
   ASSERT_GT(group.Start(c, err), 0) << err;
   ASSERT_EQ(WaitExit(group, "info", 60s), 0) << Slurp(log);
   const std::string text = Slurp(log);
-  EXPECT_NE(text.find(std::to_string(kLegs * ticks)), std::string::npos) << text;
+  EXPECT_NE(text.find(std::to_string(count["hexa_LegSensors"])), std::string::npos) << text;
+  EXPECT_NE(text.find(std::to_string(count["hexa_ValveCommand"])), std::string::npos) << text;
 }
 
 TEST(RecorderSystem, RoundTrip) {
