@@ -14,6 +14,7 @@ constexpr int kImuEveryTicks = 5;
 constexpr dds_attach_t kTokenShutdown = 1;
 constexpr dds_attach_t kTokenValve = 2;
 constexpr dds_attach_t kTokenSetpoint = 3;
+constexpr dds_attach_t kTokenPeers = 4;
 
 hexa_msg_FaultReason FaultOf(CommandCheck check) {
   switch (check) {
@@ -67,7 +68,7 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
   waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
   waitset_.Attach(valve_reader_.data_condition(), kTokenValve);
   waitset_.Attach(setpoint_reader_.data_condition(), kTokenSetpoint);
-  waitset_.Attach(peers_.data_condition(), 4);
+  waitset_.Attach(peers_.data_condition(), kTokenPeers);
   last_check_.fill(CommandCheck::kOk);
 }
 
