@@ -16,6 +16,8 @@ constexpr double kPi = 3.14159265358979323846;
 void BM_PlatformPlantOneSecond(benchmark::State& state) {
   hexa::PlatformPlantConfig config;  // realistic profile, default integrator step
   config.integrator_step_s = static_cast<double>(state.range(0)) * 1e-6;
+  config.integrator = state.range(1) == 3 ? hexa::PlantIntegrator::kSsprk3
+                                          : hexa::PlantIntegrator::kRk4;
   hexa::PlatformPlant plant(config);
   long ticks = 0;
   long substeps = 0;
@@ -43,8 +45,15 @@ void BM_PlatformPlantOneSecond(benchmark::State& state) {
   state.counters["substeps_per_tick"] =
       static_cast<double>(substeps) / static_cast<double>(std::max(ticks, 1L));
 }
-// Argument: RK4 substep in microseconds (250 = default).
-BENCHMARK(BM_PlatformPlantOneSecond)->Arg(250)->Arg(500)->Arg(1000)->Unit(benchmark::kMillisecond);
+// Arguments: nominal substep in microseconds, integrator order (4 = RK4, 3 = SSPRK3).
+BENCHMARK(BM_PlatformPlantOneSecond)
+    ->ArgNames({"step_us", "order"})
+    ->Args({250, 4})
+    ->Args({500, 4})
+    ->Args({1000, 4})
+    ->Args({500, 3})
+    ->Args({1000, 3})
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

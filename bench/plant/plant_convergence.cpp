@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <vector>
 
 #include "hexa/core/platform_plant.hpp"
@@ -17,9 +18,11 @@ struct Trace {
   bool ok = true;
 };
 
-Trace Run(double step_s, double amplitude_v) {
+Trace Run(double step_s, double amplitude_v,
+          hexa::PlantIntegrator integrator = hexa::PlantIntegrator::kRk4) {
   hexa::PlatformPlantConfig config;
   config.integrator_step_s = step_s;
+  config.integrator = integrator;
   hexa::PlatformPlant plant(config);
   Trace tr;
   for (int k = 0; k < 5000; ++k) {
@@ -49,7 +52,7 @@ double MaxDiff(const std::vector<double>& a, const std::vector<double>& b) {
 
 // Conservative case of tests/plant (closed chambers, no friction, gamma = k): energy drift
 // over 10 s, a smooth problem on which RK4's order is visible.
-double EnergyDrift(double step_s) {
+double EnergyDrift(double step_s, hexa::PlantIntegrator integrator) {
   hexa::PlatformPlantConfig c;
   c.disturbance = hexa::MakeIdealDisturbanceProfile();
   c.rig.valve.max_orifice_area_m2 = 0.0;
@@ -58,6 +61,7 @@ double EnergyDrift(double step_s) {
   c.rig.polytropic.extend = {k, k, k};
   c.rig.polytropic.retract = {k, k, k};
   c.integrator_step_s = step_s;
+  c.integrator = integrator;
   hexa::PlatformPlant plant(c);
   hexa::PlatformTrueState s = plant.truth();
   s.twist_B << 0.05, -0.04, 0.08, 0.3, -0.2, 0.4;
@@ -73,18 +77,28 @@ double EnergyDrift(double step_s) {
   return drift;
 }
 
-int main() {
+int main(int argc, char** argv) {
+  // Usage: plant_convergence [rk4|ssprk3]  (integrator under test; the reference is always
+  // RK4 at h = 10 us).
+  hexa::PlantIntegrator integrator = hexa::PlantIntegrator::kRk4;
+  if (argc > 1 && std::string(argv[1]) == "ssprk3") {
+    integrator = hexa::PlantIntegrator::kSsprk3;
+  } else if (argc > 1 && std::string(argv[1]) != "rk4") {
+    std::fprintf(stderr, "usage: plant_convergence [rk4|ssprk3]\n");
+    return 2;
+  }
+  std::printf("integrator %s\n", integrator == hexa::PlantIntegrator::kRk4 ? "rk4" : "ssprk3");
   std::printf("energy drift over 10 s, conservative case\n%10s %16s\n", "h [us]", "max |dE| [J]");
   for (double h_us : {62.5, 125.0, 250.0, 500.0, 1000.0}) {
-    std::printf("%10.1f %16.3e\n", h_us, EnergyDrift(h_us * 1e-6));
+    std::printf("%10.1f %16.3e\n", h_us, EnergyDrift(h_us * 1e-6, integrator));
   }
   for (double amplitude : {1.5, 5.0}) {
     const Trace ref = Run(10e-6, amplitude);
-    std::printf("valve amplitude +-%.1f V around null; reference h = 10 us\n", amplitude);
+    std::printf("valve amplitude +-%.1f V around null; reference RK4 h = 10 us\n", amplitude);
     std::printf("%10s %16s %16s %16s %s\n", "h [us]", "max |dp| [m]", "max |dl| [m]",
                 "max |dP| [Pa]", "status");
     for (double h_us : {20.0, 50.0, 100.0, 125.0, 200.0, 250.0, 333.333333, 500.0, 1000.0}) {
-      const Trace tr = Run(h_us * 1e-6, amplitude);
+      const Trace tr = Run(h_us * 1e-6, amplitude, integrator);
       const bool finite = tr.ok;
       std::printf("%10.1f %16.3e %16.3e %16.3e %s\n", h_us,
                   finite ? MaxDiff(tr.position_m, ref.position_m) : NAN,

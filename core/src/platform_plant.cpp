@@ -350,7 +350,8 @@ PlantStatus PlatformPlant::Step(const LegArray<double>& valve_v, double dt_s) {
   StateVector k1, k2, k3, k4;
   double t = time_s_;
   for (int s = 0; s < n; ++s) {
-    // Classical RK4 (docs/plant.md "Integrator"), quaternion renormalised per substep.
+    // SSPRK3 or classical RK4 (docs/plant.md "Integrator"); quaternion renormalised per
+    // substep. k1 is the rate at the substep's start in both.
     if (s == 0) {
       // rate_at_state_ = Derivative(state_, time_s_) from the end of the last Step / Reset /
       // SetState, evaluated with the previous spool targets; only the spool rates depend on
@@ -364,10 +365,19 @@ PlantStatus PlatformPlant::Step(const LegArray<double>& valve_v, double dt_s) {
     } else {
       Derivative(x, t, k1, false);
     }
-    Derivative(x + 0.5 * h * k1, t + 0.5 * h, k2, false);
-    Derivative(x + 0.5 * h * k2, t + 0.5 * h, k3, false);
-    Derivative(x + h * k3, t + h, k4, false);
-    x += (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4);
+    if (config_.integrator == PlantIntegrator::kSsprk3) {
+      // Shu-Osher SSPRK3: convex combinations of forward-Euler stages.
+      k4 = x + h * k1;                                   // u1
+      Derivative(k4, t + h, k2, false);
+      k4 = 0.75 * x + 0.25 * (k4 + h * k2);              // u2
+      Derivative(k4, t + 0.5 * h, k3, false);
+      x = (1.0 / 3.0) * x + (2.0 / 3.0) * (k4 + h * k3);
+    } else {
+      Derivative(x + 0.5 * h * k1, t + 0.5 * h, k2, false);
+      Derivative(x + 0.5 * h * k2, t + 0.5 * h, k3, false);
+      Derivative(x + h * k3, t + h, k4, false);
+      x += (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4);
+    }
     x.segment<4>(kQ).normalize();
     t = time_s_ + (s + 1) * h;
   }
