@@ -140,19 +140,40 @@ def main():
              "seeds and even between builds that only reorder floating-point arithmetic (stick-slip "
              "friction makes the loop chaotic at rounding level, docs/plant.md); differences smaller "
              "than that are ties.")
+    meas_xy = [value(res[(t, "bssmc")], i, "rmse_vs_measured_pose")
+               for t in ("x", "y") for i in (0, 1)]
+    meas_xy = [m for m in meas_xy if m is not None]
+    meas_text = (f" Against the measured pose, as the paper measured, the same sessions show "
+                 f"{min(meas_xy):.2f}-{max(meas_xy):.2f} cm (X and Y of the x and y sessions)."
+                 if meas_xy else "")
     L.append("- Pure x and y translations sit at a floor of ~0.3 cm for both controllers: the "
              "`realistic` profile's kinematic calibration errors (joints off by up to 2 mm, "
              "potentiometer offsets and gain errors) are not observable from leg lengths + IMU, so "
-             "neither the leg loops nor the outer loop can remove them (docs/task_space.md). "
-             "Against the measured pose, as the paper measured, the same sessions show 0.13-0.23 cm.")
+             "neither the leg loops nor the outer loop can remove them (docs/task_space.md)." +
+             meas_text)
+    pi_wins_pure, pi_wins_comb = [], []
+    for ti, t in enumerate(TRAJ):
+        for i in (range(6) if t == "combined" else [ti]):
+            b, p = value(res[(t, "bssmc")], i), value(res[(t, "pi")], i)
+            if b is not None and p is not None and p <= b:
+                (pi_wins_comb if t == "combined" else pi_wins_pure).append(AXES[i])
+    where = []
+    if pi_wins_comb:
+        where.append("on the combined trajectory (" + ", ".join(pi_wins_comb) + ") the BS-SMC's "
+                     "valve-command smoothing (linear inversion near null, 2 ms spool filter, "
+                     "docs/tuning.md 'Valve chatter') trades some tracking for valves that do not "
+                     "chatter")
+    if pi_wins_pure:
+        where.append("on pure " + ", ".join(pi_wins_pure) + " the two are within the "
+                     "seed-to-seed spread")
     L.append("- The PI baseline here is not the paper's plain PI: a plain PI goes unstable on this "
              "platform, so it has velocity feed-forward and rate damping from the same "
              "differentiator (docs/controller.md). It is a well-tuned baseline, much stronger than "
-             "ref [11]'s, and it beats the BS-SMC on some axes (see the table above). Where it "
-             "does: on the combined trajectory the BS-SMC's valve-command smoothing (linear "
-             "inversion near null, 2 ms spool filter, docs/tuning.md 'Valve chatter') trades "
-             "some tracking for valves that do not chatter; on y and roll the two are within the "
-             "seed-to-seed spread. The valve activity columns below are part of the comparison.")
+             "ref [11]'s" +
+             ((", and it beats the BS-SMC on some axes (see the table above). Where it does: " +
+               "; ".join(where) + ".") if where else
+              "; the BS-SMC beats it on every moving axis of this run.") +
+             " The valve activity columns below are part of the comparison.")
     cb, cp = res[("combined", "bssmc")]["report"], res[("combined", "pi")]["report"]
     if cb and cp:
         L.append("- On the combined trajectory the PI reaches its figures with its valves at an end "
