@@ -60,7 +60,8 @@ def one_run(a, speed, rep, tmp, env):
     rec_log = open(os.path.join(tmp, f"record_{speed}_{rep}.log"), "w")
     rec = start([a.recorder, "record", "--output", path, "--domain", str(a.domain), "--quiet",
                  "--topics", "hexa_LegSensors,hexa_ValveCommand,hexa_ImuSample,hexa_LegSetpoint,"
-                 "hexa_PoseReport,hexa_GroundTruth", "--sync", a.sync], env, rec_log)
+                 "hexa_PoseReport,hexa_GroundTruth", "--sync", a.sync] +
+                (["--batch-ms", str(a.batch_ms)] if a.batch_ms is not None else []), env, rec_log)
     loads = []
     try:
         time.sleep(1.0)  # recorder readers exist before the generators look for them
@@ -113,11 +114,16 @@ def main():
     ap.add_argument("--speeds", default="1,5,10,15,20")
     ap.add_argument("--publishers", type=int, default=3)
     ap.add_argument("--sync", default="fdatasync", choices=["fdatasync", "fflush", "none"])
+    ap.add_argument("--batch-ms", type=float, default=None,
+                    help="passed to hexa_recorder record (default: the recorder's default)")
+    ap.add_argument("--dds-config", default=None,
+                    help="Cyclone XML for every process (default: deploy/cyclonedds-loopback.xml)")
     a = ap.parse_args()
     a.recorder = os.path.join(a.build, "services/recorder/hexa_recorder")
     a.load = os.path.join(a.build, "bench/recorder_system/recsys_load")
     env = dict(os.environ)
-    env["CYCLONEDDS_URI"] = "file://" + os.path.join(root, "deploy/cyclonedds-loopback.xml")
+    env["CYCLONEDDS_URI"] = "file://" + os.path.abspath(
+        a.dds_config or os.path.join(root, "deploy/cyclonedds-loopback.xml"))
     tmp = tempfile.mkdtemp(prefix="recsys_bench_")
     print(f"# recorder system benchmark: {a.seconds} s per run, {a.reps} reps, "
           f"{a.publishers} publisher processes, sync {a.sync}, logs in {tmp}")

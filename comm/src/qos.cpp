@@ -101,10 +101,13 @@ int32_t WriterHistoryDepth(TopicKind kind) {
   switch (kind) {
     case TopicKind::kLegSensors:
     case TopicKind::kValveCommand:
-    case TopicKind::kGroundTruth: return 100;  // 100 ms at 1 kHz
+    // 1 s of samples per instance: what a reliable reader that stalls (the recorder behind
+    // an fdatasync or descheduled on a loaded machine) can still get retransmitted. A
+    // keep-last writer never blocks; the depth costs memory only while a reader lags.
+    case TopicKind::kGroundTruth: return 1000;  // 1 s at 1 kHz
     case TopicKind::kImuSample:
     case TopicKind::kLegSetpoint:
-    case TopicKind::kPoseReport: return 20;  // 100 ms at 200 Hz
+    case TopicKind::kPoseReport: return 200;  // 1 s at 200 Hz
     case TopicKind::kNodeStatus: return 1;   // per node: the current status is what matters
     case TopicKind::kFaultEvent: return 64;  // the last 64 faults for late joiners
     case TopicKind::kOperatorCommand: return 0;  // keep-all

@@ -13,6 +13,7 @@
 #include <limits>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "child_process.hpp"
@@ -31,6 +32,7 @@ constexpr dds_domainid_t kDomainLiveliness = 42;
 constexpr dds_domainid_t kDomainOwnership = 43;
 constexpr dds_domainid_t kDomainShutdown = 44;
 constexpr dds_domainid_t kDomainHungWriter = 48;  // ctest -j runs tests concurrently
+constexpr dds_domainid_t kDomainStalledReader = 49;
 
 const std::string kHelper = HEXA_COMM_TEST_HELPER;
 
@@ -395,6 +397,64 @@ TEST_F(CommProcess, SigtermWakesBlockedWaitSetAndExitsZero) {
     }
     EXPECT_TRUE(said) << "the waitset was not woken by the shutdown guard";
   }
+}
+
+// A reliable reader that stops acknowledging (its process SIGSTOPped: a recorder behind a
+// slow disk, a descheduled controller) must never block the plant's writers. They keep the
+// last WriterHistoryDepth samples per instance and drop the oldest for that reader; a
+// keep-all writer would instead be suspended at Cyclone's WHC high-water mark and dds_write
+// would return TIMEOUT after max_blocking_time (100 ms) - checked: with LegSensors /
+// GroundTruth made keep-all this test fails with "Timeout". (Measured on Cyclone 0.10.2: even
+// a 10 kB WhcHigh does not suspend these keep-last writers.)
+TEST_F(CommProcess, StalledReliableReaderNeverBlocksKeepLastWriters) {
+  Participant p(kDomainStalledReader);
+  QosParams params;
+  params.deadline_period_s = std::numeric_limits<double>::infinity();
+  Topic<hexa_msg_LegSensors> sensors_topic(p);
+  Topic<hexa_msg_GroundTruth> truth_topic(p);
+  Writer<hexa_msg_LegSensors> sensors(p, sensors_topic, params);
+  Writer<hexa_msg_GroundTruth> truth(p, truth_topic, params);
+  std::vector<std::string> env;  // this process's environment, CYCLONEDDS_URI included
+  for (char** e = environ; *e != nullptr; ++e) env.emplace_back(*e);
+  ChildProcess reader(kHelper,
+                      {"sub-all", "--domain", std::to_string(kDomainStalledReader),
+                       "--min-per-topic", "1000000000", "--max-s", "120"},
+                      env);
+  ASSERT_TRUE(reader.WaitForLine("READY", milliseconds(10000))) << "reader did not start";
+  for (int i = 0; i < 1000; ++i) {  // bounded wait for the match
+    if (sensors.Snapshot().publication_matched_current > 0 &&
+        truth.Snapshot().publication_matched_current > 0)
+      break;
+    std::this_thread::sleep_for(milliseconds(10));
+  }
+  ASSERT_GT(sensors.Snapshot().publication_matched_current, 0u);
+  ASSERT_GT(truth.Snapshot().publication_matched_current, 0u);
+
+  reader.Signal(SIGSTOP);
+  // 2 s of the plant's 1 kHz output, written as fast as possible: twice the 1 s history
+  // depth, so every instance's history overflows while the reader is stopped.
+  const int ticks = 2000;
+  hexa_msg_LegSensors s{};
+  hexa_msg_GroundTruth g{};
+  int failed = 0;
+  dds_return_t first_error = DDS_RETCODE_OK;
+  for (int tick = 1; tick <= ticks; ++tick) {
+    const int64_t now = RealtimeNow_ns();
+    for (uint8_t leg = 1; leg <= 6; ++leg) {
+      s.leg_id = leg;
+      s.header.tick = static_cast<uint64_t>(tick);
+      s.header.source_time_ns = now;
+      const dds_return_t rc = sensors.Write(s, now);
+      if (rc != DDS_RETCODE_OK && failed++ == 0) first_error = rc;
+    }
+    g.header.tick = static_cast<uint64_t>(tick);
+    g.header.source_time_ns = now;
+    const dds_return_t rc = truth.Write(g, now);
+    if (rc != DDS_RETCODE_OK && failed++ == 0) first_error = rc;
+  }
+  reader.Signal(SIGCONT);
+  EXPECT_EQ(failed, 0) << "of " << 7 * ticks << " writes with the reader stopped; first error: "
+                       << dds_strretcode(first_error);
 }
 
 }  // namespace

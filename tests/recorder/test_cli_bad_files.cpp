@@ -126,6 +126,13 @@ TEST_F(CliTest, GoodFileInfoExportDiffSucceed) {
   const CliResult bad_opt = Run("info --frobnicate '" + good_.string() + "'");
   EXPECT_EQ(bad_opt.code, 2);
   EXPECT_NE(bad_opt.err.find("unknown option '--frobnicate'"), std::string::npos) << bad_opt.err;
+  // Record options are checked before any DDS entity exists.
+  const CliResult bad_batch = Run("record --output '" + (dir_ / "x.mcap").string() +
+                                  "' --flush-ms 100 --batch-ms 500");
+  EXPECT_EQ(bad_batch.code, 2);
+  EXPECT_NE(bad_batch.err.find("--batch-ms must be in [0, --flush-ms]"), std::string::npos)
+      << bad_batch.err;
+  EXPECT_FALSE(fs::exists(dir_ / "x.mcap"));
 }
 
 TEST_F(CliTest, EmptyFile) { ExpectRejected("empty.mcap", "", "is empty"); }

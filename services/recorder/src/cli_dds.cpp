@@ -4,6 +4,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
@@ -135,6 +137,8 @@ class TopicRecorder final : public TopicRecorderBase {
     for (;;) {
       const int n = reader_.Take();
       if (n <= 0) return;
+      // Log time = when this batch was taken: at most --batch-ms after Cyclone received the
+      // sample (Cyclone 0.10's sample info has no reception timestamp).
       const uint64_t log_ns = static_cast<uint64_t>(comm::RealtimeNow_ns());
       for (int i = 0; i < n; ++i) {
         if (!reader_.info(i).valid_data) continue;  // dispose / unregister: no sample
@@ -143,8 +147,8 @@ class TopicRecorder final : public TopicRecorderBase {
         w.Write(channel, log_ns, static_cast<uint64_t>(SourceTime_ns(s)), msg_);
         ++received;
         if (on_sample) on_sample(msg_);
-        if (periodic) {
-          if (auto tick = MessageTick(msg_)) loss.Add(MessageKey(msg_), *tick);
+        if constexpr (requires { s.header.tick; }) {  // every periodic topic has a header
+          if (periodic) loss.AddAt(StreamOf(s), s.header.tick);
         }
       }
       if (static_cast<std::size_t>(n) < kCapacity) return;
@@ -152,9 +156,29 @@ class TopicRecorder final : public TopicRecorderBase {
   }
 
  private:
+  // Loss-tracker stream of a sample: keyed by leg for the leg topics, one stream otherwise
+  // (the same keys as MessageKey gives for the recorded message, without reflection).
+  std::size_t StreamOf(const T& s) {
+    if constexpr (requires { s.leg_id; }) {
+      int64_t& index = stream_of_leg_[s.leg_id];
+      if (index < 0) index = static_cast<int64_t>(loss.StreamIndex("leg " + std::to_string(s.leg_id)));
+      return static_cast<std::size_t>(index);
+    } else {
+      if (keyless_stream_ < 0) keyless_stream_ = static_cast<int64_t>(loss.StreamIndex(""));
+      return static_cast<std::size_t>(keyless_stream_);
+    }
+  }
+
   comm::Topic<T> topic_;
   comm::Reader<T> reader_;
   P msg_;
+  std::array<int64_t, 256> stream_of_leg_ = MakeUnset();
+  int64_t keyless_stream_ = -1;
+  static std::array<int64_t, 256> MakeUnset() {
+    std::array<int64_t, 256> a;
+    a.fill(-1);
+    return a;
+  }
 };
 
 McapSyncMode ParseSync(const std::string& s) {
@@ -175,17 +199,22 @@ dds_domainid_t ParseDomain(const Args& a) {
 int RunRecord(const std::vector<std::string>& argv) {
   const Args a = ParseArgs(argv,
                            {"output", "o", "domain", "topics", "exclude", "duration-s", "flush-ms",
-                            "sync", "dds-config"},
+                            "batch-ms", "sync", "dds-config"},
                            {"quiet"});
   if (a.help) {
     std::fputs(
         "usage: hexa_recorder record --output FILE.mcap [--domain N] [--topics GLOB,..]\n"
         "                            [--exclude GLOB,..] [--duration-s S] [--flush-ms MS]\n"
-        "                            [--sync none|fflush|fdatasync] [--dds-config FILE.xml]\n"
+        "                            [--batch-ms MS] [--sync none|fflush|fdatasync]\n"
+        "                            [--dds-config FILE.xml]\n"
         "Subscribes to every topic of the system (reliable, keep-all recorder QoS) or the ones\n"
         "matching --topics, and writes each sample as protobuf to one MCAP channel per topic\n"
-        "(log time = receipt, publish time = the sample's source_time_ns). Chunks are closed\n"
+        "(log time = when taken from DDS, within --batch-ms of receipt; publish time = the\n"
+        "sample's source_time_ns). Chunks are closed\n"
         "and synced every --flush-ms (default 100): a kill -9 loses at most that much.\n"
+        "The DDS samples wait in the readers and are taken in batches at most every --batch-ms\n"
+        "(default 2; 0 = on every arrival): one wake-up per batch instead of per sample.\n"
+        "fdatasync (the default --sync) runs on a background thread.\n"
         "Stops after --duration-s or on SIGINT/SIGTERM, then prints per topic the samples\n"
         "received and the loss seen from tick numbers.\n"
         "topics: hexa_LegSensors hexa_ValveCommand hexa_ImuSample hexa_LegSetpoint\n"
@@ -202,6 +231,9 @@ int RunRecord(const std::vector<std::string>& argv) {
   const double flush_ms = a.GetDouble("flush-ms", 100.0);
   if (!(flush_ms >= 1.0 && flush_ms <= 60000.0))
     throw UsageError("--flush-ms must be in [1, 60000]");
+  const double batch_ms = a.GetDouble("batch-ms", 2.0);
+  if (!(batch_ms >= 0.0 && batch_ms <= flush_ms))
+    throw UsageError("--batch-ms must be in [0, --flush-ms]");
   const TopicFilter filter{a.GetAll("topics"), a.GetAll("exclude")};
   const bool quiet = a.Has("quiet");
 
@@ -246,6 +278,7 @@ int RunRecord(const std::vector<std::string>& argv) {
   const int64_t end_ns =
       duration_s > 0 ? start_ns + static_cast<int64_t>(duration_s * 1e9) : INT64_MAX;
   const int64_t flush_ns = static_cast<int64_t>(flush_ms * 1e6);
+  const int64_t batch_ns = static_cast<int64_t>(batch_ms * 1e6);
   int64_t next_flush_ns = start_ns + flush_ns;
   while (!shutdown.requested()) {
     const int64_t now = comm::RealtimeNow_ns();
@@ -261,6 +294,14 @@ int RunRecord(const std::vector<std::string>& argv) {
     if (after >= next_flush_ns) {
       writer.mcap().FlushIfDue(static_cast<uint64_t>(after));
       next_flush_ns = after + flush_ns;
+    }
+    // Let samples accumulate in the readers (keep-all) before the next take: at 1 kHz x 13
+    // streams a wake-up per sample costs more CPU than recording the sample.
+    const int64_t pause_ns = std::min({batch_ns, end_ns - after, next_flush_ns - after});
+    if (pause_ns > 0) {
+      const timespec pause{static_cast<time_t>(pause_ns / 1'000'000'000),
+                           static_cast<long>(pause_ns % 1'000'000'000)};
+      nanosleep(&pause, nullptr);  // a signal ends it early; the loop then sees the shutdown
     }
   }
   for (auto& t : topics) t->Drain(writer);  // what arrived before the stop

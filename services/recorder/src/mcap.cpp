@@ -10,8 +10,11 @@
 #include <algorithm>
 #include <array>
 #include <cerrno>
+#include <condition_variable>
 #include <cstring>
+#include <mutex>
 #include <sstream>
+#include <thread>
 
 namespace hexa::recorder {
 namespace {
@@ -166,6 +169,62 @@ void McapWriterConfig::Validate() const {
     throw std::invalid_argument("McapWriterConfig.chunk_max_span_ns must be > 0");
 }
 
+// fdatasync() of one file descriptor on its own thread: Request() returns at once; requests
+// made while a sync runs are coalesced into one more sync (which covers everything written
+// before it started). Finish() waits for the last requested sync and stops the thread.
+class BackgroundSync {
+ public:
+  explicit BackgroundSync(int fd) : fd_(fd), thread_([this] { Run(); }) {}
+  ~BackgroundSync() { Finish(); }
+  void Request() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      pending_ = true;
+    }
+    cv_.notify_one();
+  }
+  // Waits until every requested sync is done, stops the thread. Returns the errno of the
+  // first failed fdatasync, 0 if none failed.
+  int Finish() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    cv_.notify_one();
+    if (thread_.joinable()) thread_.join();
+    return error_;
+  }
+  int error() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return error_;
+  }
+
+ private:
+  void Run() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      cv_.wait(lock, [this] { return pending_ || stop_; });
+      if (pending_) {
+        pending_ = false;
+        lock.unlock();
+        const int rc = ::fdatasync(fd_);
+        const int err = rc == 0 ? 0 : errno;
+        lock.lock();
+        if (err != 0 && error_ == 0) error_ = err;
+        continue;  // a request made meanwhile is served before stopping
+      }
+      if (stop_) return;
+    }
+  }
+  const int fd_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  bool pending_ = false;
+  bool stop_ = false;
+  int error_ = 0;
+  std::thread thread_;  // last: starts after the members it uses
+};
+
 McapWriter::McapWriter(McapWriterConfig config) : config_(std::move(config)) {
   config_.Validate();
 }
@@ -204,6 +263,8 @@ void McapWriter::Open(const std::string& path) {
     throw McapError("cannot create '" + path + "': " + std::strerror(errno));
   path_ = path;
   std::setvbuf(file_, nullptr, _IOFBF, 1 << 20);
+  if (config_.sync == McapSyncMode::kFdatasync)
+    syncer_ = std::make_unique<BackgroundSync>(fileno(file_));
   offset_ = 0;
   data_crc_ = 0;
   in_data_section_ = true;
@@ -313,8 +374,11 @@ void McapWriter::Sync() {
   if (config_.sync == McapSyncMode::kNone) return;
   if (std::fflush(file_) != 0)
     throw McapError("flush of '" + path_ + "' failed: " + std::strerror(errno));
-  if (config_.sync == McapSyncMode::kFdatasync && ::fdatasync(fileno(file_)) != 0)
-    throw McapError("fdatasync of '" + path_ + "' failed: " + std::strerror(errno));
+  if (syncer_ != nullptr) {
+    if (const int err = syncer_->error(); err != 0)
+      throw McapError("fdatasync of '" + path_ + "' failed: " + std::strerror(err));
+    syncer_->Request();
+  }
   ++stats_.syncs;
 }
 
@@ -482,11 +546,16 @@ void McapWriter::Close() {
   WriteBytes(kMcapMagic, sizeof kMcapMagic);
 
   const bool flushed = std::fflush(file_) == 0;
-  const bool synced = config_.sync != McapSyncMode::kFdatasync || ::fdatasync(fileno(file_)) == 0;
-  const bool closed = std::fclose(file_) == 0;
+  int err = flushed ? 0 : errno;
+  if (syncer_ != nullptr) {
+    const int background = syncer_->Finish();
+    syncer_.reset();
+    if (err == 0) err = background;
+    if (err == 0 && ::fdatasync(fileno(file_)) != 0) err = errno;
+  }
+  if (std::fclose(file_) != 0 && err == 0) err = errno;
   file_ = nullptr;
-  if (!flushed || !synced || !closed)
-    throw McapError("closing '" + path_ + "' failed: " + std::strerror(errno));
+  if (err != 0) throw McapError("closing '" + path_ + "' failed: " + std::strerror(err));
 }
 
 // ===================================== reader =============================================

@@ -203,12 +203,23 @@ std::string MessageKey(const gp::Message& message) {
   return "";
 }
 
-void TickLossTracker::Add(const std::string& key, uint64_t tick) {
-  Stream& s = streams_[key];
+std::size_t TickLossTracker::StreamIndex(const std::string& key) {
+  const auto [it, inserted] = index_.try_emplace(key, streams_.size());
+  if (inserted) streams_.emplace_back();
+  return it->second;
+}
+
+void TickLossTracker::AddAt(std::size_t stream_index, uint64_t tick) {
+  Stream& s = streams_[stream_index];
   if (s.count == 0) {
     s.first = s.last = s.max_tick = tick;
   } else if (tick > s.max_tick) {
-    ++s.delta_histogram[tick - s.max_tick];
+    const uint64_t delta = tick - s.max_tick;
+    if (delta <= kSmallDeltas) {
+      ++s.small_deltas[delta];
+    } else {
+      ++s.large_deltas[delta];
+    }
     s.max_tick = tick;
   } else {
     ++s.not_increasing;  // duplicate or late sample: not a loss, but reported
@@ -220,15 +231,21 @@ void TickLossTracker::Add(const std::string& key, uint64_t tick) {
 
 std::vector<StreamLoss> TickLossTracker::Results() const {
   std::vector<StreamLoss> out;
-  for (const auto& [key, s] : streams_) {
+  for (const auto& [key, index] : index_) {
+    const Stream& s = streams_[index];
     StreamLoss l;
     l.key = key;
     l.count = s.count;
     l.first_tick = s.first;
     l.last_tick = s.last;
     l.not_increasing = s.not_increasing;
+    std::vector<std::pair<uint64_t, uint64_t>> histogram;  // (delta, count), delta ascending
+    for (uint64_t d = 1; d <= kSmallDeltas; ++d) {
+      if (s.small_deltas[d] > 0) histogram.emplace_back(d, s.small_deltas[d]);
+    }
+    histogram.insert(histogram.end(), s.large_deltas.begin(), s.large_deltas.end());
     uint64_t best = 0;
-    for (const auto& [delta, n] : s.delta_histogram) {
+    for (const auto& [delta, n] : histogram) {
       if (n > best) {
         best = n;
         l.step_ticks = delta;
@@ -236,7 +253,7 @@ std::vector<StreamLoss> TickLossTracker::Results() const {
       l.max_gap_ticks = std::max(l.max_gap_ticks, delta);
     }
     if (l.step_ticks == 0) l.step_ticks = 1;
-    for (const auto& [delta, n] : s.delta_histogram) {
+    for (const auto& [delta, n] : histogram) {
       if (delta > l.step_ticks) {
         // Round to the nearest whole number of steps: a late sample shifts one difference.
         const uint64_t steps = (delta + l.step_ticks / 2) / l.step_ticks;

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <functional>
 #include <map>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -65,7 +66,11 @@ struct McapWriterConfig {
   uint64_t chunk_max_bytes = 1u << 20;       // close a chunk when its records reach this size
   uint64_t chunk_max_messages = 100000;      // ... or hold this many messages
   uint64_t chunk_max_span_ns = 100'000'000;  // ... or span this much log time (crash window)
-  McapSyncMode sync = McapSyncMode::kFdatasync;  // after each chunk is written
+  // After each chunk is written: kFflush hands the bytes to the kernel (enough to survive a
+  // kill -9 of the recorder); kFdatasync does that and then fdatasync()s on a background
+  // thread, so that a slow disk never stalls the caller (the recorder's DDS loop). A failed
+  // background fdatasync is reported by the next FlushChunk() or Close().
+  McapSyncMode sync = McapSyncMode::kFdatasync;
   bool compute_data_crc = true;
   void Validate() const;  // throws std::invalid_argument naming the field
 };
@@ -74,8 +79,10 @@ struct McapWriterStats {
   uint64_t messages = 0;
   uint64_t chunks = 0;
   uint64_t bytes = 0;
-  uint64_t syncs = 0;
+  uint64_t syncs = 0;  // flushes to the kernel (each followed by a background fdatasync)
 };
+
+class BackgroundSync;  // mcap.cpp
 
 // Writes messages into uncompressed chunks. Schema and Channel records go to the data section
 // as soon as they are added, so that a file cut after any flushed chunk is readable (crash
@@ -133,6 +140,7 @@ class McapWriter {
   uint64_t message_start_ns_ = 0, message_end_ns_ = 0;
   std::string scratch_;
   McapWriterStats stats_;
+  std::unique_ptr<BackgroundSync> syncer_;  // kFdatasync only, while a file is open
 };
 
 struct McapStatistics {

@@ -7,6 +7,7 @@
 #include <google/protobuf/dynamic_message.h>
 #include <google/protobuf/message.h>
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -106,15 +107,22 @@ struct StreamLoss {
 
 class TickLossTracker {
  public:
-  void Add(const std::string& key, uint64_t tick);
+  void Add(const std::string& key, uint64_t tick) { AddAt(StreamIndex(key), tick); }
+  // Fast path for a caller that sees the same keys over and over (the live recorder): look
+  // the key up once, then add by index (no string, no map lookup per message).
+  std::size_t StreamIndex(const std::string& key);
+  void AddAt(std::size_t stream_index, uint64_t tick);
   std::vector<StreamLoss> Results() const;
 
  private:
+  static constexpr uint64_t kSmallDeltas = 16;  // tick differences counted in an array
   struct Stream {
     uint64_t count = 0, first = 0, last = 0, max_tick = 0, not_increasing = 0;
-    std::map<uint64_t, uint64_t> delta_histogram;
+    std::array<uint64_t, kSmallDeltas + 1> small_deltas{};  // [d] = how often d, d <= 16
+    std::map<uint64_t, uint64_t> large_deltas;              // d > 16 (gaps)
   };
-  std::map<std::string, Stream> streams_;
+  std::map<std::string, std::size_t> index_;  // key -> streams_ index (Results in key order)
+  std::vector<Stream> streams_;
 };
 
 struct ChannelInfo {
