@@ -70,6 +70,10 @@ void QosParams::Validate() const {
                                 std::to_string(valve_liveliness_lease_s) +
                                 " s: must be finite and > 0");
   }
+  if (control_reader_depth < 1 || control_reader_depth > 1000) {
+    throw std::invalid_argument("QosParams.control_reader_depth = " +
+                                std::to_string(control_reader_depth) + ": must be in [1, 1000]");
+  }
   if (ownership_strength < 0) {
     throw std::invalid_argument("QosParams.ownership_strength = " +
                                 std::to_string(ownership_strength) + ": must be >= 0");
@@ -149,7 +153,7 @@ Qos MakeQos(TopicKind kind, EndpointRole role, const QosParams& params) {
   } else if (recorder || kind == TopicKind::kOperatorCommand || kind == TopicKind::kFaultEvent) {
     dds_qset_history(q, DDS_HISTORY_KEEP_ALL, DDS_LENGTH_UNLIMITED);
   } else {
-    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);  // the newest sample per instance
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, params.control_reader_depth);  // 1: newest only
   }
 
   // Durability: offered (writer) and requested (reader) alike.

@@ -186,6 +186,9 @@ int main(int argc, char** argv) {
   }
   for (int leg = 1; leg <= 6; ++leg) {
     std::vector<std::string> leg_args{"--leg", std::to_string(leg), "--controller", o.controller};
+    // With a recorder, a leg runs only once the recorder has matched its valve commands too:
+    // otherwise a recorder that discovers a leg late misses its first ticks.
+    if (o.recorder) leg_args.insert(leg_args.end(), {"--valve-readers", "2"});
     if (leg == o.fault_leg) {
       leg_args.insert(leg_args.end(), {"--fault", o.fault_kind, "--fault-at", o.fault_at});
       log->warn("fault injection: leg {} primary controller, '{}' at t = {} s", leg,
@@ -195,8 +198,13 @@ int main(int argc, char** argv) {
     if (o.standby)
       specs.push_back(spec("leg" + std::to_string(leg) + "_standby",
                            "/services/leg_ctrl/hexa_leg_ctrl",
-                           {"--leg", std::to_string(leg), "--controller", o.controller,
-                            "--standby"}));
+                           [&] {
+                             std::vector<std::string> a{"--leg", std::to_string(leg),
+                                                        "--controller", o.controller,
+                                                        "--standby"};
+                             if (o.recorder) a.insert(a.end(), {"--valve-readers", "2"});
+                             return a;
+                           }()));
   }
   std::vector<std::string> sup_args{"--trajectory", o.trajectory, "--autostart",
                                     "--exit-when-done", "--periods", std::to_string(o.periods)};

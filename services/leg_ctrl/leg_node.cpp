@@ -24,6 +24,14 @@ comm::QosParams ValveQos(const LegNodeOptions& o) {
   return q;
 }
 
+comm::QosParams ControlReaderQos(const LegNodeOptions& o, comm::TopicKind kind) {
+  comm::QosParams q = node::QosFor(o.common, kind);
+  if (o.common.mode == node::TimeMode::kLockstep) {
+    q.control_reader_depth = static_cast<int32_t>(kLockstepQueue);
+  }
+  return q;
+}
+
 hexa_msg_LegCtrlStatus ToWire(LegControlStatus s) {
   return static_cast<hexa_msg_LegCtrlStatus>(static_cast<int>(s));
 }
@@ -76,9 +84,9 @@ LegNode::LegNode(const LegNodeOptions& options, const config::SystemConfig& conf
           participant_, static_cast<uint8_t>(options.leg))),
       valve_topic_(participant_),
       sensors_reader_(participant_, sensors_topic_, comm::EndpointRole::kControlReader,
-                      node::QosFor(options.common, comm::TopicKind::kLegSensors)),
+                      ControlReaderQos(options, comm::TopicKind::kLegSensors), kLockstepQueue),
       setpoint_reader_(participant_, setpoint_topic_, comm::EndpointRole::kControlReader,
-                       node::QosFor(options.common, comm::TopicKind::kLegSetpoint)),
+                       ControlReaderQos(options, comm::TopicKind::kLegSetpoint), kSetpointRing),
       valve_writer_(participant_, valve_topic_, ValveQos(options)),
       status_(participant_, name_),
       waitset_(participant_) {
@@ -102,11 +110,14 @@ bool LegNode::WaitUntilMatched() {
   const int64_t end = node::MonotonicNow_ns() + static_cast<int64_t>(options_.startup_timeout_s * 1e9);
   while (!shutdown_.requested()) {
     const bool sensors = sensors_reader_.Snapshot().subscription_matched_current >= 1;
-    const bool plant = valve_writer_.Snapshot().publication_matched_current >= 1;
-    if (sensors && plant) return true;
+    const uint32_t valve_readers = valve_writer_.Snapshot().publication_matched_current;
+    const bool readers = valve_readers >= static_cast<uint32_t>(options_.valve_readers);
+    if (sensors && readers) return true;
     if (node::MonotonicNow_ns() > end) {
-      log_->error("no plant after {} s (sensor writer matched: {}, valve reader matched: {})",
-                  options_.startup_timeout_s, sensors, plant);
+      log_->error("peers missing after {} s: sensor writer matched: {}, valve readers matched "
+                  "{} of {} (the plant{})",
+                  options_.startup_timeout_s, sensors, valve_readers, options_.valve_readers,
+                  options_.valve_readers > 1 ? " and the recorder" : "");
       return false;
     }
     waitset_.Wait(DDS_MSECS(20));  // match counts change without data: bounded re-check
@@ -120,9 +131,10 @@ void LegNode::TakeSetpoints() {
     for (std::size_t k = 0; k < setpoint_reader_.count(); ++k) {
       if (!setpoint_reader_.info(k).valid_data) continue;
       const auto& s = setpoint_reader_.sample(k);
-      if (newest_.valid && s.header.tick <= newest_.sample.header.tick) continue;
-      previous_ = newest_;
-      newest_ = Setpoint{true, s};
+      const Setpoint& newest = setpoints_[newest_setpoint_];
+      if (newest.valid && s.header.tick <= newest.sample.header.tick) continue;
+      newest_setpoint_ = newest.valid ? (newest_setpoint_ + 1) % kSetpointRing : 0;
+      setpoints_[newest_setpoint_] = Setpoint{true, s};
     }
   }
 }
@@ -132,14 +144,20 @@ const LegNode::Setpoint* LegNode::SetpointFor(std::uint64_t tick) const {
     // The protocol of docs/architecture.md: the setpoint issued at 5 * floor((n - 1) / 5).
     std::uint64_t required = 0;
     if (!RequiredSetpointTick(tick, kSupervisorEveryTicks, required)) return nullptr;
-    if (newest_.valid && newest_.sample.header.tick == required) return &newest_;
-    if (previous_.valid && previous_.sample.header.tick == required) return &previous_;
+    for (const Setpoint& p : setpoints_) {
+      if (p.valid && p.sample.header.tick == required) return &p;
+    }
     return nullptr;
   }
   // Real time: the newest setpoint not from the future.
-  if (newest_.valid && newest_.sample.header.tick <= tick) return &newest_;
-  if (previous_.valid && previous_.sample.header.tick <= tick) return &previous_;
-  return nullptr;
+  const Setpoint* best = nullptr;
+  for (const Setpoint& p : setpoints_) {
+    if (p.valid && p.sample.header.tick <= tick &&
+        (best == nullptr || p.sample.header.tick > best->sample.header.tick)) {
+      best = &p;
+    }
+  }
+  return best;
 }
 
 bool LegNode::CanAnswer(std::uint64_t tick) const {
@@ -148,7 +166,8 @@ bool LegNode::CanAnswer(std::uint64_t tick) const {
   if (!RequiredSetpointTick(tick, kSupervisorEveryTicks, required)) return true;  // tick 0
   // Setpoints come in tick order: once a newer one is here, the required one will never come
   // (the supervisor skipped it): answer without, the core holds on a stale setpoint.
-  return SetpointFor(tick) != nullptr || (newest_.valid && newest_.sample.header.tick > required);
+  const Setpoint& newest = setpoints_[newest_setpoint_];
+  return SetpointFor(tick) != nullptr || (newest.valid && newest.sample.header.tick > required);
 }
 
 bool LegNode::InjectFault(double sim_time_s) {
@@ -221,6 +240,76 @@ void LegNode::Answer(const hexa_msg_LegSensors& s) {
   valve_writer_.WriteNow(c);
 }
 
+void LegNode::ResendLastAnswer() {
+  // The plant asked again for a tick already answered (lost sample or ownership hand-over):
+  // repeat the cached answer, the controller state must not advance twice.
+  if (!(fault_active_ && options_.fault.kind == FaultKind::kSilence)) {
+    valve_writer_.WriteNow(last_command_);
+    ++resent_;
+  }
+}
+
+void LegNode::AnswerAndReport(const hexa_msg_LegSensors& s) {
+  Answer(s);
+  if (cycles_ % 100 == 0) PublishStatus(hexa_msg_NODE_RUNNING, ToString(output_.status));
+}
+
+void LegNode::TakeSensorsRealtime() {
+  // Only the newest sample matters: an older tick is already too late to act on.
+  hexa_msg_LegSensors s{};
+  if (sensors_reader_.TakeLatestForLeg(static_cast<uint8_t>(options_.leg), s) == 1) {
+    if (answered_any_ && s.header.tick == last_command_.header.tick) {
+      ResendLastAnswer();
+    } else if (!answered_any_ || s.header.tick > last_command_.header.tick) {
+      pending_ = s;
+      has_pending_ = true;
+    }
+  }
+  if (has_pending_ && CanAnswer(pending_.header.tick)) {
+    has_pending_ = false;
+    AnswerAndReport(pending_);
+  }
+}
+
+void LegNode::TakeSensorsLockstep() {
+  // Every tick, in order: a primary gets one at a time (the plant waits for it); a hot
+  // standby may be several behind and must still compute every tick, so that its state is
+  // the primary's when it takes over (bit-identical hand-over).
+  while (sensors_reader_.Take() > 0) {
+    for (std::size_t k = 0; k < sensors_reader_.count(); ++k) {
+      if (!sensors_reader_.info(k).valid_data) continue;
+      const hexa_msg_LegSensors& s = sensors_reader_.sample(k);
+      if (s.leg_id != options_.leg) continue;
+      const std::uint64_t tick = s.header.tick;
+      const std::uint64_t newest_queued =
+          queue_size_ > 0 ? queue_[(queue_head_ + queue_size_ - 1) % kLockstepQueue].header.tick
+                          : 0;
+      if (answered_any_ && queue_size_ == 0 && tick == last_command_.header.tick) {
+        ResendLastAnswer();  // the plant's re-ask
+      } else if ((!answered_any_ || tick > last_command_.header.tick) &&
+                 (queue_size_ == 0 || tick > newest_queued)) {
+        if (queue_size_ == kLockstepQueue) {  // > 64 ticks behind: the oldest is lost
+          if (queue_overflows_++ == 0) {
+            log_->warn("{} is more than {} ticks behind the plant: dropping tick {} (its state "
+                       "will no longer match the primary's)",
+                       name_, kLockstepQueue, queue_[queue_head_].header.tick);
+          }
+          queue_head_ = (queue_head_ + 1) % kLockstepQueue;
+          --queue_size_;
+        }
+        queue_[(queue_head_ + queue_size_) % kLockstepQueue] = s;
+        ++queue_size_;
+      }  // else: a repeat of a queued tick (a re-ask while this node lags): ignored
+    }
+  }
+  while (queue_size_ > 0 && CanAnswer(queue_[queue_head_].header.tick)) {
+    const std::size_t head = queue_head_;
+    queue_head_ = (queue_head_ + 1) % kLockstepQueue;
+    --queue_size_;
+    AnswerAndReport(queue_[head]);  // the slot is only reused by a later take
+  }
+}
+
 int LegNode::Run() {
   const bool realtime = options_.common.mode == node::TimeMode::kRealtime;
   PublishStatus(hexa_msg_NODE_STARTING, "waiting for the plant");
@@ -245,33 +334,17 @@ int LegNode::Run() {
       valve_writer_.AssertLiveliness();
     }
     TakeSetpoints();
-    hexa_msg_LegSensors s{};
-    if (sensors_reader_.TakeLatestForLeg(static_cast<uint8_t>(options_.leg), s) == 1) {
-      if (answered_any_ && s.header.tick == last_command_.header.tick) {
-        // The plant asked again for a tick already answered (lost sample or ownership
-        // hand-over): repeat the cached answer, the controller state must not advance twice.
-        if (!(fault_active_ && options_.fault.kind == FaultKind::kSilence)) {
-          valve_writer_.WriteNow(last_command_);
-          ++resent_;
-        }
-      } else if (!answered_any_ || s.header.tick > last_command_.header.tick) {
-        pending_ = s;
-        has_pending_ = true;
-      }
-    }
-    if (has_pending_ && CanAnswer(pending_.header.tick)) {
-      has_pending_ = false;
-      Answer(pending_);
-      if (cycles_ % 100 == 0) {
-        PublishStatus(hexa_msg_NODE_RUNNING, ToString(output_.status));
-      }
+    if (realtime) {
+      TakeSensorsRealtime();
+    } else {
+      TakeSensorsLockstep();
     }
   }
   const auto sensors = sensors_reader_.Snapshot();
   log_->info("{} stopped after {} cycles (last tick {}): sensor deadline misses {}, repeated "
-             "answers {}, compute median {:.1f} us max {:.1f} us",
+             "answers {}, lockstep ticks dropped {}, compute median {:.1f} us max {:.1f} us",
              name_, cycles_, last_command_.header.tick, sensors.requested_deadline_missed_total,
-             resent_, cycle_times_.Median() * 1e6, cycle_times_.Max() * 1e6);
+             resent_, queue_overflows_, cycle_times_.Median() * 1e6, cycle_times_.Max() * 1e6);
   PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
   return 0;
 }

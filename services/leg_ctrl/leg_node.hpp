@@ -4,6 +4,7 @@
 // strength) and fault injection for safety tests.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -24,6 +25,13 @@ struct FaultInjection {
   double slow_extra_s = 0.005; // kSlow: added to every cycle
 };
 
+// Lockstep: sensor samples not answered yet are queued in tick order (the plant does not
+// wait for a hot standby, which may lag it); the readers keep this many samples per leg.
+inline constexpr std::size_t kLockstepQueue = 64;
+// The last setpoints received: lockstep needs the one issued at 5 floor((n - 1) / 5), which a
+// lagging standby may look for after newer ones arrived.
+inline constexpr std::size_t kSetpointRing = 16;
+
 struct LegNodeOptions {
   node::CommonOptions common;
   int leg = 1;                 // 1..6
@@ -31,6 +39,9 @@ struct LegNodeOptions {
   bool standby = false;
   FaultInjection fault;
   double startup_timeout_s = 30.0;
+  // Matched readers of the valve-command writer required before RUNNING (the plant, plus
+  // the recorder when one records the session: a reader that matches late misses ticks).
+  int valve_readers = 1;
 };
 
 class LegNode {
@@ -46,6 +57,10 @@ class LegNode {
   };
   bool WaitUntilMatched();
   void TakeSetpoints();
+  void TakeSensorsLockstep();
+  void TakeSensorsRealtime();
+  void ResendLastAnswer();
+  void AnswerAndReport(const hexa_msg_LegSensors& sensors);
   const Setpoint* SetpointFor(std::uint64_t tick) const;
   bool CanAnswer(std::uint64_t tick) const;
   void Answer(const hexa_msg_LegSensors& sensors);
@@ -67,10 +82,13 @@ class LegNode {
   node::StatusPublisher status_;
   comm::WaitSet waitset_;
 
-  Setpoint newest_;
-  Setpoint previous_;
-  bool has_pending_ = false;
+  std::array<Setpoint, kSetpointRing> setpoints_{};
+  std::size_t newest_setpoint_ = 0;  // index into setpoints_ (valid if any is)
+  bool has_pending_ = false;         // real time: the newest unanswered sample
   hexa_msg_LegSensors pending_{};
+  std::array<hexa_msg_LegSensors, kLockstepQueue> queue_{};  // lockstep, ring
+  std::size_t queue_head_ = 0, queue_size_ = 0;
+  std::uint64_t queue_overflows_ = 0;
   bool answered_any_ = false;
   hexa_msg_ValveCommand last_command_{};
   LegControllerInput input_;

@@ -18,6 +18,9 @@ int main(int argc, char** argv) {
   cli.AddOption("fault-at", "s", "simulated time at which the fault starts", "0");
   cli.AddOption("fault-slow", "s", "extra time per cycle for --fault slow", "0.005");
   cli.AddOption("startup-timeout", "s", "the plant must appear within this", "30");
+  cli.AddOption("valve-readers", "N",
+                "readers of this leg's valve commands to match before running: 1 = the plant, "
+                "2 = the plant and a recorder (so that the recording has tick 0 on)", "1");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
   if (!cli.Has("leg")) {
@@ -29,7 +32,9 @@ int main(int argc, char** argv) {
   const auto at = cli.GetDouble("fault-at", 0, 1e7);
   const auto slow = cli.GetDouble("fault-slow", 0, 10);
   const auto startup = cli.GetDouble("startup-timeout", 0.1, 3600);
-  if (!hexa::node::ReadCommonOptions(cli, o.common) || !leg || !at || !slow || !startup) {
+  const auto valve_readers = cli.GetInt("valve-readers", 1, 16);
+  if (!hexa::node::ReadCommonOptions(cli, o.common) || !leg || !at || !slow || !startup ||
+      !valve_readers) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
@@ -41,6 +46,7 @@ int main(int argc, char** argv) {
   o.fault.at_sim_time_s = *at;
   o.fault.slow_extra_s = *slow;
   o.startup_timeout_s = *startup;
+  o.valve_readers = static_cast<int>(*valve_readers);
 
   const std::string name = "leg" + std::to_string(o.leg) + (o.standby ? "_standby" : "");
   auto log = hexa::logging::Init(name, o.common.log_file, o.common.log_level);

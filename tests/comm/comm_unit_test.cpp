@@ -56,6 +56,18 @@ TEST_F(CommUnit, QosProfilesMatchTheTopicTable) {
     dds_duration_t block;
     ASSERT_TRUE(dds_qget_reliability(q.get(), &rel, &block));
     EXPECT_EQ(rel, DDS_RELIABILITY_RELIABLE);  // lockstep must not lose a sample
+    dds_history_kind_t hist;
+    int32_t depth = 0;
+    ASSERT_TRUE(dds_qget_history(q.get(), &hist, &depth));
+    EXPECT_EQ(hist, DDS_HISTORY_KEEP_LAST);
+    EXPECT_EQ(depth, 1);  // the default: the newest sample only
+    lockstep.control_reader_depth = 64;  // a lockstep leg controller (hot standby may lag)
+    const Qos deep = MakeQos(TopicKind::kLegSetpoint, EndpointRole::kControlReader, lockstep);
+    ASSERT_TRUE(dds_qget_history(deep.get(), &hist, &depth));
+    EXPECT_EQ(depth, 64);
+    lockstep.control_reader_depth = 0;
+    EXPECT_THROW(MakeQos(TopicKind::kLegSetpoint, EndpointRole::kControlReader, lockstep),
+                 std::invalid_argument);
   }
   {
     // Valve command: exclusive, strength, liveliness lease, no auto-dispose.

@@ -122,7 +122,9 @@ TEST_F(TwoHosts, LockstepSessionAcrossAVethLinkCompletesWithoutLoss) {
   EXPECT_TRUE(info.complete);
   uint64_t sensors = 0, commands = 0;
   for (const auto& ch : info.channels) {
-    if (ch.loss_analysed) EXPECT_EQ(ch.missing, 0u) << ch.topic;
+    if (ch.loss_analysed) {
+      EXPECT_EQ(ch.missing, 0u) << ch.topic;
+    }
     if (ch.topic == "hexa_LegSensors") sensors = ch.count;
     if (ch.topic == "hexa_ValveCommand") commands = ch.count;
   }

@@ -75,6 +75,10 @@ struct QosParams {
   // reader asks for RELIABLE; in real time BEST_EFFORT avoids head-of-line blocking behind a
   // repair and the next sample supersedes a lost one 1 ms later.
   bool lockstep = false;
+  // Control readers: keep-last depth per instance. 1 = the newest sample only (real time:
+  // an older sample is worthless). A lockstep leg controller asks for more so that a hot
+  // standby, which the plant does not wait for, can lag and still see every tick in order.
+  int32_t control_reader_depth = 1;
 
   // Throws std::invalid_argument naming the field, value and limit.
   void Validate() const;
