@@ -209,6 +209,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> sup_args{"--trajectory", o.trajectory, "--autostart",
                                     "--exit-when-done", "--periods", std::to_string(o.periods)};
   if (!o.outer_loop) sup_args.push_back("--no-outer-loop");
+  if (o.recorder) sup_args.insert(sup_args.end(), {"--pose-readers", "1"});
   specs.push_back(spec("supervisor", "/services/task_space/hexa_task_space", sup_args));
   std::vector<std::string> plant_args{"--profile", o.profile, "--seed", std::to_string(o.seed),
                                       "--legs", "6", "--supervisor"};

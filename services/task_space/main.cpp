@@ -20,12 +20,16 @@ int main(int argc, char** argv) {
   cli.AddFlag("no-outer-loop", "disable the task-space outer loop");
   cli.AddFlag("least-squares", "six-leg least-squares position estimate instead of GQFK");
   cli.AddOption("startup-timeout", "s", "peers must match within this", "30");
+  cli.AddOption("pose-readers", "N",
+                "readers of the pose reports to match before running (1 with a recorder, so "
+                "that the recording has the first report)", "0");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
   hexa::task_space::SupervisorNodeOptions o;
   const auto periods = cli.GetInt("periods", 0, 1000);
   const auto startup = cli.GetDouble("startup-timeout", 0.1, 3600);
-  if (!hexa::node::ReadCommonOptions(cli, o.common) || !periods || !startup) {
+  const auto pose_readers = cli.GetInt("pose-readers", 0, 16);
+  if (!hexa::node::ReadCommonOptions(cli, o.common) || !periods || !startup || !pose_readers) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
@@ -36,6 +40,7 @@ int main(int argc, char** argv) {
   o.outer_loop = !cli.Flag("no-outer-loop");
   o.least_squares = cli.Flag("least-squares");
   o.startup_timeout_s = *startup;
+  o.pose_readers = static_cast<int>(*pose_readers);
 
   auto log = hexa::logging::Init("supervisor", o.common.log_file, o.common.log_level);
   try {

@@ -81,11 +81,16 @@ bool SupervisorNode::WaitUntilMatched() {
     const bool imu = imu_reader_.Snapshot().subscription_matched_current >= 1;
     // Every leg controller reads the setpoints (plus the plant in lockstep).
     const bool legs = setpoint_writer_.Snapshot().publication_matched_current >= kNumLegs;
-    if (sensors && imu && legs) return true;
+    // With a recorder: it must have matched the pose reports before the first one is written.
+    const uint32_t pose_readers = pose_writer_.Snapshot().publication_matched_current;
+    const bool poses = pose_readers >= static_cast<uint32_t>(options_.pose_readers);
+    if (sensors && imu && legs && poses) return true;
     if (node::MonotonicNow_ns() > end) {
-      log_->error("peers not matched after {} s: sensors {}, imu {}, setpoint readers {}",
+      log_->error("peers not matched after {} s: sensors {}, imu {}, setpoint readers {}, pose "
+                  "readers {} of {}",
                   options_.startup_timeout_s, sensors, imu,
-                  setpoint_writer_.Snapshot().publication_matched_current);
+                  setpoint_writer_.Snapshot().publication_matched_current, pose_readers,
+                  options_.pose_readers);
       return false;
     }
     waitset_.Wait(DDS_MSECS(20));  // match counts change without data: bounded re-check

@@ -24,6 +24,7 @@ struct SupervisorNodeOptions {
   bool outer_loop = true;
   bool least_squares = false;
   double startup_timeout_s = 30.0;
+  int pose_readers = 0;  // matched PoseReport readers required before RUNNING (the recorder)
   double leg_lost_grace_s = 0.02;       // real time: a leg without samples this long + lease lost
 };
 

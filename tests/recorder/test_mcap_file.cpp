@@ -378,5 +378,47 @@ TEST(CrashSafety, FileIsReadableUpToTheLastFlushAfterKill9AndRecoverCompletesIt)
   EXPECT_EQ(info.channels[0].streams[0].last_tick, n);
 }
 
+// A stream that starts late or stops early against the other instances of its topic is
+// reported (a recorder that matched one leg's writer late recorded it from tick 71 on, and
+// the gaps between its first and last tick could not show it). Not counted as missing.
+TEST(RecordingInfo, InstancesThatStartLateOrEndEarlyAreReported) {
+  const fs::path dir = TempDir();
+  const std::string path = dir / "partial.mcap";
+  {
+    McapWriterConfig cfg;
+    cfg.sync = McapSyncMode::kNone;
+    RecordingWriter w(cfg);
+    w.Open(path);
+    const uint16_t ch = w.AddTopic("hexa_ValveCommand", *rec::ValveCommand::descriptor(),
+                                   {{kMetaPeriodS, "0.001"}});
+    rec::ValveCommand v;
+    for (uint64_t tick = 0; tick <= 100; ++tick) {
+      for (uint32_t leg = 1; leg <= 3; ++leg) {
+        if (leg == 2 && tick < 71) continue;   // matched late
+        if (leg == 3 && tick > 90) continue;   // stopped early
+        v.set_leg_id(leg);
+        test::FillHeader(v.mutable_header(), tick);
+        w.Write(ch, 1'000'000 * (tick + 1), 1'000'000 * (tick + 1), v);
+      }
+    }
+    w.Close();
+  }
+  const RecordingInfo info = Inspect(path);
+  ASSERT_EQ(info.channels.size(), 1u);
+  const ChannelInfo& c = info.channels[0];
+  ASSERT_EQ(c.streams.size(), 3u);
+  EXPECT_EQ(c.missing, 0u);
+  for (const auto& l : c.streams) {
+    EXPECT_EQ(l.late_start_ticks, l.key == "leg 2" ? 71u : 0u) << l.key;
+    EXPECT_EQ(l.early_end_ticks, l.key == "leg 3" ? 10u : 0u) << l.key;
+  }
+  const std::string text = FormatInfo(info);
+  EXPECT_NE(text.find("PARTIAL: starts 71 ticks after and ends 0 ticks before"), std::string::npos)
+      << text;
+  EXPECT_NE(text.find("PARTIAL: starts 0 ticks after and ends 10 ticks before"), std::string::npos)
+      << text;
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace hexa::recorder

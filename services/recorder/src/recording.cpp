@@ -320,6 +320,17 @@ RecordingInfo Inspect(const std::string& path, const McapScanOptions& options) {
       c.loss_analysed = true;
       c.streams = trackers[id].Results();
       for (const auto& l : c.streams) c.missing += l.missing;
+      // Instances of one topic run on the same ticks: one that starts late or stops early
+      // against its siblings is reported (a late-matched writer, a crashed node).
+      for (auto& l : c.streams) {
+        for (const auto& other : c.streams) {
+          if (other.step_ticks != l.step_ticks || l.step_ticks == 0) continue;
+          if (other.first_tick < l.first_tick)
+            l.late_start_ticks = std::max(l.late_start_ticks, l.first_tick - other.first_tick);
+          if (other.last_tick > l.last_tick)
+            l.early_end_ticks = std::max(l.early_end_ticks, other.last_tick - l.last_tick);
+        }
+      }
     }
     if (c.count > 0) {
       if (first || c.first_log_ns < info.start_ns) info.start_ns = c.first_log_ns;
@@ -385,6 +396,13 @@ std::string FormatInfo(const RecordingInfo& info) {
                     l.last_tick, l.step_ticks, l.count, l.expected, l.missing, l.gaps,
                     l.max_gap_ticks, l.not_increasing);
       o << line;
+      if (l.late_start_ticks > 0 || l.early_end_ticks > 0) {
+        std::snprintf(line, sizeof line,
+                      "  %-28s %-12s   PARTIAL: starts %" PRIu64 " ticks after and ends %" PRIu64
+                      " ticks before the topic's other instances\n",
+                      "", "", l.late_start_ticks, l.early_end_ticks);
+        o << line;
+      }
     }
   }
   return o.str();

@@ -103,6 +103,12 @@ struct StreamLoss {
   uint64_t gaps = 0;           // number of holes
   uint64_t max_gap_ticks = 0;  // largest tick difference seen
   uint64_t not_increasing = 0; // duplicates or reordered samples
+  // Against the other instances of the same topic (same step): ticks this stream starts
+  // after the earliest first tick / ends before the latest last tick. Not counted as missing
+  // (a leg that joined late or crashed sent nothing), but a recorder that matched a writer
+  // late shows here, where the gaps between first and last tick cannot show it.
+  uint64_t late_start_ticks = 0;
+  uint64_t early_end_ticks = 0;
 };
 
 class TickLossTracker {
