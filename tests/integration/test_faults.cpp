@@ -50,7 +50,9 @@ TEST(Faults, GarbageCommandsAreNulledReportedAndTheSupervisorHolds) {
       ASSERT_TRUE(std::isfinite(v) && v >= 0.0 && v <= 10.0) << "tick " << n << " leg " << i + 1
                                                             << " (lockstep loses no sample)";
     }
-    if (n >= first_bad) ASSERT_EQ(r.applied_valve_v[n][2], 5.0) << "tick " << n;
+    if (n >= first_bad) {
+      ASSERT_EQ(r.applied_valve_v[n][2], 5.0) << "tick " << n;
+    }
   }
 }
 
