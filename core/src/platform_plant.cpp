@@ -366,12 +366,12 @@ PlantStatus PlatformPlant::Step(const LegArray<double>& valve_v, double dt_s) {
       Derivative(x, t, k1, false);
     }
     if (config_.integrator == PlantIntegrator::kSsprk3) {
-      // Shu-Osher SSPRK3: convex combinations of forward-Euler stages.
-      k4 = x + h * k1;                                   // u1
-      Derivative(k4, t + h, k2, false);
-      k4 = 0.75 * x + 0.25 * (k4 + h * k2);              // u2
-      Derivative(k4, t + 0.5 * h, k3, false);
-      x = (1.0 / 3.0) * x + (2.0 / 3.0) * (k4 + h * k3);
+      // Shu-Osher SSPRK3: convex combinations of forward-Euler stages u1, u2.
+      StateVector u = x + h * k1;                        // u1
+      Derivative(u, t + h, k2, false);
+      u = 0.75 * x + 0.25 * (u + h * k2);                // u2
+      Derivative(u, t + 0.5 * h, k3, false);
+      x = (1.0 / 3.0) * x + (2.0 / 3.0) * (u + h * k3);
     } else {
       Derivative(x + 0.5 * h * k1, t + 0.5 * h, k2, false);
       Derivative(x + 0.5 * h * k2, t + 0.5 * h, k3, false);

@@ -157,28 +157,24 @@ class TopicRecorder final : public TopicRecorderBase {
 
  private:
   // Loss-tracker stream of a sample: keyed by leg for the leg topics, one stream otherwise
-  // (the same keys as MessageKey gives for the recorded message, without reflection).
+  // (the keys MessageKey gives the recorded message, looked up once per key, no reflection).
   std::size_t StreamOf(const T& s) {
-    if constexpr (requires { s.leg_id; }) {
-      int64_t& index = stream_of_leg_[s.leg_id];
-      if (index < 0) index = static_cast<int64_t>(loss.StreamIndex("leg " + std::to_string(s.leg_id)));
-      return static_cast<std::size_t>(index);
-    } else {
-      if (keyless_stream_ < 0) keyless_stream_ = static_cast<int64_t>(loss.StreamIndex(""));
-      return static_cast<std::size_t>(keyless_stream_);
+    std::size_t slot = kKeylessSlot;
+    if constexpr (requires { s.leg_id; }) slot = s.leg_id;
+    std::optional<std::size_t>& index = stream_of_key_[slot];
+    if (!index) {
+      index = loss.StreamIndex(slot == kKeylessSlot
+                                   ? std::string()
+                                   : LegStreamKey(static_cast<uint32_t>(slot)));
     }
+    return *index;
   }
 
   comm::Topic<T> topic_;
   comm::Reader<T> reader_;
   P msg_;
-  std::array<int64_t, 256> stream_of_leg_ = MakeUnset();
-  int64_t keyless_stream_ = -1;
-  static std::array<int64_t, 256> MakeUnset() {
-    std::array<int64_t, 256> a;
-    a.fill(-1);
-    return a;
-  }
+  static constexpr std::size_t kKeylessSlot = 256;  // leg_id is a uint8_t
+  std::array<std::optional<std::size_t>, kKeylessSlot + 1> stream_of_key_{};  // [leg_id]
 };
 
 McapSyncMode ParseSync(const std::string& s) {

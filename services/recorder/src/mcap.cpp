@@ -169,6 +169,31 @@ void McapWriterConfig::Validate() const {
     throw std::invalid_argument("McapWriterConfig.chunk_max_span_ns must be > 0");
 }
 
+// Schema and Channel record bodies: written once into the data section when added and again
+// into the summary section by Close().
+std::string SchemaBody(const McapSchema& s) {
+  std::string body;
+  PutU16(body, s.id);
+  PutStr(body, s.name);
+  PutStr(body, s.encoding);
+  PutStr(body, s.data);
+  return body;
+}
+
+std::string ChannelBody(const McapChannel& ch) {
+  std::string body, map;
+  PutU16(body, ch.id);
+  PutU16(body, ch.schema_id);
+  PutStr(body, ch.topic);
+  PutStr(body, ch.message_encoding);
+  for (const auto& [k, v] : ch.metadata) {
+    PutStr(map, k);
+    PutStr(map, v);
+  }
+  PutStr(body, map);
+  return body;
+}
+
 // fdatasync() of one file descriptor on its own thread: Request() returns at once; requests
 // made while a sync runs are coalesced into one more sync (which covers everything written
 // before it started). Finish() waits for the last requested sync and stops the thread.
@@ -280,12 +305,7 @@ uint16_t McapWriter::AddSchema(std::string name, std::string encoding, std::stri
   if (schemas_.size() >= 65534) throw McapError("too many schemas");
   McapSchema s{static_cast<uint16_t>(schemas_.size() + 1), std::move(name), std::move(encoding),
                std::move(data)};
-  std::string body;
-  PutU16(body, s.id);
-  PutStr(body, s.name);
-  PutStr(body, s.encoding);
-  PutStr(body, s.data);
-  WriteRecord(McapOpcode::kSchema, body);
+  WriteRecord(McapOpcode::kSchema, SchemaBody(s));
   schemas_.push_back(std::move(s));
   return schemas_.back().id;
 }
@@ -299,18 +319,7 @@ uint16_t McapWriter::AddChannel(uint16_t schema_id, std::string topic,
   if (channels_.size() >= 65535) throw McapError("too many channels");
   McapChannel ch{static_cast<uint16_t>(channels_.size()), schema_id, std::move(topic),
                  std::move(message_encoding), std::move(metadata)};
-  std::string body;
-  PutU16(body, ch.id);
-  PutU16(body, ch.schema_id);
-  PutStr(body, ch.topic);
-  PutStr(body, ch.message_encoding);
-  std::string map;
-  for (const auto& [k, v] : ch.metadata) {
-    PutStr(map, k);
-    PutStr(map, v);
-  }
-  PutStr(body, map);
-  WriteRecord(McapOpcode::kChannel, body);
+  WriteRecord(McapOpcode::kChannel, ChannelBody(ch));
   channels_.push_back(std::move(ch));
   next_sequence_.push_back(0);
   channel_counts_.push_back(0);
@@ -465,29 +474,10 @@ void McapWriter::Close() {
     if (offset_ > start) groups.push_back({op, start, offset_ - start});
   };
   group(McapOpcode::kSchema, [&] {
-    for (const auto& s : schemas_) {
-      std::string b;
-      PutU16(b, s.id);
-      PutStr(b, s.name);
-      PutStr(b, s.encoding);
-      PutStr(b, s.data);
-      summary_record(McapOpcode::kSchema, b);
-    }
+    for (const auto& s : schemas_) summary_record(McapOpcode::kSchema, SchemaBody(s));
   });
   group(McapOpcode::kChannel, [&] {
-    for (const auto& ch : channels_) {
-      std::string b, map;
-      PutU16(b, ch.id);
-      PutU16(b, ch.schema_id);
-      PutStr(b, ch.topic);
-      PutStr(b, ch.message_encoding);
-      for (const auto& [k, v] : ch.metadata) {
-        PutStr(map, k);
-        PutStr(map, v);
-      }
-      PutStr(b, map);
-      summary_record(McapOpcode::kChannel, b);
-    }
+    for (const auto& ch : channels_) summary_record(McapOpcode::kChannel, ChannelBody(ch));
   });
   group(McapOpcode::kStatistics, [&] {
     std::string b, map;

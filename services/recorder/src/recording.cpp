@@ -191,12 +191,14 @@ std::optional<uint64_t> MessageTick(const gp::Message& message) {
   return as_uint(message, d->FindFieldByName("sequence"));
 }
 
+std::string LegStreamKey(uint32_t leg) { return "leg " + std::to_string(leg); }
+
 std::string MessageKey(const gp::Message& message) {
   const gp::Descriptor* d = message.GetDescriptor();
   const gp::Reflection* r = message.GetReflection();
   if (const auto* f = d->FindFieldByName("leg_id");
       f != nullptr && !f->is_repeated() && f->cpp_type() == gp::FieldDescriptor::CPPTYPE_UINT32)
-    return "leg " + std::to_string(r->GetUInt32(message, f));
+    return LegStreamKey(r->GetUInt32(message, f));
   if (const auto* f = d->FindFieldByName("node_name");
       f != nullptr && !f->is_repeated() && f->cpp_type() == gp::FieldDescriptor::CPPTYPE_STRING)
     return "node " + r->GetString(message, f);

@@ -89,6 +89,8 @@ McapScanResult ReadRecording(const std::string& path, const DecodedMessageFn& fn
 // (leg_id, else node_name); nullopt / "" when the type has none.
 std::optional<uint64_t> MessageTick(const google::protobuf::Message& message);
 std::string MessageKey(const google::protobuf::Message& message);
+// The key MessageKey gives a message with leg_id = leg ("leg N").
+std::string LegStreamKey(uint32_t leg);
 
 // Loss from tick numbers, per instance (topic + key). The expected tick step of a stream is its
 // most frequent positive tick difference (1 for 1 kHz topics, 5 for 200 Hz ones); a difference
