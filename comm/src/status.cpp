@@ -101,11 +101,10 @@ WriterSlot* StatusCounters::ClaimWriter(dds_instance_handle_t publication) {
   return nullptr;
 }
 
-void StatusCounters::OnRequestedDeadlineMissed(const dds_requested_deadline_missed_status_t& s) {
-  requested_deadline_missed_total_.store(s.total_count, kRelaxed);
-  const uint32_t change = s.total_count_change > 0 ? static_cast<uint32_t>(s.total_count_change)
-                                                   : 0u;
-  if (InstanceSlot* slot = ClaimInstance(s.last_instance_handle)) {
+void StatusCounters::CountInstanceMisses(dds_instance_handle_t handle,
+                                         int32_t total_count_change) {
+  const uint32_t change = total_count_change > 0 ? static_cast<uint32_t>(total_count_change) : 0u;
+  if (InstanceSlot* slot = ClaimInstance(handle)) {
     slot->deadline_missed.fetch_add(change, kRelaxed);
     slot->last_miss_mono_ns.store(MonotonicNow_ns(), kRelaxed);
   } else {
@@ -113,16 +112,14 @@ void StatusCounters::OnRequestedDeadlineMissed(const dds_requested_deadline_miss
   }
 }
 
+void StatusCounters::OnRequestedDeadlineMissed(const dds_requested_deadline_missed_status_t& s) {
+  requested_deadline_missed_total_.store(s.total_count, kRelaxed);
+  CountInstanceMisses(s.last_instance_handle, s.total_count_change);
+}
+
 void StatusCounters::OnOfferedDeadlineMissed(const dds_offered_deadline_missed_status_t& s) {
   offered_deadline_missed_total_.store(s.total_count, kRelaxed);
-  const uint32_t change = s.total_count_change > 0 ? static_cast<uint32_t>(s.total_count_change)
-                                                   : 0u;
-  if (InstanceSlot* slot = ClaimInstance(s.last_instance_handle)) {
-    slot->deadline_missed.fetch_add(change, kRelaxed);
-    slot->last_miss_mono_ns.store(MonotonicNow_ns(), kRelaxed);
-  } else {
-    instance_slot_overflow_.fetch_add(change, kRelaxed);
-  }
+  CountInstanceMisses(s.last_instance_handle, s.total_count_change);
 }
 
 void StatusCounters::OnLivelinessChanged(const dds_liveliness_changed_status_t& s) {

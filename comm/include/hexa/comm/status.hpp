@@ -89,6 +89,8 @@ class StatusCounters {
 
  private:
   InstanceSlot* ClaimInstance(dds_instance_handle_t handle);
+  // Adds a deadline status's total_count_change to the instance's slot (or to the overflow).
+  void CountInstanceMisses(dds_instance_handle_t handle, int32_t total_count_change);
   WriterSlot* ClaimWriter(dds_instance_handle_t publication);
 
   std::atomic<uint32_t> requested_deadline_missed_total_{0};
