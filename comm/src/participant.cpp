@@ -4,10 +4,11 @@
 #include <cstdlib>
 
 #include "hexa/comm/error.hpp"
+#include "hexa/comm/writer.hpp"
 
 namespace hexa::comm {
 
-Participant::Participant(dds_domainid_t domain_id) : domain_id_(domain_id) {
+Participant::Participant(dds_domainid_t domain_id, WriteBatching batching) : domain_id_(domain_id) {
   const dds_entity_t p = dds_create_participant(domain_id, nullptr, nullptr);
   if (p < 0) {
     const char* uri = std::getenv("CYCLONEDDS_URI");
@@ -17,6 +18,7 @@ Participant::Participant(dds_domainid_t domain_id) : domain_id_(domain_id) {
                    p);
   }
   entity_ = OwnedEntity(p);
+  if (batching == WriteBatching::kOn) EnableWriteBatching();
 }
 
 std::string Participant::Guid() const { return EntityGuid(entity_.get()); }

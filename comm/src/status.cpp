@@ -43,6 +43,8 @@ void OfferedIncompatibleQos(dds_entity_t, const dds_offered_incompatible_qos_sta
   Self(arg)->OnOfferedIncompatibleQos(s);
 }
 
+void DataAvailable(dds_entity_t, void* arg) { Self(arg)->OnDataAvailable(); }
+
 constexpr auto kRelaxed = std::memory_order_relaxed;
 
 }  // namespace
@@ -53,7 +55,7 @@ int64_t MonotonicNow_ns() {
   return static_cast<int64_t>(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
 }
 
-dds_listener_t* StatusCounters::CreateListener() {
+dds_listener_t* StatusCounters::CreateListener(bool with_data) {
   dds_listener_t* l = dds_create_listener(this);
   dds_lset_requested_deadline_missed(l, RequestedDeadlineMissed);
   dds_lset_offered_deadline_missed(l, OfferedDeadlineMissed);
@@ -65,6 +67,7 @@ dds_listener_t* StatusCounters::CreateListener() {
   dds_lset_publication_matched(l, PublicationMatched);
   dds_lset_requested_incompatible_qos(l, RequestedIncompatibleQos);
   dds_lset_offered_incompatible_qos(l, OfferedIncompatibleQos);
+  if (with_data) dds_lset_data_available(l, DataAvailable);
   return l;
 }
 
@@ -194,6 +197,8 @@ StatusSnapshot StatusCounters::Snapshot() const {
   s.publication_matched_current = publication_matched_current_.load(kRelaxed);
   s.publication_matched_total = publication_matched_total_.load(kRelaxed);
   s.instance_slot_overflow = instance_slot_overflow_.load(kRelaxed);
+  s.write_errors_total = write_errors_total_.load(kRelaxed);
+  s.last_write_error = last_write_error_.load(kRelaxed);
   return s;
 }
 

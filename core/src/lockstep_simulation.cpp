@@ -1,5 +1,7 @@
 #include "hexa/core/lockstep_simulation.hpp"
 
+#include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 #include <string>
 
@@ -16,14 +18,6 @@ void LockstepConfig::Validate() const {
   }
 }
 
-bool RequiredSetpointTick(std::uint64_t tick, int supervisor_every_ticks,
-                          std::uint64_t& setpoint_tick) {
-  if (tick == 0) return false;
-  const auto every = static_cast<std::uint64_t>(supervisor_every_ticks);
-  setpoint_tick = every * ((tick - 1) / every);
-  return true;
-}
-
 LockstepSimulation::LockstepSimulation(const LockstepConfig& config) : config_(config) {
   config_.Validate();
   PlatformPlantConfig plant_config;
@@ -36,11 +30,15 @@ LockstepSimulation::LockstepSimulation(const LockstepConfig& config) : config_(c
       LegControllerConfig::FromRig(config_.rig, config_.leg_controller, config_.controller);
   for (auto& leg : legs_) leg = std::make_unique<LegController>(leg_config);
   hygiene_ = CommandHygieneParams::FromValve(config_.rig.valve, 0);
+  schedule_.supervisor_every_ticks = config_.supervisor_every_ticks;
 }
 
 PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartRequest* start) {
   plant_before_ = plant_->output();
   const double now_s = time_s();
+  // The clock's barrier, as the plant service runs it (answers arrive here in call order;
+  // no time passes, so it never asks again or times out).
+  barrier_.Begin(tick_, kAllLegs, 0);
 
   // Supervisor: sensors and IMU of this tick.
   supervisor_ran_ = supervisor_due();
@@ -53,15 +51,11 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
     in.command = command;
     in.start = start;
     supervisor_->Update(in, sup_out_);
-    for (std::size_t i = 0; i < kNumLegs; ++i) {
-      previous_[i] = newest_[i];
-      newest_[i] = IssuedSetpoint{true, tick_, now_s, sup_out_.setpoint[i]};
-    }
+    for (std::size_t i = 0; i < kNumLegs; ++i)
+      setpoints_[i].Add(IssuedSetpoint{tick_, now_s, sup_out_.setpoint[i]});
   }
 
-  // Legs: sensor sample of this tick, newest setpoint issued strictly before it.
-  std::uint64_t required = 0;
-  const bool has_required = RequiredSetpointTick(tick_, config_.supervisor_every_ticks, required);
+  // Legs: sensor sample of this tick, the setpoint the protocol assigns to it.
   LegArray<double> valve_v{};
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     LegControllerInput in;
@@ -72,28 +66,22 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
     in.cap_pressure_pa = s.chamber1_pressure_pa;
     in.rod_pressure_pa = s.chamber2_pressure_pa;
     in.supply_pressure_pa = s.supply_pressure_pa;
-    const IssuedSetpoint* sp = nullptr;
-    if (has_required) {
-      if (newest_[i].valid && newest_[i].tick == required) sp = &newest_[i];
-      else if (previous_[i].valid && previous_[i].tick == required) sp = &previous_[i];
-    }
-    if (sp != nullptr) {
-      in.has_setpoint = true;
-      in.setpoint_tick = sp->tick;
-      in.setpoint_time_s = sp->time_s;
-      in.setpoint_length_m = sp->value.length_m;
-      in.setpoint_velocity_m_s = sp->value.velocity_m_s;
-      in.setpoint_acceleration_m_s2 = sp->value.acceleration_m_s2;
-      in.correction_m = sp->value.correction_m;
-      in.hold = sp->value.hold;
-    }
+    SetSetpointInput(setpoints_[i].ForTick(tick_, schedule_.supervisor_every_ticks), in);
     legs_[i]->Update(in, leg_out_[i]);
+    barrier_.Answer(static_cast<int>(i) + 1, leg_out_[i].tick);
     // Command hygiene exactly as the plant service applies it.
     LatestCommand cmd{true, leg_out_[i].tick, leg_out_[i].valve_v};
     const CommandCheck check = CheckCommand(cmd, tick_, hygiene_);
     valve_v[i] = SafeValveVoltage(cmd, check, hygiene_);
   }
   applied_v_ = valve_v;
+  // Every leg controller answers the tick it was given (LegController::Update): an internal
+  // invariant, checked always.
+  if (!barrier_.complete()) {
+    std::fprintf(stderr, "LockstepSimulation: tick %llu incomplete after every leg ran\n",
+                 static_cast<unsigned long long>(tick_));
+    std::abort();
+  }
   const PlantStatus status = plant_->Step(valve_v, config_.tick_s);
   if (status == PlantStatus::kOk) ++tick_;
   return status;

@@ -13,9 +13,6 @@ namespace hexa::leg_ctrl {
 namespace {
 
 constexpr dds_attach_t kTokenShutdown = 1;
-constexpr dds_attach_t kTokenSensors = 2;
-constexpr dds_attach_t kTokenSetpoints = 3;
-constexpr int kSupervisorEveryTicks = 5;
 
 comm::QosParams ValveQos(const LegNodeOptions& o) {
   comm::QosParams q = node::QosFor(o.common, comm::TopicKind::kValveCommand);
@@ -91,8 +88,6 @@ LegNode::LegNode(const LegNodeOptions& options, const config::SystemConfig& conf
       status_(participant_, name_),
       waitset_(participant_) {
   waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
-  waitset_.Attach(sensors_reader_.data_condition(), kTokenSensors);
-  waitset_.Attach(setpoint_reader_.data_condition(), kTokenSetpoints);
   last_command_.leg_id = static_cast<uint8_t>(options.leg);
   last_command_.controller =
       options.controller == LegControllerKind::kPi ? hexa_msg_CONTROLLER_PI : hexa_msg_CONTROLLER_BSSMC;
@@ -131,43 +126,31 @@ void LegNode::TakeSetpoints() {
     for (std::size_t k = 0; k < setpoint_reader_.count(); ++k) {
       if (!setpoint_reader_.info(k).valid_data) continue;
       const auto& s = setpoint_reader_.sample(k);
-      const Setpoint& newest = setpoints_[newest_setpoint_];
-      if (newest.valid && s.header.tick <= newest.sample.header.tick) continue;
-      newest_setpoint_ = newest.valid ? (newest_setpoint_ + 1) % kSetpointRing : 0;
-      setpoints_[newest_setpoint_] = Setpoint{true, s};
+      if (s.leg_id != options_.leg) continue;
+      IssuedSetpoint issued;
+      issued.tick = s.header.tick;
+      issued.time_s = s.header.sim_time_s;
+      issued.value.length_m = s.length_m;
+      issued.value.velocity_m_s = s.velocity_m_s;
+      issued.value.acceleration_m_s2 = s.acceleration_m_s2;
+      issued.value.correction_m = s.correction_m;
+      issued.value.hold = s.hold;
+      setpoints_.Add(issued);  // an older or repeated one is ignored
     }
   }
 }
 
-const LegNode::Setpoint* LegNode::SetpointFor(std::uint64_t tick) const {
-  if (options_.common.mode == node::TimeMode::kLockstep) {
-    // The protocol of docs/architecture.md: the setpoint issued at 5 * floor((n - 1) / 5).
-    std::uint64_t required = 0;
-    if (!RequiredSetpointTick(tick, kSupervisorEveryTicks, required)) return nullptr;
-    for (const Setpoint& p : setpoints_) {
-      if (p.valid && p.sample.header.tick == required) return &p;
-    }
-    return nullptr;
-  }
-  // Real time: the newest setpoint not from the future.
-  const Setpoint* best = nullptr;
-  for (const Setpoint& p : setpoints_) {
-    if (p.valid && p.sample.header.tick <= tick &&
-        (best == nullptr || p.sample.header.tick > best->sample.header.tick)) {
-      best = &p;
-    }
-  }
-  return best;
+const IssuedSetpoint* LegNode::SetpointFor(std::uint64_t tick) const {
+  // Lockstep: the protocol's setpoint for this tick (core/lockstep_protocol.hpp). Real time:
+  // the newest setpoint not from the future.
+  if (options_.common.mode == node::TimeMode::kLockstep)
+    return setpoints_.ForTick(tick, schedule_.supervisor_every_ticks);
+  return setpoints_.NewestNotAfter(tick);
 }
 
 bool LegNode::CanAnswer(std::uint64_t tick) const {
   if (options_.common.mode == node::TimeMode::kRealtime) return true;
-  std::uint64_t required = 0;
-  if (!RequiredSetpointTick(tick, kSupervisorEveryTicks, required)) return true;  // tick 0
-  // Setpoints come in tick order: once a newer one is here, the required one will never come
-  // (the supervisor skipped it): answer without, the core holds on a stale setpoint.
-  const Setpoint& newest = setpoints_[newest_setpoint_];
-  return SetpointFor(tick) != nullptr || (newest.valid && newest.sample.header.tick > required);
+  return setpoints_.CanAnswer(tick, schedule_.supervisor_every_ticks);
 }
 
 bool LegNode::InjectFault(double sim_time_s) {
@@ -207,18 +190,7 @@ void LegNode::Answer(const hexa_msg_LegSensors& s) {
   input_.cap_pressure_pa = s.cap_pressure_pa;
   input_.rod_pressure_pa = s.rod_pressure_pa;
   input_.supply_pressure_pa = s.supply_pressure_pa;
-  const Setpoint* sp = SetpointFor(s.header.tick);
-  input_.has_setpoint = sp != nullptr;
-  if (sp != nullptr) {
-    const auto& p = sp->sample;
-    input_.setpoint_tick = p.header.tick;
-    input_.setpoint_time_s = p.header.sim_time_s;
-    input_.setpoint_length_m = p.length_m;
-    input_.setpoint_velocity_m_s = p.velocity_m_s;
-    input_.setpoint_acceleration_m_s2 = p.acceleration_m_s2;
-    input_.correction_m = p.correction_m;
-    input_.hold = p.hold;
-  }
+  SetSetpointInput(SetpointFor(s.header.tick), input_);
   controller_.Update(input_, output_);
   const double compute_s = static_cast<double>(node::MonotonicNow_ns() - t0) * 1e-9;
   cycle_times_.Add(compute_s);
@@ -238,6 +210,7 @@ void LegNode::Answer(const hexa_msg_LegSensors& s) {
   answered_any_ = true;
   if (fault_active_ && options_.fault.kind == FaultKind::kSilence) return;
   valve_writer_.WriteNow(c);
+  last_write_ns_.store(node::MonotonicNow_ns(), std::memory_order_relaxed);
 }
 
 void LegNode::ResendLastAnswer() {
@@ -245,6 +218,7 @@ void LegNode::ResendLastAnswer() {
   // repeat the cached answer, the controller state must not advance twice.
   if (!(fault_active_ && options_.fault.kind == FaultKind::kSilence)) {
     valve_writer_.WriteNow(last_command_);
+    last_write_ns_.store(node::MonotonicNow_ns(), std::memory_order_relaxed);
     ++resent_;
   }
 }
@@ -310,6 +284,21 @@ void LegNode::TakeSensorsLockstep() {
   }
 }
 
+void LegNode::OnData(void* self) {
+  auto* node = static_cast<LegNode*>(self);
+  std::lock_guard<std::mutex> lock(node->mutex_);
+  node->RunCycle();
+}
+
+void LegNode::RunCycle() {
+  TakeSetpoints();
+  if (options_.common.mode == node::TimeMode::kRealtime) {
+    TakeSensorsRealtime();
+  } else {
+    TakeSensorsLockstep();
+  }
+}
+
 int LegNode::Run() {
   const bool realtime = options_.common.mode == node::TimeMode::kRealtime;
   PublishStatus(hexa_msg_NODE_STARTING, "waiting for the plant");
@@ -321,30 +310,40 @@ int LegNode::Run() {
   log_->info("{} running: leg {}, {}, {}", name_, options_.leg,
              options_.controller == LegControllerKind::kPi ? "PI" : "BS-SMC",
              options_.standby ? "hot standby (ownership strength 10)" : "primary (strength 20)");
-  // Real time: wake at least every 3 ms to assert MANUAL_BY_TOPIC liveliness (10 ms lease)
-  // while no sensor sample arrives.
-  const dds_duration_t idle_wait = realtime ? DDS_MSECS(3) : DDS_SECS(1);
+  // From here the control cycle runs on the receive thread (callbacks first, then whatever
+  // arrived before them).
+  sensors_reader_.OnDataAvailable(&LegNode::OnData, this);
+  setpoint_reader_.OnDataAvailable(&LegNode::OnData, this);
+  OnData(this);
+  // Real time: MANUAL_BY_TOPIC liveliness (10 ms lease) is asserted by every write; while no
+  // sensor sample arrives this thread asserts it every 3 ms, but only if it gets the control
+  // lock (a control cycle stuck in a callback holds it: its liveliness then lapses).
+  const dds_duration_t wait = realtime ? DDS_MSECS(3) : DDS_SECS(1);
+  const int64_t idle_ns = 3'000'000;
   while (!shutdown_.requested()) {
-    const dds_return_t n = waitset_.Wait(idle_wait);
+    const dds_return_t n = waitset_.Wait(wait);
     if (n < 0) {
       log_->error("waitset failed: {}", dds_strretcode(n));
       return 1;
     }
-    if (n == 0 && realtime && !(fault_active_ && options_.fault.kind == FaultKind::kSilence)) {
+    if (!realtime || shutdown_.requested()) continue;
+    if (node::MonotonicNow_ns() - last_write_ns_.load(std::memory_order_relaxed) < idle_ns) continue;
+    std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+    if (lock.owns_lock() && !(fault_active_ && options_.fault.kind == FaultKind::kSilence)) {
       valve_writer_.AssertLiveliness();
     }
-    TakeSetpoints();
-    if (realtime) {
-      TakeSensorsRealtime();
-    } else {
-      TakeSensorsLockstep();
-    }
   }
+  // No callback may run while the counters are read and the node is torn down.
+  sensors_reader_.OnDataAvailable(nullptr, nullptr);
+  setpoint_reader_.OnDataAvailable(nullptr, nullptr);
+  std::lock_guard<std::mutex> lock(mutex_);
   const auto sensors = sensors_reader_.Snapshot();
   log_->info("{} stopped after {} cycles (last tick {}): sensor deadline misses {}, repeated "
-             "answers {}, lockstep ticks dropped {}, compute median {:.1f} us max {:.1f} us",
+             "answers {}, lockstep ticks dropped {}, failed writes {}, compute median {:.1f} us "
+             "max {:.1f} us",
              name_, cycles_, last_command_.header.tick, sensors.requested_deadline_missed_total,
-             resent_, queue_overflows_, cycle_times_.Median() * 1e6, cycle_times_.Max() * 1e6);
+             resent_, queue_overflows_, valve_writer_.Snapshot().write_errors_total,
+             cycle_times_.Median() * 1e6, cycle_times_.Max() * 1e6);
   PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
   return 0;
 }

@@ -2,15 +2,24 @@
 // sample; answers each tick with a valve command computed by the core LegController
 // (BS-SMC or PI). Knows nothing of the other legs. Optional hot standby (lower ownership
 // strength) and fault injection for safety tests.
+//
+// Threads: the control cycle runs on Cyclone's receive thread, in the sensor and setpoint
+// readers' data callbacks (a sample is answered where it is received, with no hand-over to
+// another thread: docs/performance.md). The main thread publishes nothing per tick: it waits
+// for shutdown and, in real time, asserts the writer's liveliness while the control path is
+// idle - only if it can take the control lock, so a hung control cycle lets it lapse.
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 
 #include "hexa/comm/comm.hpp"
 #include "hexa/core/leg_controller.hpp"
+#include "hexa/core/lockstep_protocol.hpp"
 #include "hexa/services/node.hpp"
 
 namespace hexa::leg_ctrl {
@@ -51,17 +60,15 @@ class LegNode {
   int Run();
 
  private:
-  struct Setpoint {
-    bool valid = false;
-    hexa_msg_LegSetpoint sample{};
-  };
   bool WaitUntilMatched();
+  static void OnData(void* self);
+  void RunCycle();
   void TakeSetpoints();
   void TakeSensorsLockstep();
   void TakeSensorsRealtime();
   void ResendLastAnswer();
   void AnswerAndReport(const hexa_msg_LegSensors& sensors);
-  const Setpoint* SetpointFor(std::uint64_t tick) const;
+  const IssuedSetpoint* SetpointFor(std::uint64_t tick) const;
   bool CanAnswer(std::uint64_t tick) const;
   void Answer(const hexa_msg_LegSensors& sensors);
   bool InjectFault(double sim_time_s);
@@ -82,8 +89,10 @@ class LegNode {
   node::StatusPublisher status_;
   comm::WaitSet waitset_;
 
-  std::array<Setpoint, kSetpointRing> setpoints_{};
-  std::size_t newest_setpoint_ = 0;  // index into setpoints_ (valid if any is)
+  LockstepSchedule schedule_;
+  std::mutex mutex_;  // the control state below: receive thread(s) and the main thread
+  std::atomic<std::int64_t> last_write_ns_{0};
+  SetpointRing<IssuedSetpoint, kSetpointRing> setpoints_;
   bool has_pending_ = false;         // real time: the newest unanswered sample
   hexa_msg_LegSensors pending_{};
   std::array<hexa_msg_LegSensors, kLockstepQueue> queue_{};  // lockstep, ring

@@ -14,7 +14,8 @@ int main(int argc, char** argv) {
                 "realistic");
   cli.AddOption("seed", "N", "seed of noise and calibration errors", "1");
   cli.AddOption("legs", "N", "leg controllers that must answer (lockstep)", "6");
-  cli.AddFlag("supervisor", "lockstep: also wait for the supervisor's setpoints every 5 ms");
+  cli.AddFlag("supervisor", "the supervisor must be running before the first tick (lockstep: the "
+              "legs then wait for its setpoints, docs/architecture.md)");
   cli.AddFlag("expect-recorder", "wait for the recorder before the first tick");
   cli.AddOption("duration", "s", "stop after this simulated time (0 = until stopped)", "0");
   cli.AddOption("startup-timeout", "s", "peers must be ready within this", "30");

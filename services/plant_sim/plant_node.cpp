@@ -10,11 +10,9 @@ namespace hexa::plant_sim {
 namespace {
 
 constexpr double kTickS = 0.001;
-constexpr int kImuEveryTicks = 5;
 constexpr dds_attach_t kTokenShutdown = 1;
-constexpr dds_attach_t kTokenValve = 2;
-constexpr dds_attach_t kTokenSetpoint = 3;
-constexpr dds_attach_t kTokenPeers = 4;
+constexpr dds_attach_t kTokenDone = 2;
+constexpr dds_attach_t kTokenPeers = 3;
 
 hexa_msg_FaultReason FaultOf(CommandCheck check) {
   switch (check) {
@@ -36,7 +34,38 @@ PlatformPlantConfig MakePlantConfig(const PlantNodeOptions& o, const config::Sys
   return p;
 }
 
+LockstepBarrierParams BarrierParams(const PlantNodeOptions& o) {
+  LockstepBarrierParams p;
+  p.reask_after_ns = static_cast<std::int64_t>(o.resend_after_s * 1e9);
+  p.timeout_ns = static_cast<std::int64_t>(o.common.lockstep_timeout_s * 1e9);
+  return p;
+}
+
+std::string LegList(LegMask mask) {
+  std::string text;
+  for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg)
+    if (mask & LegBit(leg)) text += " leg" + std::to_string(leg);
+  return text;
+}
+
 }  // namespace
+
+void CommandAgeHistogram::Add(std::int64_t age_ticks) {
+  if (age_ticks < 0) {
+    ++none;
+    return;
+  }
+  const int bin = age_ticks <= 2 ? static_cast<int>(age_ticks) : (age_ticks < 8 ? 3 : (age_ticks < 16 ? 4 : 5));
+  ++bins[static_cast<std::size_t>(bin)];
+}
+
+std::uint64_t CommandAgeHistogram::late() const {
+  std::uint64_t n = 0;
+  for (int k = 1; k < kBins; ++k) n += bins[static_cast<std::size_t>(k)];
+  return n;
+}
+
+std::uint64_t CommandAgeHistogram::total() const { return bins[0] + late() + none; }
 
 PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig& config,
                      std::shared_ptr<spdlog::logger> log)
@@ -45,13 +74,16 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
       log_(std::move(log)),
       plant_(MakePlantConfig(options, config)),
       hygiene_(CommandHygieneParams::FromValve(config.rig.valve, 0)),
-      participant_(static_cast<dds_domainid_t>(options.common.domain_id)),
+      barrier_(BarrierParams(options)),
+      // The six legs' samples of a tick leave in one datagram per reader (comm/writer.hpp).
+      participant_(static_cast<dds_domainid_t>(options.common.domain_id),
+                   comm::WriteBatching::kOn),
       shutdown_(participant_),
+      done_(participant_),
       sensors_topic_(participant_),
       imu_topic_(participant_),
       truth_topic_(participant_),
       valve_topic_(participant_),
-      setpoint_topic_(participant_),
       sensors_writer_(participant_, sensors_topic_,
                       node::QosFor(options.common, comm::TopicKind::kLegSensors)),
       imu_writer_(participant_, imu_topic_, node::QosFor(options.common, comm::TopicKind::kImuSample)),
@@ -59,17 +91,15 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
                     node::QosFor(options.common, comm::TopicKind::kGroundTruth)),
       valve_reader_(participant_, valve_topic_, comm::EndpointRole::kControlReader,
                     node::QosFor(options.common, comm::TopicKind::kValveCommand), 64),
-      setpoint_reader_(participant_, setpoint_topic_, comm::EndpointRole::kControlReader,
-                       node::QosFor(options.common, comm::TopicKind::kLegSetpoint), 64),
       status_(participant_, "plant"),
       faults_(participant_, "plant"),
       peers_(participant_),
       waitset_(participant_) {
   waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
-  waitset_.Attach(valve_reader_.data_condition(), kTokenValve);
-  waitset_.Attach(setpoint_reader_.data_condition(), kTokenSetpoint);
+  waitset_.Attach(done_.get(), kTokenDone);
   waitset_.Attach(peers_.data_condition(), kTokenPeers);
   last_check_.fill(CommandCheck::kOk);
+  for (auto& age : truth_sample_.command_age_ticks) age = -1;
 }
 
 void PlantNode::PublishStatus(hexa_msg_NodeState state, const char* detail) {
@@ -85,8 +115,8 @@ bool PlantNode::WaitForPeers() {
   for (int leg = 1; leg <= options_.expected_legs; ++leg) expected.push_back("leg" + std::to_string(leg));
   if (options_.expect_supervisor) expected.push_back("supervisor");
   if (options_.expect_recorder) expected.push_back("recorder");
-  // Sensor readers: each leg controller (its own filtered reader), the supervisor, the
-  // recorder. Valve writers: one per leg controller.
+  // Sensor readers: each leg controller, the supervisor, the recorder. Valve writers: one per
+  // leg controller.
   const uint32_t sensor_readers = static_cast<uint32_t>(options_.expected_legs) +
                                   (options_.expect_supervisor ? 1u : 0u) +
                                   (options_.expect_recorder ? 1u : 0u);
@@ -124,7 +154,7 @@ bool PlantNode::WaitForPeers() {
   return false;
 }
 
-void PlantNode::PublishSensors(bool with_imu_and_truth, int only_leg) {
+void PlantNode::PublishTick(int only_leg) {
   const PlatformPlantOutput& out = plant_.output();
   const double t = static_cast<double>(tick_) * kTickS;
   const int64_t now_ns = comm::RealtimeNow_ns();
@@ -137,10 +167,11 @@ void PlantNode::PublishSensors(bool with_imu_and_truth, int only_leg) {
     s.cap_pressure_pa = out.legs[i].chamber1_pressure_pa;
     s.rod_pressure_pa = out.legs[i].chamber2_pressure_pa;
     s.supply_pressure_pa = out.legs[i].supply_pressure_pa;
-    sensors_writer_.Write(s, now_ns);
+    sensors_writer_.WriteDeferred(s, now_ns);
   }
-  if (!with_imu_and_truth) return;
-  if (tick_ % kImuEveryTicks == 0) {
+  sensors_writer_.Flush();
+  if (only_leg != 0) return;
+  if (schedule_.SupervisorDue(tick_)) {
     hexa_msg_ImuSample imu{};
     comm::FillHeader(imu.header, tick_, t, now_ns);
     const auto& q = out.imu.q_BP_measured;
@@ -151,7 +182,9 @@ void PlantNode::PublishSensors(bool with_imu_and_truth, int only_leg) {
     for (int k = 0; k < 3; ++k) imu.angular_rate_rad_s[k] = out.imu.angular_rate_B_rad_s[k];
     imu_writer_.Write(imu, now_ns);
   }
-  hexa_msg_GroundTruth g{};
+  // Ground truth of this tick (for the recorder only). Like applied_valve_v, the command ages
+  // in it are those of the step that led to this state (filled in by ApplyAndStep).
+  hexa_msg_GroundTruth& g = truth_sample_;
   comm::FillHeader(g.header, tick_, t, now_ns);
   const PlatformTrueState& truth = out.truth;
   for (int k = 0; k < 3; ++k) {
@@ -174,7 +207,7 @@ void PlantNode::PublishSensors(bool with_imu_and_truth, int only_leg) {
   truth_writer_.Write(g, now_ns);
 }
 
-void PlantNode::TakeCommands() {
+void PlantNode::TakeCommands(bool feed_barrier) {
   while (valve_reader_.Take() > 0) {
     for (std::size_t k = 0; k < valve_reader_.count(); ++k) {
       if (!valve_reader_.info(k).valid_data) continue;
@@ -183,91 +216,31 @@ void PlantNode::TakeCommands() {
       LatestCommand& latest = latest_[c.leg_id - 1];
       if (latest.received && c.header.tick < latest.answered_tick) continue;  // older
       latest = LatestCommand{true, c.header.tick, c.valve_v};
+      if (feed_barrier) barrier_.Answer(c.leg_id, c.header.tick);
     }
   }
 }
 
-void PlantNode::TakeSetpoints() {
-  while (setpoint_reader_.Take() > 0) {
-    for (std::size_t k = 0; k < setpoint_reader_.count(); ++k) {
-      if (!setpoint_reader_.info(k).valid_data) continue;
-      const auto& s = setpoint_reader_.sample(k);
-      if (s.leg_id < 1 || s.leg_id > kNumLegs) continue;
-      const std::size_t i = s.leg_id - 1;
-      if (!setpoint_seen_[i] || s.header.tick > setpoint_tick_[i]) setpoint_tick_[i] = s.header.tick;
-      setpoint_seen_[i] = true;
-    }
-  }
-}
-
-bool PlantNode::LockstepCollect() {
-  const bool need_setpoints = options_.expect_supervisor && tick_ % kImuEveryTicks == 0;
-  const int64_t start = node::MonotonicNow_ns();
-  const int64_t resend_ns = static_cast<int64_t>(options_.resend_after_s * 1e9);
-  int64_t next_resend = start + resend_ns;
-  const int64_t end = start + static_cast<int64_t>(options_.common.lockstep_timeout_s * 1e9);
-  while (!shutdown_.requested()) {
-    TakeCommands();
-    if (need_setpoints) TakeSetpoints();
-    bool complete = true;
-    for (int i = 0; i < options_.expected_legs; ++i) {
-      if (!latest_[i].received || latest_[i].answered_tick < tick_) complete = false;
-      if (need_setpoints && (!setpoint_seen_[i] || setpoint_tick_[i] < tick_)) complete = false;
-    }
-    if (complete) return true;
-    const int64_t now = node::MonotonicNow_ns();
-    if (now > end) {
-      std::string missing;
-      for (int i = 0; i < options_.expected_legs; ++i) {
-        if (!latest_[i].received || latest_[i].answered_tick < tick_)
-          missing += " leg" + std::to_string(i + 1) + "(command)";
-        if (need_setpoints && (!setpoint_seen_[i] || setpoint_tick_[i] < tick_))
-          missing += " leg" + std::to_string(i + 1) + "(setpoint)";
-      }
-      log_->error("lockstep: tick {} not answered within {} s by:{}", tick_,
-                  options_.common.lockstep_timeout_s, missing);
-      for (int i = 0; i < options_.expected_legs; ++i) {
-        if (!latest_[i].received || latest_[i].answered_tick < tick_) {
-          char detail[160];
-          std::snprintf(detail, sizeof detail, "lockstep: no command for tick %llu within %.1f s",
-                        static_cast<unsigned long long>(tick_), options_.common.lockstep_timeout_s);
-          faults_.Publish(static_cast<uint8_t>(i + 1), tick_,
-                          hexa_msg_FAULT_COMMAND_DEADLINE_MISSED, detail);
-        }
-      }
-      return false;
-    }
-    if (now > next_resend) {
-      // A sample can be lost to a reader that had not yet matched this writer, or to an
-      // ownership hand-over (hot standby): ask the silent legs again for this tick. Leg
-      // controllers answer a repeated tick with their cached command.
-      for (int i = 0; i < options_.expected_legs; ++i) {
-        if (!latest_[i].received || latest_[i].answered_tick < tick_) {
-          PublishSensors(false, i + 1);
-          ++resends_;
-        }
-      }
-      next_resend = now + resend_ns;
-    }
-    waitset_.Wait(DDS_MSECS(10));
-  }
-  return false;
-}
-
-void PlantNode::ApplyAndStep(std::uint64_t stale_tolerance) {
+bool PlantNode::ApplyAndStep(std::uint64_t stale_tolerance) {
   hygiene_.stale_tolerance_ticks = stale_tolerance;
   LegArray<double> valve_v{};
   for (std::size_t i = 0; i < kNumLegs; ++i) {
-    const CommandCheck check = CheckCommand(latest_[i], tick_, hygiene_);
-    valve_v[i] = SafeValveVoltage(latest_[i], check, hygiene_);
+    const LatestCommand& latest = latest_[i];
+    const std::int64_t age = latest.received ? static_cast<std::int64_t>(tick_) -
+                                                   static_cast<std::int64_t>(latest.answered_tick)
+                                             : -1;
+    command_age_[i].Add(age);
+    truth_sample_.command_age_ticks[i] = static_cast<int32_t>(std::clamp<std::int64_t>(age, -1, INT32_MAX));
+    const CommandCheck check = CheckCommand(latest, tick_, hygiene_);
+    valve_v[i] = SafeValveVoltage(latest, check, hygiene_);
     if (check != last_check_[i]) {
       if (check == CommandCheck::kAwaitingFirst) {
         // Start-up: the controller has not had its tolerance to answer yet.
       } else if (check != CommandCheck::kOk) {
         char detail[160];
         std::snprintf(detail, sizeof detail, "valve command %s (%.6g V, answers tick %llu): valve held at null",
-                      ToString(check), latest_[i].valve_v,
-                      static_cast<unsigned long long>(latest_[i].answered_tick));
+                      ToString(check), latest.valve_v,
+                      static_cast<unsigned long long>(latest.answered_tick));
         faults_.Publish(static_cast<uint8_t>(i + 1), tick_, FaultOf(check), detail);
         log_->warn("leg {} tick {}: {}", i + 1, tick_, detail);
         ++faults_per_leg_[i];
@@ -278,6 +251,142 @@ void PlantNode::ApplyAndStep(std::uint64_t stale_tolerance) {
     }
   }
   plant_.Step(valve_v, kTickS);
+  if (plant_.output().status != PlantStatus::kNonFiniteState) return true;
+  faults_.Publish(0, tick_, hexa_msg_FAULT_STATE_NOT_FINITE, "plant state not finite: stopped");
+  log_->error("plant state became non-finite at tick {}: stopping", tick_);
+  LogLastGoodState();
+  PublishStatus(hexa_msg_NODE_FAULT, "state not finite");
+  return false;
+}
+
+void PlantNode::EndTick() {
+  ++tick_;
+  if (tick_ % 100 != 0) return;
+  const bool realtime = options_.common.mode == node::TimeMode::kRealtime;
+  PublishStatus(hexa_msg_NODE_RUNNING, realtime ? "real time" : "lockstep");
+  // Faults still in effect are repeated at the status rate, so that a supervisor reset
+  // while the cause persists sees the fault again.
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    if (last_check_[i] == CommandCheck::kOk || last_check_[i] == CommandCheck::kAwaitingFirst)
+      continue;
+    faults_.Publish(static_cast<uint8_t>(i + 1), tick_, FaultOf(last_check_[i]),
+                    "valve command still invalid: valve held at null");
+  }
+}
+
+void PlantNode::OnValveData(void* self) {
+  auto* node = static_cast<PlantNode*>(self);
+  std::lock_guard<std::mutex> lock(node->mutex_);
+  node->TakeCommands(true);
+  node->AdvanceIfComplete();
+}
+
+void PlantNode::AdvanceIfComplete() {
+  // Lockstep: every awaited leg answered tick_ -> step, publish tick_ + 1 and await it.
+  while (running_ && barrier_.complete()) {
+    const int64_t now = node::MonotonicNow_ns();
+    cycle_times_.Add(static_cast<double>(now - tick_started_ns_) * 1e-9);
+    if (!ApplyAndStep(0)) {
+      exit_code_ = 4;
+    } else {
+      EndTick();
+      if (tick_ >= last_tick_) exit_code_ = 0;
+    }
+    if (exit_code_ >= 0) {
+      running_ = false;
+      done_.Set();
+      return;
+    }
+    tick_started_ns_ = now;
+    PublishTick();
+    barrier_.Begin(tick_, FirstLegs(options_.expected_legs), now);
+    TakeCommands(true);  // answers that came in with this callback's data
+  }
+}
+
+int PlantNode::RunLockstep(std::uint64_t last_tick) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    last_tick_ = last_tick;
+    running_ = true;
+    tick_started_ns_ = node::MonotonicNow_ns();
+    // The callback first, then tick 0: an answer can never arrive unseen.
+    valve_reader_.OnDataAvailable(&PlantNode::OnValveData, this);
+    PublishTick();
+    barrier_.Begin(tick_, FirstLegs(options_.expected_legs), tick_started_ns_);
+    TakeCommands(true);
+    AdvanceIfComplete();
+  }
+  waitset_.Detach(peers_.data_condition());  // NodeStatus traffic must not wake this thread
+  // The receive thread runs the loop; this thread watches for silence and shutdown.
+  while (!shutdown_.requested()) {
+    dds_duration_t wait = DDS_MSECS(10);
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (exit_code_ >= 0) break;
+      const int64_t now = node::MonotonicNow_ns();
+      switch (barrier_.Check(now)) {
+        case LockstepBarrier::Action::kWait:
+          wait = std::max<dds_duration_t>(DDS_MSECS(1), barrier_.next_check_ns() - now);
+          break;
+        case LockstepBarrier::Action::kReask:
+          // A sample can be lost to a reader that had not yet matched this writer, or to an
+          // ownership hand-over (hot standby): ask the silent legs again for this tick. Leg
+          // controllers answer a repeated tick with their cached command.
+          for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg)
+            if (barrier_.missing() & LegBit(leg)) {
+              PublishTick(leg);
+              ++resent_samples_;
+            }
+          break;
+        case LockstepBarrier::Action::kTimeout: {
+          log_->error("lockstep: tick {} not answered within {} s by:{}", tick_,
+                      options_.common.lockstep_timeout_s, LegList(barrier_.missing()));
+          for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
+            if (!(barrier_.missing() & LegBit(leg))) continue;
+            char detail[160];
+            std::snprintf(detail, sizeof detail, "lockstep: no command for tick %llu within %.1f s",
+                          static_cast<unsigned long long>(tick_), options_.common.lockstep_timeout_s);
+            faults_.Publish(static_cast<uint8_t>(leg), tick_,
+                            hexa_msg_FAULT_COMMAND_DEADLINE_MISSED, detail);
+          }
+          exit_code_ = 3;
+          running_ = false;
+          break;
+        }
+      }
+      if (exit_code_ >= 0) break;
+    }
+    waitset_.Wait(wait);
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  running_ = false;  // the callback stays installed but no longer advances
+  return exit_code_ >= 0 ? exit_code_ : 0;
+}
+
+int PlantNode::RunRealtime(std::uint64_t last_tick) {
+  timespec next{};
+  clock_gettime(CLOCK_MONOTONIC, &next);
+  // No data callback in real time: this thread alone touches the loop state. The lock is
+  // held for form (uncontended) so that the helpers' contract is the same in both modes.
+  std::lock_guard<std::mutex> lock(mutex_);
+  while (!shutdown_.requested() && tick_ < last_tick) {
+    PublishTick();
+    next.tv_nsec += 1'000'000;
+    if (next.tv_nsec >= 1'000'000'000) {
+      next.tv_nsec -= 1'000'000'000;
+      ++next.tv_sec;
+    }
+    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
+    TakeCommands(false);
+    const int64_t late_ns = node::MonotonicNow_ns() -
+                            (static_cast<int64_t>(next.tv_sec) * 1'000'000'000 + next.tv_nsec);
+    if (late_ns > 1'000'000) ++overruns_;
+    cycle_times_.Add(static_cast<double>(late_ns) * 1e-9);
+    if (!ApplyAndStep(options_.realtime_stale_ticks)) return 4;
+    EndTick();
+  }
+  return 0;
 }
 
 void PlantNode::LogLastGoodState() const {
@@ -288,6 +397,17 @@ void PlantNode::LogLastGoodState() const {
               t.legs[0].chamber1_pressure_pa, t.legs[1].chamber1_pressure_pa,
               t.legs[2].chamber1_pressure_pa, t.legs[3].chamber1_pressure_pa,
               t.legs[4].chamber1_pressure_pa, t.legs[5].chamber1_pressure_pa);
+}
+
+void PlantNode::LogCommandAges() const {
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    const CommandAgeHistogram& h = command_age_[i];
+    if (h.total() == 0) continue;
+    log_->info("leg {} command age at apply (ticks): 0: {}, 1: {}, 2: {}, 3-7: {}, 8-15: {}, "
+               ">=16: {}, none: {}; late ticks {} of {} ({:.3f} %)",
+               i + 1, h.bins[0], h.bins[1], h.bins[2], h.bins[3], h.bins[4], h.bins[5], h.none,
+               h.late(), h.total(), 100.0 * static_cast<double>(h.late()) / static_cast<double>(h.total()));
+  }
 }
 
 int PlantNode::Run() {
@@ -302,60 +422,19 @@ int PlantNode::Run() {
   const uint64_t last_tick = options_.duration_s > 0
                                  ? static_cast<uint64_t>(std::llround(options_.duration_s / kTickS))
                                  : UINT64_MAX;
-  timespec next{};
-  clock_gettime(CLOCK_MONOTONIC, &next);
-  int rc = 0;
-  while (!shutdown_.requested() && tick_ < last_tick) {
-    const int64_t t0 = node::MonotonicNow_ns();
-    PublishSensors(true);
-    if (realtime) {
-      next.tv_nsec += 1'000'000;
-      if (next.tv_nsec >= 1'000'000'000) {
-        next.tv_nsec -= 1'000'000'000;
-        ++next.tv_sec;
-      }
-      clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
-      TakeCommands();
-      const int64_t late_ns = node::MonotonicNow_ns() -
-                              (static_cast<int64_t>(next.tv_sec) * 1'000'000'000 + next.tv_nsec);
-      if (late_ns > 1'000'000) ++overruns_;
-      ApplyAndStep(options_.realtime_stale_ticks);
-    } else {
-      if (!LockstepCollect()) {
-        rc = shutdown_.requested() ? 0 : 3;
-        break;
-      }
-      ApplyAndStep(0);
-    }
-    if (plant_.output().status == PlantStatus::kNonFiniteState) {
-      faults_.Publish(0, tick_, hexa_msg_FAULT_STATE_NOT_FINITE, "plant state not finite: stopped");
-      log_->error("plant state became non-finite at tick {}: stopping", tick_);
-      LogLastGoodState();
-      PublishStatus(hexa_msg_NODE_FAULT, "state not finite");
-      return 4;
-    }
-    ++tick_;
-    if (!realtime) cycle_times_.Add(static_cast<double>(node::MonotonicNow_ns() - t0) * 1e-9);
-    if (tick_ % 100 == 0) {
-      PublishStatus(hexa_msg_NODE_RUNNING, realtime ? "real time" : "lockstep");
-      // Faults still in effect are repeated at the status rate, so that a supervisor reset
-      // while the cause persists sees the fault again.
-      for (std::size_t i = 0; i < kNumLegs; ++i) {
-        if (last_check_[i] == CommandCheck::kOk || last_check_[i] == CommandCheck::kAwaitingFirst)
-          continue;
-        faults_.Publish(static_cast<uint8_t>(i + 1), tick_, FaultOf(last_check_[i]),
-                        "valve command still invalid: valve held at null");
-      }
-    }
-  }
+  const int rc = realtime ? RunRealtime(last_tick) : RunLockstep(last_tick);
+  std::lock_guard<std::mutex> lock(mutex_);
   uint32_t faults = 0;
   for (auto f : faults_per_leg_) faults += f;
   const auto valve = valve_reader_.Snapshot();
+  const auto sensors = sensors_writer_.Snapshot();
   log_->info("stopped at tick {} (t = {:.3f} s): valve deadline misses {}, loop overruns {}, "
-             "command faults {}, lockstep resends {}",
+             "command faults {}, lockstep resends {} (in {} re-asks), failed writes {}",
              tick_, static_cast<double>(tick_) * kTickS, valve.requested_deadline_missed_total,
-             overruns_, faults, resends_);
-  PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
+             overruns_, faults, resent_samples_, barrier_.reasks_total(),
+             sensors.write_errors_total);
+  LogCommandAges();
+  if (rc != 4) PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
   return rc;
 }
 

@@ -2,15 +2,26 @@
 // leg's sensors each 1 ms tick, the IMU every 5 ms, ground truth each tick; applies each
 // leg's valve command after command hygiene (missing, stale, NaN or out-of-range -> valve
 // at null, FaultEvent). Lockstep or real time (docs/architecture.md).
+//
+// Threads. Lockstep: the tick advances on Cyclone's receive thread, in the ValveCommand
+// reader's data callback: when the last awaited leg has answered tick n the plant steps and
+// publishes tick n + 1 at once, with no hand-over to another thread (docs/performance.md).
+// The main thread only watches for silence (re-ask, timeout) and shutdown. Real time: the
+// main thread ticks on the clock and takes the newest commands at each tick; no thread wakes
+// on their arrival. One mutex guards the loop state in both.
 #pragma once
 
+#include <array>
+#include <atomic>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
 #include "hexa/comm/comm.hpp"
 #include "hexa/core/command_hygiene.hpp"
+#include "hexa/core/lockstep_protocol.hpp"
 #include "hexa/core/platform_plant.hpp"
 #include "hexa/services/node.hpp"
 
@@ -20,13 +31,25 @@ struct PlantNodeOptions {
   node::CommonOptions common;
   std::string profile;             // disturbance profile name in the rig file
   std::uint64_t seed = 1;
-  int expected_legs = 6;           // leg controllers that must answer every tick
-  bool expect_supervisor = true;   // lockstep: wait for its setpoints every 5th tick
+  int expected_legs = 6;           // leg controllers that must answer every tick (1..N)
+  bool expect_supervisor = true;   // the supervisor must be RUNNING before tick 0
   bool expect_recorder = false;    // wait for the recorder before tick 0
   double duration_s = 0.0;         // stop after this simulated time (0 = until stopped)
   double startup_timeout_s = 30.0; // peers must be ready within this
   std::uint64_t realtime_stale_ticks = 15;  // real time: command tolerance (main.cpp)
   double resend_after_s = 0.05;    // lockstep: republish sensors of a silent leg after this
+};
+
+// Age of the command the plant applied at a tick, in ticks (tick - answered tick; 0 = the
+// command answered the sensors of this tick), per leg. Real time: a command older than the
+// sensor sample just before it (age >= 1) arrived too late for its tick: a late tick.
+struct CommandAgeHistogram {
+  static constexpr int kBins = 6;  // 0, 1, 2, 3-7, 8-15, >= 16
+  std::array<std::uint64_t, kBins> bins{};
+  std::uint64_t none = 0;          // no command yet
+  void Add(std::int64_t age_ticks);
+  std::uint64_t late() const;      // age >= 1
+  std::uint64_t total() const;
 };
 
 class PlantNode {
@@ -39,46 +62,60 @@ class PlantNode {
 
  private:
   bool WaitForPeers();
-  void PublishSensors(bool with_imu_and_truth, int only_leg = 0);
-  void TakeCommands();
-  void TakeSetpoints();
-  bool LockstepCollect();
-  void ApplyAndStep(std::uint64_t stale_tolerance);
+  int RunLockstep(std::uint64_t last_tick);
+  int RunRealtime(std::uint64_t last_tick);
+  // Receive thread (lockstep): takes the commands and, when the tick is complete, advances.
+  static void OnValveData(void* self);
+  void AdvanceIfComplete();
+  // Publishes the sensors of tick_ (all legs, or `only_leg`), and with all legs the IMU
+  // (every 5th tick) and ground truth. Batched: each reader gets one datagram.
+  void PublishTick(int only_leg = 0);
+  void TakeCommands(bool feed_barrier);
+  // Command hygiene and one plant step; false when the plant state became non-finite.
+  bool ApplyAndStep(std::uint64_t stale_tolerance);
+  void EndTick();
   void PublishStatus(hexa_msg_NodeState state, const char* detail);
   void LogLastGoodState() const;
+  void LogCommandAges() const;
 
   PlantNodeOptions options_;
   config::SystemConfig config_;
   std::shared_ptr<spdlog::logger> log_;
   PlatformPlant plant_;
   CommandHygieneParams hygiene_;
+  LockstepSchedule schedule_;
+  LockstepBarrier barrier_;
+  std::uint64_t last_tick_ = UINT64_MAX;
 
   comm::Participant participant_;
   comm::ShutdownGuard shutdown_;
+  comm::GuardCondition done_;  // set by the receive thread when the lockstep run ends
   comm::Topic<hexa_msg_LegSensors> sensors_topic_;
   comm::Topic<hexa_msg_ImuSample> imu_topic_;
   comm::Topic<hexa_msg_GroundTruth> truth_topic_;
   comm::Topic<hexa_msg_ValveCommand> valve_topic_;
-  comm::Topic<hexa_msg_LegSetpoint> setpoint_topic_;
   comm::Writer<hexa_msg_LegSensors> sensors_writer_;
   comm::Writer<hexa_msg_ImuSample> imu_writer_;
   comm::Writer<hexa_msg_GroundTruth> truth_writer_;
   comm::Reader<hexa_msg_ValveCommand> valve_reader_;
-  comm::Reader<hexa_msg_LegSetpoint> setpoint_reader_;
   node::StatusPublisher status_;
   node::FaultPublisher faults_;
   node::PeerTracker peers_;
   comm::WaitSet waitset_;
 
+  std::mutex mutex_;  // everything below; the receive thread and the main thread
   std::uint64_t tick_ = 0;
+  bool running_ = false;        // lockstep: the receive thread may advance
+  int exit_code_ = -1;          // set when the run ends (>= 0)
   LegArray<LatestCommand> latest_{};
-  LegArray<std::uint64_t> setpoint_tick_{};
-  LegArray<bool> setpoint_seen_{};
   LegArray<CommandCheck> last_check_{};
   LegArray<std::uint32_t> faults_per_leg_{};
+  LegArray<CommandAgeHistogram> command_age_{};
+  hexa_msg_GroundTruth truth_sample_{};
   node::CycleTimeWindow cycle_times_;
+  std::int64_t tick_started_ns_ = 0;
   std::uint32_t overruns_ = 0;
-  std::uint32_t resends_ = 0;
+  std::uint64_t resent_samples_ = 0;  // lockstep: sensor samples re-published to silent legs
 };
 
 }  // namespace hexa::plant_sim

@@ -7,11 +7,9 @@ namespace hexa::task_space {
 namespace {
 
 constexpr dds_attach_t kTokenShutdown = 1;
-constexpr dds_attach_t kTokenImu = 2;
-constexpr dds_attach_t kTokenSensors = 3;
-constexpr dds_attach_t kTokenOperator = 4;
-constexpr dds_attach_t kTokenFault = 5;
-constexpr int kSupervisorEveryTicks = 5;
+constexpr dds_attach_t kTokenOperator = 2;
+constexpr dds_attach_t kTokenFault = 3;
+constexpr dds_attach_t kTokenDone = 4;
 
 SupervisorParams ParamsFrom(const SupervisorNodeOptions& o, const config::SystemConfig& c) {
   SupervisorParams p = c.supervisor;
@@ -32,7 +30,9 @@ SupervisorNode::SupervisorNode(const SupervisorNodeOptions& options,
     : options_(options),
       log_(std::move(log)),
       supervisor_(config.rig, ParamsFrom(options, config)),
-      participant_(static_cast<dds_domainid_t>(options.common.domain_id)),
+      // The six legs' samples of a tick leave in one datagram per reader (comm/writer.hpp).
+      participant_(static_cast<dds_domainid_t>(options.common.domain_id),
+                   comm::WriteBatching::kOn),
       shutdown_(participant_),
       sensors_topic_(participant_),
       imu_topic_(participant_),
@@ -40,7 +40,6 @@ SupervisorNode::SupervisorNode(const SupervisorNodeOptions& options,
       pose_topic_(participant_),
       operator_topic_(participant_),
       fault_topic_(participant_),
-      valve_topic_(participant_),
       sensors_reader_(participant_, sensors_topic_, comm::EndpointRole::kControlReader,
                       node::QosFor(options.common, comm::TopicKind::kLegSensors), 64),
       imu_reader_(participant_, imu_topic_, comm::EndpointRole::kControlReader,
@@ -49,28 +48,25 @@ SupervisorNode::SupervisorNode(const SupervisorNodeOptions& options,
                        node::QosFor(options.common, comm::TopicKind::kOperatorCommand)),
       fault_reader_(participant_, fault_topic_, comm::EndpointRole::kControlReader,
                     node::QosFor(options.common, comm::TopicKind::kFaultEvent), 64),
-      valve_reader_(participant_, valve_topic_, comm::EndpointRole::kControlReader,
-                    node::QosFor(options.common, comm::TopicKind::kValveCommand), 64),
       setpoint_writer_(participant_, setpoint_topic_,
                        node::QosFor(options.common, comm::TopicKind::kLegSetpoint)),
       pose_writer_(participant_, pose_topic_,
                    node::QosFor(options.common, comm::TopicKind::kPoseReport)),
       status_(participant_, "supervisor"),
       faults_(participant_, "supervisor"),
+      done_(participant_),
       waitset_(participant_) {
   waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
-  waitset_.Attach(imu_reader_.data_condition(), kTokenImu);
-  // The sensor reader is attached only while a lockstep tick waits for its leg samples:
-  // waking on every 1 kHz sample would cost CPU the 2-core machine needs elsewhere.
   waitset_.Attach(operator_reader_.data_condition(), kTokenOperator);
   waitset_.Attach(fault_reader_.data_condition(), kTokenFault);
+  waitset_.Attach(done_.get(), kTokenDone);
   leg_fault_.fill(FaultReason::kNone);
 }
 
 void SupervisorNode::PublishStatus(hexa_msg_NodeState state, const char* detail) {
   const auto imu = imu_reader_.Snapshot();
   status_.Publish(state, last_run_tick_, static_cast<double>(last_run_tick_) * 0.001,
-                  imu.requested_deadline_missed_total, valve_reader_.Snapshot().liveliness_lost_events,
+                  imu.requested_deadline_missed_total, 0,
                   cycles_, cycle_times_.Median(), cycle_times_.Max(), detail);
 }
 
@@ -187,20 +183,6 @@ void SupervisorNode::TakeFaults() {
   }
 }
 
-void SupervisorNode::TakeValveCommands() {
-  // Which writer drives each leg, for the liveliness check (real time only).
-  const int64_t now = node::MonotonicNow_ns();
-  while (valve_reader_.Take() > 0) {
-    for (std::size_t k = 0; k < valve_reader_.count(); ++k) {
-      if (!valve_reader_.info(k).valid_data) continue;
-      const auto& c = valve_reader_.sample(k);
-      if (c.leg_id < 1 || c.leg_id > kNumLegs) continue;
-      leg_writer_[c.leg_id - 1] = valve_reader_.info(k).publication_handle;
-      leg_last_sample_ns_[c.leg_id - 1] = now;
-    }
-  }
-}
-
 void SupervisorNode::RunTick(std::uint64_t tick, double time_s) {
   const int64_t t0 = node::MonotonicNow_ns();
   input_ = SupervisorInput{};
@@ -216,23 +198,9 @@ void SupervisorNode::RunTick(std::uint64_t tick, double time_s) {
   }
   input_.imu_deadline_misses_consecutive = imu_misses_consecutive_;
   for (int k = 0; k < 4; ++k) input_.orientation_wxyz[k] = imu_.orientation_wxyz[k];
-  if (options_.common.mode == node::TimeMode::kRealtime) {
-    // Lost liveliness: the writer that drove the leg is no longer alive and nothing newer
-    // arrived within the grace (a hot standby that took over keeps the leg alive).
-    const auto& slots = valve_reader_.status().writers();
-    for (std::size_t i = 0; i < kNumLegs; ++i) {
-      if (leg_writer_[i] == 0) continue;
-      for (const auto& slot : slots) {
-        if (slot.publication.load() != leg_writer_[i]) continue;
-        const auto state = static_cast<comm::WriterLiveliness>(slot.state.load());
-        const bool dead = state == comm::WriterLiveliness::kNotAlive ||
-                          state == comm::WriterLiveliness::kGone;
-        const bool quiet = t0 - leg_last_sample_ns_[i] >
-                           static_cast<int64_t>(options_.leg_lost_grace_s * 1e9);
-        if (dead && quiet) input_.leg_alive[i] = false;
-      }
-    }
-  }
+  // A leg whose controller died is reported by the plant (FaultEvent: its command stops
+  // advancing) and held through leg_fault: this service reads no ValveCommand, so that the
+  // legs' 1 kHz commands are not sent to one more process (docs/performance.md).
   input_.command = pending_command_;
   input_.start = pending_start_ ? &*pending_start_ : nullptr;
   supervisor_.Update(input_, output_);
@@ -304,8 +272,9 @@ void SupervisorNode::Publish(std::uint64_t tick, double time_s) {
     s.acceleration_m_s2 = sp.acceleration_m_s2;
     s.correction_m = sp.correction_m;
     s.hold = sp.hold;
-    setpoint_writer_.Write(s, now_ns);
+    setpoint_writer_.WriteDeferred(s, now_ns);
   }
+  setpoint_writer_.Flush();
   hexa_msg_PoseReport r{};
   comm::FillHeader(r.header, tick, time_s, now_ns);
   r.state = static_cast<hexa_msg_SupervisorState>(static_cast<int>(output_.state));
@@ -320,6 +289,34 @@ void SupervisorNode::Publish(std::uint64_t tick, double time_s) {
   pose_writer_.Write(r, now_ns);
 }
 
+void SupervisorNode::OnData(void* self) {
+  auto* node = static_cast<SupervisorNode*>(self);
+  std::lock_guard<std::mutex> lock(node->mutex_);
+  node->RunCycle();
+}
+
+void SupervisorNode::RunCycle() {
+  if (exit_code_ >= 0) return;
+  TakeSensors();
+  const bool fresh_imu = TakeImu();
+  if (!imu_seen_) return;
+  const std::uint64_t m = imu_.header.tick;
+  if (options_.common.mode == node::TimeMode::kRealtime) {
+    // On each IMU sample, with the newest leg samples.
+    if (!fresh_imu) return;
+    last_imu_mono_ns_ = node::MonotonicNow_ns();
+    imu_misses_consecutive_ = 0;
+    RunTick(m, imu_.header.sim_time_s);
+  } else {
+    // Lockstep: the IMU of tick m and the six legs' samples of tick m.
+    if (ran_once_ && m <= last_run_tick_) return;
+    for (std::size_t i = 0; i < kNumLegs; ++i)
+      if (!sensors_seen_[i] || sensors_[i].header.tick != m) return;
+    RunTick(m, imu_.header.sim_time_s);
+  }
+  if (exit_code_ >= 0) done_.Set();
+}
+
 int SupervisorNode::Run() {
   const bool realtime = options_.common.mode == node::TimeMode::kRealtime;
   PublishStatus(hexa_msg_NODE_STARTING, "waiting for peers");
@@ -332,48 +329,39 @@ int SupervisorNode::Run() {
   log_->info("supervisor running ({}, outer loop {}, estimator {})",
              realtime ? "real time" : "lockstep", options_.outer_loop ? "on" : "off",
              options_.least_squares ? "six-leg least squares" : "GQFK (eq 47)");
-  // Real time: the IMU is due every 5 ms; a wait that times out counts a miss and the
-  // state machine runs on what it has (it holds after the configured count).
-  const dds_duration_t wait = realtime ? DDS_MSECS(5) * 2 : DDS_SECS(1);
-  bool sensors_attached = false;
-  while (!shutdown_.requested() && exit_code_ < 0) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    last_imu_mono_ns_ = node::MonotonicNow_ns();
+    sensors_reader_.OnDataAvailable(&SupervisorNode::OnData, this);
+    imu_reader_.OnDataAvailable(&SupervisorNode::OnData, this);
+    RunCycle();  // what arrived before the callbacks
+  }
+  // Real time: the IMU is due every 5 ms; 10 ms without one counts a miss and the state
+  // machine runs on what it has (it holds after the configured count).
+  const dds_duration_t wait = realtime ? DDS_MSECS(10) : DDS_SECS(1);
+  const int64_t imu_due_ns = 10'000'000;
+  while (!shutdown_.requested()) {
     const dds_return_t n = waitset_.Wait(wait);
     if (n < 0) return 1;
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (exit_code_ >= 0) break;
     TakeOperatorCommands();
     TakeFaults();
-    if (realtime) TakeValveCommands();
-    TakeSensors();
-    const bool fresh_imu = TakeImu();
-    if (!imu_seen_) continue;
-    const std::uint64_t m = imu_.header.tick;
-    if (realtime) {
-      if (fresh_imu) {
-        imu_misses_consecutive_ = 0;
-        RunTick(m, imu_.header.sim_time_s);
-      } else if (n == 0 && ran_once_) {
-        ++imu_misses_consecutive_;
-        RunTick(last_run_tick_, imu_.header.sim_time_s);
-      }
-      continue;
+    if (realtime && ran_once_ && node::MonotonicNow_ns() - last_imu_mono_ns_ > imu_due_ns) {
+      ++imu_misses_consecutive_;
+      last_imu_mono_ns_ = node::MonotonicNow_ns();
+      RunTick(last_run_tick_, imu_.header.sim_time_s);
     }
-    // Lockstep: the IMU of tick m and the six legs' samples of tick m.
-    if (ran_once_ && m <= last_run_tick_) continue;
-    bool complete = true;
-    for (std::size_t i = 0; i < kNumLegs; ++i)
-      complete = complete && sensors_seen_[i] && sensors_[i].header.tick == m;
-    if (complete) {
-      RunTick(m, imu_.header.sim_time_s);
-      if (sensors_attached) waitset_.Detach(sensors_reader_.data_condition());
-      sensors_attached = false;
-    } else if (!sensors_attached) {
-      waitset_.Attach(sensors_reader_.data_condition(), kTokenSensors);
-      sensors_attached = true;
-    }
+    if (exit_code_ >= 0) break;
   }
+  sensors_reader_.OnDataAvailable(nullptr, nullptr);
+  imu_reader_.OnDataAvailable(nullptr, nullptr);
+  std::lock_guard<std::mutex> lock(mutex_);
   PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
-  log_->info("supervisor stopped after {} cycles (state {}), compute median {:.1f} us max {:.1f} us",
+  log_->info("supervisor stopped after {} cycles (state {}), compute median {:.1f} us max {:.1f} us, "
+             "failed writes {}",
              cycles_, ToString(output_.state), cycle_times_.Median() * 1e6,
-             cycle_times_.Max() * 1e6);
+             cycle_times_.Max() * 1e6, setpoint_writer_.Snapshot().write_errors_total);
   return exit_code_ < 0 ? 0 : exit_code_;
 }
 

@@ -2,10 +2,16 @@
 // sensor samples), estimate the pose (IMU + GQFK), run the outer loop and the safety state
 // machine of the core Supervisor, and publish the six leg setpoints and the pose report.
 // Operator commands arrive on their topic; faults reported by other nodes put it in HOLD.
+//
+// Threads: the 5 ms cycle runs on Cyclone's receive thread, in the IMU and leg-sensor
+// readers' data callbacks (docs/performance.md). The main thread takes operator commands and
+// fault events, counts missing IMU samples in real time, and leaves when the cycle says so.
+// One mutex guards the state shared by the two.
 #pragma once
 
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 
@@ -25,7 +31,6 @@ struct SupervisorNodeOptions {
   bool least_squares = false;
   double startup_timeout_s = 30.0;
   int pose_readers = 0;  // matched PoseReport readers required before RUNNING (the recorder)
-  double leg_lost_grace_s = 0.02;       // real time: a leg without samples this long + lease lost
 };
 
 class SupervisorNode {
@@ -40,7 +45,8 @@ class SupervisorNode {
   bool TakeImu();
   void TakeOperatorCommands();
   void TakeFaults();
-  void TakeValveCommands();
+  static void OnData(void* self);
+  void RunCycle();
   void RunTick(std::uint64_t tick, double time_s);
   void Publish(std::uint64_t tick, double time_s);
   bool PrepareStart(const std::string& trajectory, int periods);
@@ -57,18 +63,19 @@ class SupervisorNode {
   comm::Topic<hexa_msg_PoseReport> pose_topic_;
   comm::Topic<hexa_msg_OperatorCommand> operator_topic_;
   comm::Topic<hexa_msg_FaultEvent> fault_topic_;
-  comm::Topic<hexa_msg_ValveCommand> valve_topic_;
   comm::Reader<hexa_msg_LegSensors> sensors_reader_;
   comm::Reader<hexa_msg_ImuSample> imu_reader_;
   comm::Reader<hexa_msg_OperatorCommand> operator_reader_;
   comm::Reader<hexa_msg_FaultEvent> fault_reader_;
-  comm::Reader<hexa_msg_ValveCommand> valve_reader_;
   comm::Writer<hexa_msg_LegSetpoint> setpoint_writer_;
   comm::Writer<hexa_msg_PoseReport> pose_writer_;
   node::StatusPublisher status_;
   node::FaultPublisher faults_;
+  comm::GuardCondition done_;  // set by the cycle when the service should exit
   comm::WaitSet waitset_;
 
+  std::mutex mutex_;  // everything below
+  std::int64_t last_imu_mono_ns_ = 0;  // real time: when the last IMU sample was taken
   LegArray<hexa_msg_LegSensors> sensors_{};
   LegArray<bool> sensors_seen_{};
   LegArray<std::uint64_t> sensor_tick_at_last_run_{};
@@ -79,8 +86,6 @@ class SupervisorNode {
   int imu_misses_consecutive_ = 0;
   LegArray<int> leg_misses_consecutive_{};
   LegArray<FaultReason> leg_fault_{};
-  LegArray<dds_instance_handle_t> leg_writer_{};
-  LegArray<std::int64_t> leg_last_sample_ns_{};
 
   SupervisorInput input_;
   SupervisorOutput output_;

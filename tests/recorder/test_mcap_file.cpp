@@ -144,7 +144,10 @@ void FillEveryField(gp::Message& m, int& counter) {
           r->SetInt64(&m, f, -static_cast<int64_t>(counter) * 1'000'000'007);
           break;
         case gp::FieldDescriptor::CPPTYPE_UINT32: r->SetUInt32(&m, f, counter % 250 + 1); break;
-        case gp::FieldDescriptor::CPPTYPE_INT32: r->SetInt32(&m, f, -(counter % 100) - 1); break;
+        case gp::FieldDescriptor::CPPTYPE_INT32:
+          f->is_repeated() ? r->AddInt32(&m, f, -(counter % 100) - 1)
+                           : r->SetInt32(&m, f, -(counter % 100) - 1);
+          break;
         case gp::FieldDescriptor::CPPTYPE_BOOL: r->SetBool(&m, f, true); break;
         case gp::FieldDescriptor::CPPTYPE_ENUM:
           r->SetEnum(&m, f, f->enum_type()->value(f->enum_type()->value_count() - 1));

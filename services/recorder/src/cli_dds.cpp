@@ -25,6 +25,7 @@
 #include "hexa/comm/topic.hpp"
 #include "hexa/comm/waitset.hpp"
 #include "hexa/comm/writer.hpp"
+#include "hexa/core/lockstep_protocol.hpp"
 #include "hexa/recorder/convert.hpp"
 #include "hexa/recorder/recording.hpp"
 
@@ -460,17 +461,21 @@ int RunLockstepPlayback(const std::string& path, const LockstepOptions& o,
     ReadRecording(path, [&](const McapChannel& ch, const McapMessageView&,
                             const google::protobuf::Message& m) {
       if (ch.topic != comm::kLegSensorsTopic) return;
-      const std::string key = MessageKey(m);  // "leg N"
-      if (key.rfind("leg ", 0) == 0) legs.insert(static_cast<uint32_t>(std::stoul(key.substr(4))));
+      if (const uint32_t leg = LegOfKey(MessageKey(m)); leg != 0) legs.insert(leg);
     });
     if (legs.empty()) throw UsageError("play --answers-out: the recording has no leg sensors");
   }
 
   // Answers: the ValveCommands of the controllers under test, recorded like `record` does.
+  // The clock's side of the lockstep protocol (core/lockstep_protocol.hpp) decides when a tick
+  // is complete, asks a silent leg again and gives up, exactly as the plant service does.
   std::unique_ptr<RecordingWriter> answers_writer;
   std::unique_ptr<TopicRecorderBase> answers;
-  std::map<uint32_t, uint64_t> answered;  // leg -> newest tick answered
+  LockstepBarrierParams barrier_params;
+  barrier_params.timeout_ns = static_cast<int64_t>(o.answer_timeout_s * 1e9);
+  LockstepBarrier barrier(barrier_params);
   uint64_t answers_received = 0;
+  std::map<uint32_t, uint64_t> answered;  // leg -> newest tick answered (for the summary)
   comm::WaitSet waitset(participant, 4);
   waitset.Attach(shutdown.guard_condition(), 0);
   if (await_answers) {
@@ -481,10 +486,11 @@ int RunLockstepPlayback(const std::string& path, const LockstepOptions& o,
     answers->on_sample = [&](const google::protobuf::Message& m) {
       ++answers_received;
       const auto tick = MessageTick(m);
-      const std::string key = MessageKey(m);
-      if (!tick || key.rfind("leg ", 0) != 0) return;
-      uint64_t& newest = answered[static_cast<uint32_t>(std::stoul(key.substr(4)))];
+      const uint32_t leg = LegOfKey(MessageKey(m));
+      if (!tick || leg == 0) return;
+      uint64_t& newest = answered[leg];
       newest = std::max(newest, *tick);
+      if (leg <= kNumLegs) barrier.Answer(static_cast<int>(leg), *tick);
     };
     answers_writer->mcap().FlushChunk();
     waitset.Attach(answers->condition(), 1);
@@ -524,27 +530,41 @@ int RunLockstepPlayback(const std::string& path, const LockstepOptions& o,
   struct Pending {
     TopicPlayerBase* player;
     std::string data;
-    uint32_t leg;  // LegSensors: its leg, else 0
+    uint32_t leg;  // LegSensors and LegSetpoint: its leg, else 0
   };
   std::map<uint64_t, std::vector<Pending>> buffer;
   uint64_t next_tick = 0;  // every tick below has been played
   bool started = false;
-  uint64_t ticks_played = 0, published = 0, refused = 0, ack_timeouts = 0;
+  uint64_t ticks_played = 0, published = 0, refused = 0, ack_timeouts = 0, resent = 0;
+  uint64_t unanswerable = 0;  // leg-ticks not awaited: their setpoint is not in the recording
   int64_t last_progress_ns = 0;
-  std::set<uint32_t> awaited;
+  // The setpoints played so far, per leg (only their ticks matter): the protocol's rule says
+  // whether a leg can answer a tick (a recording ends with ticks whose setpoint the finished
+  // supervisor never issued; no controller can answer those, so they are not awaited).
+  struct PlayedSetpoint {
+    uint64_t tick = 0;
+  };
+  LegArray<SetpointRing<PlayedSetpoint, 2>> played_setpoints{};
+  const LockstepSchedule schedule;
+  const bool setpoints_played = setpoint_player != nullptr;
 
   auto drain_answers = [&] {
     if (answers) answers->Drain(*answers_writer);
   };
   auto play_tick = [&](uint64_t tick, std::vector<Pending>& msgs) {
-    awaited.clear();
+    LegMask awaited = 0;
     for (const Pending& m : msgs) {
       if (!m.player->Publish(m.data)) {
         ++refused;
         continue;
       }
       ++published;
-      if (m.leg != 0 && (o.answer_legs.empty() || legs.count(m.leg))) awaited.insert(m.leg);
+      if (m.leg == 0 || m.leg > kNumLegs) continue;
+      if (m.player == setpoint_player) {
+        played_setpoints[m.leg - 1].Add(PlayedSetpoint{tick});
+      } else if (o.answer_legs.empty() || legs.count(m.leg)) {
+        awaited = static_cast<LegMask>(awaited | LegBit(static_cast<int>(m.leg)));
+      }
     }
     ++ticks_played;
     if (o.ack_every_ticks > 0 && ticks_played % o.ack_every_ticks == 0) {
@@ -553,23 +573,43 @@ int RunLockstepPlayback(const std::string& path, const LockstepOptions& o,
       }
     }
     if (await_answers) {
-      const int64_t until =
-          comm::RealtimeNow_ns() + static_cast<int64_t>(o.answer_timeout_s * 1e9);
+      if (setpoints_played) {
+        for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
+          if ((awaited & LegBit(leg)) &&
+              !played_setpoints[leg - 1].CanAnswer(tick, schedule.supervisor_every_ticks)) {
+            awaited = static_cast<LegMask>(awaited & ~LegBit(leg));
+            ++unanswerable;
+          }
+        }
+      }
+      barrier.Begin(tick, awaited, comm::MonotonicNow_ns());
+      for (const auto& [leg, newest] : answered)  // answered before this tick was played
+        if (newest >= tick && leg <= kNumLegs) barrier.Answer(static_cast<int>(leg), tick);
       for (;;) {
         drain_answers();
-        std::string late;
-        for (uint32_t leg : awaited) {
-          auto it = answered.find(leg);
-          if (it == answered.end() || it->second < tick) late += " " + std::to_string(leg);
-        }
-        if (late.empty()) break;
+        if (barrier.complete()) break;
         if (shutdown.requested()) throw StopPlayback{};
-        if (comm::RealtimeNow_ns() > until) {
+        const int64_t now = comm::MonotonicNow_ns();
+        const LockstepBarrier::Action action = barrier.Check(now);
+        if (action == LockstepBarrier::Action::kTimeout) {
+          std::string late;
+          for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg)
+            if (barrier.missing() & LegBit(leg)) late += " " + std::to_string(leg);
           throw std::runtime_error("play --lockstep: tick " + std::to_string(tick) +
                                    " not answered within " + std::to_string(o.answer_timeout_s) +
                                    " s by leg(s)" + late);
         }
-        waitset.WaitUntil(static_cast<dds_time_t>(until));
+        if (action == LockstepBarrier::Action::kReask) {
+          // As the plant does: the silent legs' sensor samples once more (a controller answers
+          // a repeated tick from its cache).
+          for (const Pending& m : msgs) {
+            if (m.player == sensors_player && m.leg >= 1 && m.leg <= kNumLegs &&
+                (barrier.missing() & LegBit(static_cast<int>(m.leg))) && m.player->Publish(m.data))
+              ++resent;
+          }
+        }
+        const int64_t wait_ns = std::max<int64_t>(1'000'000, barrier.next_check_ns() - now);
+        waitset.Wait(wait_ns);
       }
     }
     const int64_t now = comm::RealtimeNow_ns();
@@ -612,10 +652,8 @@ int RunLockstepPlayback(const std::string& path, const LockstepOptions& o,
             std::to_string(next_tick - 1) + " was played: raise --reorder-ticks (now " +
             std::to_string(o.reorder_ticks) + ")");
       uint32_t leg = 0;
-      if (it->second == sensors_player) {
-        const std::string key = MessageKey(*msg);
-        if (key.rfind("leg ", 0) == 0) leg = static_cast<uint32_t>(std::stoul(key.substr(4)));
-      }
+      if (it->second == sensors_player || it->second == setpoint_player)
+        leg = LegOfKey(MessageKey(*msg));
       buffer[*tick].push_back(Pending{it->second, std::string(m.data), leg});
       const uint64_t newest = buffer.rbegin()->first;
       if (newest >= o.reorder_ticks) {
@@ -645,6 +683,10 @@ int RunLockstepPlayback(const std::string& path, const LockstepOptions& o,
   std::printf("played %" PRIu64 " messages in %" PRIu64 " ticks (%" PRIu64
               " refused, %" PRIu64 " acknowledgement timeouts)%s\n",
               published, ticks_played, refused, ack_timeouts, interrupted ? ", interrupted" : "");
+  if (answers)
+    std::printf("lockstep: %" PRIu64 " sensor samples re-published to silent legs; %" PRIu64
+                " leg-ticks not awaited (their setpoint is not in the recording)\n",
+                resent, unanswerable);
   if (answers) {
     std::printf("answers: %" PRIu64 " ValveCommands -> %s; newest tick per leg:", answers_received,
                 o.answers_out.c_str());

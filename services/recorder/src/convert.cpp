@@ -9,18 +9,29 @@
 namespace hexa::recorder {
 namespace {
 
-template <size_t N>
-void ArrayToProto(const double (&in)[N], google::protobuf::RepeatedField<double>* out) {
+template <typename V, size_t N>
+void ArrayToProto(const V (&in)[N], google::protobuf::RepeatedField<V>* out) {
   out->Clear();
   out->Reserve(static_cast<int>(N));
-  for (double v : in) out->Add(v);
+  for (V v : in) out->Add(v);
 }
 
-template <size_t N>
-bool ArrayFromProto(const google::protobuf::RepeatedField<double>& in, double (&out)[N]) {
+template <typename V, size_t N>
+bool ArrayFromProto(const google::protobuf::RepeatedField<V>& in, V (&out)[N]) {
   if (in.size() != static_cast<int>(N)) return false;
   for (size_t i = 0; i < N; ++i) out[i] = in.Get(static_cast<int>(i));
   return true;
+}
+
+// A field added to the wire type after recordings existed: absent (empty) in an older
+// recording, where every element is `absent`.
+template <typename V, size_t N>
+bool OptionalArrayFromProto(const google::protobuf::RepeatedField<V>& in, V (&out)[N], V absent) {
+  if (in.empty()) {
+    for (V& v : out) v = absent;
+    return true;
+  }
+  return ArrayFromProto(in, out);
 }
 
 // IDL bounded strings are NUL-terminated char arrays of bound + 1.
@@ -126,6 +137,7 @@ void ToProto(const hexa_msg_GroundTruth& in, rec::GroundTruth& out) {
   ArrayToProto(in.rod_pressure_pa, out.mutable_rod_pressure_pa());
   ArrayToProto(in.spool_position_m, out.mutable_spool_position_m());
   ArrayToProto(in.applied_valve_v, out.mutable_applied_valve_v());
+  ArrayToProto(in.command_age_ticks, out.mutable_command_age_ticks());
 }
 
 void ToProto(const hexa_msg_OperatorCommand& in, rec::OperatorCommand& out) {
@@ -227,7 +239,8 @@ bool FromProto(const rec::GroundTruth& in, hexa_msg_GroundTruth& out) {
          ArrayFromProto(in.cap_pressure_pa(), out.cap_pressure_pa) &&
          ArrayFromProto(in.rod_pressure_pa(), out.rod_pressure_pa) &&
          ArrayFromProto(in.spool_position_m(), out.spool_position_m) &&
-         ArrayFromProto(in.applied_valve_v(), out.applied_valve_v);
+         ArrayFromProto(in.applied_valve_v(), out.applied_valve_v) &&
+         OptionalArrayFromProto(in.command_age_ticks(), out.command_age_ticks, -1);
 }
 
 bool FromProto(const rec::OperatorCommand& in, hexa_msg_OperatorCommand& out) {

@@ -193,6 +193,16 @@ std::optional<uint64_t> MessageTick(const gp::Message& message) {
 
 std::string LegStreamKey(uint32_t leg) { return "leg " + std::to_string(leg); }
 
+uint32_t LegOfKey(const std::string& key) {
+  if (key.rfind("leg ", 0) != 0 || key.size() == 4 || key.size() > 13) return 0;
+  uint64_t leg = 0;
+  for (std::size_t i = 4; i < key.size(); ++i) {
+    if (key[i] < '0' || key[i] > '9') return 0;
+    leg = leg * 10 + static_cast<uint64_t>(key[i] - '0');
+  }
+  return leg <= UINT32_MAX ? static_cast<uint32_t>(leg) : 0;
+}
+
 std::string MessageKey(const gp::Message& message) {
   const gp::Descriptor* d = message.GetDescriptor();
   const gp::Reflection* r = message.GetReflection();

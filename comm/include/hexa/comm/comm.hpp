@@ -4,6 +4,7 @@
 #include "hexa/comm/config.hpp"
 #include "hexa/comm/error.hpp"
 #include "hexa/comm/participant.hpp"
+#include "hexa/comm/partition.hpp"
 #include "hexa/comm/qos.hpp"
 #include "hexa/comm/reader.hpp"
 #include "hexa/comm/shutdown.hpp"

@@ -38,12 +38,17 @@ class OwnedEntity {
   dds_entity_t entity_ = 0;
 };
 
+// Write batching (Writer<T>::WriteDeferred + Flush, writer.hpp): process-wide in Cyclone, and
+// it reaches only writers created after it is switched on, so it is chosen with the
+// participant, before any writer exists.
+enum class WriteBatching : bool { kOff = false, kOn = true };
+
 class Participant {
  public:
   // Creates a participant on `domain_id`. Call EnsureDdsConfig() first. Throws DdsError with
   // the domain id, the CYCLONEDDS_URI in use and Cyclone's reason (a config error is also
   // written to stderr by Cyclone itself).
-  explicit Participant(dds_domainid_t domain_id);
+  explicit Participant(dds_domainid_t domain_id, WriteBatching batching = WriteBatching::kOff);
 
   dds_entity_t get() const { return entity_.get(); }
   dds_domainid_t domain_id() const { return domain_id_; }

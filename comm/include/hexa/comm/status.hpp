@@ -53,9 +53,14 @@ struct StatusSnapshot {
   uint32_t liveliness_lost_total = 0;  // this writer failed to assert its liveliness
   uint32_t publication_matched_current = 0;
   uint32_t publication_matched_total = 0;
+  uint32_t write_errors_total = 0;     // dds_write returned an error
+  int32_t last_write_error = 0;        // its dds_return_t
   // Instances whose misses did not fit in the slot table (counted in the totals only).
   uint32_t instance_slot_overflow = 0;
 };
+
+// A reader's data callback (Reader::OnDataAvailable), called on Cyclone's receive thread.
+using DataCallback = void (*)(void* arg);
 
 class StatusCounters {
  public:
@@ -69,9 +74,18 @@ class StatusCounters {
   // A listener whose callbacks update this object; the caller owns and deletes it
   // (dds_delete_listener) after handing it to dds_create_reader / dds_create_writer, which
   // copy it. The object must outlive the entity.
-  dds_listener_t* CreateListener();
+  // `with_data`: also on_data_available (SetDataCallback), for Reader::OnDataAvailable.
+  dds_listener_t* CreateListener(bool with_data = false);
 
   StatusSnapshot Snapshot() const;
+  // The callback of the on_data_available that CreateListener(true) installs.
+  void SetDataCallback(DataCallback callback, void* arg) {
+    data_callback_ = callback;
+    data_arg_ = arg;
+  }
+  void OnDataAvailable() const {
+    if (data_callback_ != nullptr) data_callback_(data_arg_);
+  }
   const std::array<InstanceSlot, kMaxInstances>& instances() const { return instances_; }
   const std::array<WriterSlot, kMaxWriters>& writers() const { return writers_; }
 
@@ -86,6 +100,10 @@ class StatusCounters {
   void OnPublicationMatched(const dds_publication_matched_status_t& s);
   void OnRequestedIncompatibleQos(const dds_requested_incompatible_qos_status_t& s);
   void OnOfferedIncompatibleQos(const dds_offered_incompatible_qos_status_t& s);
+  void CountWriteError(dds_return_t rc) {
+    write_errors_total_.fetch_add(1, std::memory_order_relaxed);
+    last_write_error_.store(rc, std::memory_order_relaxed);
+  }
 
  private:
   InstanceSlot* ClaimInstance(dds_instance_handle_t handle);
@@ -111,6 +129,10 @@ class StatusCounters {
   std::atomic<uint32_t> publication_matched_current_{0};
   std::atomic<uint32_t> publication_matched_total_{0};
   std::atomic<uint32_t> instance_slot_overflow_{0};
+  std::atomic<uint32_t> write_errors_total_{0};
+  std::atomic<int32_t> last_write_error_{0};
+  DataCallback data_callback_ = nullptr;  // set before the listener that calls it
+  void* data_arg_ = nullptr;
   std::array<InstanceSlot, kMaxInstances> instances_{};
   std::array<WriterSlot, kMaxWriters> writers_{};
 };

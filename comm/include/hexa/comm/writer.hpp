@@ -6,15 +6,26 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "hexa/comm/error.hpp"
 #include "hexa/comm/participant.hpp"
+#include "hexa/comm/partition.hpp"
 #include "hexa/comm/qos.hpp"
 #include "hexa/comm/status.hpp"
 #include "hexa/comm/time.hpp"
 #include "hexa/comm/topic.hpp"
 
 namespace hexa::comm {
+
+// Write batching, process-wide (Cyclone's dds_write_set_batch): every writer created after
+// this call keeps what it writes in its outgoing packet until it is flushed. Writer<T>::Write()
+// flushes at once, so only WriteDeferred() + Flush() batch: the plant writes six legs' sensor
+// samples and sends them to each reader in one datagram (on loopback every reader process
+// gets its own datagram per send; docs/performance.md). Switched on through the Participant
+// (WriteBatching::kOn), before any writer exists, in a process whose writers are all Writer<T>.
+void EnableWriteBatching();
+bool WriteBatchingEnabled();
 
 template <typename T>
 concept HasHeader = requires(T t) { t.header.source_time_ns; };
@@ -26,11 +37,16 @@ class Writer {
  public:
   static constexpr TopicKind kKind = TopicTraits<T>::kKind;
 
-  Writer(const Participant& participant, const Topic<T>& topic, const QosParams& params = {})
-      : counters_(std::make_unique<StatusCounters>()) {
+  // `partitions`: the writer's publisher partitions (partition.hpp); empty = the default
+  // partition.
+  Writer(const Participant& participant, const Topic<T>& topic, const QosParams& params = {},
+         const std::vector<std::string>& partitions = {})
+      : counters_(std::make_unique<StatusCounters>()),
+        publisher_(CreatePublisher(participant, partitions)) {
     const Qos qos = MakeQos(kKind, EndpointRole::kWriter, params);
     dds_listener_t* listener = counters_->CreateListener();
-    const dds_entity_t w = dds_create_writer(participant.get(), topic.get(), qos.get(), listener);
+    const dds_entity_t parent = publisher_ ? publisher_.get() : participant.get();
+    const dds_entity_t w = dds_create_writer(parent, topic.get(), qos.get(), listener);
     dds_delete_listener(listener);
     entity_ = OwnedEntity(CheckDds(w, "cannot create writer on " + std::string(TopicName(kKind))));
   }
@@ -38,8 +54,20 @@ class Writer {
   // Publishes `sample` with source timestamp `source_time_ns` (CLOCK_REALTIME ns). Never
   // blocks for the keep-last profiles; returns DDS_RETCODE_OK or the error.
   dds_return_t Write(const T& sample, int64_t source_time_ns) {
-    return dds_write_ts(entity_.get(), &sample, source_time_ns);
+    const dds_return_t rc = WriteDeferred(sample, source_time_ns);
+    if (rc == DDS_RETCODE_OK && WriteBatchingEnabled()) Flush();
+    return rc;
   }
+  // With write batching on (EnableWriteBatching), queues the sample in this writer's packet
+  // until Flush(): the samples written between two flushes reach each reader in one
+  // datagram. Without batching it is Write(). A failed write is counted (status()).
+  dds_return_t WriteDeferred(const T& sample, int64_t source_time_ns) {
+    const dds_return_t rc = dds_write_ts(entity_.get(), &sample, source_time_ns);
+    if (rc != DDS_RETCODE_OK) counters_->CountWriteError(rc);
+    return rc;
+  }
+  // Sends what WriteDeferred() queued (nothing to do without batching).
+  void Flush() { dds_write_flush(entity_.get()); }
 
   // Stamps the sample's own source time field with the clock now and writes it with that
   // same timestamp, so the sample and the DDS source timestamp always agree.
@@ -72,6 +100,7 @@ class Writer {
   // Heap-allocated so the listener's pointer survives moves of the Writer. Declared before
   // entity_ so that it is destroyed after dds_delete (which waits for running callbacks).
   std::unique_ptr<StatusCounters> counters_;
+  OwnedEntity publisher_;  // only with partitions; deleted after the writer
   OwnedEntity entity_;
 };
 

@@ -15,6 +15,7 @@
 #include "hexa/core/command_hygiene.hpp"
 #include "hexa/core/control_params.hpp"
 #include "hexa/core/leg_controller.hpp"
+#include "hexa/core/lockstep_protocol.hpp"
 #include "hexa/core/metrics.hpp"
 #include "hexa/core/platform_plant.hpp"
 #include "hexa/core/supervisor.hpp"
@@ -33,19 +34,6 @@ struct LockstepConfig {
   void Validate() const;  // throws std::invalid_argument naming the field and value
 };
 
-// Issued at tick `tick`; what LegSetpoint carries on the wire.
-struct IssuedSetpoint {
-  bool valid = false;
-  std::uint64_t tick = 0;
-  double time_s = 0.0;
-  SupervisorLegSetpoint value;
-};
-
-// Index of the setpoint a leg controller uses at tick n: the newest issued strictly before
-// n, i.e. at 5 * floor((n - 1) / 5); none at tick 0.
-bool RequiredSetpointTick(std::uint64_t tick, int supervisor_every_ticks,
-                          std::uint64_t& setpoint_tick);
-
 class LockstepSimulation {
  public:
   explicit LockstepSimulation(const LockstepConfig& config);  // validates (throws)
@@ -57,7 +45,7 @@ class LockstepSimulation {
 
   std::uint64_t tick() const { return tick_; }
   double time_s() const { return static_cast<double>(tick_) * config_.tick_s; }
-  bool supervisor_due() const { return tick_ % config_.supervisor_every_ticks == 0; }
+  bool supervisor_due() const { return schedule_.SupervisorDue(tick_); }
 
   // Results of the last Tick(): sensors/truth it used (before the step), leg outputs, and
   // the supervisor output (valid when supervisor_ran()).
@@ -77,9 +65,10 @@ class LockstepSimulation {
   std::unique_ptr<Supervisor> supervisor_;
   LegArray<std::unique_ptr<LegController>> legs_;
   CommandHygieneParams hygiene_;
+  LockstepSchedule schedule_;
+  LockstepBarrier barrier_;
   std::uint64_t tick_ = 0;
-  LegArray<IssuedSetpoint> newest_{};    // issued at the last supervisor tick
-  LegArray<IssuedSetpoint> previous_{};  // issued at the supervisor tick before it
+  LegArray<SetpointRing<IssuedSetpoint, 2>> setpoints_{};  // the last two issued per leg
   PlatformPlantOutput plant_before_;
   LegArray<LegControllerOutput> leg_out_{};
   LegArray<double> applied_v_{};

@@ -91,6 +91,8 @@ std::optional<uint64_t> MessageTick(const google::protobuf::Message& message);
 std::string MessageKey(const google::protobuf::Message& message);
 // The key MessageKey gives a message with leg_id = leg ("leg N").
 std::string LegStreamKey(uint32_t leg);
+// The leg of such a key; 0 for any other key.
+uint32_t LegOfKey(const std::string& key);
 
 // Loss from tick numbers, per instance (topic + key). The expected tick step of a stream is its
 // most frequent positive tick difference (1 for 1 kHz topics, 5 for 200 Hz ones); a difference

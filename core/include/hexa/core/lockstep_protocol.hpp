@@ -1,0 +1,156 @@
+// The lockstep protocol (docs/architecture.md, "Lockstep"), written once. Three users follow
+// it: the plant service over DDS, the recorder's deterministic replay over DDS, and the
+// in-process simulation (core/lockstep_simulation), so that what makes a tick complete and
+// which setpoint a leg uses at a tick cannot drift apart between them.
+//
+//   tick n: the clock (plant, or replay) publishes leg sensors(n) (and IMU(n) when n % 5 == 0);
+//           the supervisor, when n % 5 == 0, answers with setpoints issued at n;
+//           leg i answers sensors(n) with its valve command for n, computed with the setpoint
+//           issued at s(n) = 5 * floor((n - 1) / 5) (none at n = 0);
+//           the clock advances when every awaited leg has answered n.
+// The clock does not wait for the supervisor: the legs do (each needs setpoint s(n) before it
+// answers n), so the supervisor is inside every tick's barrier without a round trip of its
+// own. Pure: no clock (times are arguments), no I/O, no allocation.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "hexa/core/leg_controller.hpp"
+#include "hexa/core/rig.hpp"
+#include "hexa/core/supervisor.hpp"
+
+namespace hexa {
+
+// Legs as a bit set: bit (leg_id - 1).
+using LegMask = std::uint8_t;
+inline constexpr LegMask kAllLegs = 0x3F;
+constexpr LegMask LegBit(int leg_id) { return static_cast<LegMask>(1u << (leg_id - 1)); }
+constexpr LegMask FirstLegs(int count) {
+  return static_cast<LegMask>(count <= 0 ? 0u : (count >= 6 ? 0x3Fu : (1u << count) - 1u));
+}
+
+struct LockstepSchedule {
+  int supervisor_every_ticks = 5;
+  bool SupervisorDue(std::uint64_t tick) const {
+    return tick % static_cast<std::uint64_t>(supervisor_every_ticks) == 0;
+  }
+};
+
+// Index of the setpoint a leg controller uses at tick n: the newest issued strictly before
+// n, i.e. at 5 * floor((n - 1) / 5); none at tick 0 (returns false).
+bool RequiredSetpointTick(std::uint64_t tick, int supervisor_every_ticks,
+                          std::uint64_t& setpoint_tick);
+
+// The clock's side: which awaited legs have answered the current tick, and what to do about
+// those that stay silent (ask again, then give up).
+struct LockstepBarrierParams {
+  // A leg silent this long after the tick began (and again after each re-ask) is asked again:
+  // its sensor sample is re-published and it answers from its cache (its state does not
+  // advance twice). Recovers a sample lost to a reader that had just matched and the
+  // hand-over to a hot standby.
+  std::int64_t reask_after_ns = 50'000'000;
+  // A tick not complete this long after it began is a fault of the missing legs.
+  std::int64_t timeout_ns = 10'000'000'000;
+};
+
+class LockstepBarrier {
+ public:
+  enum class Action : std::uint8_t { kWait, kReask, kTimeout };
+
+  explicit LockstepBarrier(const LockstepBarrierParams& params = {}) : params_(params) {}
+
+  // Tick `tick` was published at `now_ns` to the legs in `awaited`.
+  void Begin(std::uint64_t tick, LegMask awaited, std::int64_t now_ns);
+  // Leg `leg_id` (1..6) answered tick `answered_tick`. Answers for other ticks (a repeated
+  // answer, a late answer of an earlier tick) change nothing. Returns complete().
+  bool Answer(int leg_id, std::uint64_t answered_tick);
+  bool complete() const { return missing_ == 0; }
+  std::uint64_t tick() const { return tick_; }
+  LegMask missing() const { return missing_; }
+  LegMask awaited() const { return awaited_; }
+  // What the silence of missing() calls for at `now_ns`: kReask at most once per re-ask
+  // period, kTimeout once the timeout since Begin() has passed (and on every call after).
+  Action Check(std::int64_t now_ns);
+  // When the next Check() can return something other than kWait.
+  std::int64_t next_check_ns() const;
+  std::uint64_t reasks_total() const { return reasks_total_; }
+  std::int64_t began_ns() const { return began_ns_; }
+
+ private:
+  LockstepBarrierParams params_;
+  std::uint64_t tick_ = 0;
+  LegMask awaited_ = 0;
+  LegMask missing_ = 0;
+  std::int64_t began_ns_ = 0;
+  std::int64_t next_reask_ns_ = 0;
+  std::uint64_t reasks_total_ = 0;
+};
+
+// A setpoint as issued by the supervisor at tick `tick`: what LegSetpoint carries on the wire.
+struct IssuedSetpoint {
+  std::uint64_t tick = 0;
+  double time_s = 0.0;
+  SupervisorLegSetpoint value;
+};
+
+// Puts `setpoint` (nullptr: none) into a leg controller's input, the same way for every user
+// of the protocol.
+void SetSetpointInput(const IssuedSetpoint* setpoint, LegControllerInput& input);
+
+// A leg's side: the setpoints it has received (newest few, in tick order) and the rule that
+// says whether tick n can be answered yet. `Setpoint` is whatever the caller stores per
+// setpoint; it must have `std::uint64_t tick` (the tick it was issued at).
+template <typename Setpoint, std::size_t kCapacity = 16>
+class SetpointRing {
+ public:
+  // Stores a setpoint; one not newer than the newest stored is ignored (returns false).
+  bool Add(const Setpoint& s) {
+    if (count_ > 0 && s.tick <= items_[newest_].tick) return false;
+    newest_ = count_ == 0 ? 0 : (newest_ + 1) % kCapacity;
+    items_[newest_] = s;
+    if (count_ < kCapacity) ++count_;
+    return true;
+  }
+  // The setpoint issued at `tick`, or nullptr.
+  const Setpoint* Find(std::uint64_t tick) const {
+    for (std::size_t k = 0; k < count_; ++k) {
+      const Setpoint& s = items_[(newest_ + kCapacity - k) % kCapacity];
+      if (s.tick == tick) return &s;
+      if (s.tick < tick) break;  // older ones cannot match
+    }
+    return nullptr;
+  }
+  const Setpoint* newest() const { return count_ > 0 ? &items_[newest_] : nullptr; }
+  // Lockstep: the setpoint leg controllers use at `tick`, or nullptr (none at tick 0, or not
+  // received yet).
+  const Setpoint* ForTick(std::uint64_t tick, int supervisor_every_ticks) const {
+    std::uint64_t required = 0;
+    if (!RequiredSetpointTick(tick, supervisor_every_ticks, required)) return nullptr;
+    return Find(required);
+  }
+  // Lockstep: true when tick `tick` can be answered now: at tick 0 (no setpoint exists), when
+  // its setpoint is here, or when a newer one is (setpoints come in tick order: the required
+  // one was skipped and will never come; the controller then holds on a stale setpoint).
+  bool CanAnswer(std::uint64_t tick, int supervisor_every_ticks) const {
+    std::uint64_t required = 0;
+    if (!RequiredSetpointTick(tick, supervisor_every_ticks, required)) return true;
+    const Setpoint* n = newest();
+    return n != nullptr && (n->tick >= required);
+  }
+  // Real time: the newest setpoint not issued after `tick`, or nullptr.
+  const Setpoint* NewestNotAfter(std::uint64_t tick) const {
+    for (std::size_t k = 0; k < count_; ++k) {
+      const Setpoint& s = items_[(newest_ + kCapacity - k) % kCapacity];
+      if (s.tick <= tick) return &s;
+    }
+    return nullptr;
+  }
+
+ private:
+  Setpoint items_[kCapacity]{};
+  std::size_t newest_ = 0;
+  std::size_t count_ = 0;
+};
+
+}  // namespace hexa

@@ -1,0 +1,57 @@
+#include "hexa/core/lockstep_protocol.hpp"
+
+#include <algorithm>
+
+namespace hexa {
+
+bool RequiredSetpointTick(std::uint64_t tick, int supervisor_every_ticks,
+                          std::uint64_t& setpoint_tick) {
+  if (tick == 0) return false;
+  const auto every = static_cast<std::uint64_t>(supervisor_every_ticks);
+  setpoint_tick = every * ((tick - 1) / every);
+  return true;
+}
+
+void SetSetpointInput(const IssuedSetpoint* setpoint, LegControllerInput& input) {
+  input.has_setpoint = setpoint != nullptr;
+  if (setpoint == nullptr) return;
+  input.setpoint_tick = setpoint->tick;
+  input.setpoint_time_s = setpoint->time_s;
+  input.setpoint_length_m = setpoint->value.length_m;
+  input.setpoint_velocity_m_s = setpoint->value.velocity_m_s;
+  input.setpoint_acceleration_m_s2 = setpoint->value.acceleration_m_s2;
+  input.correction_m = setpoint->value.correction_m;
+  input.hold = setpoint->value.hold;
+}
+
+void LockstepBarrier::Begin(std::uint64_t tick, LegMask awaited, std::int64_t now_ns) {
+  tick_ = tick;
+  awaited_ = awaited;
+  missing_ = awaited;
+  began_ns_ = now_ns;
+  next_reask_ns_ = now_ns + params_.reask_after_ns;
+}
+
+bool LockstepBarrier::Answer(int leg_id, std::uint64_t answered_tick) {
+  if (leg_id >= 1 && leg_id <= static_cast<int>(kNumLegs) && answered_tick == tick_) {
+    missing_ = static_cast<LegMask>(missing_ & ~LegBit(leg_id));
+  }
+  return complete();
+}
+
+LockstepBarrier::Action LockstepBarrier::Check(std::int64_t now_ns) {
+  if (complete()) return Action::kWait;
+  if (now_ns - began_ns_ >= params_.timeout_ns) return Action::kTimeout;
+  if (now_ns >= next_reask_ns_) {
+    next_reask_ns_ = now_ns + params_.reask_after_ns;
+    ++reasks_total_;
+    return Action::kReask;
+  }
+  return Action::kWait;
+}
+
+std::int64_t LockstepBarrier::next_check_ns() const {
+  return std::min(next_reask_ns_, began_ns_ + params_.timeout_ns);
+}
+
+}  // namespace hexa
