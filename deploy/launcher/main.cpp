@@ -19,6 +19,7 @@
 
 #include "hexa/services/cli.hpp"
 #include "hexa/services/logging.hpp"
+#include "hexa/services/scheduling.hpp"
 #include "process_group.hpp"
 
 namespace fs = std::filesystem;
@@ -47,11 +48,55 @@ std::string TailOf(const std::string& path, int lines) {
 struct Options {
   std::string trajectory, controller, profile, mode, out_dir, rig, dds_config;
   long long seed = 1, domain = 0, periods = 0;
-  bool recorder = true, standby = false, outer_loop = true;
+  bool recorder = true, standby = false, outer_loop = true, rt_sched = true;
+  std::string cpus_control, cpus_recorder;
   int fault_leg = 0;
   std::string fault_kind, fault_at;
   double timeout_s = 0;
 };
+
+// CPU time of every process over its whole life (start-up and discovery included), per
+// simulated second when the plant's summary says how much was simulated: `processes.json`
+// and a table in the log (docs/performance.md).
+void WriteProcessTable(const std::string& out_dir, const std::vector<hexa::deploy::ChildExit>& exits,
+                       double wall_s, spdlog::logger& log) {
+  double sim_s = 0.0;
+  {
+    std::ifstream summary(out_dir + "/plant.json");
+    const std::string text((std::istreambuf_iterator<char>(summary)), {});
+    if (const auto at = text.find("\"sim_time_s\": "); at != std::string::npos)
+      sim_s = std::strtod(text.c_str() + at + 14, nullptr);
+  }
+  std::ofstream json(out_dir + "/processes.json");
+  json << "{\n  \"wall_time_s\": " << wall_s << ",\n  \"sim_time_s\": " << sim_s
+       << ",\n  \"processes\": [";
+  double user = 0, sys = 0;
+  std::string table;
+  for (std::size_t k = 0; k < exits.size(); ++k) {
+    const auto& e = exits[k];
+    user += e.cpu_user_s;
+    sys += e.cpu_system_s;
+    json << (k == 0 ? "" : ",") << "\n    {\"name\": \"" << e.name << "\", \"cpu_user_s\": "
+         << e.cpu_user_s << ", \"cpu_system_s\": " << e.cpu_system_s
+         << ", \"max_rss_kb\": " << e.max_rss_kb << "}";
+    char line[160];
+    std::snprintf(line, sizeof line, "\n  %-16s user %7.3f s  system %7.3f s", e.name.c_str(),
+                  e.cpu_user_s, e.cpu_system_s);
+    table += line;
+    if (sim_s > 0) {
+      std::snprintf(line, sizeof line, "  = %.3f s per simulated s",
+                    (e.cpu_user_s + e.cpu_system_s) / sim_s);
+      table += line;
+    }
+  }
+  json << "\n  ],\n  \"cpu_user_s\": " << user << ",\n  \"cpu_system_s\": " << sys << "\n}\n";
+  log.info("CPU time per process (whole life, start-up included):{}\n  {:<16} user {:7.3f} s  "
+           "system {:7.3f} s{}",
+           table, "all", user, sys,
+           sim_s > 0 ? fmt::format("  = {:.3f} s per simulated s ({:.3f} s simulated)",
+                                   (user + sys) / sim_s, sim_s)
+                     : std::string());
+}
 
 }  // namespace
 
@@ -75,6 +120,11 @@ int main(int argc, char** argv) {
   cli.AddFlag("no-recorder", "do not record (no report)");
   cli.AddFlag("no-outer-loop", "disable the task-space outer loop");
   cli.AddFlag("standby", "also start a hot-standby controller per leg");
+  cli.AddOption("cpus-control", "list",
+                "pin the plant, the leg controllers and the supervisor to these CPUs (e.g. 1); "
+                "docs/performance.md");
+  cli.AddOption("cpus-recorder", "list", "pin the recorder to these CPUs (e.g. 0)");
+  cli.AddFlag("no-rt-sched", "real time: do not ask for SCHED_FIFO (control 70-80, recorder 50)");
   cli.AddOption("fault", "leg:kind:time_s",
                 "inject a fault into one primary leg controller, e.g. 3:crash:2.0 "
                 "(kinds: crash hang slow garbage silence)");
@@ -91,6 +141,18 @@ int main(int argc, char** argv) {
   o.recorder = !cli.Flag("no-recorder");
   o.standby = cli.Flag("standby");
   o.outer_loop = !cli.Flag("no-outer-loop");
+  o.rt_sched = !cli.Flag("no-rt-sched");
+  for (auto [name, field] : {std::pair{"cpus-control", &o.cpus_control},
+                             std::pair{"cpus-recorder", &o.cpus_recorder}}) {
+    if (!cli.Has(name)) continue;
+    std::vector<int> cpus;
+    if (!hexa::sched::ParseCpuList(cli.Get(name), cpus)) {
+      std::fprintf(stderr, "error: --%s '%s': expected CPU numbers such as 1, 0,1 or 0-1\n",
+                   name, cli.Get(name).c_str());
+      return 2;
+    }
+    *field = cli.Get(name);
+  }
   auto seed = cli.GetInt("seed", 0, (1LL << 62));
   auto periods = cli.GetInt("periods", 0, 1000);
   auto timeout = cli.GetDouble("timeout", 0, 1e6);
@@ -157,8 +219,10 @@ int main(int argc, char** argv) {
   const std::string bin = HEXA_BINARY_DIR;
   const std::map<std::string, std::string> env{
       {"CYCLONEDDS_URI", "file://" + o.dds_config}};
-  const std::vector<std::string> common{"--rig", o.rig, "--domain", std::to_string(o.domain),
-                                        "--mode", o.mode};
+  std::vector<std::string> common{"--rig", o.rig, "--domain", std::to_string(o.domain),
+                                  "--mode", o.mode};
+  if (!o.cpus_control.empty()) common.insert(common.end(), {"--cpus", o.cpus_control});
+  if (!o.rt_sched) common.push_back("--no-rt-sched");
   auto spec = [&](const std::string& name, const std::string& exe,
                   std::vector<std::string> args) {
     ChildSpec s;
@@ -180,6 +244,10 @@ int main(int argc, char** argv) {
     r.name = "recorder";
     r.argv = {bin + "/services/recorder/hexa_recorder", "record", "--output", mcap, "--domain",
               std::to_string(o.domain)};
+    if (!o.cpus_recorder.empty()) r.argv.insert(r.argv.end(), {"--cpus", o.cpus_recorder});
+    // Real time: SCHED_FIFO below the control processes (70-80). A SCHED_OTHER recorder
+    // beside SCHED_FIFO peers is starved and loses samples.
+    if (o.mode == "realtime" && o.rt_sched) r.argv.insert(r.argv.end(), {"--rt-priority", "50"});
     r.env = env;
     r.log_path = o.out_dir + "/recorder.console.log";
     specs.push_back(r);
@@ -212,7 +280,8 @@ int main(int argc, char** argv) {
   if (o.recorder) sup_args.insert(sup_args.end(), {"--pose-readers", "1"});
   specs.push_back(spec("supervisor", "/services/task_space/hexa_task_space", sup_args));
   std::vector<std::string> plant_args{"--profile", o.profile, "--seed", std::to_string(o.seed),
-                                      "--legs", "6", "--supervisor"};
+                                      "--legs", "6", "--supervisor", "--summary",
+                                      o.out_dir + "/plant.json"};
   if (o.recorder) plant_args.push_back("--expect-recorder");
   specs.push_back(spec("plant", "/services/plant_sim/hexa_plant_sim", plant_args));
 
@@ -229,6 +298,7 @@ int main(int argc, char** argv) {
 
   bool completed = false;
   bool failed = false;
+  std::vector<hexa::deploy::ChildExit> exits;  // every child's exit, with its CPU time
   while (!completed && !failed) {
     auto ev = group.WaitEvent(std::chrono::milliseconds(1000));
     const double elapsed_s =
@@ -238,6 +308,7 @@ int main(int argc, char** argv) {
       failed = true;
     } else if (ev.kind == ProcessGroup::Event::kChildExited) {
       const auto& e = ev.exit;
+      exits.push_back(e);
       if (e.name == "supervisor" && e.signal == 0 && e.exit_code == 0) {
         log->info("supervisor finished the trajectory after {:.1f} s wall", elapsed_s);
         completed = true;
@@ -267,6 +338,7 @@ int main(int argc, char** argv) {
     if (!group.Running(name)) return;
     auto e = group.Stop(name, std::chrono::milliseconds(5000));
     if (!e) return;
+    exits.push_back(*e);
     const bool ok = e->signal == 0 && e->exit_code == 0;
     if (!ok) clean = false;
     (ok ? log->info("{}", e->Describe()) : log->error("{}", e->Describe()));
@@ -279,6 +351,7 @@ int main(int argc, char** argv) {
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   log->info("all processes stopped; session wall time {:.1f} s", wall_s);
+  WriteProcessTable(o.out_dir, exits, wall_s, *log);
 
   // The report is written whenever there is a recording: after a fault it shows what
   // happened. The session still exits non-zero unless it completed.

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -99,7 +100,8 @@ pid_t ProcessGroup::Start(const ChildSpec& spec, std::string& error) {
 
 std::optional<ChildExit> ProcessGroup::Reap(pid_t pid, bool block) {
   int status = 0;
-  const pid_t r = waitpid(pid, &status, block ? 0 : WNOHANG);
+  rusage usage{};
+  const pid_t r = wait4(pid, &status, block ? 0 : WNOHANG, &usage);
   if (r != pid) return std::nullopt;
   auto it = std::find_if(running_.begin(), running_.end(),
                          [pid](const Child& c) { return c.pid == pid; });
@@ -111,6 +113,9 @@ std::optional<ChildExit> ProcessGroup::Reap(pid_t pid, bool block) {
   }
   if (WIFSIGNALED(status)) exit.signal = WTERMSIG(status);
   else exit.exit_code = WEXITSTATUS(status);
+  exit.cpu_user_s = static_cast<double>(usage.ru_utime.tv_sec) + usage.ru_utime.tv_usec * 1e-6;
+  exit.cpu_system_s = static_cast<double>(usage.ru_stime.tv_sec) + usage.ru_stime.tv_usec * 1e-6;
+  exit.max_rss_kb = usage.ru_maxrss;
   return exit;
 }
 

@@ -27,6 +27,9 @@ struct ChildExit {
   pid_t pid = -1;
   int exit_code = -1;    // valid when !signaled
   int signal = 0;        // terminating signal, 0 if exited normally
+  double cpu_user_s = 0.0;    // CPU time of the child over its life (wait4 rusage)
+  double cpu_system_s = 0.0;
+  long max_rss_kb = 0;
   std::string Describe() const;
 };
 

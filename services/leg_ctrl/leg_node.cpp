@@ -75,15 +75,17 @@ LegNode::LegNode(const LegNodeOptions& options, const config::SystemConfig& conf
                                                options.controller)),
       participant_(static_cast<dds_domainid_t>(options.common.domain_id)),
       shutdown_(participant_),
-      sensors_topic_(comm::Topic<hexa_msg_LegSensors>::FilteredByLeg(
-          participant_, static_cast<uint8_t>(options.leg))),
-      setpoint_topic_(comm::Topic<hexa_msg_LegSetpoint>::FilteredByLeg(
-          participant_, static_cast<uint8_t>(options.leg))),
+      sensors_topic_(participant_),
+      setpoint_topic_(participant_),
       valve_topic_(participant_),
+      // This leg's partition only: the writers route each leg's samples to its controllers
+      // (comm::LegRoutedWriter), nothing of the other legs arrives here.
       sensors_reader_(participant_, sensors_topic_, comm::EndpointRole::kControlReader,
-                      ControlReaderQos(options, comm::TopicKind::kLegSensors), kLockstepQueue),
+                      ControlReaderQos(options, comm::TopicKind::kLegSensors), kLockstepQueue,
+                      {comm::LegPartition(options.leg)}),
       setpoint_reader_(participant_, setpoint_topic_, comm::EndpointRole::kControlReader,
-                       ControlReaderQos(options, comm::TopicKind::kLegSetpoint), kSetpointRing),
+                       ControlReaderQos(options, comm::TopicKind::kLegSetpoint), kSetpointRing,
+                       {comm::LegPartition(options.leg)}),
       valve_writer_(participant_, valve_topic_, ValveQos(options)),
       status_(participant_, name_),
       waitset_(participant_) {

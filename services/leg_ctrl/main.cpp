@@ -55,8 +55,7 @@ int main(int argc, char** argv) {
     auto config = hexa::node::LoadConfig(o.common.rig_path, *log);
     if (!config) return 1;
     // Before the participant exists: Cyclone's threads inherit the policy (PLATFORM_NOTES).
-    if (o.common.mode == hexa::node::TimeMode::kRealtime && o.common.try_realtime_scheduling)
-      hexa::node::TryRealtimeScheduling(70, *log);
+    hexa::node::ApplyScheduling(o.common, 70, *log);
     hexa::leg_ctrl::LegNode node(o, *config, log);
     return node.Run();
   } catch (const std::exception& e) {

@@ -22,6 +22,8 @@ int main(int argc, char** argv) {
   // 15 ms: this VM shows scheduling stalls of several ms even under SCHED_FIFO
   // (PLATFORM_NOTES.md), and a hot-standby hand-over takes the 10 ms liveliness lease + 0.5 ms;
   // a late command is still used within it, beyond it the valve closes.
+  cli.AddOption("summary", "file", "write the run's figures (ticks, command ages per leg, ...) "
+                "as JSON here at exit");
   cli.AddOption("stale-ticks", "N", "real time: ticks a command may lag before null + fault", "15");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
@@ -45,6 +47,7 @@ int main(int argc, char** argv) {
   o.duration_s = *duration;
   o.startup_timeout_s = *startup;
   o.realtime_stale_ticks = static_cast<std::uint64_t>(*stale);
+  o.summary_path = cli.Get("summary");
 
   auto log = hexa::logging::Init("plant", o.common.log_file, o.common.log_level);
   try {
@@ -59,8 +62,7 @@ int main(int argc, char** argv) {
       return 1;
     }
     // Before the participant exists: Cyclone's threads inherit the policy (PLATFORM_NOTES).
-    if (o.common.mode == hexa::node::TimeMode::kRealtime && o.common.try_realtime_scheduling)
-      hexa::node::TryRealtimeScheduling(80, *log);
+    hexa::node::ApplyScheduling(o.common, 80, *log);
     hexa::plant_sim::PlantNode node(o, *config, log);
     return node.Run();
   } catch (const std::exception& e) {

@@ -115,11 +115,17 @@ bool PlantNode::WaitForPeers() {
   for (int leg = 1; leg <= options_.expected_legs; ++leg) expected.push_back("leg" + std::to_string(leg));
   if (options_.expect_supervisor) expected.push_back("supervisor");
   if (options_.expect_recorder) expected.push_back("recorder");
-  // Sensor readers: each leg controller, the supervisor, the recorder. Valve writers: one per
-  // leg controller.
-  const uint32_t sensor_readers = static_cast<uint32_t>(options_.expected_legs) +
-                                  (options_.expect_supervisor ? 1u : 0u) +
-                                  (options_.expect_recorder ? 1u : 0u);
+  // Sensor readers: each leg controller in its leg's partition; the supervisor and the
+  // recorder on the all-legs writer. Valve writers: one per leg controller.
+  const uint32_t all_legs_readers = (options_.expect_supervisor ? 1u : 0u) +
+                                    (options_.expect_recorder ? 1u : 0u);
+  const uint32_t sensor_readers = static_cast<uint32_t>(options_.expected_legs) + all_legs_readers;
+  auto sensor_readers_matched = [&] {
+    uint32_t n = 0;
+    for (int leg = 1; leg <= options_.expected_legs; ++leg)
+      n += std::min<uint32_t>(1, sensors_writer_.leg(leg).Snapshot().publication_matched_current);
+    return n + std::min(all_legs_readers, sensors_writer_.all().Snapshot().publication_matched_current);
+  };
   const uint32_t valve_writers = static_cast<uint32_t>(options_.expected_legs);
   PublishStatus(hexa_msg_NODE_STARTING, "waiting for peers");
   const int64_t end = node::MonotonicNow_ns() + static_cast<int64_t>(options_.startup_timeout_s * 1e9);
@@ -127,9 +133,15 @@ bool PlantNode::WaitForPeers() {
   while (!shutdown_.requested()) {
     peers_.Poll();
     const auto missing = peers_.NotRunning(expected);
-    const auto sensors = sensors_writer_.Snapshot().publication_matched_current;
+    const auto sensors = sensor_readers_matched();
     const auto valves = valve_reader_.Snapshot().subscription_matched_current;
-    if (missing.empty() && sensors >= sensor_readers && valves >= valve_writers) {
+    // The IMU too: a reader matched on its side may not be matched on this side yet, and a
+    // volatile IMU(0) sent before would never reach it (the supervisor would wait for it).
+    const auto imu = imu_writer_.Snapshot().publication_matched_current;
+    const auto truth = truth_writer_.Snapshot().publication_matched_current;
+    const uint32_t truth_readers = options_.expect_recorder ? 1u : 0u;
+    if (missing.empty() && sensors >= sensor_readers && valves >= valve_writers &&
+        imu >= all_legs_readers && truth >= truth_readers) {
       log_->info("all peers ready: {} sensor readers, {} valve writers", sensors, valves);
       return true;
     }
@@ -138,8 +150,10 @@ bool PlantNode::WaitForPeers() {
       std::string names;
       for (const auto& m : missing) names += " " + m;
       log_->error("peers not ready after {} s: not running:{}; sensor readers {}/{}, valve "
-                  "writers {}/{}", options_.startup_timeout_s, names.empty() ? " none" : names,
-                  sensors, sensor_readers, valves, valve_writers);
+                  "writers {}/{}, IMU readers {}/{}, ground-truth readers {}/{}",
+                  options_.startup_timeout_s, names.empty() ? " none" : names, sensors,
+                  sensor_readers, valves, valve_writers, imu, all_legs_readers, truth,
+                  truth_readers);
       return false;
     }
     if (now > next_log) {
@@ -167,10 +181,13 @@ void PlantNode::PublishTick(int only_leg) {
     s.cap_pressure_pa = out.legs[i].chamber1_pressure_pa;
     s.rod_pressure_pa = out.legs[i].chamber2_pressure_pa;
     s.supply_pressure_pa = out.legs[i].supply_pressure_pa;
+    if (only_leg != 0) {
+      sensors_writer_.WriteToLegOnly(s, now_ns);  // a re-ask: that leg's controllers only
+      return;
+    }
     sensors_writer_.WriteDeferred(s, now_ns);
   }
   sensors_writer_.Flush();
-  if (only_leg != 0) return;
   if (schedule_.SupervisorDue(tick_)) {
     hexa_msg_ImuSample imu{};
     comm::FillHeader(imu.header, tick_, t, now_ns);
@@ -410,6 +427,36 @@ void PlantNode::LogCommandAges() const {
   }
 }
 
+void PlantNode::WriteSummary(int exit_code) const {
+  if (options_.summary_path.empty()) return;
+  std::FILE* f = std::fopen(options_.summary_path.c_str(), "w");
+  if (f == nullptr) {
+    log_->error("cannot write the summary to {}", options_.summary_path);
+    return;
+  }
+  const auto valve = valve_reader_.Snapshot();
+  std::fprintf(f, "{\n  \"mode\": \"%s\",\n  \"exit_code\": %d,\n  \"ticks\": %llu,\n"
+               "  \"sim_time_s\": %.6f,\n  \"valve_deadline_misses\": %u,\n"
+               "  \"loop_overruns\": %u,\n  \"lockstep_resends\": %llu,\n"
+               "  \"command_age_bins\": [\"0\", \"1\", \"2\", \"3-7\", \"8-15\", \">=16\"],\n"
+               "  \"legs\": [",
+               options_.common.mode == node::TimeMode::kRealtime ? "realtime" : "lockstep",
+               exit_code, static_cast<unsigned long long>(tick_),
+               static_cast<double>(tick_) * kTickS, valve.requested_deadline_missed_total,
+               overruns_, static_cast<unsigned long long>(resent_samples_));
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    const CommandAgeHistogram& h = command_age_[i];
+    std::fprintf(f, "%s\n    {\"leg\": %zu, \"command_age\": [", i == 0 ? "" : ",", i + 1);
+    for (int k = 0; k < CommandAgeHistogram::kBins; ++k)
+      std::fprintf(f, "%s%llu", k == 0 ? "" : ", ", static_cast<unsigned long long>(h.bins[static_cast<std::size_t>(k)]));
+    std::fprintf(f, "], \"no_command\": %llu, \"late_ticks\": %llu, \"faults\": %u}",
+                 static_cast<unsigned long long>(h.none), static_cast<unsigned long long>(h.late()),
+                 faults_per_leg_[i]);
+  }
+  std::fprintf(f, "\n  ]\n}\n");
+  std::fclose(f);
+}
+
 int PlantNode::Run() {
   const bool realtime = options_.common.mode == node::TimeMode::kRealtime;
   if (!WaitForPeers()) {
@@ -427,13 +474,13 @@ int PlantNode::Run() {
   uint32_t faults = 0;
   for (auto f : faults_per_leg_) faults += f;
   const auto valve = valve_reader_.Snapshot();
-  const auto sensors = sensors_writer_.Snapshot();
   log_->info("stopped at tick {} (t = {:.3f} s): valve deadline misses {}, loop overruns {}, "
              "command faults {}, lockstep resends {} (in {} re-asks), failed writes {}",
              tick_, static_cast<double>(tick_) * kTickS, valve.requested_deadline_missed_total,
              overruns_, faults, resent_samples_, barrier_.reasks_total(),
-             sensors.write_errors_total);
+             sensors_writer_.write_errors_total());
   LogCommandAges();
+  WriteSummary(rc);
   if (rc != 4) PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
   return rc;
 }

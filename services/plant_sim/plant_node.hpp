@@ -38,6 +38,7 @@ struct PlantNodeOptions {
   double startup_timeout_s = 30.0; // peers must be ready within this
   std::uint64_t realtime_stale_ticks = 15;  // real time: command tolerance (main.cpp)
   double resend_after_s = 0.05;    // lockstep: republish sensors of a silent leg after this
+  std::string summary_path;        // write the run's figures here as JSON at exit ("" = no)
 };
 
 // Age of the command the plant applied at a tick, in ticks (tick - answered tick; 0 = the
@@ -67,7 +68,7 @@ class PlantNode {
   // Receive thread (lockstep): takes the commands and, when the tick is complete, advances.
   static void OnValveData(void* self);
   void AdvanceIfComplete();
-  // Publishes the sensors of tick_ (all legs, or `only_leg`), and with all legs the IMU
+  // Publishes the sensors of tick_ (all legs, or `only_leg` to that leg alone), and with all legs the IMU
   // (every 5th tick) and ground truth. Batched: each reader gets one datagram.
   void PublishTick(int only_leg = 0);
   void TakeCommands(bool feed_barrier);
@@ -77,6 +78,7 @@ class PlantNode {
   void PublishStatus(hexa_msg_NodeState state, const char* detail);
   void LogLastGoodState() const;
   void LogCommandAges() const;
+  void WriteSummary(int exit_code) const;
 
   PlantNodeOptions options_;
   config::SystemConfig config_;
@@ -94,7 +96,7 @@ class PlantNode {
   comm::Topic<hexa_msg_ImuSample> imu_topic_;
   comm::Topic<hexa_msg_GroundTruth> truth_topic_;
   comm::Topic<hexa_msg_ValveCommand> valve_topic_;
-  comm::Writer<hexa_msg_LegSensors> sensors_writer_;
+  comm::LegRoutedWriter<hexa_msg_LegSensors> sensors_writer_;
   comm::Writer<hexa_msg_ImuSample> imu_writer_;
   comm::Writer<hexa_msg_GroundTruth> truth_writer_;
   comm::Reader<hexa_msg_ValveCommand> valve_reader_;

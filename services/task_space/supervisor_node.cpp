@@ -76,7 +76,9 @@ bool SupervisorNode::WaitUntilMatched() {
     const bool sensors = sensors_reader_.Snapshot().subscription_matched_current >= 1;
     const bool imu = imu_reader_.Snapshot().subscription_matched_current >= 1;
     // Every leg controller reads the setpoints (plus the plant in lockstep).
-    const bool legs = setpoint_writer_.Snapshot().publication_matched_current >= kNumLegs;
+    bool legs = true;
+    for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg)
+      legs = legs && setpoint_writer_.leg(leg).Snapshot().publication_matched_current >= 1;
     // With a recorder: it must have matched the pose reports before the first one is written.
     const uint32_t pose_readers = pose_writer_.Snapshot().publication_matched_current;
     const bool poses = pose_readers >= static_cast<uint32_t>(options_.pose_readers);
@@ -85,7 +87,7 @@ bool SupervisorNode::WaitUntilMatched() {
       log_->error("peers not matched after {} s: sensors {}, imu {}, setpoint readers {}, pose "
                   "readers {} of {}",
                   options_.startup_timeout_s, sensors, imu,
-                  setpoint_writer_.Snapshot().publication_matched_current, pose_readers,
+                  legs ? "all" : "not all", pose_readers,
                   options_.pose_readers);
       return false;
     }
@@ -361,7 +363,7 @@ int SupervisorNode::Run() {
   log_->info("supervisor stopped after {} cycles (state {}), compute median {:.1f} us max {:.1f} us, "
              "failed writes {}",
              cycles_, ToString(output_.state), cycle_times_.Median() * 1e6,
-             cycle_times_.Max() * 1e6, setpoint_writer_.Snapshot().write_errors_total);
+             cycle_times_.Max() * 1e6, setpoint_writer_.write_errors_total());
   return exit_code_ < 0 ? 0 : exit_code_;
 }
 

@@ -67,7 +67,7 @@ class SupervisorNode {
   comm::Reader<hexa_msg_ImuSample> imu_reader_;
   comm::Reader<hexa_msg_OperatorCommand> operator_reader_;
   comm::Reader<hexa_msg_FaultEvent> fault_reader_;
-  comm::Writer<hexa_msg_LegSetpoint> setpoint_writer_;
+  comm::LegRoutedWriter<hexa_msg_LegSetpoint> setpoint_writer_;
   comm::Writer<hexa_msg_PoseReport> pose_writer_;
   node::StatusPublisher status_;
   node::FaultPublisher faults_;

@@ -56,7 +56,8 @@ TEST(SixLegProcesses, HoldHomeThenTrackAStepOfEveryLeg) {
   hexa::comm::QosParams lockstep;
   lockstep.lockstep = true;
   lockstep.deadline_period_s = 10.0;
-  hexa::comm::Writer<hexa_msg_LegSetpoint> sp_writer(p, sp_topic, lockstep);
+  // Setpoints reach leg controllers in their leg's partition, as the supervisor writes them.
+  hexa::comm::LegRoutedWriter<hexa_msg_LegSetpoint> sp_writer(p, sp_topic, lockstep);
   hexa::comm::Reader<hexa_msg_LegSensors> sensors(p, sensor_topic,
                                                   hexa::comm::EndpointRole::kRecorderReader,
                                                   lockstep, 64);
@@ -93,7 +94,9 @@ TEST(SixLegProcesses, HoldHomeThenTrackAStepOfEveryLeg) {
           s.leg_id = static_cast<uint8_t>(leg);
           hexa::comm::FillHeader(s.header, tick, t, 0);
           s.length_m = home_m[leg - 1] + (t >= kStepAtS ? kStepM : 0.0);
-          sp_writer.WriteNow(s);
+          s.header.source_time_ns = hexa::comm::RealtimeNow_ns();
+          sp_writer.WriteDeferred(s, s.header.source_time_ns);
+          sp_writer.Flush();
         }
         published_up_to = tick;
         published_any = true;

@@ -110,6 +110,11 @@ std::string Parser::Get(const std::string& name) const {
   return {};
 }
 
+bool Parser::Fail(const std::string& message) {
+  error_ = message;
+  return false;
+}
+
 std::optional<long long> Parser::GetInt(const std::string& name, long long min, long long max) {
   const std::string text = Get(name);
   errno = 0;

@@ -1,13 +1,10 @@
 #include "hexa/services/node.hpp"
 
-#include <sched.h>
-#include <sys/mman.h>
-
 #include <algorithm>
-#include <cerrno>
-#include <cstring>
 #include <ctime>
 #include <limits>
+
+#include "hexa/services/scheduling.hpp"
 
 namespace hexa::node {
 
@@ -23,6 +20,8 @@ void AddCommonOptions(cli::Parser& p) {
   p.AddOption("rt-deadline-1ms", "s", "real time: deadline of the 1 ms topics", "0.001");
   p.AddOption("rt-deadline-5ms", "s", "real time: deadline of the 5 ms topics", "0.005");
   p.AddFlag("no-rt-sched", "do not try SCHED_FIFO / mlockall in real time");
+  p.AddOption("rt-priority", "N", "real time: SCHED_FIFO priority 1..98 (default: the service's)");
+  p.AddOption("cpus", "list", "pin every thread to these CPUs, e.g. 1 or 0,1 or 0-1");
 }
 
 bool ReadCommonOptions(cli::Parser& p, CommonOptions& o) {
@@ -41,7 +40,25 @@ bool ReadCommonOptions(cli::Parser& p, CommonOptions& o) {
   o.log_file = p.Get("log-file");
   o.log_level = p.Get("log-level");
   o.try_realtime_scheduling = !p.Flag("no-rt-sched");
+  if (p.Has("rt-priority")) {
+    const auto prio = p.GetInt("rt-priority", 1, 98);
+    if (!prio) return false;
+    o.realtime_priority = static_cast<int>(*prio);
+  }
+  if (p.Has("cpus") && !sched::ParseCpuList(p.Get("cpus"), o.cpus)) {
+    return p.Fail("--cpus '" + p.Get("cpus") + "': expected CPU numbers such as 1, 0,1 or 0-1");
+  }
   return true;
+}
+
+void ApplyScheduling(const CommonOptions& o, int default_priority, spdlog::logger& log) {
+  std::string message;
+  if (!o.cpus.empty()) {
+    const bool ok = sched::SetCpuAffinity(o.cpus, message);
+    ok ? log.info("{}", message) : log.warn("{}", message);
+  }
+  if (o.mode == TimeMode::kRealtime && o.try_realtime_scheduling)
+    TryRealtimeScheduling(o.realtime_priority > 0 ? o.realtime_priority : default_priority, log);
 }
 
 comm::QosParams QosFor(const CommonOptions& o, comm::TopicKind kind) {
@@ -81,19 +98,9 @@ std::optional<config::SystemConfig> LoadConfig(const std::string& path, spdlog::
 }
 
 void TryRealtimeScheduling(int priority, spdlog::logger& log) {
-  sched_param sp{};
-  sp.sched_priority = priority;
-  if (sched_setscheduler(0, SCHED_FIFO, &sp) == 0) {
-    log.info("SCHED_FIFO priority {} enabled", priority);
-  } else {
-    log.warn("SCHED_FIFO not available ({}): running with normal scheduling",
-             std::strerror(errno));
-  }
-  if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
-    log.info("memory locked (mlockall)");
-  } else {
-    log.warn("mlockall not available ({})", std::strerror(errno));
-  }
+  std::string message;
+  const bool ok = sched::SetRealtime(priority, message);
+  ok ? log.info("{}", message) : log.warn("{}", message);
 }
 
 StatusPublisher::StatusPublisher(const comm::Participant& participant,

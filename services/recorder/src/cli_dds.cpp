@@ -28,6 +28,7 @@
 #include "hexa/core/lockstep_protocol.hpp"
 #include "hexa/recorder/convert.hpp"
 #include "hexa/recorder/recording.hpp"
+#include "hexa/services/scheduling.hpp"
 
 namespace hexa::recorder::cli {
 namespace {
@@ -196,14 +197,14 @@ dds_domainid_t ParseDomain(const Args& a) {
 int RunRecord(const std::vector<std::string>& argv) {
   const Args a = ParseArgs(argv,
                            {"output", "o", "domain", "topics", "exclude", "duration-s", "flush-ms",
-                            "batch-ms", "sync", "dds-config"},
+                            "batch-ms", "sync", "dds-config", "rt-priority", "cpus"},
                            {"quiet"});
   if (a.help) {
     std::fputs(
         "usage: hexa_recorder record --output FILE.mcap [--domain N] [--topics GLOB,..]\n"
         "                            [--exclude GLOB,..] [--duration-s S] [--flush-ms MS]\n"
         "                            [--batch-ms MS] [--sync none|fflush|fdatasync]\n"
-        "                            [--dds-config FILE.xml]\n"
+        "                            [--dds-config FILE.xml] [--rt-priority N] [--cpus LIST]\n"
         "Subscribes to every topic of the system (reliable, keep-all recorder QoS) or the ones\n"
         "matching --topics, and writes each sample as protobuf to one MCAP channel per topic\n"
         "(log time = when taken from DDS, within --batch-ms of receipt; publish time = the\n"
@@ -214,6 +215,9 @@ int RunRecord(const std::vector<std::string>& argv) {
         "fdatasync (the default --sync) runs on a background thread.\n"
         "Stops after --duration-s or on SIGINT/SIGTERM, then prints per topic the samples\n"
         "received and the loss seen from tick numbers.\n"
+        "--rt-priority N: SCHED_FIFO at N (1..98) + mlockall, for real-time sessions whose\n"
+        "control processes run SCHED_FIFO (a SCHED_OTHER recorder beside them is starved);\n"
+        "--cpus LIST pins it (e.g. 0): both before DDS starts, so Cyclone's threads inherit.\n"
         "topics: hexa_LegSensors hexa_ValveCommand hexa_ImuSample hexa_LegSetpoint\n"
         "        hexa_PoseReport hexa_GroundTruth hexa_OperatorCommand hexa_NodeStatus\n"
         "        hexa_FaultEvent\n",
@@ -233,6 +237,21 @@ int RunRecord(const std::vector<std::string>& argv) {
     throw UsageError("--batch-ms must be in [0, --flush-ms]");
   const TopicFilter filter{a.GetAll("topics"), a.GetAll("exclude")};
   const bool quiet = a.Has("quiet");
+  const long long rt_priority = a.GetInt("rt-priority", 0);
+  if (rt_priority < 0 || rt_priority > 98) throw UsageError("--rt-priority must be in [0, 98]");
+  std::vector<int> cpus;
+  if (a.Has("cpus") && !sched::ParseCpuList(a.Get("cpus", ""), cpus))
+    throw UsageError("--cpus '" + a.Get("cpus", "") + "': expected CPU numbers such as 1, 0,1 or 0-1");
+  // Before the participant: Cyclone's threads inherit both.
+  std::string sched_message;
+  if (!cpus.empty()) {
+    sched::SetCpuAffinity(cpus, sched_message);
+    if (!quiet) std::fprintf(stderr, "record: %s\n", sched_message.c_str());
+  }
+  if (rt_priority > 0) {
+    sched::SetRealtime(static_cast<int>(rt_priority), sched_message);
+    if (!quiet) std::fprintf(stderr, "record: %s\n", sched_message.c_str());
+  }
 
   McapWriterConfig cfg;
   cfg.chunk_max_span_ns = static_cast<uint64_t>(flush_ms * 1e6);
@@ -365,21 +384,40 @@ class TopicPlayer final : public TopicPlayerBase {
     writer_ = comm::OwnedEntity(comm::CheckDds(
         dds_create_writer(p.get(), topic_.get(), qos.get(), nullptr),
         "cannot create writer on " + topic));
+    // Leg-keyed topics are also written in each leg's partition, as the plant and the
+    // supervisor do (comm::LegRoutedWriter): that is where leg controllers read them.
+    if constexpr (comm::LegKeyed<T>) {
+      for (int leg = 1; leg <= kRoutedLegs; ++leg) {
+        leg_publishers_[leg - 1] = comm::CreatePublisher(p, {comm::LegPartition(leg)});
+        leg_writers_[leg - 1] = comm::OwnedEntity(comm::CheckDds(
+            dds_create_writer(leg_publishers_[leg - 1].get(), topic_.get(), qos.get(), nullptr),
+            "cannot create writer on " + topic + " for leg " + std::to_string(leg)));
+      }
+    }
   }
   const google::protobuf::Message* Parse(std::string_view data) override {
     return msg_.ParseFromArray(data.data(), static_cast<int>(data.size())) ? &msg_ : nullptr;
   }
+  // Matched readers over the writers: a leg controller matches its leg's writer, the
+  // recorder and the supervisor the default-partition one.
   comm::StatusSnapshot Status() const override {
     comm::StatusSnapshot s;
-    dds_publication_matched_status_t m{};
-    if (dds_get_publication_matched_status(writer_.get(), &m) == DDS_RETCODE_OK) {
-      s.publication_matched_current = m.current_count;
-      s.publication_matched_total = m.total_count;
+    for (dds_entity_t w : Writers()) {
+      dds_publication_matched_status_t m{};
+      if (dds_get_publication_matched_status(w, &m) == DDS_RETCODE_OK) {
+        s.publication_matched_current += m.current_count;
+        s.publication_matched_total += m.total_count;
+      }
     }
     return s;
   }
   dds_return_t WaitForAcks(dds_duration_t timeout) override {
-    return dds_wait_for_acks(writer_.get(), timeout);
+    dds_return_t rc = DDS_RETCODE_OK;
+    for (dds_entity_t w : Writers()) {
+      const dds_return_t r = dds_wait_for_acks(w, timeout);
+      if (r != DDS_RETCODE_OK) rc = r;
+    }
+    return rc;
   }
   bool Publish(std::string_view data) override {
     T sample{};
@@ -390,18 +428,35 @@ class TopicPlayer final : public TopicPlayerBase {
     }
     // The sample keeps its recorded header; DDS gets the replay time as source timestamp.
     // A keep-all writer may time out while a reader catches up: try again (bounded).
-    dds_return_t rc = DDS_RETCODE_TIMEOUT;
-    for (int attempt = 0; attempt < 30 && rc == DDS_RETCODE_TIMEOUT; ++attempt)
-      rc = dds_write_ts(writer_.get(), &sample, comm::RealtimeNow_ns());
-    if (rc < 0) throw std::runtime_error("write on " + topic + " failed: " +
-                                         std::string(dds_strretcode(rc)));
+    const int64_t now_ns = comm::RealtimeNow_ns();
+    Write(writer_.get(), sample, now_ns);
+    if constexpr (comm::LegKeyed<T>) {
+      if (sample.leg_id >= 1 && sample.leg_id <= kRoutedLegs)
+        Write(leg_writers_[sample.leg_id - 1].get(), sample, now_ns);
+    }
     ++published;
     return true;
   }
 
  private:
+  static constexpr int kRoutedLegs = 6;
+  void Write(dds_entity_t writer, const T& sample, int64_t source_time_ns) {
+    dds_return_t rc = DDS_RETCODE_TIMEOUT;
+    for (int attempt = 0; attempt < 30 && rc == DDS_RETCODE_TIMEOUT; ++attempt)
+      rc = dds_write_ts(writer, &sample, source_time_ns);
+    if (rc < 0) throw std::runtime_error("write on " + topic + " failed: " +
+                                         std::string(dds_strretcode(rc)));
+  }
+  std::vector<dds_entity_t> Writers() const {
+    std::vector<dds_entity_t> all{writer_.get()};
+    for (const auto& w : leg_writers_)
+      if (w) all.push_back(w.get());
+    return all;
+  }
   comm::Topic<T> topic_;
   comm::OwnedEntity writer_;
+  std::array<comm::OwnedEntity, kRoutedLegs> leg_publishers_;  // leg-keyed topics only
+  std::array<comm::OwnedEntity, kRoutedLegs> leg_writers_;
   P msg_;
 };
 

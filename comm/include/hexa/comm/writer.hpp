@@ -104,4 +104,59 @@ class Writer {
   OwnedEntity entity_;
 };
 
+// A leg-keyed topic (LegSensors, LegSetpoint) written for two kinds of reader at once:
+// leg N's sample in partition LegPartition(N), where only leg N's controllers (primary and
+// standby) read it, and all six in the default partition, where the supervisor, the recorder
+// and any tool read the topic as one keyed stream. With write batching on (the plant, the
+// supervisor) the six samples of the default partition leave in one datagram per reader.
+// A leg controller then receives one datagram with one sample per tick: no topic filter
+// (Cyclone 0.10 filters in the reader, after delivery, and each filtered-out sample costs a
+// key-map entry freed by its garbage-collector thread: a wake-up per sample;
+// docs/performance.md).
+template <WireType T>
+  requires LegKeyed<T>
+class LegRoutedWriter {
+ public:
+  static constexpr int kLegs = 6;
+  LegRoutedWriter(const Participant& participant, const Topic<T>& topic,
+                  const QosParams& params = {})
+      : all_(participant, topic, params) {
+    legs_.reserve(kLegs);
+    for (int leg = 1; leg <= kLegs; ++leg)
+      legs_.emplace_back(participant, topic, params, std::vector<std::string>{LegPartition(leg)});
+  }
+  // Queues `sample` for its leg's controllers and for the all-legs readers; Flush() sends.
+  dds_return_t WriteDeferred(const T& sample, int64_t source_time_ns) {
+    dds_return_t rc = all_.WriteDeferred(sample, source_time_ns);
+    if (sample.leg_id >= 1 && sample.leg_id <= kLegs) {
+      const dds_return_t leg_rc = legs_[sample.leg_id - 1].WriteDeferred(sample, source_time_ns);
+      if (rc == DDS_RETCODE_OK) rc = leg_rc;
+    }
+    return rc;
+  }
+  void Flush() {
+    all_.Flush();
+    for (auto& w : legs_) w.Flush();
+  }
+  // To the leg's controllers only (the lockstep re-ask of one silent leg), sent at once.
+  dds_return_t WriteToLegOnly(const T& sample, int64_t source_time_ns) {
+    if (sample.leg_id < 1 || sample.leg_id > kLegs) return DDS_RETCODE_BAD_PARAMETER;
+    Writer<T>& w = legs_[sample.leg_id - 1];
+    const dds_return_t rc = w.WriteDeferred(sample, source_time_ns);
+    w.Flush();
+    return rc;
+  }
+  Writer<T>& all() { return all_; }
+  Writer<T>& leg(int leg_id) { return legs_.at(static_cast<std::size_t>(leg_id - 1)); }
+  uint32_t write_errors_total() const {
+    uint32_t n = all_.Snapshot().write_errors_total;
+    for (const auto& w : legs_) n += w.Snapshot().write_errors_total;
+    return n;
+  }
+
+ private:
+  Writer<T> all_;
+  std::vector<Writer<T>> legs_;
+};
+
 }  // namespace hexa::comm

@@ -35,6 +35,9 @@ class Parser {
   std::optional<long long> GetInt(const std::string& name, long long min, long long max);
   std::optional<double> GetDouble(const std::string& name, double min, double max);
   const std::vector<std::string>& positional() const { return positional_; }
+  // Records a validation error found by the caller (e.g. a list a typed getter cannot read);
+  // error() then returns it. Always returns false.
+  bool Fail(const std::string& message);
 
  private:
   struct Spec {

@@ -35,10 +35,12 @@ struct CommonOptions {
   double realtime_deadline_1ms_topics_s = 0.001;
   double realtime_deadline_5ms_topics_s = 0.005;
   bool try_realtime_scheduling = true;
+  int realtime_priority = 0;   // --rt-priority: SCHED_FIFO priority; 0 = the service's default
+  std::vector<int> cpus;       // --cpus: CPU affinity of every thread; empty = any CPU
 };
 
 // Adds --rig --domain --mode --dds-config --log-file --log-level --lockstep-timeout
-// --rt-deadline-1ms --rt-deadline-5ms --no-rt-sched.
+// --rt-deadline-1ms --rt-deadline-5ms --no-rt-sched --rt-priority --cpus.
 void AddCommonOptions(cli::Parser& parser);
 // Reads them back; false with parser.error() set on a bad value.
 bool ReadCommonOptions(cli::Parser& parser, CommonOptions& options);
@@ -53,6 +55,12 @@ std::optional<config::SystemConfig> LoadConfig(const std::string& path, spdlog::
 
 // SCHED_FIFO + mlockall when allowed (root); logs the outcome, never fails.
 void TryRealtimeScheduling(int priority, spdlog::logger& log);
+
+// Scheduling of a service, applied before its DDS participant exists so that Cyclone's
+// threads inherit it: CPU affinity (--cpus) in both modes; in real time SCHED_FIFO at
+// --rt-priority (else `default_priority`) + mlockall unless --no-rt-sched. Logs what it did;
+// a refusal (not root, CPU not present) is logged and the service carries on.
+void ApplyScheduling(const CommonOptions& options, int default_priority, spdlog::logger& log);
 
 // NodeStatus writer for one node name.
 class StatusPublisher {

@@ -1,0 +1,21 @@
+// Process scheduling for the services and the recorder: CPU affinity and SCHED_FIFO. Applied
+// before the DDS participant exists, so that Cyclone's threads inherit them. Each call says
+// what it did in `message` (for the log) and never throws: a host that refuses (not root, a
+// CPU that is not there) leaves the process running with normal scheduling.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace hexa::sched {
+
+// "1", "0,1", "0-1" -> CPU numbers; false on a malformed list.
+bool ParseCpuList(const std::string& text, std::vector<int>& cpus);
+
+// Pins every thread of the process (and those it creates later) to `cpus`.
+bool SetCpuAffinity(const std::vector<int>& cpus, std::string& message);
+
+// SCHED_FIFO at `priority` (1..98) and mlockall.
+bool SetRealtime(int priority, std::string& message);
+
+}  // namespace hexa::sched

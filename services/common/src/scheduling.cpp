@@ -1,0 +1,80 @@
+#include "hexa/services/scheduling.hpp"
+
+#include <sched.h>
+#include <sys/mman.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+
+namespace hexa::sched {
+namespace {
+
+bool ParseNumber(const std::string& text, int& out) {
+  if (text.empty() || text.size() > 4 || text.find_first_not_of("0123456789") != std::string::npos)
+    return false;
+  out = std::stoi(text);
+  return true;
+}
+
+}  // namespace
+
+bool ParseCpuList(const std::string& text, std::vector<int>& cpus) {
+  cpus.clear();
+  std::size_t pos = 0;
+  while (pos <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', pos), text.size());
+    const std::string item = text.substr(pos, comma - pos);
+    const std::size_t dash = item.find('-');
+    int first = 0, last = 0;
+    if (dash == std::string::npos) {
+      if (!ParseNumber(item, first)) return false;
+      last = first;
+    } else if (!ParseNumber(item.substr(0, dash), first) ||
+               !ParseNumber(item.substr(dash + 1), last) || last < first) {
+      return false;
+    }
+    if (last >= CPU_SETSIZE) return false;
+    for (int c = first; c <= last; ++c) cpus.push_back(c);
+    pos = comma + 1;
+  }
+  return !cpus.empty();
+}
+
+bool SetCpuAffinity(const std::vector<int>& cpus, std::string& message) {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  std::string list;
+  for (int c : cpus) {
+    if (c >= 0 && c < CPU_SETSIZE) CPU_SET(c, &set);
+    list += (list.empty() ? "" : ",") + std::to_string(c);
+  }
+  if (sched_setaffinity(0, sizeof set, &set) != 0) {
+    message = "CPU affinity " + list + " not applied (" + std::strerror(errno) +
+              "): running on any CPU";
+    return false;
+  }
+  message = "CPU affinity: " + list;
+  return true;
+}
+
+bool SetRealtime(int priority, std::string& message) {
+  sched_param sp{};
+  sp.sched_priority = priority;
+  bool ok = true;
+  if (sched_setscheduler(0, SCHED_FIFO, &sp) == 0) {
+    message = "SCHED_FIFO priority " + std::to_string(priority) + " enabled";
+  } else {
+    message = std::string("SCHED_FIFO not available (") + std::strerror(errno) +
+              "): running with normal scheduling";
+    ok = false;
+  }
+  if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
+    message += "; memory locked (mlockall)";
+  } else {
+    message += std::string("; mlockall not available (") + std::strerror(errno) + ")";
+  }
+  return ok;
+}
+
+}  // namespace hexa::sched
