@@ -12,6 +12,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   python3-numpy python3-matplotlib
   iproute2 procps
+  rt-tests stress-ng   # bench/loop: cyclictest (the machine's wake-up latency), a CPU hog
 )
 # Node.js + npm (one test reads recordings with the MCAP project's own JS library): machines
 # of this kind ship their own Node; Debian's npm conflicts with it, so the Debian packages are

@@ -67,6 +67,26 @@ std::uint64_t CommandAgeHistogram::late() const {
 
 std::uint64_t CommandAgeHistogram::total() const { return bins[0] + late() + none; }
 
+void DurationHistogram::Add(std::int64_t duration_ns) {
+  const std::int64_t d = std::max<std::int64_t>(0, duration_ns);
+  const std::size_t bin = std::min<std::size_t>(static_cast<std::size_t>(d / kBinNs), kBins);
+  ++bins_[bin];
+  ++count_;
+  max_ns_ = std::max(max_ns_, d);
+  sum_s_ += static_cast<double>(d) * 1e-9;
+}
+
+double DurationHistogram::Quantile_s(double q) const {
+  if (count_ == 0) return 0.0;
+  const auto rank = static_cast<std::uint64_t>(std::ceil(q * static_cast<double>(count_)));
+  std::uint64_t seen = 0;
+  for (std::size_t b = 0; b <= kBins; ++b) {
+    seen += bins_[b];
+    if (seen >= rank) return b == kBins ? max_s() : static_cast<double>((b + 1) * kBinNs) * 1e-9;
+  }
+  return max_s();
+}
+
 PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig& config,
                      std::shared_ptr<spdlog::logger> log)
     : options_(options),
@@ -303,6 +323,7 @@ void PlantNode::AdvanceIfComplete() {
   while (running_ && barrier_.complete()) {
     const int64_t now = node::MonotonicNow_ns();
     cycle_times_.Add(static_cast<double>(now - tick_started_ns_) * 1e-9);
+    tick_wall_.Add(now - tick_started_ns_);
     if (!ApplyAndStep(0)) {
       exit_code_ = 4;
     } else {
@@ -400,6 +421,7 @@ int PlantNode::RunRealtime(std::uint64_t last_tick) {
                             (static_cast<int64_t>(next.tv_sec) * 1'000'000'000 + next.tv_nsec);
     if (late_ns > 1'000'000) ++overruns_;
     cycle_times_.Add(static_cast<double>(late_ns) * 1e-9);
+    tick_wall_.Add(late_ns);
     if (!ApplyAndStep(options_.realtime_stale_ticks)) return 4;
     EndTick();
   }
@@ -438,12 +460,18 @@ void PlantNode::WriteSummary(int exit_code) const {
   std::fprintf(f, "{\n  \"mode\": \"%s\",\n  \"exit_code\": %d,\n  \"ticks\": %llu,\n"
                "  \"sim_time_s\": %.6f,\n  \"valve_deadline_misses\": %u,\n"
                "  \"loop_overruns\": %u,\n  \"lockstep_resends\": %llu,\n"
+               "  \"loop_wall_s\": %.6f,\n  \"%s\": {\"median\": %.6f, \"p99\": %.6f, "
+               "\"max\": %.6f, \"mean\": %.6f},\n"
                "  \"command_age_bins\": [\"0\", \"1\", \"2\", \"3-7\", \"8-15\", \">=16\"],\n"
                "  \"legs\": [",
                options_.common.mode == node::TimeMode::kRealtime ? "realtime" : "lockstep",
                exit_code, static_cast<unsigned long long>(tick_),
                static_cast<double>(tick_) * kTickS, valve.requested_deadline_missed_total,
-               overruns_, static_cast<unsigned long long>(resent_samples_));
+               overruns_, static_cast<unsigned long long>(resent_samples_),
+               static_cast<double>(loop_ended_ns_ - loop_started_ns_) * 1e-9,
+               options_.common.mode == node::TimeMode::kRealtime ? "wake_lateness_s" : "tick_wall_s",
+               tick_wall_.Quantile_s(0.5), tick_wall_.Quantile_s(0.99), tick_wall_.max_s(),
+               tick_wall_.mean_s());
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     const CommandAgeHistogram& h = command_age_[i];
     std::fprintf(f, "%s\n    {\"leg\": %zu, \"command_age\": [", i == 0 ? "" : ",", i + 1);
@@ -469,8 +497,10 @@ int PlantNode::Run() {
   const uint64_t last_tick = options_.duration_s > 0
                                  ? static_cast<uint64_t>(std::llround(options_.duration_s / kTickS))
                                  : UINT64_MAX;
+  loop_started_ns_ = node::MonotonicNow_ns();
   const int rc = realtime ? RunRealtime(last_tick) : RunLockstep(last_tick);
   std::lock_guard<std::mutex> lock(mutex_);
+  loop_ended_ns_ = node::MonotonicNow_ns();
   uint32_t faults = 0;
   for (auto f : faults_per_leg_) faults += f;
   const auto valve = valve_reader_.Snapshot();

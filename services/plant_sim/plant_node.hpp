@@ -53,6 +53,26 @@ struct CommandAgeHistogram {
   std::uint64_t total() const;
 };
 
+// Distribution of a duration (a lockstep tick's wall time; the real-time wake-up lateness)
+// over a whole run, in 10 us bins up to 100 ms: allocation-free after construction.
+class DurationHistogram {
+ public:
+  static constexpr std::int64_t kBinNs = 10'000;
+  static constexpr std::size_t kBins = 10'000;
+  void Add(std::int64_t duration_ns);
+  std::uint64_t count() const { return count_; }
+  // Upper edge of the bin holding the q-quantile (0 < q <= 1), in seconds; 0 when empty.
+  double Quantile_s(double q) const;
+  double max_s() const { return static_cast<double>(max_ns_) * 1e-9; }
+  double mean_s() const { return count_ == 0 ? 0.0 : sum_s_ / static_cast<double>(count_); }
+
+ private:
+  std::array<std::uint32_t, kBins + 1> bins_{};  // the last one: beyond 100 ms
+  std::uint64_t count_ = 0;
+  std::int64_t max_ns_ = 0;
+  double sum_s_ = 0.0;
+};
+
 class PlantNode {
  public:
   PlantNode(const PlantNodeOptions& options, const config::SystemConfig& config,
@@ -115,6 +135,9 @@ class PlantNode {
   LegArray<CommandAgeHistogram> command_age_{};
   hexa_msg_GroundTruth truth_sample_{};
   node::CycleTimeWindow cycle_times_;
+  DurationHistogram tick_wall_;   // lockstep: publish -> complete; real time: wake-up lateness
+  std::int64_t loop_started_ns_ = 0;
+  std::int64_t loop_ended_ns_ = 0;
   std::int64_t tick_started_ns_ = 0;
   std::uint32_t overruns_ = 0;
   std::uint64_t resent_samples_ = 0;  // lockstep: sensor samples re-published to silent legs

@@ -95,6 +95,14 @@ SessionReport ComputeSessionReport(const std::string& path) {
           for (int i = 0; i < 6; ++i) s.truth_pose[i] = v[i];
           s.applied_v = Six(g.applied_valve_v());
           s.truth = true;
+          if (g.command_age_ticks_size() == 6) {
+            r.command_age_recorded = true;
+            for (int i = 0; i < 6; ++i) {
+              const int32_t age = g.command_age_ticks(i);
+              const int bin = age < 0 ? 6 : age <= 2 ? age : age < 8 ? 3 : age < 16 ? 4 : 5;
+              ++r.command_age[static_cast<std::size_t>(i)][static_cast<std::size_t>(bin)];
+            }
+          }
         } else if (ch.topic == "hexa_LegSensors") {
           const auto m = Parse<rec::LegSensors>(view, ch.topic);
           if (m.leg_id() < 1 || m.leg_id() > 6) return;
@@ -310,7 +318,19 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
       j << (first ? "" : ", ") << JsonString(k) << ": " << v;
       first = false;
     }
-    j << "},\n  \"missing_samples\": {";
+    j << "},\n  \"command_age_bins\": [\"0\", \"1\", \"2\", \"3-7\", \"8-15\", \">=16\", \"none\"],"
+      << "\n  \"command_age_per_leg\": ";
+    if (!r.command_age_recorded) j << "null";
+    else {
+      j << "[";
+      for (int i = 0; i < 6; ++i) {
+        j << (i ? ", " : "") << "[";
+        for (int b = 0; b < SessionReport::kAgeBins; ++b) j << (b ? ", " : "") << r.command_age[i][b];
+        j << "]";
+      }
+      j << "]";
+    }
+    j << ",\n  \"missing_samples\": {";
     first = true;
     for (const auto& [k, v] : r.missing) {
       j << (first ? "" : ", ") << JsonString(k) << ": " << v;
@@ -398,6 +418,23 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
       << Json(r.latency_s.median * 1e6) << " us, p99 " << Json(r.latency_s.p99 * 1e6) << " us, max "
       << Json(r.latency_s.max * 1e6) << " us over " << r.latency_pairs << " pairs\n";
     for (const auto& [k, v] : r.deadline_misses) m << "- deadline misses " << k << ": " << v << "\n";
+    if (r.command_age_recorded) {
+      m << "\nAge of the command the plant applied (ticks; >= 1 = a late tick: the command "
+           "for the sensor sample before it had not arrived):\n\n| leg | 0 | 1 | 2 | 3-7 | 8-15 | "
+           ">= 16 | none | late ticks |\n|---|---|---|---|---|---|---|---|---|\n";
+      for (int i = 0; i < 6; ++i) {
+        const auto& a = r.command_age[i];
+        uint64_t total = 0, late = 0;
+        for (int b = 0; b < SessionReport::kAgeBins; ++b) total += a[b];
+        for (int b = 1; b < 6; ++b) late += a[b];
+        m << "| " << i + 1;
+        for (int b = 0; b < SessionReport::kAgeBins; ++b) m << " | " << a[b];
+        char pct[32];
+        std::snprintf(pct, sizeof pct, "%.3f %%", total ? 100.0 * late / total : 0.0);
+        m << " | " << late << " (" << pct << ") |\n";
+      }
+      m << "\n";
+    }
     for (const auto& [k, v] : r.missing) m << "- samples missing (from tick numbers) " << k << ": " << v << "\n";
     m << "\n(In real time a leg controller answers only the newest sensor sample of its leg, so "
          "gaps in hexa_ValveCommand there are ticks it skipped, not samples the recorder lost.)\n";

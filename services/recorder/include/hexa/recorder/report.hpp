@@ -33,6 +33,14 @@ struct SessionReport {
   Percentiles latency_s;                      // sensor written -> command written
   std::uint64_t latency_pairs = 0;
   std::map<std::string, std::uint64_t> deadline_misses;  // per topic (from NodeStatus)
+  // Age of the command the plant applied, per leg, from GroundTruth.command_age_ticks: tick -
+  // the tick the command answered. Bins 0, 1, 2, 3-7, 8-15, >= 16, no command yet. A command
+  // older than the sensor sample just before it (age >= 1) came too late: a late tick, the
+  // figure that matters to control (the raw DDS deadline misses above count every late
+  // sample against a 1 ms deadline on a machine that does not keep 1 ms).
+  static constexpr int kAgeBins = 7;
+  std::array<std::array<std::uint64_t, kAgeBins>, 6> command_age{};
+  bool command_age_recorded = false;  // recordings before the field existed have none
   std::map<std::string, std::uint64_t> messages;         // per topic
   std::map<std::string, std::uint64_t> missing;          // per periodic topic, from ticks
   std::vector<std::string> faults;                       // FaultEvent lines
