@@ -29,8 +29,10 @@ CommandHygieneParams CommandHygieneParams::FromValve(const ValveParams& valve,
 CommandCheck CheckCommand(const LatestCommand& command, std::uint64_t current_tick,
                           const CommandHygieneParams& params) {
   if (!command.received) {
-    return current_tick <= params.stale_tolerance_ticks ? CommandCheck::kAwaitingFirst
-                                                        : CommandCheck::kMissing;
+    const std::uint64_t grace = params.startup_grace_ticks > params.stale_tolerance_ticks
+                                    ? params.startup_grace_ticks
+                                    : params.stale_tolerance_ticks;
+    return current_tick <= grace ? CommandCheck::kAwaitingFirst : CommandCheck::kMissing;
   }
   // A command from the future (tick beyond the plant's) is as wrong as an old one.
   if (command.answered_tick > current_tick ||
@@ -47,6 +49,28 @@ CommandCheck CheckCommand(const LatestCommand& command, std::uint64_t current_ti
 double SafeValveVoltage(const LatestCommand& command, CommandCheck check,
                         const CommandHygieneParams& params) {
   return check == CommandCheck::kOk ? command.valve_v : params.null_voltage_v;
+}
+
+bool IsCommandFault(CommandCheck check) {
+  return check != CommandCheck::kOk && check != CommandCheck::kAwaitingFirst;
+}
+
+CommandEpisode::Event CommandEpisode::Update(CommandCheck check) {
+  if (IsCommandFault(check)) {
+    ok_run_ = 0;
+    latest_ = check;
+    ++fault_ticks_;
+    if (active_) return Event::kNone;
+    active_ = true;
+    first_ = check;
+    fault_ticks_ = 1;
+    ++episodes_;
+    return Event::kStarted;
+  }
+  if (!active_ || check != CommandCheck::kOk) return Event::kNone;
+  if (++ok_run_ < clear_after_ok_ticks_) return Event::kNone;
+  active_ = false;
+  return Event::kEnded;
 }
 
 }  // namespace hexa

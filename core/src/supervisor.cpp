@@ -50,6 +50,8 @@ const char* ToString(FaultReason reason) {
     case FaultReason::kEstimateOutsideWorkspace: return "FAULT_ESTIMATE_OUTSIDE_WORKSPACE";
     case FaultReason::kSensorInvalid: return "FAULT_SENSOR_INVALID";
     case FaultReason::kTrajectoryRejected: return "FAULT_TRAJECTORY_REJECTED";
+    case FaultReason::kHostOverload: return "FAULT_HOST_OVERLOAD";
+    case FaultReason::kComputeOverrun: return "FAULT_COMPUTE_OVERRUN";
   }
   return "?";
 }
@@ -237,6 +239,12 @@ void Supervisor::HandleCommand(const SupervisorInput& input, SupervisorOutput& o
 FaultReason Supervisor::CheckFaults(const SupervisorInput& input,
                                     const PoseEstimatorOutput& estimate, int& leg,
                                     std::array<char, 160>& detail) const {
+  if (input.system_fault != FaultReason::kNone) {
+    leg = 0;
+    std::snprintf(detail.data(), detail.size(), "the plant reports %s",
+                  ToString(input.system_fault));
+    return input.system_fault;
+  }
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     if (input.leg_fault[i] != FaultReason::kNone) {
       leg = static_cast<int>(i) + 1;

@@ -47,7 +47,7 @@ std::string TailOf(const std::string& path, int lines) {
 
 struct Options {
   std::string trajectory, controller, profile, mode, out_dir, rig, dds_config;
-  long long seed = 1, domain = 0, periods = 0;
+  long long seed = 1, domain = 0, periods = 0, stale_ticks = 15;
   bool recorder = true, standby = false, outer_loop = true, rt_sched = true;
   std::string cpus_control, cpus_recorder;
   int fault_leg = 0;
@@ -124,6 +124,9 @@ int main(int argc, char** argv) {
                 "pin the plant, the leg controllers and the supervisor to these CPUs (e.g. 1); "
                 "docs/performance.md");
   cli.AddOption("cpus-recorder", "list", "pin the recorder to these CPUs (e.g. 0)");
+  cli.AddOption("stale-ticks", "N",
+                "real time: ticks a leg's command may lag before the plant closes its valve and "
+                "reports it", "15");
   cli.AddFlag("no-rt-sched", "real time: do not ask for SCHED_FIFO (control 70-80, recorder 50)");
   cli.AddOption("fault", "leg:kind:time_s",
                 "inject a fault into one primary leg controller, e.g. 3:crash:2.0 "
@@ -156,15 +159,17 @@ int main(int argc, char** argv) {
   auto seed = cli.GetInt("seed", 0, (1LL << 62));
   auto periods = cli.GetInt("periods", 0, 1000);
   auto timeout = cli.GetDouble("timeout", 0, 1e6);
+  auto stale_ticks = cli.GetInt("stale-ticks", 1, 1000);
   std::optional<long long> domain = 100 + getpid() % 100;
   if (cli.Has("domain")) domain = cli.GetInt("domain", 0, 230);
-  if (!seed || !periods || !timeout || !domain) {
+  if (!seed || !periods || !timeout || !domain || !stale_ticks) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
   o.seed = *seed;
   o.periods = *periods;
   o.timeout_s = *timeout;
+  o.stale_ticks = *stale_ticks;
   o.domain = *domain;
   static const std::vector<std::string> kNamed{"x", "y", "z", "roll", "pitch", "yaw", "combined"};
   if (std::find(kNamed.begin(), kNamed.end(), o.trajectory) == kNamed.end()) {
@@ -281,7 +286,8 @@ int main(int argc, char** argv) {
   specs.push_back(spec("supervisor", "/services/task_space/hexa_task_space", sup_args));
   std::vector<std::string> plant_args{"--profile", o.profile, "--seed", std::to_string(o.seed),
                                       "--legs", "6", "--supervisor", "--summary",
-                                      o.out_dir + "/plant.json"};
+                                      o.out_dir + "/plant.json", "--stale-ticks",
+                                      std::to_string(o.stale_ticks)};
   if (o.recorder) plant_args.push_back("--expect-recorder");
   specs.push_back(spec("plant", "/services/plant_sim/hexa_plant_sim", plant_args));
 

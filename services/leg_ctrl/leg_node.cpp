@@ -264,7 +264,17 @@ void LegNode::TakeSensorsLockstep() {
         ResendLastAnswer();  // the plant's re-ask
       } else if ((!answered_any_ || tick > last_command_.header.tick) &&
                  (queue_size_ == 0 || tick > newest_queued)) {
-        if (queue_size_ == kLockstepQueue) {  // > 64 ticks behind: the oldest is lost
+        // A tick that never arrived (more than the reader's depth behind, the sample was
+        // overwritten): this node's state no longer follows the primary's. Say so once.
+        const std::uint64_t expected = queue_size_ > 0 ? newest_queued + 1
+                                       : answered_any_ ? last_command_.header.tick + 1 : 0;
+        if (tick > expected) {
+          if (ticks_missed_ == 0)
+            log_->warn("{} missed ticks {}..{} (more than {} behind the plant): its state no "
+                       "longer matches the primary's", name_, expected, tick - 1, kLockstepQueue);
+          ticks_missed_ += tick - expected;
+        }
+        if (queue_size_ == kLockstepQueue) {  // the queue is full: the oldest is lost
           if (queue_overflows_++ == 0) {
             log_->warn("{} is more than {} ticks behind the plant: dropping tick {} (its state "
                        "will no longer match the primary's)",
@@ -341,10 +351,10 @@ int LegNode::Run() {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto sensors = sensors_reader_.Snapshot();
   log_->info("{} stopped after {} cycles (last tick {}): sensor deadline misses {}, repeated "
-             "answers {}, lockstep ticks dropped {}, failed writes {}, compute median {:.1f} us "
-             "max {:.1f} us",
+             "answers {}, lockstep ticks dropped {} and missed {}, failed writes {}, compute "
+             "median {:.1f} us max {:.1f} us",
              name_, cycles_, last_command_.header.tick, sensors.requested_deadline_missed_total,
-             resent_, queue_overflows_, valve_writer_.Snapshot().write_errors_total,
+             resent_, queue_overflows_, ticks_missed_, valve_writer_.Snapshot().write_errors_total,
              cycle_times_.Median() * 1e6, cycle_times_.Max() * 1e6);
   PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
   return 0;

@@ -35,11 +35,13 @@ struct FaultInjection {
 };
 
 // Lockstep: sensor samples not answered yet are queued in tick order (the plant does not
-// wait for a hot standby, which may lag it); the readers keep this many samples per leg.
-inline constexpr std::size_t kLockstepQueue = 64;
+// wait for a hot standby, which may lag it: on a loaded machine by a hundred ticks and more);
+// the readers keep this many samples per leg: 1 s of ticks.
+inline constexpr std::size_t kLockstepQueue = 1000;
 // The last setpoints received: lockstep needs the one issued at 5 floor((n - 1) / 5), which a
-// lagging standby may look for after newer ones arrived.
-inline constexpr std::size_t kSetpointRing = 16;
+// lagging standby looks for after newer ones arrived. 256 setpoints = 1.28 s: more than the
+// queue holds.
+inline constexpr std::size_t kSetpointRing = 256;
 
 struct LegNodeOptions {
   node::CommonOptions common;
@@ -98,6 +100,7 @@ class LegNode {
   std::array<hexa_msg_LegSensors, kLockstepQueue> queue_{};  // lockstep, ring
   std::size_t queue_head_ = 0, queue_size_ = 0;
   std::uint64_t queue_overflows_ = 0;
+  std::uint64_t ticks_missed_ = 0;  // lockstep: ticks that never reached this node
   bool answered_any_ = false;
   hexa_msg_ValveCommand last_command_{};
   LegControllerInput input_;

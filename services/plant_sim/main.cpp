@@ -25,6 +25,8 @@ int main(int argc, char** argv) {
   cli.AddOption("summary", "file", "write the run's figures (ticks, command ages per leg, ...) "
                 "as JSON here at exit");
   cli.AddOption("stale-ticks", "N", "real time: ticks a command may lag before null + fault", "15");
+  cli.AddOption("startup-grace-ticks", "N",
+                "real time: ticks a leg's first command may take before it is missing", "500");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
 
@@ -34,8 +36,9 @@ int main(int argc, char** argv) {
   const auto duration = cli.GetDouble("duration", 0, 1e7);
   const auto startup = cli.GetDouble("startup-timeout", 0.1, 3600);
   const auto stale = cli.GetInt("stale-ticks", 0, 1000);
+  const auto grace = cli.GetInt("startup-grace-ticks", 0, 600000);
   if (!hexa::node::ReadCommonOptions(cli, o.common) || !seed || !legs || !duration || !startup ||
-      !stale) {
+      !stale || !grace) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
@@ -47,6 +50,7 @@ int main(int argc, char** argv) {
   o.duration_s = *duration;
   o.startup_timeout_s = *startup;
   o.realtime_stale_ticks = static_cast<std::uint64_t>(*stale);
+  o.startup_grace_ticks = static_cast<std::uint64_t>(*grace);
   o.summary_path = cli.Get("summary");
 
   auto log = hexa::logging::Init("plant", o.common.log_file, o.common.log_level);

@@ -93,7 +93,12 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
       config_(config),
       log_(std::move(log)),
       plant_(MakePlantConfig(options, config)),
-      hygiene_(CommandHygieneParams::FromValve(config.rig.valve, 0)),
+      hygiene_([&] {
+        CommandHygieneParams h = CommandHygieneParams::FromValve(config.rig.valve, 0);
+        if (options.common.mode == node::TimeMode::kRealtime)
+          h.startup_grace_ticks = options.startup_grace_ticks;
+        return h;
+      }()),
       barrier_(BarrierParams(options)),
       // The six legs' samples of a tick leave in one datagram per reader (comm/writer.hpp).
       participant_(static_cast<dds_domainid_t>(options.common.domain_id),
@@ -118,7 +123,6 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
   waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
   waitset_.Attach(done_.get(), kTokenDone);
   waitset_.Attach(peers_.data_condition(), kTokenPeers);
-  last_check_.fill(CommandCheck::kOk);
   for (auto& age : truth_sample_.command_age_ticks) age = -1;
 }
 
@@ -261,6 +265,8 @@ void PlantNode::TakeCommands(bool feed_barrier) {
 bool PlantNode::ApplyAndStep(std::uint64_t stale_tolerance) {
   hygiene_.stale_tolerance_ticks = stale_tolerance;
   LegArray<double> valve_v{};
+  LegArray<CommandCheck> checks{};
+  int stale_legs = 0;
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     const LatestCommand& latest = latest_[i];
     const std::int64_t age = latest.received ? static_cast<std::int64_t>(tick_) -
@@ -268,23 +274,47 @@ bool PlantNode::ApplyAndStep(std::uint64_t stale_tolerance) {
                                              : -1;
     command_age_[i].Add(age);
     truth_sample_.command_age_ticks[i] = static_cast<int32_t>(std::clamp<std::int64_t>(age, -1, INT32_MAX));
-    const CommandCheck check = CheckCommand(latest, tick_, hygiene_);
-    valve_v[i] = SafeValveVoltage(latest, check, hygiene_);
-    if (check != last_check_[i]) {
-      if (check == CommandCheck::kAwaitingFirst) {
-        // Start-up: the controller has not had its tolerance to answer yet.
-      } else if (check != CommandCheck::kOk) {
+    checks[i] = CheckCommand(latest, tick_, hygiene_);
+    valve_v[i] = SafeValveVoltage(latest, checks[i], hygiene_);
+    if (static_cast<int>(i) < options_.expected_legs && checks[i] == CommandCheck::kStale) ++stale_legs;
+  }
+  // Every awaited leg stale in the same tick is not six controller faults: the host did not
+  // run the loop (the plant's own wake-ups, the legs or the network were descheduled). Say
+  // that once, with the measured lateness, instead of six leg faults.
+  const bool overload = options_.expected_legs > 1 && stale_legs == options_.expected_legs;
+  if (overload && !host_overload_reported_) {
+    host_overload_reported_ = true;
+    std::uint64_t newest = 0;
+    for (int i = 0; i < options_.expected_legs; ++i)
+      newest = std::max(newest, latest_[static_cast<std::size_t>(i)].answered_tick);
+    char detail[160];
+    std::snprintf(detail, sizeof detail,
+                  "host overload: all %d legs' commands late at tick %llu (newest answers tick "
+                  "%llu); plant wake-up late by up to %.1f ms: the host does not keep 1 ms",
+                  options_.expected_legs, static_cast<unsigned long long>(tick_),
+                  static_cast<unsigned long long>(newest), tick_wall_.max_s() * 1e3);
+    faults_.Publish(0, tick_, hexa_msg_FAULT_HOST_OVERLOAD, detail);
+    log_->error("tick {}: {}", tick_, detail);
+  }
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    const CommandCheck check = checks[i];
+    switch (episodes_[i].Update(check)) {
+      case CommandEpisode::Event::kStarted: {
+        ++faults_per_leg_[i];
+        if (overload) break;  // reported once as the host's, above
         char detail[160];
         std::snprintf(detail, sizeof detail, "valve command %s (%.6g V, answers tick %llu): valve held at null",
-                      ToString(check), latest.valve_v,
-                      static_cast<unsigned long long>(latest.answered_tick));
+                      ToString(check), latest_[i].valve_v,
+                      static_cast<unsigned long long>(latest_[i].answered_tick));
         faults_.Publish(static_cast<uint8_t>(i + 1), tick_, FaultOf(check), detail);
         log_->warn("leg {} tick {}: {}", i + 1, tick_, detail);
-        ++faults_per_leg_[i];
-      } else {
-        log_->info("leg {} tick {}: valve command valid again", i + 1, tick_);
+        break;
       }
-      last_check_[i] = check;
+      case CommandEpisode::Event::kEnded:
+        log_->info("leg {} tick {}: valve commands valid again ({} faulty ticks in the episode)",
+                   i + 1, tick_, episodes_[i].fault_ticks());
+        break;
+      case CommandEpisode::Event::kNone: break;
     }
   }
   plant_.Step(valve_v, kTickS);
@@ -301,13 +331,16 @@ void PlantNode::EndTick() {
   if (tick_ % 100 != 0) return;
   const bool realtime = options_.common.mode == node::TimeMode::kRealtime;
   PublishStatus(hexa_msg_NODE_RUNNING, realtime ? "real time" : "lockstep");
-  // Faults still in effect are repeated at the status rate, so that a supervisor reset
-  // while the cause persists sees the fault again.
+  // A fault episode still in effect is repeated at the status rate (one event per leg per
+  // 100 ticks, whatever the command does meanwhile), so that a supervisor reset while the
+  // cause persists sees the fault again.
   for (std::size_t i = 0; i < kNumLegs; ++i) {
-    if (last_check_[i] == CommandCheck::kOk || last_check_[i] == CommandCheck::kAwaitingFirst)
-      continue;
-    faults_.Publish(static_cast<uint8_t>(i + 1), tick_, FaultOf(last_check_[i]),
-                    "valve command still invalid: valve held at null");
+    if (!episodes_[i].active()) continue;
+    char detail[160];
+    std::snprintf(detail, sizeof detail, "valve command still %s (%llu faulty ticks): valve held at null",
+                  ToString(episodes_[i].latest()),
+                  static_cast<unsigned long long>(episodes_[i].fault_ticks()));
+    faults_.Publish(static_cast<uint8_t>(i + 1), tick_, FaultOf(episodes_[i].latest()), detail);
   }
 }
 

@@ -37,6 +37,9 @@ struct PlantNodeOptions {
   double duration_s = 0.0;         // stop after this simulated time (0 = until stopped)
   double startup_timeout_s = 30.0; // peers must be ready within this
   std::uint64_t realtime_stale_ticks = 15;  // real time: command tolerance (main.cpp)
+  // Real time: ticks a leg's first command may take (the loop starting up) before it is
+  // missing; the stale check is armed by the first command.
+  std::uint64_t startup_grace_ticks = 500;
   double resend_after_s = 0.05;    // lockstep: republish sensors of a silent leg after this
   std::string summary_path;        // write the run's figures here as JSON at exit ("" = no)
 };
@@ -130,7 +133,8 @@ class PlantNode {
   bool running_ = false;        // lockstep: the receive thread may advance
   int exit_code_ = -1;          // set when the run ends (>= 0)
   LegArray<LatestCommand> latest_{};
-  LegArray<CommandCheck> last_check_{};
+  LegArray<CommandEpisode> episodes_{};  // fault episodes per leg: one report each
+  bool host_overload_reported_ = false;
   LegArray<std::uint32_t> faults_per_leg_{};
   LegArray<CommandAgeHistogram> command_age_{};
   hexa_msg_GroundTruth truth_sample_{};

@@ -164,6 +164,7 @@ void SupervisorNode::TakeOperatorCommands() {
         case hexa_msg_OPERATOR_RESET:
           pending_command_ = OperatorCommandKind::kReset;
           leg_fault_.fill(FaultReason::kNone);  // re-latched if the cause is still reported
+          system_fault_ = FaultReason::kNone;
           break;
         case hexa_msg_OPERATOR_HOME: pending_command_ = OperatorCommandKind::kHome; break;
         case hexa_msg_OPERATOR_SHUTDOWN: shutdown_.RequestShutdown(); break;
@@ -180,7 +181,11 @@ void SupervisorNode::TakeFaults() {
       if (std::strcmp(f.source_node, "supervisor") == 0) continue;  // our own
       log_->warn("fault from {}: leg {} tick {} reason {}: {}", f.source_node, f.leg_id, f.tick,
                  ToString(FromWire(f.reason)), f.detail);
-      if (f.leg_id >= 1 && f.leg_id <= kNumLegs) leg_fault_[f.leg_id - 1] = FromWire(f.reason);
+      if (f.leg_id >= 1 && f.leg_id <= kNumLegs) {
+        leg_fault_[f.leg_id - 1] = FromWire(f.reason);
+      } else if (f.reason != hexa_msg_FAULT_NONE) {
+        system_fault_ = FromWire(f.reason);  // the host or the plant itself
+      }
     }
   }
 }
@@ -198,6 +203,7 @@ void SupervisorNode::RunTick(std::uint64_t tick, double time_s) {
     input_.deadline_misses_consecutive[i] = leg_misses_consecutive_[i];
     input_.leg_fault[i] = leg_fault_[i];
   }
+  input_.system_fault = system_fault_;
   input_.imu_deadline_misses_consecutive = imu_misses_consecutive_;
   for (int k = 0; k < 4; ++k) input_.orientation_wxyz[k] = imu_.orientation_wxyz[k];
   // A leg whose controller died is reported by the plant (FaultEvent: its command stops

@@ -86,6 +86,7 @@ class SupervisorNode {
   int imu_misses_consecutive_ = 0;
   LegArray<int> leg_misses_consecutive_{};
   LegArray<FaultReason> leg_fault_{};
+  FaultReason system_fault_ = FaultReason::kNone;
 
   SupervisorInput input_;
   SupervisorOutput output_;

@@ -40,6 +40,13 @@ TEST(Faults, GarbageCommandsAreNulledReportedAndTheSupervisorHolds) {
       << Faults(r);
   EXPECT_TRUE(AnyFault(r, "supervisor:")) << Faults(r);
   EXPECT_EQ(r.final_supervisor_state, "HOLD");
+  // One report when the episode starts and a reminder at the status rate (every 100 ticks),
+  // not one per tick as the check flips between NaN and out of range.
+  std::size_t leg3_events = 0;
+  for (const auto& f : r.faults) leg3_events += f.rfind("plant: leg 3 ", 0) == 0 ? 1 : 0;
+  const std::size_t ticks_after = r.applied_valve_v.size() - 1000;
+  EXPECT_GE(leg3_events, 1u);
+  EXPECT_LE(leg3_events, 2 + ticks_after / 100) << Faults(r);
   // From the first bad tick on, the plant applied the null voltage to leg 3, and every
   // voltage it applied was finite and in range.
   const std::size_t first_bad = 1000 + 1;  // command of tick 1000 applied during step 1000
@@ -85,26 +92,35 @@ TEST(Faults, HotStandbyTakesOverACrashedPrimaryWithoutAFault) {
 }
 
 // Real time: the primary of leg 5 dies without a standby. The plant closes the valve after
-// its tolerance and reports; the supervisor holds. (Behaviour only: no timing asserted.)
+// its tolerance and reports; the supervisor holds. Behaviour only, nothing timed: the
+// tolerance is raised to 100 ticks so that a loaded machine's stalls (which the plant reports
+// as a host overload, not a leg fault) do not end the session before the crash, and the
+// valve is checked from the tick the plant reported, not from an assumed one.
 TEST(Faults, RealTimeCrashWithoutStandbyIsDetectedAndHolds) {
   const auto run = RunSession("fault_crash_rt", 75, {"--trajectory", "combined", "--periods", "1",
-                                                     "--mode", "realtime",
+                                                     "--mode", "realtime", "--stale-ticks", "100",
                                                      "--fault", "5:crash:1.0"});
   EXPECT_NE(run.exit_code, 0);
   ASSERT_TRUE(run.has_report) << Slurp(run.dir + "/session.log");
   const auto& r = run.report;
-  EXPECT_TRUE(AnyFault(r, "plant: leg 5", "FAULT_COMMAND_STALE")) << Faults(r);
+  std::size_t fault_tick = 0;
+  for (const auto& f : r.faults) {
+    if (f.find("plant: leg 5 tick ") != 0 || f.find("FAULT_COMMAND_STALE") == std::string::npos)
+      continue;
+    fault_tick = std::stoul(f.substr(std::string("plant: leg 5 tick ").size()));
+    break;
+  }
+  ASSERT_GT(fault_tick, 1000u) << "no stale-command fault of leg 5 after the crash:\n" << Faults(r);
+  EXPECT_FALSE(AnyFault(r, "plant: leg 1")) << Faults(r);  // the other legs ran on
   EXPECT_EQ(r.final_supervisor_state, "HOLD");
-  // After the crash (1.0 s) + the 15 ms tolerance + margin, leg 5's valve is held at null.
-  const std::size_t closed_from = 1000 + 15 + 5;
-  ASSERT_GT(r.applied_valve_v.size(), closed_from + 500);
+  // From the reported tick on, leg 5's valve is held at null in every recorded tick.
   std::size_t known = 0;
-  for (std::size_t n = closed_from; n < r.applied_valve_v.size(); ++n) {
+  for (std::size_t n = fault_tick + 1; n < r.applied_valve_v.size(); ++n) {
     if (std::isnan(r.applied_valve_v[n][4])) continue;  // GroundTruth sample not recorded
     ASSERT_EQ(r.applied_valve_v[n][4], 5.0) << "tick " << n;
     ++known;
   }
-  EXPECT_GT(known, 400u);
+  EXPECT_GT(known, 100u);
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 // every loss figure is known exactly.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -26,6 +27,12 @@ inline const std::map<std::string, uint64_t>& SynthExpectedCounts() {
       {"hexa_OperatorCommand", 1},
   };
   return counts;
+}
+// The command-age histogram of the synthetic ground truth, per leg (bins 0, 1, 2, 3-7, 8-15,
+// >= 16, none): leg 4 late at 10 of its 1000 ticks.
+inline std::array<uint64_t, 7> SynthCommandAges(int leg) {
+  if (leg == 4) return {990, 0, 3, 7, 0, 0, 0};
+  return {1000, 0, 0, 0, 0, 0, 0};
 }
 inline constexpr uint64_t kSynthStartNs = 1'700'000'000'000'000'000ull;
 
@@ -120,6 +127,9 @@ inline void WriteSynthRecording(const std::string& path, McapWriterConfig config
       g.add_rod_pressure_pa(3e5);
       g.add_spool_position_m(0.0);
       g.add_applied_valve_v(5.0);
+      // Leg 4's command comes late at ticks 300..309: 2 ticks old, then 5 (SynthCommandAges).
+      const bool late4 = i == 3 && tick >= 300 && tick < 310;
+      g.add_command_age_ticks(late4 ? (tick < 303 ? 2 : 5) : 0);
     }
     put(c_gt, tick, 10'000, g);
     if (tick % 5 == 0) {

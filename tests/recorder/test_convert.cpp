@@ -313,7 +313,7 @@ TEST(Convert, FaultEventBothWays) {
   auto b = Zeroed<hexa_msg_FaultEvent>();
   ASSERT_TRUE(FromProto(p, b));
   EXPECT_EQ(std::memcmp(&b, &d, sizeof d), 0);
-  p.set_reason(static_cast<rec::FaultReason>(12));
+  p.set_reason(static_cast<rec::FaultReason>(99));  // no such reason
   EXPECT_FALSE(FromProto(p, b));
 }
 

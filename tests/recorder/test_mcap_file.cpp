@@ -14,6 +14,7 @@
 
 #include "hexa/recorder/mcap.hpp"
 #include "hexa/recorder/recording.hpp"
+#include "hexa/recorder/report.hpp"
 #include "recording.pb.h"
 #include "synth.hpp"
 
@@ -247,6 +248,20 @@ TEST(RecordingInfo, CountsAndLossOfTheSyntheticRecordingAreExact) {
   const std::string text = FormatInfo(info);
   EXPECT_NE(text.find("hexa_LegSensors"), std::string::npos);
   EXPECT_NE(text.find("leg 3"), std::string::npos);
+}
+
+// The late ticks of the report come from the plant's GroundTruth.command_age_ticks, per leg.
+TEST(SessionReport, CommandAgesPerLegComeFromTheGroundTruth) {
+  const fs::path dir = TempDir();
+  const std::string path = dir / "synth_ages.mcap";
+  test::WriteSynthRecording(path);
+  const SessionReport r = ComputeSessionReport(path);
+  ASSERT_TRUE(r.command_age_recorded);
+  for (int leg = 1; leg <= 6; ++leg) {
+    const auto expected = test::SynthCommandAges(leg);
+    for (int b = 0; b < SessionReport::kAgeBins; ++b)
+      EXPECT_EQ(r.command_age[leg - 1][b], expected[b]) << "leg " << leg << " bin " << b;
+  }
 }
 
 TEST(RecordingDiff, FindsTheFirstDifferingTickAndTheSizeOfTheDifference) {

@@ -47,5 +47,51 @@ TEST(CommandHygiene, EveryBadCommandGivesNull) {
   EXPECT_EQ(CheckCommand({true, 7, 6.0}, 10, p), CommandCheck::kOk);  // 3 ticks: tolerated
 }
 
+// Real time: a leg's first command may take the start-up grace; after it, the stale check is
+// armed with the normal tolerance.
+TEST(CommandHygiene, StartupGraceCoversOnlyTheFirstCommand) {
+  auto p = Params(15);
+  p.startup_grace_ticks = 500;
+  EXPECT_EQ(CheckCommand({false, 0, 6.0}, 400, p), CommandCheck::kAwaitingFirst);
+  EXPECT_EQ(CheckCommand({false, 0, 6.0}, 501, p), CommandCheck::kMissing);
+  EXPECT_EQ(CheckCommand({true, 380, 6.0}, 400, p), CommandCheck::kStale);  // armed: 20 > 15
+  EXPECT_EQ(CheckCommand({true, 390, 6.0}, 400, p), CommandCheck::kOk);
+  p.startup_grace_ticks = 3;  // a grace below the tolerance is the tolerance
+  EXPECT_EQ(CheckCommand({false, 0, 6.0}, 15, p), CommandCheck::kAwaitingFirst);
+}
+
+// A controller that writes NaN and 42 V in turn changes its check every tick: one episode,
+// one report, not one per tick.
+TEST(CommandEpisode, FlippingBadCommandsAreOneEpisode) {
+  CommandEpisode e(100);
+  EXPECT_EQ(e.Update(CommandCheck::kOk), CommandEpisode::Event::kNone);
+  EXPECT_EQ(e.Update(CommandCheck::kAwaitingFirst), CommandEpisode::Event::kNone);
+  int started = 0;
+  for (int k = 0; k < 1000; ++k) {
+    const auto check = k % 2 == 0 ? CommandCheck::kNotFinite : CommandCheck::kOutOfRange;
+    started += e.Update(check) == CommandEpisode::Event::kStarted ? 1 : 0;
+  }
+  EXPECT_EQ(started, 1);
+  EXPECT_TRUE(e.active());
+  EXPECT_EQ(e.first(), CommandCheck::kNotFinite);
+  EXPECT_EQ(e.latest(), CommandCheck::kOutOfRange);
+  EXPECT_EQ(e.fault_ticks(), 1000u);
+}
+
+// Good ticks in between do not end an episode until `clear_after_ok_ticks` come in a row.
+TEST(CommandEpisode, EndsOnlyAfterAGoodRun) {
+  CommandEpisode e(10);
+  EXPECT_EQ(e.Update(CommandCheck::kStale), CommandEpisode::Event::kStarted);
+  for (int k = 0; k < 50; ++k) {  // flicker: good, bad, good, bad ...
+    EXPECT_EQ(e.Update(k % 2 ? CommandCheck::kStale : CommandCheck::kOk),
+              CommandEpisode::Event::kNone);
+  }
+  for (int k = 0; k < 9; ++k) EXPECT_EQ(e.Update(CommandCheck::kOk), CommandEpisode::Event::kNone);
+  EXPECT_EQ(e.Update(CommandCheck::kOk), CommandEpisode::Event::kEnded);
+  EXPECT_FALSE(e.active());
+  EXPECT_EQ(e.Update(CommandCheck::kMissing), CommandEpisode::Event::kStarted);
+  EXPECT_EQ(e.episodes(), 2u);
+}
+
 }  // namespace
 }  // namespace hexa

@@ -28,6 +28,11 @@ struct CommandHygieneParams {
   // Lockstep: 0 (every tick is answered). Real time: a few ticks of tolerance because this
   // VM's scheduling jitter exceeds 1 ms (PLATFORM_NOTES.md).
   std::uint64_t stale_tolerance_ticks = 0;
+  // Before a leg's first command: how long (ticks from the start) it may take to come before
+  // it is missing. Real time: the first answers of a starting loop are slow (page faults,
+  // first allocations in DDS); the stale check is armed by the first command, not by the
+  // clock. At least stale_tolerance_ticks.
+  std::uint64_t startup_grace_ticks = 0;
 
   static CommandHygieneParams FromValve(const ValveParams& valve,
                                         std::uint64_t stale_tolerance_ticks);
@@ -46,5 +51,34 @@ CommandCheck CheckCommand(const LatestCommand& command, std::uint64_t current_ti
 // The voltage to apply: the command when kOk, otherwise the null (closed) voltage.
 double SafeValveVoltage(const LatestCommand& command, CommandCheck check,
                         const CommandHygieneParams& params);
+
+bool IsCommandFault(CommandCheck check);  // not kOk and not kAwaitingFirst
+
+// Fault episodes of one leg's commands, for reporting: one report when an episode starts, not
+// one per tick (a controller writing NaN and 42 V in turn changes its check every tick). An
+// episode starts at the first faulty check and ends after `clear_after_ok_ticks` good ones in
+// a row (a command that flickers between good and bad stays one episode).
+class CommandEpisode {
+ public:
+  enum class Event : std::uint8_t { kNone, kStarted, kEnded };
+  CommandEpisode() = default;
+  explicit CommandEpisode(std::uint64_t clear_after_ok_ticks)
+      : clear_after_ok_ticks_(clear_after_ok_ticks) {}
+  Event Update(CommandCheck check);
+  bool active() const { return active_; }
+  CommandCheck first() const { return first_; }     // the check that started the episode
+  CommandCheck latest() const { return latest_; }   // the newest faulty check
+  std::uint64_t fault_ticks() const { return fault_ticks_; }  // faulty ticks in the episode
+  std::uint64_t episodes() const { return episodes_; }
+
+ private:
+  std::uint64_t clear_after_ok_ticks_ = 100;
+  bool active_ = false;
+  CommandCheck first_ = CommandCheck::kOk;
+  CommandCheck latest_ = CommandCheck::kOk;
+  std::uint64_t fault_ticks_ = 0;
+  std::uint64_t ok_run_ = 0;
+  std::uint64_t episodes_ = 0;
+};
 
 }  // namespace hexa

@@ -47,6 +47,8 @@ enum class FaultReason {
   kEstimateOutsideWorkspace,
   kSensorInvalid,
   kTrajectoryRejected,
+  kHostOverload,        // real time: every leg's command late at once: the host, not a leg
+  kComputeOverrun,      // a leg controller's cycle exceeded its compute budget
 };
 const char* ToString(FaultReason reason);  // "FAULT_NONE", ...
 
@@ -72,6 +74,7 @@ struct SupervisorInput {
   LegArray<double> length_m{};                           // measured leg lengths
   std::array<double, 4> orientation_wxyz{1.0, 0.0, 0.0, 0.0};  // IMU R_BP
   LegArray<FaultReason> leg_fault{};                     // reported per leg, kNone = healthy
+  FaultReason system_fault = FaultReason::kNone;         // reported for no leg (host, plant)
   LegArray<bool> leg_alive{true, true, true, true, true, true};  // leg controller liveliness
   LegArray<int> deadline_misses_consecutive{};           // per leg input topic
   int imu_deadline_misses_consecutive = 0;
