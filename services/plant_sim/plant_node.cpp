@@ -430,8 +430,12 @@ int PlantNode::RunLockstep(std::uint64_t last_tick) {
     }
     waitset_.Wait(wait);
   }
-  std::lock_guard<std::mutex> lock(mutex_);
-  running_ = false;  // the callback stays installed but no longer advances
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    running_ = false;
+  }
+  // No callback runs after this (it touches members destroyed before the reader).
+  valve_reader_.OnDataAvailable(nullptr, nullptr);
   return exit_code_ >= 0 ? exit_code_ : 0;
 }
 
