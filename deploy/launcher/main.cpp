@@ -120,10 +120,13 @@ int main(int argc, char** argv) {
   cli.AddFlag("no-recorder", "do not record (no report)");
   cli.AddFlag("no-outer-loop", "disable the task-space outer loop");
   cli.AddFlag("standby", "also start a hot-standby controller per leg");
-  cli.AddOption("cpus-control", "list",
-                "pin the plant, the leg controllers and the supervisor to these CPUs (e.g. 1); "
-                "docs/performance.md");
-  cli.AddOption("cpus-recorder", "list", "pin the recorder to these CPUs (e.g. 0)");
+  cli.AddOption("cpus-control", "list|auto|none",
+                "pin the plant, the leg controllers and the supervisor to these CPUs; auto: the "
+                "last CPU this process may use, when it may use two or more (the loop's wake-ups "
+                "then stay on one CPU: docs/performance.md)", "auto");
+  cli.AddOption("cpus-recorder", "list|auto|none",
+                "pin the recorder to these CPUs; auto: the other CPUs when --cpus-control is auto",
+                "auto");
   cli.AddOption("stale-ticks", "N",
                 "real time: ticks a leg's command may lag before the plant closes its valve and "
                 "reports it", "15");
@@ -145,9 +148,20 @@ int main(int argc, char** argv) {
   o.standby = cli.Flag("standby");
   o.outer_loop = !cli.Flag("no-outer-loop");
   o.rt_sched = !cli.Flag("no-rt-sched");
+  {
+    // auto: the control loop on the last allowed CPU, the recorder on the others.
+    const std::vector<int> allowed = hexa::sched::AllowedCpus();
+    const bool split = allowed.size() >= 2;
+    const std::vector<int> control_auto = split ? std::vector<int>{allowed.back()} : std::vector<int>{};
+    const std::vector<int> recorder_auto =
+        split ? std::vector<int>(allowed.begin(), allowed.end() - 1) : std::vector<int>{};
+    if (cli.Get("cpus-control") == "auto") o.cpus_control = hexa::sched::FormatCpuList(control_auto);
+    if (cli.Get("cpus-recorder") == "auto")
+      o.cpus_recorder = cli.Get("cpus-control") == "auto" ? hexa::sched::FormatCpuList(recorder_auto) : "";
+  }
   for (auto [name, field] : {std::pair{"cpus-control", &o.cpus_control},
                              std::pair{"cpus-recorder", &o.cpus_recorder}}) {
-    if (!cli.Has(name)) continue;
+    if (cli.Get(name) == "auto" || cli.Get(name) == "none") continue;
     std::vector<int> cpus;
     if (!hexa::sched::ParseCpuList(cli.Get(name), cpus)) {
       std::fprintf(stderr, "error: --%s '%s': expected CPU numbers such as 1, 0,1 or 0-1\n",
@@ -220,6 +234,9 @@ int main(int argc, char** argv) {
   log->info("session: trajectory={} controller={} profile={} mode={} seed={} domain={} out={}",
             o.trajectory, o.controller, o.profile, o.mode, o.seed, o.domain, o.out_dir);
   log->info("DDS config: {}", o.dds_config);
+  log->info("CPUs: control processes {}, recorder {}",
+            o.cpus_control.empty() ? "any" : o.cpus_control,
+            o.cpus_recorder.empty() ? "any" : o.cpus_recorder);
 
   const std::string bin = HEXA_BINARY_DIR;
   const std::map<std::string, std::string> env{

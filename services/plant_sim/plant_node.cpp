@@ -11,7 +11,7 @@ namespace {
 
 constexpr double kTickS = 0.001;
 constexpr dds_attach_t kTokenShutdown = 1;
-constexpr dds_attach_t kTokenDone = 2;
+constexpr dds_attach_t kTokenWake = 2;
 constexpr dds_attach_t kTokenPeers = 3;
 
 hexa_msg_FaultReason FaultOf(CommandCheck check) {
@@ -104,7 +104,7 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
       participant_(static_cast<dds_domainid_t>(options.common.domain_id),
                    comm::WriteBatching::kOn),
       shutdown_(participant_),
-      done_(participant_),
+      wake_(participant_),
       sensors_topic_(participant_),
       imu_topic_(participant_),
       truth_topic_(participant_),
@@ -121,7 +121,7 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
       peers_(participant_),
       waitset_(participant_) {
   waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
-  waitset_.Attach(done_.get(), kTokenDone);
+  waitset_.Attach(wake_.get(), kTokenWake);
   waitset_.Attach(peers_.data_condition(), kTokenPeers);
   for (auto& age : truth_sample_.command_age_ticks) age = -1;
 }
@@ -281,7 +281,8 @@ bool PlantNode::ApplyAndStep(std::uint64_t stale_tolerance) {
   // Every awaited leg stale in the same tick is not six controller faults: the host did not
   // run the loop (the plant's own wake-ups, the legs or the network were descheduled). Say
   // that once, with the measured lateness, instead of six leg faults.
-  const bool overload = options_.expected_legs > 1 && stale_legs == options_.expected_legs;
+  const bool overload = options_.common.mode == node::TimeMode::kRealtime &&
+                        options_.expected_legs > 1 && stale_legs == options_.expected_legs;
   if (overload && !host_overload_reported_) {
     host_overload_reported_ = true;
     std::uint64_t newest = 0;
@@ -352,8 +353,10 @@ void PlantNode::OnValveData(void* self) {
 }
 
 void PlantNode::AdvanceIfComplete() {
-  // Lockstep: every awaited leg answered tick_ -> step, publish tick_ + 1 and await it.
-  while (running_ && barrier_.complete()) {
+  // Lockstep: every awaited leg answered tick_ -> step, publish tick_ + 1 and await it. While
+  // a recorder sync is pending, tick_ is not published yet and the barrier still holds the
+  // previous (complete) tick: nothing may advance.
+  while (running_ && !sync_pending_ && barrier_.complete()) {
     const int64_t now = node::MonotonicNow_ns();
     cycle_times_.Add(static_cast<double>(now - tick_started_ns_) * 1e-9);
     tick_wall_.Add(now - tick_started_ns_);
@@ -365,14 +368,26 @@ void PlantNode::AdvanceIfComplete() {
     }
     if (exit_code_ >= 0) {
       running_ = false;
-      done_.Set();
+      wake_.Set();
       return;
     }
-    tick_started_ns_ = now;
-    PublishTick();
-    barrier_.Begin(tick_, FirstLegs(options_.expected_legs), now);
-    TakeCommands(true);  // answers that came in with this callback's data
+    if (options_.expect_recorder && options_.recorder_sync_ticks > 0 &&
+        tick_ % options_.recorder_sync_ticks == 0) {
+      // The main thread waits for the acknowledgements (they arrive on this thread) and
+      // publishes tick_ then.
+      sync_pending_ = true;
+      wake_.Set();
+      return;
+    }
+    StartTick(now);
   }
+}
+
+void PlantNode::StartTick(int64_t now_ns) {
+  tick_started_ns_ = now_ns;
+  PublishTick();
+  barrier_.Begin(tick_, FirstLegs(options_.expected_legs), now_ns);
+  TakeCommands(true);  // answers that came in with this callback's data
 }
 
 int PlantNode::RunLockstep(std::uint64_t last_tick) {
@@ -380,18 +395,41 @@ int PlantNode::RunLockstep(std::uint64_t last_tick) {
     std::lock_guard<std::mutex> lock(mutex_);
     last_tick_ = last_tick;
     running_ = true;
-    tick_started_ns_ = node::MonotonicNow_ns();
     // The callback first, then tick 0: an answer can never arrive unseen.
     valve_reader_.OnDataAvailable(&PlantNode::OnValveData, this);
-    PublishTick();
-    barrier_.Begin(tick_, FirstLegs(options_.expected_legs), tick_started_ns_);
-    TakeCommands(true);
+    StartTick(node::MonotonicNow_ns());
     AdvanceIfComplete();
   }
   waitset_.Detach(peers_.data_condition());  // NodeStatus traffic must not wake this thread
-  // The receive thread runs the loop; this thread watches for silence and shutdown.
+  // The receive thread runs the loop; this thread watches for silence and shutdown, and
+  // keeps the loop within recorder_sync_ticks of the recorder.
   while (!shutdown_.requested()) {
     dds_duration_t wait = DDS_MSECS(10);
+    bool sync = false;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (exit_code_ >= 0) break;
+      sync = sync_pending_;
+    }
+    if (sync) {
+      const int64_t t0 = node::MonotonicNow_ns();
+      wake_.Set(false);
+      // Everything written so far is in every reliable reader's history (the recorder's
+      // too): from then on no sample of it can be lost by a keep-last writer history.
+      while (!shutdown_.requested() &&
+             (sensors_writer_.WaitForAcks(DDS_MSECS(100)) == DDS_RETCODE_TIMEOUT ||
+              truth_writer_.WaitForAcks(DDS_MSECS(100)) == DDS_RETCODE_TIMEOUT)) {
+      }
+      std::lock_guard<std::mutex> lock(mutex_);
+      sync_pending_ = false;
+      ++recorder_syncs_;
+      recorder_sync_wait_s_ += static_cast<double>(node::MonotonicNow_ns() - t0) * 1e-9;
+      if (running_) {
+        StartTick(node::MonotonicNow_ns());
+        AdvanceIfComplete();
+      }
+      continue;
+    }
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (exit_code_ >= 0) break;
@@ -542,10 +580,11 @@ int PlantNode::Run() {
   for (auto f : faults_per_leg_) faults += f;
   const auto valve = valve_reader_.Snapshot();
   log_->info("stopped at tick {} (t = {:.3f} s): valve deadline misses {}, loop overruns {}, "
-             "command faults {}, lockstep resends {} (in {} re-asks), failed writes {}",
+             "command faults {}, lockstep resends {} (in {} re-asks), failed writes {}, "
+             "recorder syncs {} ({:.3f} s waited)",
              tick_, static_cast<double>(tick_) * kTickS, valve.requested_deadline_missed_total,
              overruns_, faults, resent_samples_, barrier_.reasks_total(),
-             sensors_writer_.write_errors_total());
+             sensors_writer_.write_errors_total(), recorder_syncs_, recorder_sync_wait_s_);
   LogCommandAges();
   WriteSummary(rc);
   if (rc != 4) PublishStatus(hexa_msg_NODE_STOPPING, "stopped");

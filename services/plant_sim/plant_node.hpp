@@ -41,6 +41,11 @@ struct PlantNodeOptions {
   // missing; the stale check is armed by the first command.
   std::uint64_t startup_grace_ticks = 500;
   double resend_after_s = 0.05;    // lockstep: republish sensors of a silent leg after this
+  // Lockstep with a recorder: every this many ticks the plant waits until every reliable
+  // reader (the recorder's too) has acknowledged what it wrote, so that a fast loop never runs
+  // more than this far ahead of a slow recorder (its writers keep 1 s of history; samples
+  // older than that could no longer be repaired). 0 = never.
+  std::uint64_t recorder_sync_ticks = 100;
   std::string summary_path;        // write the run's figures here as JSON at exit ("" = no)
 };
 
@@ -91,6 +96,7 @@ class PlantNode {
   // Receive thread (lockstep): takes the commands and, when the tick is complete, advances.
   static void OnValveData(void* self);
   void AdvanceIfComplete();
+  void StartTick(std::int64_t now_ns);  // publish tick_ and await its answers
   // Publishes the sensors of tick_ (all legs, or `only_leg` to that leg alone), and with all legs the IMU
   // (every 5th tick) and ground truth. Batched: each reader gets one datagram.
   void PublishTick(int only_leg = 0);
@@ -114,7 +120,7 @@ class PlantNode {
 
   comm::Participant participant_;
   comm::ShutdownGuard shutdown_;
-  comm::GuardCondition done_;  // set by the receive thread when the lockstep run ends
+  comm::GuardCondition wake_;  // set by the receive thread: the run ended, or a recorder sync
   comm::Topic<hexa_msg_LegSensors> sensors_topic_;
   comm::Topic<hexa_msg_ImuSample> imu_topic_;
   comm::Topic<hexa_msg_GroundTruth> truth_topic_;
@@ -131,6 +137,9 @@ class PlantNode {
   std::mutex mutex_;  // everything below; the receive thread and the main thread
   std::uint64_t tick_ = 0;
   bool running_ = false;        // lockstep: the receive thread may advance
+  bool sync_pending_ = false;   // lockstep: tick_ is not published until the recorder caught up
+  std::uint64_t recorder_syncs_ = 0;
+  double recorder_sync_wait_s_ = 0.0;
   int exit_code_ = -1;          // set when the run ends (>= 0)
   LegArray<LatestCommand> latest_{};
   LegArray<CommandEpisode> episodes_{};  // fault episodes per leg: one report each

@@ -41,6 +41,22 @@ bool ParseCpuList(const std::string& text, std::vector<int>& cpus) {
   return !cpus.empty();
 }
 
+std::vector<int> AllowedCpus() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  std::vector<int> cpus;
+  if (sched_getaffinity(0, sizeof set, &set) != 0) return cpus;
+  for (int c = 0; c < CPU_SETSIZE; ++c)
+    if (CPU_ISSET(c, &set)) cpus.push_back(c);
+  return cpus;
+}
+
+std::string FormatCpuList(const std::vector<int>& cpus) {
+  std::string list;
+  for (int c : cpus) list += (list.empty() ? "" : ",") + std::to_string(c);
+  return list;
+}
+
 bool SetCpuAffinity(const std::vector<int>& cpus, std::string& message) {
   cpu_set_t set;
   CPU_ZERO(&set);

@@ -68,6 +68,10 @@ class Writer {
   }
   // Sends what WriteDeferred() queued (nothing to do without batching).
   void Flush() { dds_write_flush(entity_.get()); }
+  // Blocks until every matched reliable reader has acknowledged everything written, or
+  // `timeout` (DDS_RETCODE_TIMEOUT). Never from a receive-thread callback: the acknowledgements
+  // arrive on that thread.
+  dds_return_t WaitForAcks(dds_duration_t timeout) { return dds_wait_for_acks(entity_.get(), timeout); }
 
   // Stamps the sample's own source time field with the clock now and writes it with that
   // same timestamp, so the sample and the DDS source timestamp always agree.
@@ -144,6 +148,15 @@ class LegRoutedWriter {
     Writer<T>& w = legs_[sample.leg_id - 1];
     const dds_return_t rc = w.WriteDeferred(sample, source_time_ns);
     w.Flush();
+    return rc;
+  }
+  // The all-legs writer's readers (supervisor, recorder) and each leg's; see Writer::WaitForAcks.
+  dds_return_t WaitForAcks(dds_duration_t timeout) {
+    dds_return_t rc = all_.WaitForAcks(timeout);
+    for (auto& w : legs_) {
+      const dds_return_t r = w.WaitForAcks(timeout);
+      if (rc == DDS_RETCODE_OK) rc = r;
+    }
     return rc;
   }
   Writer<T>& all() { return all_; }

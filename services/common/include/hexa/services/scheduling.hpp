@@ -12,6 +12,12 @@ namespace hexa::sched {
 // "1", "0,1", "0-1" -> CPU numbers; false on a malformed list.
 bool ParseCpuList(const std::string& text, std::vector<int>& cpus);
 
+// The CPUs this process may run on (sched_getaffinity), ascending; empty on error.
+std::vector<int> AllowedCpus();
+
+// "0,1" text of a CPU list.
+std::string FormatCpuList(const std::vector<int>& cpus);
+
 // Pins every thread of the process (and those it creates later) to `cpus`.
 bool SetCpuAffinity(const std::vector<int>& cpus, std::string& message);
 
