@@ -70,9 +70,6 @@ void Server::Start() {
   ws.init_asio();
   ws.set_reuse_addr(true);
   ws.set_max_message_size(config_.max_client_message_bytes);
-  ws.set_socket_init_handler([](Hdl, asio::ip::tcp::socket& s) {
-    s.set_option(asio::ip::tcp::no_delay(true));
-  });
   // Handshake: the client must offer the Foxglove subprotocol.
   ws.set_validate_handler([this](Hdl hdl) {
     auto con = impl_->ws.get_con_from_hdl(hdl);
@@ -89,6 +86,8 @@ void Server::Start() {
   });
   ws.set_open_handler([this](Hdl hdl) {
     auto con = impl_->ws.get_con_from_hdl(hdl);
+    asio::error_code nodelay_ec;  // small frames go out at once (best effort)
+    con->get_socket().set_option(asio::ip::tcp::no_delay(true), nodelay_ec);
     Impl::Client c;
     {
       std::lock_guard<std::mutex> lock(impl_->clients_mutex);

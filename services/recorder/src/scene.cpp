@@ -195,6 +195,7 @@ bool SceneBuilder::Add(const gp::Message& message) {
                    .normalized()
                    .toRotationMatrix();
       truth_ = p;
+      truth_tick_ = g->header().tick();
       OnTick(g->header().tick(), true);
     }
   } else if (d->full_name() == "hexa.rec.PoseReport") {
@@ -202,6 +203,7 @@ bool SceneBuilder::Add(const gp::Message& message) {
     if (const auto* r = As(message, scratch)) {
       if (r->estimated_pose_size() == 6) measured_ = PoseOf(r->estimated_pose());
       if (r->desired_pose_size() == 6) desired_ = PoseOf(r->desired_pose());
+      if (r->estimated_pose_size() == 6) measured_tick_ = r->header().tick();
       supervisor_state_ = r->state();
       trajectory_time_s_ = r->trajectory_time_s();
       legs_.OnSupervisorHold(r->state() == rec::SUPERVISOR_HOLD);
@@ -252,6 +254,7 @@ void SceneBuilder::Build(std::uint64_t stamp_ns) {
   }
   // The platform the legs are drawn to: ground truth when there is one, else the measured.
   const bool on_truth = truth_.has_value();
+  drawn_tick_ = on_truth ? truth_tick_ : measured_tick_;
   const std::optional<Pose>& leg_pose = on_truth ? truth_ : measured_;
   const GeometryParams& leg_geometry = on_truth ? truth_g : nominal;
   if (on_truth) {
@@ -299,6 +302,7 @@ void SceneBuilder::Build(std::uint64_t stamp_ns) {
       AddMeta(e, "state", ToString(state));
       AddMeta(e, "length_m", Num(s.length_m));
       AddMeta(e, "platform", on_truth ? "platform" : "platform_measured");
+      AddMeta(e, "tick", std::to_string(drawn_tick_));
     }
   }
   // Status label above the platform.

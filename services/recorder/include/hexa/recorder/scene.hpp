@@ -62,7 +62,9 @@ class SceneBuilder {
   std::optional<Pose> truth_, measured_, desired_;
   int supervisor_state_ = -1;
   double trajectory_time_s_ = 0.0;
-  std::uint64_t last_tick_ = 0;
+  std::uint64_t last_tick_ = 0;   // newest tick seen (any input)
+  std::uint64_t drawn_tick_ = 0;  // tick of the pose the legs are drawn at
+  std::uint64_t truth_tick_ = 0, measured_tick_ = 0;
   bool have_truth_stream_ = false;
   bool due_ = false;
   std::optional<std::uint64_t> next_due_tick_;
