@@ -10,10 +10,10 @@
 //    close with code 1002 (protocol error); a handshake without the subprotocol is refused;
 // 5. the bridge goes on: a new client subscribes again and receives LegSensors.
 import { createRequire } from "node:module";
-import { FoxgloveClient } from "@foxglove/ws-protocol";
 import WebSocket from "ws";
 
 const require = createRequire(import.meta.url);
+const { FoxgloveClient } = require("@foxglove/ws-protocol");
 const protobuf = require("protobufjs");
 const descriptor = require("protobufjs/ext/descriptor");
 const url = process.argv[2];
