@@ -120,9 +120,12 @@ const char* SupervisorStateName(int s) {
   return s >= 0 && s < 5 ? kNames[s] : "no pose report yet";
 }
 
-Pose PoseOf(const gp::RepeatedField<double>& xyz_rpy) {
-  Vector6d v = Vector6d::Zero();
-  for (int i = 0; i < 6 && i < xyz_rpy.size(); ++i) v[i] = xyz_rpy.Get(i);
+// [x y z roll pitch yaw] -> pose; nullopt when not six finite values.
+std::optional<Pose> PoseOf(const gp::RepeatedField<double>& xyz_rpy) {
+  if (xyz_rpy.size() != 6) return std::nullopt;
+  Vector6d v;
+  for (int i = 0; i < 6; ++i) v[i] = xyz_rpy.Get(i);
+  if (!v.allFinite()) return std::nullopt;
   return PoseFromVector(v);
 }
 
@@ -188,22 +191,26 @@ bool SceneBuilder::Add(const gp::Message& message) {
     static thread_local rec::GroundTruth scratch;
     const auto* g = As(message, scratch);
     if (g != nullptr && g->position_m_size() == 3 && g->orientation_wxyz_size() == 4) {
+      const Eigen::Quaterniond q(g->orientation_wxyz(0), g->orientation_wxyz(1),
+                                 g->orientation_wxyz(2), g->orientation_wxyz(3));
       Pose p;
       p.p_BP_B_m = Eigen::Vector3d(g->position_m(0), g->position_m(1), g->position_m(2));
-      p.R_BP = Eigen::Quaterniond(g->orientation_wxyz(0), g->orientation_wxyz(1),
-                                  g->orientation_wxyz(2), g->orientation_wxyz(3))
-                   .normalized()
-                   .toRotationMatrix();
-      truth_ = p;
-      truth_tick_ = g->header().tick();
+      // A sample that is no pose (non-finite, or not a unit quaternion) is not drawn.
+      if (p.p_BP_B_m.allFinite() && q.coeffs().allFinite() && std::abs(q.norm() - 1.0) < 1e-3) {
+        p.R_BP = q.normalized().toRotationMatrix();
+        truth_ = p;
+        truth_tick_ = g->header().tick();
+      }
       OnTick(g->header().tick(), true);
     }
   } else if (d->full_name() == "hexa.rec.PoseReport") {
     static thread_local rec::PoseReport scratch;
     if (const auto* r = As(message, scratch)) {
-      if (r->estimated_pose_size() == 6) measured_ = PoseOf(r->estimated_pose());
-      if (r->desired_pose_size() == 6) desired_ = PoseOf(r->desired_pose());
-      if (r->estimated_pose_size() == 6) measured_tick_ = r->header().tick();
+      if (auto m = PoseOf(r->estimated_pose())) {
+        measured_ = m;
+        measured_tick_ = r->header().tick();
+      }
+      if (auto d = PoseOf(r->desired_pose())) desired_ = d;
       supervisor_state_ = r->state();
       trajectory_time_s_ = r->trajectory_time_s();
       legs_.OnSupervisorHold(r->state() == rec::SUPERVISOR_HOLD);
