@@ -52,7 +52,7 @@ def info_counts(recorder, path, env):
     for line in out.splitlines():
         m = re.match(r"\s*\d+\s+(hexa_\w+)\s+\S+\s+(\d+)\s+[0-9.]+\s+[0-9.]+\s+(\d+|-)\s+\S+\s*$",
                      line)
-        if m:
+        if m and m.group(1) not in ("hexa_Scene", "hexa_FrameTransforms"):  # display only
             recorded += int(m.group(2))
             missing += int(m.group(3)) if m.group(3) != "-" else 0
     return recorded, missing, out
@@ -64,7 +64,8 @@ def one_run(a, speed, rep, tmp, env, compression="zstd"):
     rec = start([a.recorder, "record", "--output", path, "--domain", str(a.domain), "--quiet",
                  "--topics", "hexa_LegSensors,hexa_ValveCommand,hexa_ImuSample,hexa_LegSetpoint,"
                  "hexa_PoseReport,hexa_GroundTruth", "--sync", a.sync,
-                 "--compression", compression] +
+                 "--compression", compression.split(":")[0]] +
+                (["--zstd-level", compression.split(":")[1]] if ":" in compression else []) +
                 (["--batch-ms", str(a.batch_ms)] if a.batch_ms is not None else []), env, rec_log)
     loads = []
     try:
@@ -121,7 +122,8 @@ def main():
     ap.add_argument("--publishers", type=int, default=3)
     ap.add_argument("--sync", default="fdatasync", choices=["fdatasync", "fflush", "none"])
     ap.add_argument("--compressions", default="zstd",
-                    help="comma list of record --compression values, run side by side")
+                    help="comma list of record --compression values (zstd:L for a zstd level), "
+                         "run side by side")
     ap.add_argument("--batch-ms", type=float, default=None,
                     help="passed to hexa_recorder record (default: the recorder's default)")
     ap.add_argument("--dds-config", default=None,

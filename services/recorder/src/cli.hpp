@@ -45,6 +45,8 @@ Args ParseArgs(const std::vector<std::string>& argv, const std::set<std::string>
 
 // --compression none|zstd (default zstd), as every writing subcommand takes it.
 McapCompression ParseCompressionOption(const Args& a);
+// --zstd-level 1..19 (default McapWriterConfig's).
+int ParseZstdLevelOption(const Args& a);
 
 int RunInfo(const std::vector<std::string>& argv);
 int RunExport(const std::vector<std::string>& argv);

@@ -199,7 +199,7 @@ int RunRecord(const std::vector<std::string>& argv) {
   const Args a = ParseArgs(argv,
                            {"output", "o", "domain", "topics", "exclude", "duration-s", "flush-ms",
                             "batch-ms", "sync", "dds-config", "rt-priority", "cpus",
-                            "compression", "rig", "profile", "seed", "scene-hz"},
+                            "compression", "zstd-level", "rig", "profile", "seed", "scene-hz"},
                            {"quiet", "no-scene"});
   if (a.help) {
     std::fputs(
@@ -216,7 +216,8 @@ int RunRecord(const std::vector<std::string>& argv) {
         "The DDS samples wait in the readers and are taken in batches at most every --batch-ms\n"
         "(default 2; 0 = on every arrival): one wake-up per batch instead of per sample.\n"
         "fdatasync (the default --sync) runs on a background thread.\n"
-        "Chunks are zstd-compressed (libzstd level 3) unless --compression none.\n"
+        "Chunks are zstd-compressed (libzstd, --zstd-level 1..19, default 3) unless\n"
+        "--compression none.\n"
         "Stops after --duration-s or on SIGINT/SIGTERM, then prints per topic the samples\n"
         "received and the loss seen from tick numbers.\n"
         "--rt-priority N: SCHED_FIFO at N (1..98) + mlockall, for real-time sessions whose\n"
@@ -263,6 +264,7 @@ int RunRecord(const std::vector<std::string>& argv) {
   cfg.chunk_max_span_ns = static_cast<uint64_t>(flush_ms * 1e6);
   cfg.sync = ParseSync(a.Get("sync", "fdatasync"));
   cfg.compression = ParseCompressionOption(a);
+  cfg.zstd_level = ParseZstdLevelOption(a);
   std::optional<std::string> dds_config;
   if (a.Has("dds-config")) dds_config = a.Get("dds-config", "");
   comm::EnsureDdsConfig(dds_config);

@@ -56,6 +56,12 @@ McapCompression ParseCompressionOption(const Args& a) {
   return ParseMcapCompression(v);
 }
 
+int ParseZstdLevelOption(const Args& a) {
+  const long long level = a.GetInt("zstd-level", McapWriterConfig{}.zstd_level);
+  if (level < 1 || level > 19) throw UsageError("--zstd-level must be in [1, 19]");
+  return static_cast<int>(level);
+}
+
 Args ParseArgs(const std::vector<std::string>& argv, const std::set<std::string>& value_options,
                const std::set<std::string>& flag_options) {
   Args a;
