@@ -3,16 +3,13 @@
 as it can (the well-behaved viewer of bench/bridge/run_bench.py). Prints the count on SIGTERM.
 Standard library only.   /usr/bin/python3 reading_client.py PORT
 """
-import base64
 import json
 import os
 import signal
-import socket
-import struct
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tests", "foxglove"))
-from stuck_client import read_exact, read_frame, send_text  # noqa: E402
+from stuck_client import connect, read_frame, send_text  # noqa: E402
 
 count = 0
 
@@ -25,15 +22,7 @@ def done(*_):
 def main():
     global count
     signal.signal(signal.SIGTERM, done)
-    port = int(sys.argv[1])
-    sock = socket.create_connection(("127.0.0.1", port))
-    key = base64.b64encode(os.urandom(16)).decode()
-    sock.sendall((f"GET / HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\n"
-                  f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
-                  "Sec-WebSocket-Version: 13\r\nSec-WebSocket-Protocol: foxglove.websocket.v1\r\n\r\n").encode())
-    head = b""
-    while b"\r\n\r\n" not in head:
-        head += read_exact(sock, 1)
+    sock = connect(int(sys.argv[1]))
     subscribed = False
     while True:
         op, payload = read_frame(sock)

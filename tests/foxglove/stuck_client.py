@@ -48,10 +48,11 @@ def read_frame(sock):
     return b0 & 0x0F, read_exact(sock, n)
 
 
-def main():
-    port = int(sys.argv[1])
+def connect(port, rcvbuf=None):
+    """WebSocket handshake with the foxglove.websocket.v1 subprotocol; returns the socket."""
     sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-    sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    if rcvbuf is not None:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, rcvbuf)
     sock.connect(("127.0.0.1", port))
     key = base64.b64encode(os.urandom(16)).decode()
     sock.sendall((f"GET / HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\n"
@@ -61,8 +62,13 @@ def main():
     while b"\r\n\r\n" not in head:
         head += read_exact(sock, 1)
     if b" 101 " not in head.split(b"\r\n")[0]:
-        print("stuck_client: handshake refused:", head.split(b"\r\n")[0].decode(), flush=True)
-        return 1
+        raise ConnectionError("handshake refused: " + head.split(b"\r\n")[0].decode())
+    return sock
+
+
+def main():
+    port = int(sys.argv[1])
+    sock = connect(port, rcvbuf=4096)
     channels = []
     while not channels:
         op, payload = read_frame(sock)
