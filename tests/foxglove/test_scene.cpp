@@ -80,7 +80,9 @@ TEST(Scene, OneFramePerTwentyTicksDrivenByGroundTruth) {
   for (uint64_t tick = 0; tick <= 100; ++tick) {
     if (b.Add(Truth(tick, SomePose(tick * 1e-3), o.truth_geometry))) due.push_back(tick);
     r.mutable_header()->set_tick(tick);
-    if (tick % 5 == 0) EXPECT_FALSE(b.Add(r)) << "the pose report does not drive when there is truth";
+    if (tick % 5 == 0) {
+      EXPECT_FALSE(b.Add(r)) << "the pose report does not drive when there is truth";
+    }
   }
   EXPECT_EQ(due, (std::vector<uint64_t>{0, 20, 40, 60, 80, 100}));
   // Without ground truth (hardware), the pose reports drive, at the same rate.
