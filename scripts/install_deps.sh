@@ -13,8 +13,11 @@ packages=(
   python3-numpy python3-matplotlib
   iproute2 procps
   rt-tests stress-ng   # bench/loop: cyclictest (the machine's wake-up latency), a CPU hog
+  libzstd-dev                                           # zstd MCAP chunks (recorder)
+  libwebsocketpp-dev libasio-dev nlohmann-json3-dev     # hexa_bridge (Foxglove WebSocket)
 )
-# Node.js + npm (one test reads recordings with the MCAP project's own JS library): machines
+# Node.js + npm (test clients only: the MCAP project's JS library reads recordings, Foxglove's
+# schemas and WebSocket client check the scene and hexa_bridge; tests/foxglove): machines
 # of this kind ship their own Node; Debian's npm conflicts with it, so the Debian packages are
 # only installed when no node/npm is on PATH.
 need_node=0

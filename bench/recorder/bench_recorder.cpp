@@ -28,9 +28,11 @@ std::string BenchPath(const char* name) {
          std::to_string(::getpid()) + ".mcap";
 }
 
-McapWriterConfig Config(int sync) {
+// sync: 0 none, 1 fflush, 2 fdatasync; zstd: 0 uncompressed chunks, 1 zstd (the default).
+McapWriterConfig Config(int sync, int zstd) {
   McapWriterConfig c;
   c.sync = static_cast<McapSyncMode>(sync);
+  c.compression = zstd ? McapCompression::kZstd : McapCompression::kNone;
   c.chunk_max_span_ns = 100'000'000;
   return c;
 }
@@ -38,7 +40,7 @@ McapWriterConfig Config(int sync) {
 // LegSensors only: the most frequent message of the system.
 void BM_WriteLegSensors(benchmark::State& state) {
   const std::string path = BenchPath("sensors");
-  RecordingWriter w(Config(static_cast<int>(state.range(0))));
+  RecordingWriter w(Config(static_cast<int>(state.range(0)), static_cast<int>(state.range(1))));
   w.Open(path);
   const uint16_t ch = w.AddTopic("hexa_LegSensors", *rec::LegSensors::descriptor(), {});
   hexa_msg_LegSensors s{};
@@ -70,13 +72,14 @@ void BM_WriteLegSensors(benchmark::State& state) {
   state.counters["syncs"] = static_cast<double>(w.mcap().stats().syncs);
   ::unlink(path.c_str());
 }
-BENCHMARK(BM_WriteLegSensors)->ArgName("sync")->Arg(0)->Arg(1)->Arg(2)->UseRealTime()->MinTime(2.0);
+BENCHMARK(BM_WriteLegSensors)->ArgNames({"sync", "zstd"})->Args({0, 0})->Args({0, 1})
+    ->Args({1, 0})->Args({1, 1})->Args({2, 0})->Args({2, 1})->UseRealTime()->MinTime(2.0);
 
 // The nominal mix of one 1 ms tick (6 sensors, 6 valve commands, ground truth; every fifth
 // tick IMU, 6 setpoints, pose) = 13 or 21 messages.
 void BM_WriteNominalMix(benchmark::State& state) {
   const std::string path = BenchPath("mix");
-  RecordingWriter w(Config(static_cast<int>(state.range(0))));
+  RecordingWriter w(Config(static_cast<int>(state.range(0)), static_cast<int>(state.range(1))));
   w.Open(path);
   const uint16_t cs = w.AddTopic("hexa_LegSensors", *rec::LegSensors::descriptor(), {});
   const uint16_t cv = w.AddTopic("hexa_ValveCommand", *rec::ValveCommand::descriptor(), {});
@@ -140,7 +143,8 @@ void BM_WriteNominalMix(benchmark::State& state) {
       static_cast<double>(w.mcap().stats().bytes) / static_cast<double>(messages);
   ::unlink(path.c_str());
 }
-BENCHMARK(BM_WriteNominalMix)->ArgName("sync")->Arg(0)->Arg(2)->UseRealTime()->MinTime(2.0);
+BENCHMARK(BM_WriteNominalMix)->ArgNames({"sync", "zstd"})->Args({0, 0})->Args({0, 1})
+    ->Args({2, 0})->Args({2, 1})->UseRealTime()->MinTime(2.0);
 
 }  // namespace
 }  // namespace hexa::recorder

@@ -13,6 +13,9 @@ generators really sent per second), median recorded, median missing, lossless ru
     /usr/bin/python3 bench/recorder_system/run_bench.py --build build-rec2 --domain 89 \
         --seconds 5 --reps 3 --speeds 1,5,10,15,20 --publishers 3
 
+--compressions none,zstd runs every speed with uncompressed and with zstd chunks side by side
+(interleaved run by run) and reports the file sizes too.
+
 Every child is started in its own session with PR_SET_PDEATHSIG(SIGKILL) and killed by pid at
 the end, so nothing outlives the script.
 """
@@ -49,18 +52,20 @@ def info_counts(recorder, path, env):
     for line in out.splitlines():
         m = re.match(r"\s*\d+\s+(hexa_\w+)\s+\S+\s+(\d+)\s+[0-9.]+\s+[0-9.]+\s+(\d+|-)\s+\S+\s*$",
                      line)
-        if m:
+        if m and m.group(1) not in ("hexa_Scene", "hexa_FrameTransforms"):  # display only
             recorded += int(m.group(2))
             missing += int(m.group(3)) if m.group(3) != "-" else 0
     return recorded, missing, out
 
 
-def one_run(a, speed, rep, tmp, env):
-    path = os.path.join(tmp, f"bench_{speed}_{rep}.mcap")
-    rec_log = open(os.path.join(tmp, f"record_{speed}_{rep}.log"), "w")
+def one_run(a, speed, rep, tmp, env, compression="zstd"):
+    path = os.path.join(tmp, f"bench_{speed}_{rep}_{compression}.mcap")
+    rec_log = open(os.path.join(tmp, f"record_{speed}_{rep}_{compression}.log"), "w")
     rec = start([a.recorder, "record", "--output", path, "--domain", str(a.domain), "--quiet",
                  "--topics", "hexa_LegSensors,hexa_ValveCommand,hexa_ImuSample,hexa_LegSetpoint,"
-                 "hexa_PoseReport,hexa_GroundTruth", "--sync", a.sync] +
+                 "hexa_PoseReport,hexa_GroundTruth", "--sync", a.sync,
+                 "--compression", compression.split(":")[0]] +
+                (["--zstd-level", compression.split(":")[1]] if ":" in compression else []) +
                 (["--batch-ms", str(a.batch_ms)] if a.batch_ms is not None else []), env, rec_log)
     loads = []
     try:
@@ -90,17 +95,29 @@ def one_run(a, speed, rep, tmp, env):
             if p.poll() is None:
                 p.kill()
                 p.wait()
+        rec_cpu_s = float("nan")
         if rec.poll() is None:
             rec.send_signal(signal.SIGINT)
-            try:
-                rec.wait(timeout=60)
-            except subprocess.TimeoutExpired:
-                rec.kill()
-                rec.wait()
+            # wait4: the recorder's own CPU time (user + system), a figure the machine's load
+            # disturbs much less than loss counts do.
+            deadline = time.time() + 60
+            while True:
+                pid, _, usage = os.wait4(rec.pid, os.WNOHANG)
+                if pid == rec.pid:
+                    rec_cpu_s = usage.ru_utime + usage.ru_stime
+                    rec.returncode = 0
+                    break
+                if time.time() > deadline:
+                    rec.kill()
+                    rec.wait()
+                    break
+                time.sleep(0.05)
     recorded, missing, _ = info_counts(a.recorder, path, env)
+    size = os.path.getsize(path)
     os.remove(path)
     return dict(sent=sent, elapsed=elapsed, rate=sent / elapsed, recorded=recorded,
-                missing=missing, behind=behind, lossless=(recorded == sent and missing == 0))
+                missing=missing, behind=behind, lossless=(recorded == sent and missing == 0),
+                size=size, cpu_s=rec_cpu_s)
 
 
 def main():
@@ -114,6 +131,9 @@ def main():
     ap.add_argument("--speeds", default="1,5,10,15,20")
     ap.add_argument("--publishers", type=int, default=3)
     ap.add_argument("--sync", default="fdatasync", choices=["fdatasync", "fflush", "none"])
+    ap.add_argument("--compressions", default="zstd",
+                    help="comma list of record --compression values (zstd:L for a zstd level), "
+                         "run side by side")
     ap.add_argument("--batch-ms", type=float, default=None,
                     help="passed to hexa_recorder record (default: the recorder's default)")
     ap.add_argument("--dds-config", default=None,
@@ -128,23 +148,36 @@ def main():
     print(f"# recorder system benchmark: {a.seconds} s per run, {a.reps} reps, "
           f"{a.publishers} publisher processes, sync {a.sync}, logs in {tmp}")
     print(f"# load average at start: {os.getloadavg()[0]:.2f}")
-    print("| requested x nominal | achieved msg/s (median) | x nominal | recorded (median) | "
-          "missing (median) | lossless runs | publisher behind ticks (median) |")
-    print("|---|---|---|---|---|---|---|")
-    best = 0.0
+    print("| requested x nominal | compression | achieved msg/s (median) | x nominal | "
+          "recorded (median) | missing (median) | lossless runs | file MB (median) | "
+          "bytes/msg | publisher behind ticks (median) | recorder CPU us/msg (median) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    best = {}
+    comps = a.compressions.split(",")
     for speed in [float(s) for s in a.speeds.split(",")]:
-        runs = [one_run(a, speed, r, tmp, env) for r in range(a.reps)]
-        rate = statistics.median(r["rate"] for r in runs)
-        ok = sum(r["lossless"] for r in runs)
-        print(f"| {speed:g} | {rate:.0f} | {rate / NOMINAL_MSG_S:.1f} | "
-              f"{statistics.median(r['recorded'] for r in runs):.0f} of "
-              f"{statistics.median(r['sent'] for r in runs):.0f} | "
-              f"{statistics.median(r['missing'] for r in runs):.0f} | {ok}/{a.reps} | "
-              f"{statistics.median(r['behind'] for r in runs):.0f} |", flush=True)
-        if ok == a.reps:
-            best = max(best, rate)
-    print(f"\nhighest median rate with every run lossless: {best:.0f} msg/s = "
-          f"{best / NOMINAL_MSG_S:.1f}x nominal (target 10x)")
+        runs = {c: [] for c in comps}
+        for r in range(a.reps):  # interleaved: the machine's load hits both alike
+            for c in comps:
+                runs[c].append(one_run(a, speed, r, tmp, env, c))
+        for c in comps:
+            rr = runs[c]
+            rate = statistics.median(r["rate"] for r in rr)
+            ok = sum(r["lossless"] for r in rr)
+            size = statistics.median(r["size"] for r in rr)
+            print(f"| {speed:g} | {c} | {rate:.0f} | {rate / NOMINAL_MSG_S:.1f} | "
+                  f"{statistics.median(r['recorded'] for r in rr):.0f} of "
+                  f"{statistics.median(r['sent'] for r in rr):.0f} | "
+                  f"{statistics.median(r['missing'] for r in rr):.0f} | {ok}/{a.reps} | "
+                  f"{size / 1e6:.2f} | {size / max(1, statistics.median(r['recorded'] for r in rr)):.1f} | "
+                  f"{statistics.median(r['behind'] for r in rr):.0f} | "
+                  f"{statistics.median(1e6 * r['cpu_s'] / max(1, r['recorded']) for r in rr):.2f} |",
+                  flush=True)
+            if ok == a.reps:
+                best[c] = max(best.get(c, 0.0), rate)
+    for c in comps:
+        b = best.get(c, 0.0)
+        print(f"\n{c}: highest median rate with every run lossless: {b:.0f} msg/s = "
+              f"{b / NOMINAL_MSG_S:.1f}x nominal (target 10x)")
     print(f"# load average at end: {os.getloadavg()[0]:.2f}")
     return 0
 

@@ -91,6 +91,17 @@ void PlatformPlantConfig::Validate() const {
   leg.Validate();
 }
 
+GeometryParams TrueGeometry(const GeometryParams& nominal, const DisturbanceProfile& profile,
+                            std::uint64_t seed) {
+  GeometryParams g = nominal;
+  std::mt19937_64 geometry_rng(DeriveSeed(seed, 3));
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    g.p_BA_B[i] += UniformInBall(geometry_rng, profile.joint_position_error_max_m);
+    g.p_PB_P[i] += UniformInBall(geometry_rng, profile.joint_position_error_max_m);
+  }
+  return g;
+}
+
 PlatformPlant::PlatformPlant(const PlatformPlantConfig& config)
     : config_(config), sensors_(config.rig, config.disturbance, config.seed) {
   config_.Validate();
@@ -103,14 +114,8 @@ PlatformPlant::PlatformPlant(const PlatformPlantConfig& config)
   leg.friction_enabled = config_.friction_enabled;
   leg_model_ = LegModel(leg);
 
-  // The plant's true geometry: every joint off by up to joint_position_error_max_m
-  // (uniform in a ball), drawn from the seed; the controllers keep the nominal one.
-  true_geometry_ = rig.geometry;
-  std::mt19937_64 geometry_rng(DeriveSeed(config_.seed, 3));
-  for (std::size_t i = 0; i < kNumLegs; ++i) {
-    true_geometry_.p_BA_B[i] += UniformInBall(geometry_rng, dist.joint_position_error_max_m);
-    true_geometry_.p_PB_P[i] += UniformInBall(geometry_rng, dist.joint_position_error_max_m);
-  }
+  // The plant's true geometry; the controllers keep the nominal one.
+  true_geometry_ = TrueGeometry(rig.geometry, dist, config_.seed);
 
   platform_mass_kg_ = rig.platform.mass_kg * dist.payload_scale;
   platform_inertia_P_ = (rig.platform.inertia_diag_kg_m2 * dist.payload_scale).asDiagonal();

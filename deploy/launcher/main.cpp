@@ -48,8 +48,9 @@ std::string TailOf(const std::string& path, int lines) {
 struct Options {
   std::string trajectory, controller, profile, mode, out_dir, rig, dds_config;
   long long seed = 1, domain = 0, periods = 0, stale_ticks = 15;
-  bool recorder = true, standby = false, outer_loop = true, rt_sched = true;
+  bool recorder = true, standby = false, outer_loop = true, rt_sched = true, bridge = false;
   std::string cpus_control, cpus_recorder;
+  std::string bridge_listen, bridge_port, bridge_queue_kb;
   int fault_leg = 0;
   std::string fault_kind, fault_at;
   double timeout_s = 0;
@@ -131,6 +132,12 @@ int main(int argc, char** argv) {
                 "real time: ticks a leg's command may lag before the plant closes its valve and "
                 "reports it", "15");
   cli.AddFlag("no-rt-sched", "real time: do not ask for SCHED_FIFO (control 70-80, recorder 50)");
+  cli.AddFlag("bridge", "also start hexa_bridge: the session live in Foxglove over WebSocket "
+              "(docs/foxglove.md)");
+  cli.AddOption("bridge-listen", "address", "address hexa_bridge serves on", "127.0.0.1");
+  cli.AddOption("bridge-port", "n", "TCP port of hexa_bridge (0 = any free port, see bridge.log)",
+                "8765");
+  cli.AddOption("bridge-queue-kb", "n", "hexa_bridge --client-queue-kb", "4096");
   cli.AddOption("fault", "leg:kind:time_s",
                 "inject a fault into one primary leg controller, e.g. 3:crash:2.0 "
                 "(kinds: crash hang slow garbage silence)");
@@ -170,6 +177,10 @@ int main(int argc, char** argv) {
     }
     *field = cli.Get(name);
   }
+  o.bridge = cli.Flag("bridge");
+  o.bridge_listen = cli.Get("bridge-listen");
+  o.bridge_port = cli.Get("bridge-port");
+  o.bridge_queue_kb = cli.Get("bridge-queue-kb");
   auto seed = cli.GetInt("seed", 0, (1LL << 62));
   auto periods = cli.GetInt("periods", 0, 1000);
   auto timeout = cli.GetDouble("timeout", 0, 1e6);
@@ -264,8 +275,10 @@ int main(int argc, char** argv) {
   if (o.recorder) {
     ChildSpec r;
     r.name = "recorder";
+    // --rig/--profile/--seed: the 3-D scene draws the simulated plant's true joints.
     r.argv = {bin + "/services/recorder/hexa_recorder", "record", "--output", mcap, "--domain",
-              std::to_string(o.domain)};
+              std::to_string(o.domain), "--rig", o.rig, "--profile", o.profile, "--seed",
+              std::to_string(o.seed)};
     if (!o.cpus_recorder.empty()) r.argv.insert(r.argv.end(), {"--cpus", o.cpus_recorder});
     // Real time: SCHED_FIFO below the control processes (70-80). A SCHED_OTHER recorder
     // beside SCHED_FIFO peers is starved and loses samples.
@@ -273,6 +286,19 @@ int main(int argc, char** argv) {
     r.env = env;
     r.log_path = o.out_dir + "/recorder.console.log";
     specs.push_back(r);
+  }
+  if (o.bridge) {
+    ChildSpec b;
+    b.name = "bridge";
+    b.argv = {bin + "/services/bridge/hexa_bridge", "--domain", std::to_string(o.domain),
+              "--listen", o.bridge_listen, "--port", o.bridge_port, "--client-queue-kb",
+              o.bridge_queue_kb, "--rig", o.rig,
+              "--profile", o.profile, "--seed", std::to_string(o.seed), "--log-file",
+              o.out_dir + "/bridge.log"};
+    b.env = env;
+    b.log_path = o.out_dir + "/bridge.console.log";
+    specs.push_back(b);
+    log->info("bridge: Foxglove WebSocket on ws://{}:{}", o.bridge_listen, o.bridge_port);
   }
   for (int leg = 1; leg <= 6; ++leg) {
     std::vector<std::string> leg_args{"--leg", std::to_string(leg), "--controller", o.controller};
@@ -339,6 +365,10 @@ int main(int argc, char** argv) {
                  e.name.find("_standby") == std::string::npos &&
                  group.Running(e.name + "_standby")) {
         log->warn("{}; its hot standby {}_standby takes over the valve", e.Describe(), e.name);
+      } else if (e.name == "bridge") {
+        // A viewer, not part of the control loop: the session goes on without it.
+        log->error("{}; the session goes on without the Foxglove bridge; its last log "
+                   "lines:\n{}", e.Describe(), TailOf(o.out_dir + "/bridge.console.log", 15));
       } else if (o.fault_leg != 0 && e.name == "leg" + std::to_string(o.fault_leg)) {
         // The death was injected on purpose: let the plant and the supervisor handle it.
         log->warn("{} (injected fault): watching the plant and the supervisor react",
@@ -369,8 +399,9 @@ int main(int argc, char** argv) {
   stop("plant");
   stop("supervisor");
   for (const auto& name : group.RunningNames())
-    if (name != "recorder") stop(name);
+    if (name != "recorder" && name != "bridge") stop(name);
   stop("recorder");
+  stop("bridge");
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   log->info("all processes stopped; session wall time {:.1f} s", wall_s);

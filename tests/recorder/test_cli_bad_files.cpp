@@ -50,6 +50,9 @@ class CliTest : public ::testing::Test {
     good_ = dir_ / "good.mcap";
     McapWriterConfig cfg;
     cfg.chunk_max_bytes = 64 * 1024;
+    // The damage below is done to the uncompressed layout (bytes of chunk records); damaged
+    // zstd chunks are tested in test_mcap_file.cpp (McapCompression.*).
+    cfg.compression = McapCompression::kNone;
     test::WriteSynthRecording(good_.string(), cfg);
     bytes_ = Slurp(good_);
   }

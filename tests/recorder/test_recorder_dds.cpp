@@ -161,7 +161,9 @@ TEST_F(RecorderDds, RecordsEveryPublishedSampleWithLossFromTicks) {
   ASSERT_TRUE(info.complete);
   std::map<std::string, const ChannelInfo*> by_topic;
   for (const auto& c : info.channels) by_topic[c.topic] = &c;
-  ASSERT_EQ(by_topic.size(), 9u);  // every topic has a channel, even without data
+  // Every topic has a channel, even without data, and so has the 3-D scene (docs/foxglove.md).
+  ASSERT_EQ(by_topic.size(), 9u + 2u);
+  ASSERT_EQ(by_topic.count("hexa_Scene") + by_topic.count("hexa_FrameTransforms"), 2u);
   EXPECT_EQ(by_topic["hexa_LegSensors"]->count, sent_sensors);
   EXPECT_EQ(by_topic["hexa_LegSensors"]->missing, 3u);
   EXPECT_EQ(by_topic["hexa_ImuSample"]->count, sent_imu);

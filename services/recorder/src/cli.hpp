@@ -9,6 +9,12 @@
 #include <string>
 #include <vector>
 
+#include "hexa/recorder/mcap.hpp"
+
+namespace hexa::recorder {
+struct SceneOptions;
+}
+
 namespace hexa::recorder::cli {
 
 inline constexpr int kExitOk = 0;
@@ -37,6 +43,11 @@ struct Args {
 Args ParseArgs(const std::vector<std::string>& argv, const std::set<std::string>& value_options,
                const std::set<std::string>& flag_options);
 
+// --compression none|zstd (default zstd), as every writing subcommand takes it.
+McapCompression ParseCompressionOption(const Args& a);
+// --zstd-level 1..19 (default McapWriterConfig's).
+int ParseZstdLevelOption(const Args& a);
+
 int RunInfo(const std::vector<std::string>& argv);
 int RunExport(const std::vector<std::string>& argv);
 int RunRecover(const std::vector<std::string>& argv);
@@ -44,5 +55,11 @@ int RunDiff(const std::vector<std::string>& argv);
 int RunRecord(const std::vector<std::string>& argv);
 int RunPlay(const std::vector<std::string>& argv);
 int RunReport(const std::vector<std::string>& argv);
+int RunAnnotate(const std::vector<std::string>& argv);
+
+// The scene options of `record` and `annotate` (--rig, --profile, --seed, --scene-hz) and
+// their help text (cli_scene.cpp).
+extern const char* kSceneOptionsHelp;
+SceneOptions SceneOptionsFromArgs(const Args& a);
 
 }  // namespace hexa::recorder::cli

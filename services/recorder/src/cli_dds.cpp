@@ -28,6 +28,7 @@
 #include "hexa/core/lockstep_protocol.hpp"
 #include "hexa/recorder/convert.hpp"
 #include "hexa/recorder/recording.hpp"
+#include "hexa/recorder/scene.hpp"
 #include "hexa/services/scheduling.hpp"
 
 namespace hexa::recorder::cli {
@@ -197,14 +198,16 @@ dds_domainid_t ParseDomain(const Args& a) {
 int RunRecord(const std::vector<std::string>& argv) {
   const Args a = ParseArgs(argv,
                            {"output", "o", "domain", "topics", "exclude", "duration-s", "flush-ms",
-                            "batch-ms", "sync", "dds-config", "rt-priority", "cpus"},
-                           {"quiet"});
+                            "batch-ms", "sync", "dds-config", "rt-priority", "cpus",
+                            "compression", "zstd-level", "rig", "profile", "seed", "scene-hz"},
+                           {"quiet", "no-scene"});
   if (a.help) {
     std::fputs(
         "usage: hexa_recorder record --output FILE.mcap [--domain N] [--topics GLOB,..]\n"
         "                            [--exclude GLOB,..] [--duration-s S] [--flush-ms MS]\n"
         "                            [--batch-ms MS] [--sync none|fflush|fdatasync]\n"
         "                            [--dds-config FILE.xml] [--rt-priority N] [--cpus LIST]\n"
+        "                            [--compression none|zstd]\n"
         "Subscribes to every topic of the system (reliable, keep-all recorder QoS) or the ones\n"
         "matching --topics, and writes each sample as protobuf to one MCAP channel per topic\n"
         "(log time = when taken from DDS, within --batch-ms of receipt; publish time = the\n"
@@ -213,6 +216,8 @@ int RunRecord(const std::vector<std::string>& argv) {
         "The DDS samples wait in the readers and are taken in batches at most every --batch-ms\n"
         "(default 2; 0 = on every arrival): one wake-up per batch instead of per sample.\n"
         "fdatasync (the default --sync) runs on a background thread.\n"
+        "Chunks are zstd-compressed (libzstd, --zstd-level 1..19, default 3) unless\n"
+        "--compression none.\n"
         "Stops after --duration-s or on SIGINT/SIGTERM, then prints per topic the samples\n"
         "received and the loss seen from tick numbers.\n"
         "--rt-priority N: SCHED_FIFO at N (1..98) + mlockall, for real-time sessions whose\n"
@@ -220,8 +225,10 @@ int RunRecord(const std::vector<std::string>& argv) {
         "--cpus LIST pins it (e.g. 0): both before DDS starts, so Cyclone's threads inherit.\n"
         "topics: hexa_LegSensors hexa_ValveCommand hexa_ImuSample hexa_LegSetpoint\n"
         "        hexa_PoseReport hexa_GroundTruth hexa_OperatorCommand hexa_NodeStatus\n"
-        "        hexa_FaultEvent\n",
+        "        hexa_FaultEvent\n"
+        "  --no-scene          do not add the 3-D scene\n",
         stdout);
+    std::fputs(kSceneOptionsHelp, stdout);
     return kExitOk;
   }
   if (!a.positional.empty()) throw UsageError("unexpected argument '" + a.positional[0] + "'");
@@ -256,6 +263,8 @@ int RunRecord(const std::vector<std::string>& argv) {
   McapWriterConfig cfg;
   cfg.chunk_max_span_ns = static_cast<uint64_t>(flush_ms * 1e6);
   cfg.sync = ParseSync(a.Get("sync", "fdatasync"));
+  cfg.compression = ParseCompressionOption(a);
+  cfg.zstd_level = ParseZstdLevelOption(a);
   std::optional<std::string> dds_config;
   if (a.Has("dds-config")) dds_config = a.Get("dds-config", "");
   comm::EnsureDdsConfig(dds_config);
@@ -272,6 +281,21 @@ int RunRecord(const std::vector<std::string>& argv) {
     topics.push_back(std::make_unique<TopicRecorder<T, P>>(participant, writer, params));
   });
   if (topics.empty()) throw UsageError("--topics/--exclude leave no topic to record");
+  // The 3-D scene (docs/foxglove.md): fed with every recorded sample, written when due.
+  std::unique_ptr<SceneBuilder> scene;
+  std::unique_ptr<SceneChannels> scene_channels;
+  if (!a.Has("no-scene")) {
+    scene = std::make_unique<SceneBuilder>(SceneOptionsFromArgs(a));
+    scene_channels = std::make_unique<SceneChannels>(writer, scene->options());
+    for (auto& t : topics) {
+      t->on_sample = [&](const google::protobuf::Message& m) {
+        if (!scene->Add(m)) return;
+        const auto now = static_cast<uint64_t>(comm::RealtimeNow_ns());
+        scene->Build(now);
+        scene_channels->Write(now, *scene);
+      };
+    }
+  }
   comm::WaitSet waitset(participant, topics.size() + 1);
   waitset.Attach(shutdown.guard_condition(), 0);
   for (size_t i = 0; i < topics.size(); ++i)
@@ -326,10 +350,11 @@ int RunRecord(const std::vector<std::string>& argv) {
   writer.Close();
 
   const double elapsed_s = static_cast<double>(comm::RealtimeNow_ns() - start_ns) * 1e-9;
+  const McapWriterStats& ws = writer.mcap().stats();
   std::printf("recorded %.3f s to %s: %" PRIu64 " messages, %" PRIu64 " chunks, %" PRIu64
-              " bytes\n",
-              elapsed_s, out.c_str(), writer.mcap().stats().messages,
-              writer.mcap().stats().chunks, writer.mcap().stats().bytes);
+              " bytes (chunk records %" PRIu64 " bytes, stored %" PRIu64 ", compression %s)\n",
+              elapsed_s, out.c_str(), ws.messages, ws.chunks, ws.bytes, ws.chunk_records_bytes,
+              ws.chunk_stored_bytes, cfg.compression == McapCompression::kZstd ? "zstd" : "none");
   std::printf("%-22s %10s %10s %8s %12s %12s\n", "topic", "received", "missing", "gaps",
               "dds_lost", "dds_rejected");
   for (const auto& t : topics) {

@@ -50,6 +50,18 @@ long long Args::GetInt(const std::string& name, long long fallback) const {
   return GetIntImpl(*this, name, fallback);
 }
 
+McapCompression ParseCompressionOption(const Args& a) {
+  const std::string v = a.Get("compression", "zstd");
+  if (v != "none" && v != "zstd") throw UsageError("--compression must be none or zstd, got '" + v + "'");
+  return ParseMcapCompression(v);
+}
+
+int ParseZstdLevelOption(const Args& a) {
+  const long long level = a.GetInt("zstd-level", McapWriterConfig{}.zstd_level);
+  if (level < 1 || level > 19) throw UsageError("--zstd-level must be in [1, 19]");
+  return static_cast<int>(level);
+}
+
 Args ParseArgs(const std::vector<std::string>& argv, const std::set<std::string>& value_options,
                const std::set<std::string>& flag_options) {
   Args a;
@@ -135,18 +147,22 @@ int RunExport(const std::vector<std::string>& argv) {
 }
 
 int RunRecover(const std::vector<std::string>& argv) {
-  const Args a = ParseArgs(argv, {"output", "o"}, {});
+  const Args a = ParseArgs(argv, {"output", "o", "compression"}, {});
   if (PrintHelp(a,
-                "usage: hexa_recorder recover DAMAGED.mcap --output FIXED.mcap\n"
+                "usage: hexa_recorder recover DAMAGED.mcap --output FIXED.mcap "
+                "[--compression none|zstd]\n"
                 "Reads every intact chunk of a recording that lacks its summary and footer (e.g.\n"
                 "the recorder was killed) or has corrupt chunks, and writes a complete MCAP file\n"
-                "with summary, indexes and footer. Sequence numbers and times are kept.\n"))
+                "with summary, indexes and footer. Sequence numbers and times are kept.\n"
+                "Chunks of the output are zstd-compressed unless --compression none.\n"))
     return kExitOk;
   NeedPositionals(a, 1, "exactly one input file");
   const std::string out = a.Get("output", a.Get("o", ""));
   if (out.empty()) throw UsageError("--output FILE is required");
   if (out == a.positional[0]) throw UsageError("--output must differ from the input file");
-  const RecoverResult r = Recover(a.positional[0], out);
+  McapWriterConfig config;
+  config.compression = ParseCompressionOption(a);
+  const RecoverResult r = Recover(a.positional[0], out, config);
   for (const auto& p : r.problems) std::printf("problem: %s\n", p.c_str());
   std::printf("input %s; recovered %llu messages from %llu chunks (%llu corrupt chunks skipped, "
               "%llu bytes dropped at the end) into %s\n",

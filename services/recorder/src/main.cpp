@@ -21,6 +21,7 @@ constexpr const char* kUsage =
     "  export   one CSV file per topic\n"
     "  recover  rewrite a truncated recording (e.g. after kill -9) as a complete MCAP file\n"
     "  report   session report (RMSE tables, latency, deadline misses, plots) from a recording\n"
+    "  annotate add the Foxglove 3-D scene to a recording made without it\n"
     "\n"
     "exit status: 0 success, 1 diff found differences, 2 error (message on stderr)\n";
 }  // namespace
@@ -42,6 +43,7 @@ int main(int argc, char** argv) {
     if (command == "record") return cli::RunRecord(rest);
     if (command == "play") return cli::RunPlay(rest);
     if (command == "report") return cli::RunReport(rest);
+    if (command == "annotate") return cli::RunAnnotate(rest);
     std::fprintf(stderr, "hexa_recorder: unknown command '%s'\n\n%s", command.c_str(), kUsage);
     return cli::kExitError;
   } catch (const cli::UsageError& e) {

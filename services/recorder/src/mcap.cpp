@@ -16,6 +16,8 @@
 #include <sstream>
 #include <thread>
 
+#include "compression.hpp"
+
 namespace hexa::recorder {
 namespace {
 
@@ -159,7 +161,20 @@ const char* McapOpcodeName(uint8_t opcode) {
 
 // ===================================== writer =============================================
 
+const char* McapCompressionName(McapCompression c) {
+  return c == McapCompression::kZstd ? "zstd" : "";
+}
+
+McapCompression ParseMcapCompression(const std::string& text) {
+  if (text == "none") return McapCompression::kNone;
+  if (text == "zstd") return McapCompression::kZstd;
+  throw std::invalid_argument("compression must be none or zstd, got '" + text + "'");
+}
+
 void McapWriterConfig::Validate() const {
+  if (compression == McapCompression::kZstd && (zstd_level < 1 || zstd_level > 19))
+    throw std::invalid_argument("McapWriterConfig.zstd_level = " + std::to_string(zstd_level) +
+                                " outside [1, 19]");
   if (chunk_max_bytes < 64 || chunk_max_bytes > (1ull << 32))
     throw std::invalid_argument("McapWriterConfig.chunk_max_bytes = " +
                                 std::to_string(chunk_max_bytes) + " outside [64, 2^32]");
@@ -252,6 +267,7 @@ class BackgroundSync {
 
 McapWriter::McapWriter(McapWriterConfig config) : config_(std::move(config)) {
   config_.Validate();
+  if (config_.compression == McapCompression::kZstd) zstd_ = std::make_unique<ZstdCodec>();
 }
 
 McapWriter::~McapWriter() {
@@ -402,21 +418,31 @@ void McapWriter::FlushChunk() {
   idx.end_ns = chunk_end_ns_;
   idx.chunk_offset = offset_;
   idx.records_size = chunk_records_.size();
+  // The chunk's records as stored: zstd-compressed (one frame) or as they are. The CRC is of
+  // the uncompressed records (spec: uncompressed_crc).
+  std::string_view stored = chunk_records_;
+  if (zstd_ != nullptr) {
+    zstd_->Compress(chunk_records_, config_.zstd_level, compressed_);
+    stored = compressed_;
+  }
+  idx.stored_size = stored.size();
   std::string& head = scratch_;
   head.clear();
   PutU64(head, chunk_start_ns_);
   PutU64(head, chunk_end_ns_);
   PutU64(head, chunk_records_.size());  // uncompressed_size
   PutU32(head, Crc32(chunk_records_.data(), chunk_records_.size()));
-  PutStr(head, "");                     // compression: none
-  PutU64(head, chunk_records_.size());  // records byte length
+  PutStr(head, McapCompressionName(config_.compression));
+  PutU64(head, stored.size());  // records byte length
   char rec_head[9];
   rec_head[0] = static_cast<char>(McapOpcode::kChunk);
-  const uint64_t len = head.size() + chunk_records_.size();
+  const uint64_t len = head.size() + stored.size();
   std::memcpy(rec_head + 1, &len, 8);
   WriteBytes(rec_head, 9);
   WriteBytes(head.data(), head.size());
-  WriteBytes(chunk_records_.data(), chunk_records_.size());
+  WriteBytes(stored.data(), stored.size());
+  stats_.chunk_records_bytes += chunk_records_.size();
+  stats_.chunk_stored_bytes += stored.size();
   idx.chunk_length = offset_ - idx.chunk_offset;
 
   const uint64_t index_start = offset_;
@@ -509,8 +535,8 @@ void McapWriter::Close() {
       }
       PutStr(b, map);
       PutU64(b, ci.index_length);
-      PutStr(b, "");
-      PutU64(b, ci.records_size);  // compressed_size (= uncompressed, no compression)
+      PutStr(b, McapCompressionName(config_.compression));
+      PutU64(b, ci.stored_size);   // compressed_size (= uncompressed_size when not compressed)
       PutU64(b, ci.records_size);  // uncompressed_size
       summary_record(McapOpcode::kChunkIndex, b);
     }
@@ -549,6 +575,8 @@ void McapWriter::Close() {
 }
 
 // ===================================== reader =============================================
+
+McapReader::McapReader() = default;
 
 McapReader::~McapReader() {
   if (fd_ >= 0) ::close(fd_);
@@ -726,9 +754,16 @@ McapScanResult McapReader::Scan(const McapVisitor& visitor, const McapScanOption
                             " does not match the " + std::to_string(c.remaining()) +
                             " bytes left in the record");
           std::string_view records = c.Rest();
-          if (!compression.empty())
+          const uint64_t stored_size = records.size();
+          if (compression == "zstd") {
+            if (zstd_ == nullptr) zstd_ = std::make_unique<ZstdCodec>();
+            zstd_->Decompress(records, uncompressed_size, chunk_buffer_, what);
+            records = chunk_buffer_;
+          } else if (!compression.empty()) {
             throw McapError(what + ": compression '" + compression +
-                            "' is not supported by this reader (only uncompressed chunks)");
+                            "' is not supported by this reader (chunks must be uncompressed "
+                            "or zstd)");
+          }
           if (uncompressed_size != records.size())
             throw McapError(what + ": uncompressed_size " + std::to_string(uncompressed_size) +
                             " != records length " + std::to_string(records.size()));
@@ -777,6 +812,9 @@ McapScanResult McapReader::Scan(const McapVisitor& visitor, const McapScanOption
           }
           chunk_offsets.push_back(rec_start);
           ++result.chunks;
+          ++result.chunk_compression[compression.empty() ? "none" : compression];
+          result.chunk_records_bytes += records.size();
+          result.chunk_stored_bytes += stored_size;
           break;
         }
         case McapOpcode::kFooter:

@@ -317,6 +317,9 @@ RecordingInfo Inspect(const std::string& path, const McapScanOptions& options) {
   info.problems = r.problems;
   info.messages = r.messages;
   info.chunks = r.chunks;
+  info.chunk_compression = r.chunk_compression;
+  info.chunk_records_bytes = r.chunk_records_bytes;
+  info.chunk_stored_bytes = r.chunk_stored_bytes;
   bool first = true;
   for (const auto& [id, ch] : catalog.channels) {
     ChannelInfo c = channels.count(id) ? channels[id] : ChannelInfo{};
@@ -369,7 +372,21 @@ std::string FormatInfo(const RecordingInfo& info) {
                 duration_s, info.start_ns, info.end_ns);
   o << line;
   o << "messages:  " << info.messages << " in " << info.chunks << " chunks, "
-    << info.channels.size() << " channels\n\n";
+    << info.channels.size() << " channels\n";
+  if (info.chunks > 0) {
+    std::string kinds;
+    for (const auto& [name, n] : info.chunk_compression)
+      kinds += (kinds.empty() ? "" : ", ") + std::to_string(n) + " " + name;
+    std::snprintf(line, sizeof line,
+                  "chunks:    %s; records %.3f MB, stored %.3f MB (ratio %.2f)\n",
+                  kinds.c_str(), static_cast<double>(info.chunk_records_bytes) * 1e-6,
+                  static_cast<double>(info.chunk_stored_bytes) * 1e-6,
+                  info.chunk_stored_bytes > 0 ? static_cast<double>(info.chunk_records_bytes) /
+                                                    static_cast<double>(info.chunk_stored_bytes)
+                                              : 0.0);
+    o << line;
+  }
+  o << "\n";
   std::snprintf(line, sizeof line, "%-4s %-28s %-26s %10s %10s %11s %9s %8s\n", "id", "topic",
                 "type", "messages", "rate_hz", "max_gap_ms", "missing", "loss_%");
   o << line;

@@ -53,6 +53,13 @@ struct PlatformPlantConfig {
   void Validate() const;  // throws std::invalid_argument naming field, value and limit
 };
 
+// The plant's TRUE geometry for a seed: every joint of `nominal` off by up to
+// profile.joint_position_error_max_m (uniform in a ball), drawn from the seed. PlatformPlant
+// uses exactly this; the 3-D scene (docs/foxglove.md) recomputes it to draw the simulated legs
+// where they really are.
+GeometryParams TrueGeometry(const GeometryParams& nominal, const DisturbanceProfile& profile,
+                            std::uint64_t seed);
+
 // True state of the rig (ground truth, for evaluation only).
 struct PlatformTrueState {
   Pose pose;                                 // p_BP_B, R_BP

@@ -1,7 +1,7 @@
 // Minimal MCAP (https://mcap.dev/spec, major version 0) writer and reader, written for this
 // project from the specification. Only what the recorder needs: Header, Schema, Channel,
-// Message, uncompressed Chunk, MessageIndex, ChunkIndex, Statistics, SummaryOffset, DataEnd,
-// Footer. The format layer knows nothing about protobuf or DDS.
+// Message, Chunk (uncompressed or zstd, libzstd), MessageIndex, ChunkIndex, Statistics,
+// SummaryOffset, DataEnd, Footer. The format layer knows nothing about protobuf or DDS.
 #pragma once
 
 #include <cstdint>
@@ -60,6 +60,14 @@ struct McapMessageView {
 
 enum class McapSyncMode { kNone, kFflush, kFdatasync };
 
+// Chunk compression (the spec's per-chunk `compression` string: "" or "zstd"; "lz4" is read
+// by neither side here).
+enum class McapCompression { kNone, kZstd };
+// The chunk's compression string: "" for kNone, "zstd".
+const char* McapCompressionName(McapCompression c);
+// "none" | "zstd" (the CLI's --compression values); throws std::invalid_argument otherwise.
+McapCompression ParseMcapCompression(const std::string& text);
+
 struct McapWriterConfig {
   std::string profile;                       // "" = no well-known profile
   std::string library = "hexa_recorder";
@@ -72,6 +80,9 @@ struct McapWriterConfig {
   // background fdatasync is reported by the next FlushChunk() or Close().
   McapSyncMode sync = McapSyncMode::kFdatasync;
   bool compute_data_crc = true;
+  // zstd by default: a session recording shrinks ~5x (docs/recorder.md, "Compression").
+  McapCompression compression = McapCompression::kZstd;
+  int zstd_level = 3;                         // 1..19 (zstd's own scale; 3 is its default)
   void Validate() const;  // throws std::invalid_argument naming the field
 };
 
@@ -80,7 +91,11 @@ struct McapWriterStats {
   uint64_t chunks = 0;
   uint64_t bytes = 0;
   uint64_t syncs = 0;  // flushes to the kernel (each followed by a background fdatasync)
+  uint64_t chunk_records_bytes = 0;  // chunk records before compression
+  uint64_t chunk_stored_bytes = 0;   // the same as written (compressed or not)
 };
+
+class ZstdCodec;  // compression.hpp
 
 class BackgroundSync;  // mcap.cpp
 
@@ -116,7 +131,7 @@ class McapWriter {
   struct ChunkIndexEntry {
     uint64_t start_ns, end_ns, chunk_offset, chunk_length;
     std::vector<std::pair<uint16_t, uint64_t>> index_offsets;
-    uint64_t index_length, records_size;
+    uint64_t index_length, records_size, stored_size;
   };
   void WriteBytes(const void* data, size_t size);
   void WriteRecord(McapOpcode op, const std::string& body);
@@ -139,6 +154,8 @@ class McapWriter {
   std::vector<ChunkIndexEntry> chunk_indexes_;
   uint64_t message_start_ns_ = 0, message_end_ns_ = 0;
   std::string scratch_;
+  std::string compressed_;
+  std::unique_ptr<ZstdCodec> zstd_;
   McapWriterStats stats_;
   std::unique_ptr<BackgroundSync> syncer_;  // kFdatasync only, while a file is open
 };
@@ -169,6 +186,9 @@ struct McapScanResult {
   uint64_t messages = 0;
   uint64_t chunks = 0;
   uint64_t bad_chunks = 0;
+  std::map<std::string, uint64_t> chunk_compression;  // "none" / "zstd" -> chunks read
+  uint64_t chunk_records_bytes = 0;  // records of the chunks read, uncompressed
+  uint64_t chunk_stored_bytes = 0;   // the same as stored in the file
   McapStatistics summary_statistics;  // valid when has_summary
 };
 
@@ -182,7 +202,7 @@ struct McapVisitor {
 // checking it against the file size), then validates the summary and footer.
 class McapReader {
  public:
-  McapReader() = default;
+  McapReader();
   ~McapReader();
   McapReader(const McapReader&) = delete;
   McapReader& operator=(const McapReader&) = delete;
@@ -200,6 +220,8 @@ class McapReader {
   std::string path_;
   int fd_ = -1;
   uint64_t file_size_ = 0;
+  std::unique_ptr<ZstdCodec> zstd_;
+  std::string chunk_buffer_;  // decompressed records of the chunk being delivered
   std::map<uint16_t, McapSchema> schemas_;
   std::map<uint16_t, McapChannel> channels_;
 };

@@ -155,6 +155,8 @@ struct RecordingInfo {
   bool complete = false;
   std::vector<std::string> problems;
   uint64_t messages = 0, chunks = 0;
+  std::map<std::string, uint64_t> chunk_compression;  // "none" / "zstd" -> chunks
+  uint64_t chunk_records_bytes = 0, chunk_stored_bytes = 0;  // before / after compression
   uint64_t start_ns = 0, end_ns = 0;
   std::vector<ChannelInfo> channels;
 };

@@ -1,0 +1,290 @@
+// hexa_bridge: serves a running session's DDS topics, and the 3-D scene, to Foxglove over the
+// Foxglove WebSocket protocol (docs/foxglove.md). A topic is read from DDS only while some
+// client subscribes to it (or to the scene, which needs ground truth, pose reports, valve
+// commands and fault events), through best-effort keep-last readers: an idle bridge costs
+// the control loop nothing, a watched one one more datagram per watched sample, and a slow
+// client only its own drops (ws_server.hpp).
+#include <time.h>
+
+#include <algorithm>
+#include <array>
+#include <cinttypes>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hexa/comm/comm.hpp"
+#include "hexa/comm/config.hpp"
+#include "hexa/comm/participant.hpp"
+#include "hexa/comm/qos.hpp"
+#include "hexa/comm/shutdown.hpp"
+#include "hexa/comm/time.hpp"
+#include "hexa/comm/topic.hpp"
+#include "hexa/comm/waitset.hpp"
+#include "hexa/config/rig_config.hpp"
+#include "hexa/recorder/convert.hpp"
+#include "hexa/recorder/recording.hpp"
+#include "hexa/recorder/scene.hpp"
+#include "hexa/services/cli.hpp"
+#include "hexa/services/logging.hpp"
+#include "ws_server.hpp"
+
+namespace {
+
+using hexa::bridge::ChannelInfo;
+using hexa::bridge::Server;
+namespace comm = hexa::comm;
+namespace recorder = hexa::recorder;
+namespace rec = hexa::rec;
+
+constexpr uint32_t kSceneChannel = 10;
+constexpr uint32_t kTransformsChannel = 11;
+constexpr std::size_t kTake = 64;  // samples per dds_take
+
+// Channel id of a DDS topic: 1 + its TopicKind.
+uint32_t ChannelOf(comm::TopicKind kind) { return 1 + static_cast<uint32_t>(kind); }
+
+bool SceneInput(comm::TopicKind k) {
+  return k == comm::TopicKind::kGroundTruth || k == comm::TopicKind::kPoseReport ||
+         k == comm::TopicKind::kValveCommand || k == comm::TopicKind::kFaultEvent;
+}
+
+struct Context {
+  Server* server = nullptr;
+  recorder::SceneBuilder* scene = nullptr;
+  bool scene_watched = false;
+  std::string buffer;
+  uint64_t samples = 0;
+};
+
+struct SourceBase {
+  virtual ~SourceBase() = default;
+  virtual void Create(const comm::Participant& p, comm::WaitSet& ws) = 0;
+  virtual void Destroy(comm::WaitSet& ws) = 0;
+  virtual bool active() const = 0;
+  virtual void Drain(Context& ctx) = 0;
+  virtual const google::protobuf::Descriptor* descriptor() const = 0;
+  comm::TopicKind kind{};
+};
+
+template <typename T, typename P>
+class Source final : public SourceBase {
+ public:
+  explicit Source(const comm::Participant& p) : topic_(p) {
+    kind = comm::TopicTraits<T>::kKind;
+    for (std::size_t i = 0; i < kTake; ++i) buffers_[i] = &storage_[i];
+  }
+  ~Source() override { Release(); }
+  const google::protobuf::Descriptor* descriptor() const override { return P::descriptor(); }
+  bool active() const override { return reader_ != 0; }
+  void Create(const comm::Participant& p, comm::WaitSet& ws) override {
+    if (reader_ != 0) return;
+    // The recorder's reader QoS (matches every writer: no deadline, exclusive ownership for
+    // valve commands, ...) made lighter for the periodic topics: best effort, keep-last, volatile.
+    // The writers then keep nothing for the bridge and never resend to it.
+    comm::Qos qos = comm::MakeQos(kind, comm::EndpointRole::kRecorderReader);
+    if (comm::NominalPeriod_s(kind).has_value()) {
+      dds_qset_reliability(qos.get(), DDS_RELIABILITY_BEST_EFFORT, 0);
+      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 32);
+      dds_qset_durability(qos.get(), DDS_DURABILITY_VOLATILE);
+    }
+    reader_ = comm::CheckDds(dds_create_reader(p.get(), topic_.get(), qos.get(), nullptr),
+                             "cannot create reader on " + std::string(comm::TopicName(kind)));
+    condition_ = comm::CheckDds(
+        dds_create_readcondition(reader_, DDS_ANY_SAMPLE_STATE | DDS_ANY_VIEW_STATE |
+                                              DDS_ANY_INSTANCE_STATE),
+        "cannot create read condition");
+    ws.Attach(condition_, 2 + static_cast<dds_attach_t>(kind));
+  }
+  void Destroy(comm::WaitSet& ws) override {
+    if (reader_ == 0) return;
+    ws.Detach(condition_);
+    Release();
+  }
+  void Drain(Context& ctx) override {
+    if (reader_ == 0) return;
+    const uint32_t channel = ChannelOf(kind);
+    for (;;) {
+      const dds_return_t n = dds_take(reader_, buffers_.data(), infos_.data(), kTake, kTake);
+      if (n <= 0) return;
+      const auto now = static_cast<uint64_t>(comm::RealtimeNow_ns());
+      const bool watched = ctx.server->Watched(channel);
+      for (dds_return_t i = 0; i < n; ++i) {
+        if (!infos_[i].valid_data) continue;
+        ++ctx.samples;
+        recorder::ToProto(storage_[i], msg_);
+        if (watched) {
+          ctx.buffer.clear();
+          msg_.AppendToString(&ctx.buffer);
+          ctx.server->Publish(channel, now, ctx.buffer);
+        }
+        if (ctx.scene_watched && ctx.scene->Add(msg_)) {
+          ctx.scene->Build(now);
+          if (ctx.server->Watched(kTransformsChannel))
+            ctx.server->Publish(kTransformsChannel, now, ctx.scene->transforms().SerializeAsString());
+          if (ctx.server->Watched(kSceneChannel))
+            ctx.server->Publish(kSceneChannel, now, ctx.scene->scene().SerializeAsString());
+        }
+      }
+      if (static_cast<std::size_t>(n) < kTake) return;
+    }
+  }
+
+ private:
+  void Release() {
+    if (reader_ != 0) dds_delete(reader_);  // deletes the read condition too
+    reader_ = condition_ = 0;
+  }
+  comm::Topic<T> topic_;
+  dds_entity_t reader_ = 0, condition_ = 0;
+  std::array<T, kTake> storage_{};
+  std::array<void*, kTake> buffers_{};
+  std::array<dds_sample_info_t, kTake> infos_{};
+  P msg_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  hexa::cli::Parser cli("hexa_bridge",
+                        "Serves the DDS topics of a running session and its 3-D scene over the "
+                        "Foxglove WebSocket protocol (open ws://HOST:PORT in Foxglove).");
+  cli.AddOption("domain", "id", "DDS domain id of the session", "0");
+  cli.AddOption("dds-config", "file", "Cyclone DDS configuration (default: loopback only)");
+  cli.AddOption("listen", "address",
+                "IP address to serve on; the default serves this machine only. Give the "
+                "control network's address to let other hosts connect", "127.0.0.1");
+  cli.AddOption("port", "n", "TCP port (0 = any free port, printed at start)", "8765");
+  cli.AddOption("client-queue-kb", "n",
+                "per client: KiB of messages waiting for its socket before messages are "
+                "dropped for that client (and counted)", "4096");
+  cli.AddOption("stats-s", "s", "log every client's sent / dropped counts this often (0 = only "
+                "when a client leaves)", "5");
+  cli.AddOption("rig", "file", "rig file whose joints the 3-D scene draws",
+                hexa::config::DefaultRigFile());
+  cli.AddOption("profile", "name", "disturbance profile of the simulated plant (with --seed)");
+  cli.AddOption("seed", "n", "seed of the simulated plant: the scene draws its true joints");
+  cli.AddOption("scene-hz", "hz", "3-D scene frames per simulated second", "50");
+  cli.AddOption("log-file", "file", "also log to this file");
+  const bool parsed = cli.Parse(argc, argv);
+  if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
+  const auto domain = cli.GetInt("domain", 0, 232);
+  const auto port = cli.GetInt("port", 0, 65535);
+  const auto queue_kb = cli.GetInt("client-queue-kb", 1, 1 << 20);
+  const auto stats_s = cli.GetDouble("stats-s", 0, 3600);
+  const auto scene_hz = cli.GetDouble("scene-hz", 1, 1000);
+  std::optional<long long> seed;
+  if (cli.Has("seed")) seed = cli.GetInt("seed", 0, 1LL << 62);
+  if (!domain || !port || !queue_kb || !stats_s || !scene_hz || (cli.Has("seed") && !seed)) {
+    std::fprintf(stderr, "hexa_bridge: error: %s\n(see --help)\n", cli.error().c_str());
+    return 2;
+  }
+  auto log = hexa::logging::Init("bridge", cli.Has("log-file") ? cli.Get("log-file") : "");
+  try {
+    std::optional<std::string> dds_config;
+    if (cli.Has("dds-config")) dds_config = cli.Get("dds-config");
+    comm::EnsureDdsConfig(dds_config);
+
+    recorder::SceneOptions scene_options = recorder::SceneOptionsFromRig(
+        cli.Get("rig"), cli.Has("profile") ? cli.Get("profile") : "",
+        seed ? std::optional<uint64_t>(static_cast<uint64_t>(*seed)) : std::nullopt);
+    scene_options.period_ticks = static_cast<uint64_t>(std::llround(1000.0 / *scene_hz));
+    recorder::SceneBuilder scene(scene_options);
+
+    comm::Participant participant(static_cast<dds_domainid_t>(*domain));
+    comm::ShutdownGuard shutdown(participant);
+    comm::GuardCondition demand(participant);
+    comm::WaitSet waitset(participant, 16);
+    waitset.Attach(shutdown.guard_condition(), 0);
+    waitset.Attach(demand.get(), 1);
+
+    std::vector<std::unique_ptr<SourceBase>> sources;
+    sources.push_back(std::make_unique<Source<hexa_msg_LegSensors, rec::LegSensors>>(participant));
+    sources.push_back(std::make_unique<Source<hexa_msg_ValveCommand, rec::ValveCommand>>(participant));
+    sources.push_back(std::make_unique<Source<hexa_msg_ImuSample, rec::ImuSample>>(participant));
+    sources.push_back(std::make_unique<Source<hexa_msg_LegSetpoint, rec::LegSetpoint>>(participant));
+    sources.push_back(std::make_unique<Source<hexa_msg_PoseReport, rec::PoseReport>>(participant));
+    sources.push_back(std::make_unique<Source<hexa_msg_GroundTruth, rec::GroundTruth>>(participant));
+    sources.push_back(std::make_unique<Source<hexa_msg_OperatorCommand, rec::OperatorCommand>>(participant));
+    sources.push_back(std::make_unique<Source<hexa_msg_NodeStatus, rec::NodeStatus>>(participant));
+    sources.push_back(std::make_unique<Source<hexa_msg_FaultEvent, rec::FaultEvent>>(participant));
+
+    std::vector<ChannelInfo> channels;
+    for (const auto& s : sources) {
+      channels.push_back({ChannelOf(s->kind), std::string(comm::TopicName(s->kind)),
+                          s->descriptor()->full_name(),
+                          recorder::FileDescriptorSetFor(*s->descriptor())});
+    }
+    channels.push_back({kSceneChannel, recorder::kSceneTopic,
+                        foxglove::SceneUpdate::descriptor()->full_name(),
+                        recorder::FileDescriptorSetFor(*foxglove::SceneUpdate::descriptor())});
+    channels.push_back({kTransformsChannel, recorder::kTransformsTopic,
+                        foxglove::FrameTransforms::descriptor()->full_name(),
+                        recorder::FileDescriptorSetFor(*foxglove::FrameTransforms::descriptor())});
+
+    hexa::bridge::ServerConfig sc;
+    sc.listen_address = cli.Get("listen");
+    sc.port = static_cast<uint16_t>(*port);
+    sc.client_queue_bytes = static_cast<std::size_t>(*queue_kb) * 1024;
+    Server server(sc, channels, log);
+    server.OnDemandChange([&demand] { demand.Set(true); });
+    server.Start();
+    log->info("serving {} channels on ws://{}:{} (Foxglove WebSocket protocol), DDS domain {}; "
+              "scene joints: {}", channels.size(), sc.listen_address, server.port(), *domain,
+              scene_options.geometry_note);
+    if (sc.listen_address != "127.0.0.1" && sc.listen_address != "::1")
+      log->warn("--listen {}: other hosts can connect (no authentication)", sc.listen_address);
+
+    Context ctx;
+    ctx.server = &server;
+    ctx.scene = &scene;
+    auto update_readers = [&] {
+      ctx.scene_watched = server.Watched(kSceneChannel) || server.Watched(kTransformsChannel);
+      for (auto& s : sources) {
+        const bool want = server.Watched(ChannelOf(s->kind)) ||
+                          (ctx.scene_watched && SceneInput(s->kind));
+        if (want && !s->active()) {
+          s->Create(participant, waitset);
+          log->info("reading {} from DDS", comm::TopicName(s->kind));
+        } else if (!want && s->active()) {
+          s->Destroy(waitset);
+          log->info("no client watches {}: its DDS reader is deleted", comm::TopicName(s->kind));
+        }
+      }
+    };
+    const int64_t stats_ns = static_cast<int64_t>(*stats_s * 1e9);
+    int64_t next_stats = comm::RealtimeNow_ns() + (stats_ns > 0 ? stats_ns : INT64_MAX / 2);
+    while (!shutdown.requested()) {
+      const dds_return_t rc = waitset.WaitUntil(static_cast<dds_time_t>(next_stats));
+      if (rc < 0) throw std::runtime_error("waitset failed: " + std::string(dds_strretcode(rc)));
+      if (waitset.Triggered(1)) {
+        demand.Set(false);
+        update_readers();
+      }
+      for (auto& s : sources) s->Drain(ctx);
+      const int64_t now = comm::RealtimeNow_ns();
+      if (stats_ns > 0 && now >= next_stats) {
+        next_stats = now + stats_ns;
+        for (const auto& c : server.Stats())
+          log->info("client {} ({}): {} subscriptions, sent {} messages ({} bytes), dropped {} "
+                    "(queue full), {} bytes queued", c.id, c.remote, c.subscriptions, c.sent,
+                    c.sent_bytes, c.dropped, c.queued_bytes);
+        if (server.inbox_drops() > 0)
+          log->warn("{} messages dropped before reaching any client (inbox full)",
+                    server.inbox_drops());
+      }
+      // Take in batches (as the recorder does): one wake-up per 2 ms, not per sample.
+      const timespec pause{0, 2'000'000};
+      nanosleep(&pause, nullptr);
+    }
+    log->info("stopping: {} DDS samples read, {} protocol errors, {} inbox drops", ctx.samples,
+              server.protocol_errors(), server.inbox_drops());
+    server.Stop();
+    for (auto& s : sources) s->Destroy(waitset);
+  } catch (const std::exception& e) {
+    log->error("{}", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,242 @@
+// The 3-D scene (docs/foxglove.md): display rate, leg geometry against the plant's own truth,
+// leg colours by state, transforms; and the bridge's protocol functions.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+#include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
+
+#include "hexa/core/platform_plant.hpp"
+#include "hexa/core/scene.hpp"
+#include "hexa/recorder/scene.hpp"
+#include "protocol.hpp"
+#include "recording.pb.h"
+
+namespace hexa {
+namespace {
+using recorder::SceneBuilder;
+using recorder::SceneOptions;
+
+SceneOptions Options(uint64_t seed) {
+  SceneOptions o;
+  o.nominal_geometry = MakeReferenceRig().geometry;
+  o.truth_geometry = TrueGeometry(o.nominal_geometry, MakeRealisticDisturbanceProfile(), seed);
+  return o;
+}
+
+rec::GroundTruth Truth(uint64_t tick, const Pose& pose, const GeometryParams& g) {
+  rec::GroundTruth t;
+  t.mutable_header()->set_tick(tick);
+  for (int i = 0; i < 3; ++i) t.add_position_m(pose.p_BP_B_m[i]);
+  const Eigen::Quaterniond q(pose.R_BP);
+  t.add_orientation_wxyz(q.w());
+  t.add_orientation_wxyz(q.x());
+  t.add_orientation_wxyz(q.y());
+  t.add_orientation_wxyz(q.z());
+  for (const LegSegment& s : LegSegments(g, pose)) t.add_leg_length_m(s.length_m);
+  return t;
+}
+
+Pose SomePose(double k) {
+  Vector6d v;
+  v << 0.02 * std::sin(k), -0.03 * std::cos(k), 0.45 + 0.05 * std::sin(2 * k), 0.1 * std::sin(k),
+      -0.08, 0.2 * std::cos(k);
+  return PoseFromVector(v);
+}
+
+const foxglove::SceneEntity* Entity(const foxglove::SceneUpdate& u, const std::string& id) {
+  for (const auto& e : u.entities())
+    if (e.id() == id) return &e;
+  return nullptr;
+}
+std::string Meta(const foxglove::SceneEntity& e, const std::string& key) {
+  for (const auto& kv : e.metadata())
+    if (kv.key() == key) return kv.value();
+  return "";
+}
+
+TEST(Scene, TrueGeometryIsThePlantsOwn) {
+  PlatformPlantConfig c;
+  c.seed = 17;
+  const PlatformPlant plant(c);
+  const GeometryParams g = TrueGeometry(c.rig.geometry, c.disturbance, 17);
+  for (size_t i = 0; i < kNumLegs; ++i) {
+    EXPECT_EQ(g.p_BA_B[i], plant.true_geometry().p_BA_B[i]);
+    EXPECT_EQ(g.p_PB_P[i], plant.true_geometry().p_PB_P[i]);
+    EXPECT_GT((g.p_BA_B[i] - c.rig.geometry.p_BA_B[i]).norm(), 0.0) << "realistic: joints off";
+    EXPECT_LE((g.p_BA_B[i] - c.rig.geometry.p_BA_B[i]).norm(), 2e-3 + 1e-12);
+  }
+}
+
+TEST(Scene, OneFramePerTwentyTicksDrivenByGroundTruth) {
+  const SceneOptions o = Options(3);
+  SceneBuilder b(o);
+  std::vector<uint64_t> due;
+  rec::PoseReport r;
+  for (int i = 0; i < 6; ++i) r.add_estimated_pose(i == 2 ? 0.45 : 0.0);
+  for (int i = 0; i < 6; ++i) r.add_desired_pose(i == 2 ? 0.45 : 0.0);
+  for (uint64_t tick = 0; tick <= 100; ++tick) {
+    if (b.Add(Truth(tick, SomePose(tick * 1e-3), o.truth_geometry))) due.push_back(tick);
+    r.mutable_header()->set_tick(tick);
+    if (tick % 5 == 0) {
+      EXPECT_FALSE(b.Add(r)) << "the pose report does not drive when there is truth";
+    }
+  }
+  EXPECT_EQ(due, (std::vector<uint64_t>{0, 20, 40, 60, 80, 100}));
+  // Without ground truth (hardware), the pose reports drive, at the same rate.
+  SceneBuilder hw(o);
+  due.clear();
+  for (uint64_t tick = 0; tick <= 100; tick += 5) {
+    r.mutable_header()->set_tick(tick);
+    if (hw.Add(r)) due.push_back(tick);
+  }
+  EXPECT_EQ(due, (std::vector<uint64_t>{0, 20, 40, 60, 80, 100}));
+  // A skipped tick does not stop the display: the next tick after the due one triggers.
+  SceneBuilder gap(o);
+  EXPECT_TRUE(gap.Add(Truth(3, SomePose(0), o.truth_geometry)));
+  EXPECT_FALSE(gap.Add(Truth(19, SomePose(0), o.truth_geometry)));
+  EXPECT_TRUE(gap.Add(Truth(23, SomePose(0), o.truth_geometry)));
+  EXPECT_FALSE(gap.Add(Truth(39, SomePose(0), o.truth_geometry)));
+  EXPECT_TRUE(gap.Add(Truth(40, SomePose(0), o.truth_geometry)));
+}
+
+TEST(Scene, LegsMeetTheJointsAndHaveTheTrueLengths) {
+  const SceneOptions o = Options(9);
+  SceneBuilder b(o);
+  for (int k = 0; k < 20; ++k) {
+    const Pose pose = SomePose(0.37 * k);
+    const rec::GroundTruth t = Truth(20 * k, pose, o.truth_geometry);
+    ASSERT_TRUE(b.Add(t));
+    b.Build(1'000'000'000ull * k);
+    const foxglove::SceneUpdate& u = b.scene();
+    const auto* platform = Entity(u, "platform");
+    const auto* base = Entity(u, "base");
+    ASSERT_TRUE(platform && base);
+    ASSERT_EQ(b.transforms().transforms_size(), 1);  // no pose report yet: truth only
+    const auto& tf = b.transforms().transforms(0);
+    EXPECT_EQ(tf.child_frame_id(), "platform");
+    const Eigen::Quaterniond q(tf.rotation().w(), tf.rotation().x(), tf.rotation().y(),
+                               tf.rotation().z());
+    const Eigen::Vector3d p(tf.translation().x(), tf.translation().y(), tf.translation().z());
+    EXPECT_LT((q.toRotationMatrix() - pose.R_BP).norm(), 1e-12);
+    EXPECT_LT((p - pose.p_BP_B_m).norm(), 1e-12);
+    for (size_t i = 0; i < kNumLegs; ++i) {
+      const auto* leg = Entity(u, "leg" + std::to_string(i + 1));
+      ASSERT_TRUE(leg);
+      ASSERT_EQ(leg->cylinders_size(), 1);
+      const auto& c = leg->cylinders(0);
+      const Eigen::Quaterniond cq(c.pose().orientation().w(), c.pose().orientation().x(),
+                                  c.pose().orientation().y(), c.pose().orientation().z());
+      const Eigen::Vector3d center(c.pose().position().x(), c.pose().position().y(),
+                                   c.pose().position().z());
+      const Eigen::Vector3d half = cq * Eigen::Vector3d(0, 0, 0.5 * c.size().z());
+      const auto& bs = base->spheres(static_cast<int>(i)).pose().position();
+      const auto& ps = platform->spheres(static_cast<int>(i)).pose().position();
+      const Eigen::Vector3d base_joint(bs.x(), bs.y(), bs.z());
+      const Eigen::Vector3d platform_joint = p + q * Eigen::Vector3d(ps.x(), ps.y(), ps.z());
+      EXPECT_LT((center - half - base_joint).norm(), 1e-9) << "leg " << i + 1;
+      EXPECT_LT((center + half - platform_joint).norm(), 1e-9) << "leg " << i + 1;
+      EXPECT_NEAR(c.size().z(), t.leg_length_m(static_cast<int>(i)), 1e-12) << "eq 46";
+      EXPECT_EQ(Meta(*leg, "tick"), std::to_string(20 * k));
+    }
+  }
+}
+
+TEST(Scene, LegColoursFollowTheLegState) {
+  const SceneOptions o = Options(1);
+  SceneBuilder b(o);
+  auto valve = [&](uint32_t leg, rec::LegCtrlStatus s, bool standby) {
+    rec::ValveCommand v;
+    v.set_leg_id(leg);
+    v.set_status(s);
+    v.set_standby(standby);
+    b.Add(v);
+  };
+  auto pose_report = [&](rec::SupervisorState s) {
+    rec::PoseReport r;
+    r.set_state(s);
+    b.Add(r);
+  };
+  auto states = [&]() {
+    EXPECT_TRUE(b.Add(Truth(20 * (b.frames() + 1), SomePose(0), o.truth_geometry)) ||
+                b.frames() == 0);
+    b.Build(0);
+    std::string s;
+    for (int i = 1; i <= 6; ++i) s += Meta(*Entity(b.scene(), "leg" + std::to_string(i)), "state") + ",";
+    return s;
+  };
+  EXPECT_EQ(states(), "unknown,unknown,unknown,unknown,unknown,unknown,");
+  for (uint32_t l = 1; l <= 6; ++l) valve(l, rec::LEGCTRL_OK, false);
+  valve(2, rec::LEGCTRL_HOLD_STALE_SETPOINT, false);
+  valve(4, rec::LEGCTRL_OK, true);
+  EXPECT_EQ(states(), "ok,hold,ok,standby active,ok,ok,");
+  rec::FaultEvent f;
+  f.set_leg_id(5);
+  b.Add(f);
+  pose_report(rec::SUPERVISOR_HOLD);
+  valve(5, rec::LEGCTRL_OK, false);  // the controller is fine; the fault stays latched
+  EXPECT_EQ(states(), "ok,hold,ok,standby active,fault,ok,");
+  pose_report(rec::SUPERVISOR_TRACKING);  // operator reset
+  EXPECT_EQ(states(), "ok,hold,ok,standby active,ok,ok,");
+  // The colours differ per state.
+  const auto color = [&](int leg) {
+    const auto& c = Entity(b.scene(), "leg" + std::to_string(leg))->cylinders(0).color();
+    return std::make_tuple(c.r(), c.g(), c.b());
+  };
+  EXPECT_NE(color(1), color(2));
+  EXPECT_NE(color(1), color(4));
+  EXPECT_NE(color(2), color(4));
+}
+
+TEST(BridgeProtocol, ClientRequestsAreCheckedStrictly) {
+  using bridge::ClientRequest;
+  using bridge::ParseClientText;
+  const ClientRequest s = ParseClientText(
+      R"({"op":"subscribe","subscriptions":[{"id":0,"channelId":3},{"id":7,"channelId":10}]})");
+  ASSERT_EQ(s.kind, ClientRequest::Kind::kSubscribe);
+  EXPECT_EQ(s.subscriptions, (std::vector<std::pair<uint32_t, uint32_t>>{{0, 3}, {7, 10}}));
+  const ClientRequest u = ParseClientText(R"({"op":"unsubscribe","subscriptionIds":[7]})");
+  ASSERT_EQ(u.kind, ClientRequest::Kind::kUnsubscribe);
+  EXPECT_EQ(u.unsubscribe_ids, std::vector<uint32_t>{7});
+  for (const char* bad : {"", "garbage", "[1,2]", "{}", R"({"op":3})", R"({"op":"getParameters"})",
+                          R"({"op":"subscribe"})", R"({"op":"subscribe","subscriptions":[{"id":-1,"channelId":1}]})",
+                          R"({"op":"subscribe","subscriptions":[{"id":4294967296,"channelId":1}]})",
+                          R"({"op":"subscribe","subscriptions":[{"id":1.5,"channelId":1}]})",
+                          R"({"op":"unsubscribe","subscriptionIds":["a"]})", "\xff\xfe{\"op\""}) {
+    const ClientRequest r = ParseClientText(bad);
+    EXPECT_EQ(r.kind, ClientRequest::Kind::kError) << bad;
+    EXPECT_FALSE(r.error.empty()) << bad;
+  }
+  EXPECT_NE(ParseClientText(R"({"op":"advertise"})").error.find("unsupported op 'advertise'"),
+            std::string::npos);
+}
+
+TEST(BridgeProtocol, ServerMessagesFollowTheSpec) {
+  std::string frame;
+  bridge::MessageDataFrame(0x01020304u, 0x1122334455667788ull, "abc", frame);
+  ASSERT_EQ(frame.size(), 16u);
+  EXPECT_EQ(frame[0], 0x01);
+  uint32_t sub;
+  uint64_t ts;
+  std::memcpy(&sub, frame.data() + 1, 4);
+  std::memcpy(&ts, frame.data() + 5, 8);
+  EXPECT_EQ(sub, 0x01020304u);
+  EXPECT_EQ(ts, 0x1122334455667788ull);
+  EXPECT_EQ(frame.substr(13), "abc");
+  const auto adv = nlohmann::json::parse(bridge::AdvertiseJson({{5, "t", "pkg.T", std::string("\x00\xff\x10", 3)}}));
+  EXPECT_EQ(adv["op"], "advertise");
+  EXPECT_EQ(adv["channels"][0]["id"], 5);
+  EXPECT_EQ(adv["channels"][0]["schema"], "AP8Q");  // base64 of 00 ff 10
+  EXPECT_EQ(adv["channels"][0]["schemaEncoding"], "protobuf");
+  const auto info = nlohmann::json::parse(bridge::ServerInfoJson("hexa_bridge", "s"));
+  EXPECT_EQ(info["op"], "serverInfo");
+  EXPECT_TRUE(info["capabilities"].empty());
+  // A status quoting invalid UTF-8 from a client is still valid JSON.
+  const auto st = nlohmann::json::parse(bridge::StatusJson(bridge::StatusLevel::kError, "bad \xff op"));
+  EXPECT_EQ(st["level"], 2);
+}
+
+}  // namespace
+}  // namespace hexa
