@@ -441,6 +441,7 @@ SystemConfig Translate(const pb::RigFile& f) {
   c.leg_controller.pi.integrator_limit_v = lc.pi().integrator_limit_v();
   c.leg_controller.pi.velocity_feedforward_v_s_m = lc.pi().velocity_feedforward_v_s_m();
   c.leg_controller.pi.rate_damping_v_s_m = lc.pi().rate_damping_v_s_m();
+  c.leg_controller.pi.force_feedforward_v_n = lc.pi().force_feedforward_v_n();
   c.leg_controller.setpoint_timeout_s = lc.setpoint_timeout_s();
 
   const pb::SupervisorConfig& sv = f.supervisor();
@@ -455,6 +456,7 @@ SystemConfig Translate(const pb::RigFile& f) {
   c.supervisor.workspace_max_rotation_rad = sv.workspace_max_rotation_rad();
   c.supervisor.least_squares_estimator = sv.least_squares_estimator();
   c.supervisor.estimator_outlier_threshold_m = sv.estimator_outlier_threshold_m();
+  c.supervisor.feedforward_enabled = sv.feedforward_enabled();
   c.supervisor.outer_loop.enabled = sv.outer_loop().enabled();
   c.supervisor.outer_loop.gain = sv.outer_loop().gain();
   c.supervisor.outer_loop.max_correction_m = sv.outer_loop().max_correction_m();
@@ -701,6 +703,7 @@ std::string ToTextFormat(const SystemConfig& c) {
   lc->mutable_pi()->set_integrator_limit_v(c.leg_controller.pi.integrator_limit_v);
   lc->mutable_pi()->set_velocity_feedforward_v_s_m(c.leg_controller.pi.velocity_feedforward_v_s_m);
   lc->mutable_pi()->set_rate_damping_v_s_m(c.leg_controller.pi.rate_damping_v_s_m);
+  lc->mutable_pi()->set_force_feedforward_v_n(c.leg_controller.pi.force_feedforward_v_n);
   lc->set_setpoint_timeout_s(c.leg_controller.setpoint_timeout_s);
 
   pb::SupervisorConfig* sv = f.mutable_supervisor();
@@ -715,6 +718,7 @@ std::string ToTextFormat(const SystemConfig& c) {
   sv->set_workspace_max_rotation_rad(c.supervisor.workspace_max_rotation_rad);
   sv->set_least_squares_estimator(c.supervisor.least_squares_estimator);
   sv->set_estimator_outlier_threshold_m(c.supervisor.estimator_outlier_threshold_m);
+  sv->set_feedforward_enabled(c.supervisor.feedforward_enabled);
   sv->mutable_outer_loop()->set_enabled(c.supervisor.outer_loop.enabled);
   sv->mutable_outer_loop()->set_gain(c.supervisor.outer_loop.gain);
   sv->mutable_outer_loop()->set_max_correction_m(c.supervisor.outer_loop.max_correction_m);

@@ -436,6 +436,7 @@ void CheckLegController(Checker& c, const LegControllerParams& p, const Supervis
   c.NonNegative("leg_controller.pi.integrator_limit_v", p.pi.integrator_limit_v, "limit");
   c.NonNegative("leg_controller.pi.velocity_feedforward_v_s_m", p.pi.velocity_feedforward_v_s_m, "gain");
   c.NonNegative("leg_controller.pi.rate_damping_v_s_m", p.pi.rate_damping_v_s_m, "gain");
+  c.NonNegative("leg_controller.pi.force_feedforward_v_n", p.pi.force_feedforward_v_n, "gain");
   if (c.Finite("leg_controller.setpoint_timeout_s", p.setpoint_timeout_s) &&
       std::isfinite(sup.period_s) && !(p.setpoint_timeout_s >= sup.period_s && p.setpoint_timeout_s > 0.0)) {
     // Setpoints arrive once per supervisor period: a shorter timeout holds every cycle.

@@ -24,6 +24,7 @@ LockstepSimulation::LockstepSimulation(const LockstepConfig& config) : config_(c
   plant_config.rig = config_.rig;
   plant_config.disturbance = config_.disturbance;
   plant_config.seed = config_.seed;
+  plant_config.tracker = config_.tracker;
   plant_ = std::make_unique<PlatformPlant>(plant_config);
   supervisor_ = std::make_unique<Supervisor>(config_.rig, config_.supervisor);
   const LegControllerConfig leg_config =

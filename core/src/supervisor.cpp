@@ -85,6 +85,7 @@ Supervisor::Supervisor(const RigParams& rig, const SupervisorParams& params)
                                                    kGqfkDefaultLegs, 0.01}),
       outer_loop_(rig.geometry, params.outer_loop),
       envelope_(MakeLegEnvelope(rig, params)),
+      inertial_(PlatformInertialParams::FromRig(rig)),
       home_(HomePoseVector(rig.geometry.home_position_m)),
       home_motion_(std::make_shared<const ConstantMotion>(home_)) {
   Require(params.period_s > 0.0, "period_s", params.period_s, "must be > 0");
@@ -136,6 +137,33 @@ void Supervisor::StartTrajectory(const Trajectory& trajectory, double time_s) {
   state_ = SupervisorState::kBlending;
 }
 
+void Supervisor::FillFeedforward(const TrajectorySample& desired, bool moving,
+                                 LegArray<SupervisorLegSetpoint>& setpoint) const {
+  for (auto& sp : setpoint) {
+    sp.feedforward_valid = false;
+    sp.feedforward_force_n = 0.0;
+    sp.feedforward_force_rate_n_s = 0.0;
+  }
+  if (!params_.feedforward_enabled) return;
+  PlatformMotion motion{desired.pose, desired.twist_B, desired.twist_rate_B};
+  LegForceResult now;
+  if (LegForcesForMotion(rig_.geometry, inertial_, motion, now) != KinStatus::kOk) return;
+  LegForceResult next = now;
+  if (moving) {
+    // The force one supervisor period ahead on the same trajectory: the legs interpolate
+    // force + rate * dt between setpoints, as they do the length (no 200 Hz staircase).
+    TrajectorySample ahead;
+    trajectory_.EvaluateStopped(trajectory_time_s_ + params_.period_s, stop_at_s_, ahead);
+    const PlatformMotion m{ahead.pose, ahead.twist_B, ahead.twist_rate_B};
+    if (LegForcesForMotion(rig_.geometry, inertial_, m, next) != KinStatus::kOk) next = now;
+  }
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    setpoint[i].feedforward_valid = true;
+    setpoint[i].feedforward_force_n = now.force_n[i];
+    setpoint[i].feedforward_force_rate_n_s = (next.force_n[i] - now.force_n[i]) / params_.period_s;
+  }
+}
+
 void Supervisor::EnterHold(FaultReason reason, int leg, const char* detail,
                            SupervisorOutput& output) {
   state_ = SupervisorState::kHold;
@@ -153,6 +181,9 @@ void Supervisor::EnterHold(FaultReason reason, int leg, const char* detail,
   last_desired_.vector.q_ddot.setZero();
   last_desired_.twist_B.setZero();
   last_desired_.twist_rate_B.setZero();
+  // Held at rest: the feed-forward becomes the static load of the frozen pose (the force
+  // of the last setpoint would keep the motion's inertial part).
+  if (initialized_) FillFeedforward(last_desired_, false, last_setpoint_);
 }
 
 void Supervisor::HandleCommand(const SupervisorInput& input, SupervisorOutput& output) {
@@ -392,6 +423,7 @@ void Supervisor::Update(const SupervisorInput& input, SupervisorOutput& output) 
       output.setpoint[i] = SupervisorLegSetpoint{length_m[i], speed_m_s[i], accel_m_s2[i],
                                                  output.outer_loop.correction_m[i], false};
     }
+    FillFeedforward(desired, state_ != SupervisorState::kIdle, output.setpoint);
     last_setpoint_ = output.setpoint;
     last_desired_ = desired;
     output.desired = desired;

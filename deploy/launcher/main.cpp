@@ -48,7 +48,8 @@ std::string TailOf(const std::string& path, int lines) {
 struct Options {
   std::string trajectory, controller, profile, mode, out_dir, rig, dds_config;
   long long seed = 1, domain = 0, periods = 0, stale_ticks = 15;
-  bool recorder = true, standby = false, outer_loop = true, rt_sched = true;
+  bool recorder = true, standby = false, outer_loop = true, rt_sched = true, feedforward = true,
+       tracker = false;
   std::string cpus_control, cpus_recorder;
   int fault_leg = 0;
   std::string fault_kind, fault_at;
@@ -119,6 +120,10 @@ int main(int argc, char** argv) {
   cli.AddOption("timeout", "s", "wall-clock limit of the session (0 = none)", "0");
   cli.AddFlag("no-recorder", "do not record (no report)");
   cli.AddFlag("no-outer-loop", "disable the task-space outer loop");
+  cli.AddFlag("no-feedforward",
+              "no platform inverse-dynamics feed-forward on the leg setpoints (paper-faithful)");
+  cli.AddFlag("tracker", "the plant publishes the external pose instrument (hexa_TrackerPose, for "
+                         "hexa_calibrate; use with --trajectory calibration)");
   cli.AddFlag("standby", "also start a hot-standby controller per leg");
   cli.AddOption("cpus-control", "list",
                 "pin the plant, the leg controllers and the supervisor to these CPUs (e.g. 1); "
@@ -156,6 +161,8 @@ int main(int argc, char** argv) {
     }
     *field = cli.Get(name);
   }
+  o.feedforward = !cli.Flag("no-feedforward");
+  o.tracker = cli.Flag("tracker");
   auto seed = cli.GetInt("seed", 0, (1LL << 62));
   auto periods = cli.GetInt("periods", 0, 1000);
   auto timeout = cli.GetDouble("timeout", 0, 1e6);
@@ -282,6 +289,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> sup_args{"--trajectory", o.trajectory, "--autostart",
                                     "--exit-when-done", "--periods", std::to_string(o.periods)};
   if (!o.outer_loop) sup_args.push_back("--no-outer-loop");
+  if (!o.feedforward) sup_args.push_back("--no-feedforward");
   if (o.recorder) sup_args.insert(sup_args.end(), {"--pose-readers", "1"});
   specs.push_back(spec("supervisor", "/services/task_space/hexa_task_space", sup_args));
   std::vector<std::string> plant_args{"--profile", o.profile, "--seed", std::to_string(o.seed),
@@ -289,6 +297,7 @@ int main(int argc, char** argv) {
                                       o.out_dir + "/plant.json", "--stale-ticks",
                                       std::to_string(o.stale_ticks)};
   if (o.recorder) plant_args.push_back("--expect-recorder");
+  if (o.tracker) plant_args.push_back("--tracker");
   specs.push_back(spec("plant", "/services/plant_sim/hexa_plant_sim", plant_args));
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -369,6 +378,7 @@ int main(int argc, char** argv) {
               "--meta", "profile=" + o.profile, "--meta", "mode=" + o.mode,
               "--meta", "seed=" + std::to_string(o.seed),
               "--meta", std::string("outer_loop=") + (o.outer_loop ? "on" : "off"),
+              "--meta", std::string("feedforward=") + (o.feedforward ? "on" : "off"),
               "--meta", std::string("completed=") + (completed ? "yes" : "NO")};
     if (o.fault_leg != 0)
       r.argv.insert(r.argv.end(), {"--meta", "fault=leg " + std::to_string(o.fault_leg) + " " +

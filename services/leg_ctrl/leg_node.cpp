@@ -137,6 +137,9 @@ void LegNode::TakeSetpoints() {
       issued.value.acceleration_m_s2 = s.acceleration_m_s2;
       issued.value.correction_m = s.correction_m;
       issued.value.hold = s.hold;
+      issued.value.feedforward_valid = s.feedforward_valid;
+      issued.value.feedforward_force_n = s.feedforward_force_n;
+      issued.value.feedforward_force_rate_n_s = s.feedforward_force_rate_n_s;
       setpoints_.Add(issued);  // an older or repeated one is ignored
     }
   }

@@ -42,6 +42,7 @@ struct PlantNodeOptions {
   std::uint64_t startup_grace_ticks = 500;
   double resend_after_s = 0.05;    // lockstep: republish sensors of a silent leg after this
   std::string summary_path;        // write the run's figures here as JSON at exit ("" = no)
+  bool tracker = false;            // publish the external pose instrument (calibration, issue 14)
 };
 
 // Age of the command the plant applied at a tick, in ticks (tick - answered tick; 0 = the
@@ -122,6 +123,8 @@ class PlantNode {
   comm::LegRoutedWriter<hexa_msg_LegSensors> sensors_writer_;
   comm::Writer<hexa_msg_ImuSample> imu_writer_;
   comm::Writer<hexa_msg_GroundTruth> truth_writer_;
+  comm::Topic<hexa_msg_TrackerPose> tracker_topic_;
+  comm::Writer<hexa_msg_TrackerPose> tracker_writer_;
   comm::Reader<hexa_msg_ValveCommand> valve_reader_;
   node::StatusPublisher status_;
   node::FaultPublisher faults_;

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   cli.AddOption("rig", "file", "rig file", HEXA_DEFAULT_RIG_FILE);
   cli.AddFlag("no-outer-loop", "disable the outer loop");
   cli.AddFlag("least-squares", "six-leg least-squares estimator instead of GQFK");
+  cli.AddFlag("no-feedforward", "no inverse-dynamics feed-forward (paper-faithful)");
   const bool ok = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, ok); rc >= 0) return rc;
   auto seed = cli.GetInt("seed", 0, 1LL << 62);
@@ -51,6 +52,7 @@ int main(int argc, char** argv) {
                                                      : hexa::LegControllerKind::kBsSmc;
   if (cli.Flag("no-outer-loop")) config.supervisor.outer_loop.enabled = false;
   if (cli.Flag("least-squares")) config.supervisor.least_squares_estimator = true;
+  if (cli.Flag("no-feedforward")) config.supervisor.feedforward_enabled = false;
 
   std::vector<hexa::PaperMotion> motions;
   if (cli.Get("trajectory") == "all") {
@@ -65,9 +67,10 @@ int main(int argc, char** argv) {
     }
     motions = {m};
   }
-  std::printf("controller=%s profile=%s seed=%lld outer_loop=%s\n", cli.Get("controller").c_str(),
-              cli.Get("profile").c_str(), *seed,
-              config.supervisor.outer_loop.enabled ? "on" : "off");
+  std::printf("controller=%s profile=%s seed=%lld outer_loop=%s feedforward=%s\n",
+              cli.Get("controller").c_str(), cli.Get("profile").c_str(), *seed,
+              config.supervisor.outer_loop.enabled ? "on" : "off",
+              config.supervisor.feedforward_enabled ? "on" : "off");
   std::printf("%-9s %-4s | %8s %8s %8s | %8s %8s %8s | %s\n", "traj", "vs", "X cm", "Y cm",
               "Z cm", "rotX deg", "rotY deg", "rotZ deg", "leg RMSE mm (1..6)");
   int failures = 0;

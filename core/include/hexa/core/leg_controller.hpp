@@ -40,6 +40,8 @@ struct LegControllerConfig {
   double max_setpoint_speed_m_s = 2.0;
   double max_setpoint_acceleration_m_s2 = 100.0;
   double max_correction_m = 0.05;
+  double max_feedforward_force_n = 2000.0;        // |force| beyond -> bad input
+  double max_feedforward_force_rate_n_s = 1.0e5;  // |rate| beyond -> bad input
 
   static LegControllerConfig FromRig(const RigParams& rig, const LegControllerParams& params,
                                      LegControllerKind kind);
@@ -63,6 +65,11 @@ struct LegControllerInput {
   double setpoint_acceleration_m_s2 = 0.0;
   double correction_m = 0.0;  // outer-loop correction (Sec. 4.1), added to the length
   bool hold = false;
+  // Inverse-dynamics feed-forward of the setpoint (issue 14): force at setpoint_time_s and
+  // its rate; interpolated like the length. Not valid: the lumped load model (paper).
+  bool feedforward_valid = false;
+  double feedforward_force_n = 0.0;
+  double feedforward_force_rate_n_s = 0.0;
 };
 
 struct LegControllerOutput {
@@ -72,6 +79,7 @@ struct LegControllerOutput {
   LegControlStatus status = LegControlStatus::kHoldNoSetpoint;
   double desired_length_m = 0.0;    // interpolated setpoint + correction actually used
   double desired_velocity_m_s = 0.0;
+  double feedforward_force_n = 0.0; // interpolated feed-forward used (0 when none)
   double sliding_surface_m_s = 0.0; // S (eq 19); 0 for the PI baseline
   double velocity_m_s = 0.0;        // estimated leg velocity (BS-SMC), 0 for PI
   double desired_force_n = 0.0;     // phi (BS-SMC)

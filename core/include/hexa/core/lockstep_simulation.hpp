@@ -29,6 +29,7 @@ struct LockstepConfig {
   DisturbanceProfile disturbance = MakeRealisticDisturbanceProfile();
   std::uint64_t seed = 1;
   LegControllerKind controller = LegControllerKind::kBsSmc;
+  TrackerParams tracker;  // the plant's external pose instrument (calibration runs only)
   double tick_s = 0.001;
   int supervisor_every_ticks = 5;
   void Validate() const;  // throws std::invalid_argument naming the field and value
