@@ -42,6 +42,16 @@ KinematicCalibration NominalCalibration(const GeometryParams& geometry) {
   return c;
 }
 
+GeometryParams CalibratedGeometry(const GeometryParams& nominal,
+                                  const KinematicCalibration& calibration) {
+  GeometryParams g = nominal;
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    g.p_BA_B[i] = calibration[i].p_BA_B_m;
+    g.p_PB_P[i] = calibration[i].p_PB_P_m;
+  }
+  return g;
+}
+
 const std::array<const char*, kCalibrationParamsPerLeg>& CalibrationParameterNames() {
   static const std::array<const char*, kCalibrationParamsPerLeg> names{
       "base joint x", "base joint y", "base joint z", "platform joint x",
@@ -265,6 +275,73 @@ void PoseSequenceMotion::Evaluate(double tau_s, PoseVectorState& state) const no
   state.q = poses_[k] + sigma * delta;
   state.q_dot = dsigma * delta;
   state.q_ddot = ddsigma * delta;
+}
+
+void CalibrationSampleCollector::AddDesired(std::uint64_t tick, const Vector6d& desired_xyz_rpy,
+                                            bool usable) {
+  desired_.push_back(Desired{tick, desired_xyz_rpy, usable});
+}
+
+void CalibrationSampleCollector::AddReading(std::uint64_t tick, std::size_t leg, double reading_m) {
+  if (leg >= kNumLegs) return;
+  TickData& d = ticks_[tick];
+  d.reading[leg] = reading_m;
+  d.has_reading[leg] = true;
+}
+
+void CalibrationSampleCollector::AddTracker(std::uint64_t tick, const Eigen::Vector3d& p_BP_B_m,
+                                            const Eigen::Quaterniond& q_BP) {
+  TickData& d = ticks_[tick];
+  d.has_tracker = true;
+  d.p = p_BP_B_m;
+  d.q = q_BP;
+  ++tracker_count_;
+}
+
+std::vector<CalibrationSample> CalibrationSampleCollector::Samples() const {
+  std::vector<CalibrationSample> samples;
+  const auto min_ticks = static_cast<std::uint64_t>(std::llround(params_.min_still_s / params_.tick_s));
+  const auto window_ticks = static_cast<std::uint64_t>(std::llround(params_.window_s / params_.tick_s));
+  std::size_t begin = 0;
+  for (std::size_t k = 1; k <= desired_.size(); ++k) {
+    const bool same = k < desired_.size() && desired_[k].usable && desired_[k].q == desired_[begin].q;
+    if (same) continue;
+    const std::uint64_t first = desired_[begin].tick, last = desired_[k - 1].tick;
+    if (desired_[begin].usable && last >= first + min_ticks) {
+      // One sample per tracker measurement in the window: its pose, and each leg's readings
+      // averaged over the ticks of that measurement's period around it (the platform is
+      // still on that scale; it may wander by a millimetre over the whole window, so poses
+      // and readings are never averaged separately over the window).
+      const auto half = static_cast<std::uint64_t>(
+          std::max<long long>(0, std::llround(0.5 * params_.tracker_period_s / params_.tick_s)));
+      for (auto it = ticks_.lower_bound(last - window_ticks); it != ticks_.end() && it->first <= last;
+           ++it) {
+        if (!it->second.has_tracker) continue;
+        LegArray<double> sum{};
+        LegArray<int> n_read{};
+        const std::uint64_t t0 = it->first >= half ? it->first - half : 0;
+        for (auto jt = ticks_.lower_bound(t0); jt != ticks_.end() && jt->first < it->first + half + (half == 0 ? 1 : 0);
+             ++jt) {
+          for (std::size_t i = 0; i < kNumLegs; ++i) {
+            if (jt->second.has_reading[i]) {
+              sum[i] += jt->second.reading[i];
+              ++n_read[i];
+            }
+          }
+        }
+        bool complete = true;
+        for (int n : n_read) complete = complete && n > 0;
+        if (!complete) continue;
+        CalibrationSample s;
+        s.pose.p_BP_B_m = it->second.p;
+        s.pose.R_BP = it->second.q.normalized().toRotationMatrix();
+        for (std::size_t i = 0; i < kNumLegs; ++i) s.reading_m[i] = sum[i] / n_read[i];
+        samples.push_back(s);
+      }
+    }
+    begin = k;
+  }
+  return samples;
 }
 
 Trajectory MakeCalibrationTrajectory(const RigParams& rig, const Vector6d& start_xyz_rpy,

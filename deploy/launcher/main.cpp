@@ -288,7 +288,9 @@ int main(int argc, char** argv) {
   }
   std::vector<std::string> sup_args{"--trajectory", o.trajectory, "--autostart",
                                     "--exit-when-done", "--periods", std::to_string(o.periods)};
-  if (!o.outer_loop) sup_args.push_back("--no-outer-loop");
+  // The calibration procedure holds the platform still at each pose: the outer loop would
+  // integrate estimation noise there (idle wander, docs/task_space.md), so it is off.
+  if (!o.outer_loop || o.trajectory == "calibration") sup_args.push_back("--no-outer-loop");
   if (!o.feedforward) sup_args.push_back("--no-feedforward");
   if (o.recorder) sup_args.insert(sup_args.end(), {"--pose-readers", "1"});
   specs.push_back(spec("supervisor", "/services/task_space/hexa_task_space", sup_args));

@@ -28,20 +28,6 @@ namespace {
 
 using hexa::kNumLegs;
 
-struct TickData {
-  bool has_tracker = false;
-  Eigen::Vector3d tracker_p = Eigen::Vector3d::Zero();
-  Eigen::Quaterniond tracker_q = Eigen::Quaterniond::Identity();
-  hexa::LegArray<double> reading{};
-  hexa::LegArray<bool> has_reading{};
-};
-
-struct PoseReportRow {
-  std::uint64_t tick;
-  std::array<double, 6> desired;
-  int state;
-};
-
 template <typename T>
 T Parse(const hexa::recorder::McapMessageView& view) {
   T msg;
@@ -60,11 +46,11 @@ int main(int argc, char** argv) {
       "recorded calibration session with an external pose instrument (hexa_session "
       "--trajectory calibration --tracker). Usage: hexa_calibrate RECORDING.mcap [options]");
   cli.AddOption("rig", "file", "rig file: the nominal model to calibrate", HEXA_DEFAULT_RIG_FILE);
-  cli.AddOption("min-still", "s", "a still window: desired pose unchanged at least this long", "2");
-  cli.AddOption("window", "s", "average the last this-many seconds of each still window", "1");
+  cli.AddOption("min-still", "s", "a still window: desired pose unchanged at least this long", "4");
+  cli.AddOption("window", "s", "use the last this-many seconds of each still window", "2");
   cli.AddOption("noise-mm", "mm",
                 "1-sigma error of one averaged still sample (reading and pose), for the "
-                "identifiability check", "0.002");
+                "identifiability check", "0.035");
   cli.AddOption("max-poses", "N", "use only the first N still windows (0 = all)", "0");
   cli.AddOption("truth-seed", "N",
                 "simulated rig: compare every parameter with the plant's truth for this seed");
@@ -92,10 +78,9 @@ int main(int argc, char** argv) {
   const hexa::RigParams& rig = loaded.config.rig;
   const double mid = rig.cylinder.mid_stroke_length_m;
 
-  // 1. Read the three topics, keyed by tick.
-  std::map<std::uint64_t, TickData> ticks;
-  std::vector<PoseReportRow> reports;
-  std::size_t tracker_samples = 0;
+  // 1. Read the three topics; 2. still windows from the desired pose, the last `window`
+  // seconds of each averaged (core CalibrationSampleCollector).
+  hexa::CalibrationSampleCollector collector(hexa::StillWindowParams{*min_still, *window, 0.001});
   try {
     hexa::recorder::ReadRecording(
         recording, [&](const hexa::recorder::McapChannel& ch,
@@ -104,30 +89,27 @@ int main(int argc, char** argv) {
           if (ch.topic == "hexa_TrackerPose") {
             const auto m = Parse<hexa::rec::TrackerPose>(view);
             if (m.position_m_size() != 3 || m.orientation_wxyz_size() != 4) return;
-            TickData& d = ticks[m.header().tick()];
-            d.has_tracker = true;
-            d.tracker_p = {m.position_m(0), m.position_m(1), m.position_m(2)};
-            d.tracker_q = Eigen::Quaterniond(m.orientation_wxyz(0), m.orientation_wxyz(1),
-                                             m.orientation_wxyz(2), m.orientation_wxyz(3));
-            ++tracker_samples;
+            collector.AddTracker(m.header().tick(),
+                                 {m.position_m(0), m.position_m(1), m.position_m(2)},
+                                 Eigen::Quaterniond(m.orientation_wxyz(0), m.orientation_wxyz(1),
+                                                    m.orientation_wxyz(2), m.orientation_wxyz(3)));
           } else if (ch.topic == "hexa_LegSensors") {
             const auto m = Parse<hexa::rec::LegSensors>(view);
             if (m.leg_id() < 1 || m.leg_id() > 6) return;
-            TickData& d = ticks[m.header().tick()];
-            d.reading[m.leg_id() - 1] = m.length_m();
-            d.has_reading[m.leg_id() - 1] = true;
+            collector.AddReading(m.header().tick(), m.leg_id() - 1, m.length_m());
           } else if (ch.topic == "hexa_PoseReport") {
             const auto m = Parse<hexa::rec::PoseReport>(view);
             if (m.desired_pose_size() != 6) return;
-            PoseReportRow r{m.header().tick(), {}, static_cast<int>(m.state())};
-            for (int k = 0; k < 6; ++k) r.desired[static_cast<std::size_t>(k)] = m.desired_pose(k);
-            reports.push_back(r);
+            hexa::Vector6d q;
+            for (int k = 0; k < 6; ++k) q[k] = m.desired_pose(k);
+            collector.AddDesired(m.header().tick(), q, m.state() != hexa::rec::SUPERVISOR_HOLD);
           }
         });
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s: %s\n", recording.c_str(), e.what());
     return 1;
   }
+  const std::size_t tracker_samples = collector.tracker_count();
   if (tracker_samples == 0) {
     std::fprintf(stderr,
                  "error: %s has no hexa_TrackerPose samples: record the calibration session with "
@@ -135,57 +117,7 @@ int main(int argc, char** argv) {
                  recording.c_str());
     return 1;
   }
-
-  // 2. Still windows from the desired pose; average the last `window` seconds of each.
-  const double tick_s = 0.001;
-  const auto min_ticks = static_cast<std::uint64_t>(std::llround(*min_still / tick_s));
-  const auto window_ticks = static_cast<std::uint64_t>(std::llround(*window / tick_s));
-  std::vector<hexa::CalibrationSample> samples;
-  std::size_t begin = 0;
-  for (std::size_t k = 1; k <= reports.size(); ++k) {
-    const bool same = k < reports.size() && reports[k].desired == reports[begin].desired &&
-                      reports[k].state != 4 /* HOLD */;
-    if (same) continue;
-    const std::uint64_t first = reports[begin].tick, last = reports[k - 1].tick;
-    if (last >= first + min_ticks && reports[begin].state != 4) {
-      Eigen::Vector3d p = Eigen::Vector3d::Zero();
-      Eigen::Vector4d q_sum = Eigen::Vector4d::Zero();
-      hexa::LegArray<double> sum{};
-      hexa::LegArray<int> n_read{};
-      int n_tracker = 0;
-      Eigen::Quaterniond q_ref;
-      for (auto it = ticks.lower_bound(last - window_ticks); it != ticks.end() && it->first <= last;
-           ++it) {
-        const TickData& d = it->second;
-        if (d.has_tracker) {
-          if (n_tracker == 0) q_ref = d.tracker_q;
-          Eigen::Vector4d c = d.tracker_q.coeffs();
-          if (c.dot(q_ref.coeffs()) < 0.0) c = -c;  // same hemisphere
-          q_sum += c;
-          p += d.tracker_p;
-          ++n_tracker;
-        }
-        for (std::size_t i = 0; i < kNumLegs; ++i) {
-          if (d.has_reading[i]) {
-            sum[i] += d.reading[i];
-            ++n_read[i];
-          }
-        }
-      }
-      bool complete = n_tracker > 0;
-      for (int n : n_read) complete = complete && n > 0;
-      if (complete) {
-        hexa::CalibrationSample s;
-        s.pose.p_BP_B_m = p / n_tracker;
-        Eigen::Quaterniond q;
-        q.coeffs() = q_sum.normalized();
-        s.pose.R_BP = q.toRotationMatrix();
-        for (std::size_t i = 0; i < kNumLegs; ++i) s.reading_m[i] = sum[i] / n_read[i];
-        samples.push_back(s);
-      }
-    }
-    begin = k;
-  }
+  std::vector<hexa::CalibrationSample> samples = collector.Samples();
   if (*max_poses > 0 && samples.size() > static_cast<std::size_t>(*max_poses)) {
     samples.resize(static_cast<std::size_t>(*max_poses));
   }

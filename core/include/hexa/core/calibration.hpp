@@ -18,6 +18,7 @@
 #pragma once
 
 #include <array>
+#include <map>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -45,6 +46,16 @@ struct LegCalibration {
 };
 using KinematicCalibration = LegArray<LegCalibration>;
 
+// The leg length a calibrated potentiometer reading stands for (the model inverted):
+// l = l_mid + (reading - l_mid - offset) / gain.
+inline double CorrectedLengthM(const LegCalibration& leg, double reading_m, double mid_stroke_length_m) {
+  return mid_stroke_length_m +
+         (reading_m - mid_stroke_length_m - leg.potentiometer_offset_m) / leg.potentiometer_gain;
+}
+
+// The controllers' geometry with the calibrated joint positions.
+GeometryParams CalibratedGeometry(const GeometryParams& nominal, const KinematicCalibration& calibration);
+
 // The nominal calibration of a rig: its joint positions, ideal potentiometers.
 KinematicCalibration NominalCalibration(const GeometryParams& geometry);
 
@@ -62,7 +73,9 @@ double PredictedReadingM(const LegCalibration& leg, const Pose& pose, double mid
 
 // Identifiability of the pose set (the linearised problem at `around`).
 struct CalibrationIdentifiabilityLimits {
-  double reading_noise_m = 2.0e-6;   // 1-sigma error of one averaged sample (reading + pose)
+  // 1-sigma error of one sample (reading averaged over 10 ms, 0.05 mm potentiometer noise:
+  // 0.017 mm; tracker 0.02 mm and 0.005 deg at ~0.25 m: 0.03 mm)
+  double reading_noise_m = 0.035e-3;
   double max_joint_std_m = 5.0e-5;   // predicted 1-sigma of every joint coordinate
   double max_offset_std_m = 2.5e-5;  // predicted 1-sigma of every potentiometer offset
   double max_gain_std = 1.0e-4;      // predicted 1-sigma of every potentiometer gain
@@ -115,8 +128,8 @@ std::vector<Vector6d> SelectCalibrationPoses(const RigParams& rig,
 // move_s. The calibration fit uses the last part of every still window.
 struct CalibrationProcedureParams {
   CalibrationDesignParams design;
-  double move_s = 1.0;
-  double dwell_s = 2.5;  // >= half the supervisor's blend: the first pose is reached still
+  double move_s = 2.0;
+  double dwell_s = 5.0;  // >= half the supervisor's blend: the first pose is reached still
 };
 
 class PoseSequenceMotion final : public ReferenceMotion {
@@ -132,6 +145,48 @@ class PoseSequenceMotion final : public ReferenceMotion {
   std::vector<Vector6d> poses_;
   double move_s_;
   double dwell_s_;
+};
+
+// Builds the still samples of a calibration run from its data in tick order (hexa_calibrate
+// from a recording, hexa_sim in process): a still window is a run of supervisor ticks whose
+// desired pose does not change for at least min_still_s; the tracker poses and the
+// the last window_s of it gives one sample per tracker measurement (pose) with the
+// potentiometer readings averaged over that measurement's period. Not for the
+// control cycle (it keeps the run's data).
+struct StillWindowParams {
+  double min_still_s = 4.0;
+  double window_s = 2.0;
+  double tick_s = 0.001;
+  double tracker_period_s = 0.01;  // readings averaged over this period around a measurement
+};
+
+class CalibrationSampleCollector {
+ public:
+  explicit CalibrationSampleCollector(const StillWindowParams& params) : params_(params) {}
+  // The supervisor's desired pose at `tick`; `usable` false (e.g. HOLD) ends a window.
+  void AddDesired(std::uint64_t tick, const Vector6d& desired_xyz_rpy, bool usable);
+  void AddReading(std::uint64_t tick, std::size_t leg, double reading_m);
+  void AddTracker(std::uint64_t tick, const Eigen::Vector3d& p_BP_B_m, const Eigen::Quaterniond& q_BP);
+  std::vector<CalibrationSample> Samples() const;
+  std::size_t tracker_count() const { return tracker_count_; }
+
+ private:
+  struct TickData {
+    bool has_tracker = false;
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+    LegArray<double> reading{};
+    LegArray<bool> has_reading{};
+  };
+  struct Desired {
+    std::uint64_t tick;
+    Vector6d q;
+    bool usable;
+  };
+  StillWindowParams params_;
+  std::map<std::uint64_t, TickData> ticks_;
+  std::vector<Desired> desired_;
+  std::size_t tracker_count_ = 0;
 };
 
 Trajectory MakeCalibrationTrajectory(const RigParams& rig, const Vector6d& start_xyz_rpy,

@@ -11,7 +11,9 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 
+#include "hexa/core/calibration.hpp"
 #include "hexa/core/command_hygiene.hpp"
 #include "hexa/core/control_params.hpp"
 #include "hexa/core/leg_controller.hpp"
@@ -30,6 +32,10 @@ struct LockstepConfig {
   std::uint64_t seed = 1;
   LegControllerKind controller = LegControllerKind::kBsSmc;
   TrackerParams tracker;  // the plant's external pose instrument (calibration runs only)
+  // Kinematic calibration the controllers use (hexa_calibrate): the supervisor's geometry
+  // and every potentiometer reading the leg controllers and the supervisor see are
+  // corrected. Unset: the nominal rig (as before).
+  std::optional<KinematicCalibration> calibration;
   double tick_s = 0.001;
   int supervisor_every_ticks = 5;
   void Validate() const;  // throws std::invalid_argument naming the field and value
@@ -61,6 +67,7 @@ class LockstepSimulation {
   const LockstepConfig& config() const { return config_; }
 
  private:
+  double SensedLengthM(std::size_t leg) const;  // potentiometer reading, calibrated if set
   LockstepConfig config_;
   std::unique_ptr<PlatformPlant> plant_;
   std::unique_ptr<Supervisor> supervisor_;
