@@ -57,6 +57,17 @@ LegControllerConfig LegControllerConfig::FromRig(const RigParams& rig, const Leg
   return c;
 }
 
+LegControllerConfig LegControllerConfig::FromModel(const ControllerModel& model,
+                                                   std::size_t leg_index, LegControllerKind kind) {
+  const LegControllerModel& leg = model.legs.at(leg_index);
+  LegControllerConfig c;
+  c.kind = kind;
+  c.params = leg.params;
+  c.model = leg.model;
+  c.potentiometer = leg.potentiometer;
+  return c;
+}
+
 void LegControllerConfig::Validate() const {
   Require(std::isfinite(params.setpoint_timeout_s) && params.setpoint_timeout_s > 0,
           "setpoint_timeout_s", params.setpoint_timeout_s, "finite and > 0");
@@ -77,6 +88,10 @@ void LegControllerConfig::Validate() const {
           "max_feedforward_force_n", max_feedforward_force_n, "finite and > 0");
   Require(std::isfinite(max_feedforward_force_rate_n_s) && max_feedforward_force_rate_n_s > 0,
           "max_feedforward_force_rate_n_s", max_feedforward_force_rate_n_s, "finite and > 0");
+  Require(std::isfinite(potentiometer.offset_m), "potentiometer.offset_m", potentiometer.offset_m,
+          "finite");
+  Require(std::isfinite(potentiometer.gain) && potentiometer.gain > 0, "potentiometer.gain",
+          potentiometer.gain, "finite and > 0");
   MakeBsSmcConfig(*this).Validate();
   MakePiConfig(*this).Validate();
 }
@@ -85,7 +100,10 @@ LegController::LegController(const LegControllerConfig& config)
     : config_((config.Validate(), config)),
       bssmc_(MakeBsSmcConfig(config)),
       pi_(MakePiConfig(config)),
-      last_desired_length_m_(config.model.cylinder.mid_stroke_length_m) {}
+      last_desired_length_m_(config.model.cylinder.mid_stroke_length_m) {
+  potentiometer_calibrated_ =
+      config_.potentiometer.offset_m != 0.0 || config_.potentiometer.gain != 1.0;
+}
 
 void LegController::Interpolate(const LegControllerInput& in, double& length_m, double& velocity_m_s,
                                 double& acceleration_m_s2) {
@@ -135,7 +153,19 @@ void LegController::Hold(LegControlStatus status, LegControllerOutput& out) {
   out.desired_force_rate_n_s = 0.0;
 }
 
-void LegController::Update(const LegControllerInput& in, LegControllerOutput& out) {
+void LegController::Update(const LegControllerInput& raw, LegControllerOutput& out) {
+  // Kinematic calibration of the potentiometer (rig overlay, issue 14): the reading of piston
+  // position x is offset + gain x; the law works on the corrected length.
+  LegControllerInput calibrated;
+  const LegControllerInput* input = &raw;
+  if (potentiometer_calibrated_) {
+    calibrated = raw;
+    const double mid = config_.model.cylinder.mid_stroke_length_m;
+    calibrated.length_m =
+        mid + (raw.length_m - mid - config_.potentiometer.offset_m) / config_.potentiometer.gain;
+    input = &calibrated;
+  }
+  const LegControllerInput& in = *input;
   out.tick = in.tick;
   out.setpoint_tick = in.setpoint_tick;
   if (!SensorsValid(in)) return Hold(LegControlStatus::kHoldBadInput, out);

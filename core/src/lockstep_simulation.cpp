@@ -26,24 +26,21 @@ LockstepSimulation::LockstepSimulation(const LockstepConfig& config) : config_(c
   plant_config.seed = config_.seed;
   plant_config.tracker = config_.tracker;
   plant_ = std::make_unique<PlatformPlant>(plant_config);
-  RigParams controller_rig = config_.rig;
-  if (config_.calibration) {
-    controller_rig.geometry = CalibratedGeometry(config_.rig.geometry, *config_.calibration);
+  const ControllerModel model = config_.controllers
+                                    ? *config_.controllers
+                                    : ControllerModel::FromRig(config_.rig, config_.leg_controller);
+  LegArray<PotentiometerCalibrationParams> potentiometer{};
+  for (std::size_t i = 0; i < kNumLegs; ++i) potentiometer[i] = model.legs[i].potentiometer;
+  supervisor_ = std::make_unique<Supervisor>(model.SupervisorRig(config_.rig), config_.supervisor,
+                                             potentiometer);
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    legs_[i] = std::make_unique<LegController>(
+        LegControllerConfig::FromModel(model, i, config_.controller));
   }
-  supervisor_ = std::make_unique<Supervisor>(controller_rig, config_.supervisor);
-  const LegControllerConfig leg_config =
-      LegControllerConfig::FromRig(config_.rig, config_.leg_controller, config_.controller);
-  for (auto& leg : legs_) leg = std::make_unique<LegController>(leg_config);
   hygiene_ = CommandHygieneParams::FromValve(config_.rig.valve, 0);
   schedule_.supervisor_every_ticks = config_.supervisor_every_ticks;
 }
 
-double LockstepSimulation::SensedLengthM(std::size_t leg) const {
-  const double reading = plant_before_.legs[leg].length_m;
-  if (!config_.calibration) return reading;
-  return CorrectedLengthM((*config_.calibration)[leg], reading,
-                          config_.rig.cylinder.mid_stroke_length_m);
-}
 
 PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartRequest* start) {
   plant_before_ = plant_->output();
@@ -57,7 +54,7 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
   if (supervisor_ran_) {
     SupervisorInput in;
     in.time_s = now_s;
-    for (std::size_t i = 0; i < kNumLegs; ++i) in.length_m[i] = SensedLengthM(i);
+    for (std::size_t i = 0; i < kNumLegs; ++i) in.length_m[i] = plant_before_.legs[i].length_m;
     const auto& q = plant_before_.imu.q_BP_measured;
     in.orientation_wxyz = {q.w(), q.x(), q.y(), q.z()};
     in.command = command;
@@ -74,7 +71,7 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
     in.tick = tick_;
     in.time_s = now_s;
     const LegSensorReading& s = plant_before_.legs[i];
-    in.length_m = SensedLengthM(i);
+    in.length_m = plant_before_.legs[i].length_m;
     in.cap_pressure_pa = s.chamber1_pressure_pa;
     in.rod_pressure_pa = s.chamber2_pressure_pa;
     in.supply_pressure_pa = s.supply_pressure_pa;

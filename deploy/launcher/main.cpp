@@ -54,6 +54,7 @@ struct Options {
   int fault_leg = 0;
   std::string fault_kind, fault_at;
   double timeout_s = 0;
+  std::vector<std::string> rig_overlays;  // absolute paths, for the legs and the supervisor
 };
 
 // CPU time of every process over its whole life (start-up and discovery included), per
@@ -114,6 +115,9 @@ int main(int argc, char** argv) {
   cli.AddOption("seed", "N", "random seed of the plant (noise, calibration errors)", "1");
   cli.AddOption("out", "dir", "output directory (default: out/session-<timestamp>)");
   cli.AddOption("rig", "file", "rig file (protobuf text format)", HEXA_DEFAULT_RIG_FILE);
+  cli.AddRepeatable("rig-overlay", "file",
+                    "rig overlay (identified / calibrated values) for the leg controllers and the "
+                    "supervisor; the plant keeps the rig file + profile (docs/config.md)");
   cli.AddOption("dds-config", "file", "Cyclone DDS configuration", HEXA_DEFAULT_CYCLONE_CONFIG);
   cli.AddOption("domain", "id", "DDS domain id (default: derived from the pid, 100-199)");
   cli.AddOption("periods", "N", "trajectory periods to track (0 = the trajectory's default)", "0");
@@ -187,6 +191,13 @@ int main(int argc, char** argv) {
     }
     o.trajectory = fs::absolute(o.trajectory).string();
   }
+  for (const auto& overlay : cli.GetAll("rig-overlay")) {
+    o.rig_overlays.push_back(fs::absolute(overlay).string());
+    if (!fs::exists(o.rig_overlays.back())) {
+      std::fprintf(stderr, "error: rig overlay '%s' does not exist\n", overlay.c_str());
+      return 2;
+    }
+  }
   for (const auto& [what, path] : {std::pair{"rig file", o.rig}, {"DDS config", o.dds_config}}) {
     if (!fs::exists(path)) {
       std::fprintf(stderr, "error: %s '%s' does not exist\n", what, path.c_str());
@@ -227,6 +238,11 @@ int main(int argc, char** argv) {
   log->info("session: trajectory={} controller={} profile={} mode={} seed={} domain={} out={}",
             o.trajectory, o.controller, o.profile, o.mode, o.seed, o.domain, o.out_dir);
   log->info("DDS config: {}", o.dds_config);
+  std::vector<std::string> overlay_args;  // legs and supervisor only: the plant keeps its truth
+  for (const auto& overlay : o.rig_overlays) {
+    log->info("rig overlay for the controllers and the supervisor: {}", overlay);
+    overlay_args.insert(overlay_args.end(), {"--rig-overlay", overlay});
+  }
 
   const std::string bin = HEXA_BINARY_DIR;
   const std::map<std::string, std::string> env{
@@ -266,6 +282,7 @@ int main(int argc, char** argv) {
   }
   for (int leg = 1; leg <= 6; ++leg) {
     std::vector<std::string> leg_args{"--leg", std::to_string(leg), "--controller", o.controller};
+    leg_args.insert(leg_args.end(), overlay_args.begin(), overlay_args.end());
     // With a recorder, a leg runs only once the recorder has matched its valve commands too:
     // otherwise a recorder that discovers a leg late misses its first ticks.
     if (o.recorder) leg_args.insert(leg_args.end(), {"--valve-readers", "2"});
@@ -282,6 +299,7 @@ int main(int argc, char** argv) {
                              std::vector<std::string> a{"--leg", std::to_string(leg),
                                                         "--controller", o.controller,
                                                         "--standby"};
+                             a.insert(a.end(), overlay_args.begin(), overlay_args.end());
                              if (o.recorder) a.insert(a.end(), {"--valve-readers", "2"});
                              return a;
                            }()));
@@ -292,6 +310,7 @@ int main(int argc, char** argv) {
   // integrate estimation noise there (idle wander, docs/task_space.md), so it is off.
   if (!o.outer_loop || o.trajectory == "calibration") sup_args.push_back("--no-outer-loop");
   if (!o.feedforward) sup_args.push_back("--no-feedforward");
+  sup_args.insert(sup_args.end(), overlay_args.begin(), overlay_args.end());
   if (o.recorder) sup_args.insert(sup_args.end(), {"--pose-readers", "1"});
   specs.push_back(spec("supervisor", "/services/task_space/hexa_task_space", sup_args));
   std::vector<std::string> plant_args{"--profile", o.profile, "--seed", std::to_string(o.seed),
@@ -382,6 +401,11 @@ int main(int argc, char** argv) {
               "--meta", std::string("outer_loop=") + (o.outer_loop ? "on" : "off"),
               "--meta", std::string("feedforward=") + (o.feedforward ? "on" : "off"),
               "--meta", std::string("completed=") + (completed ? "yes" : "NO")};
+    if (!o.rig_overlays.empty()) {
+      std::string list;
+      for (const auto& overlay : o.rig_overlays) list += (list.empty() ? "" : " ") + overlay;
+      r.argv.insert(r.argv.end(), {"--meta", "rig_overlays=" + list});
+    }
     if (o.fault_leg != 0)
       r.argv.insert(r.argv.end(), {"--meta", "fault=leg " + std::to_string(o.fault_leg) + " " +
                                                  o.fault_kind + " at " + o.fault_at + " s"});

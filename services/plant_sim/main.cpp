@@ -61,6 +61,10 @@ int main(int argc, char** argv) {
     hexa::comm::EnsureDdsConfig(o.common.dds_config);
     auto config = hexa::node::LoadConfig(o.common.rig_path, *log);
     if (!config) return 1;
+    for (const auto& overlay : o.common.rig_overlays) {
+      log->info("rig overlay {} not applied to the plant: it simulates the rig file and profile "
+                "'{}' (overlays configure the controllers and the supervisor)", overlay, o.profile);
+    }
     if (config->profiles.count(o.profile) == 0) {
       std::string names;
       for (const auto& [name, p] : config->profiles) names += " " + name;

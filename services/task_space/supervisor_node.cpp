@@ -13,6 +13,14 @@ constexpr dds_attach_t kTokenOperator = 2;
 constexpr dds_attach_t kTokenFault = 3;
 constexpr dds_attach_t kTokenDone = 4;
 
+// Each leg's potentiometer calibration (rig overlay; identity without one).
+LegArray<PotentiometerCalibrationParams> PotentiometersFrom(const config::SystemConfig& c) {
+  const ControllerModel model = config::MakeControllerModel(c);
+  LegArray<PotentiometerCalibrationParams> p{};
+  for (std::size_t i = 0; i < kNumLegs; ++i) p[i] = model.legs[i].potentiometer;
+  return p;
+}
+
 SupervisorParams ParamsFrom(const SupervisorNodeOptions& o, const config::SystemConfig& c) {
   SupervisorParams p = c.supervisor;
   if (!o.outer_loop) p.outer_loop.enabled = false;
@@ -32,7 +40,8 @@ SupervisorNode::SupervisorNode(const SupervisorNodeOptions& options,
                                std::shared_ptr<spdlog::logger> log)
     : options_(options),
       log_(std::move(log)),
-      supervisor_(config.rig, ParamsFrom(options, config)),
+      supervisor_(config::MakeSupervisorRig(config), ParamsFrom(options, config),
+                  PotentiometersFrom(config)),
       // The six legs' samples of a tick leave in one datagram per reader (comm/writer.hpp).
       participant_(static_cast<dds_domainid_t>(options.common.domain_id),
                    comm::WriteBatching::kOn),

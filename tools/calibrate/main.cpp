@@ -12,6 +12,8 @@
 // the per-leg report and, for a simulated rig, the error of every parameter against the
 // plant's truth (--truth-seed).
 #include <cmath>
+#include <ctime>
+#include <fstream>
 #include <cstdio>
 #include <map>
 #include <string>
@@ -52,6 +54,9 @@ int main(int argc, char** argv) {
                 "1-sigma error of one averaged still sample (reading and pose), for the "
                 "identifiability check", "0.035");
   cli.AddOption("max-poses", "N", "use only the first N still windows (0 = all)", "0");
+  cli.AddOption("out", "file",
+                "write the calibrated rig overlay here (joints, potentiometer offset and gain; "
+                "services accept it with --rig-overlay)");
   cli.AddOption("truth-seed", "N",
                 "simulated rig: compare every parameter with the plant's truth for this seed");
   cli.AddOption("truth-profile", "name", "disturbance profile of the simulated rig", "realistic");
@@ -155,7 +160,45 @@ int main(int argc, char** argv) {
     return 1;
   }
 
-  // 4. Against the simulated plant's truth.
+  // 4. The calibrated rig overlay, validated by loading it on the rig file.
+  if (cli.Has("out")) {
+    hexa::config::RigOverlay overlay;
+    overlay.rig_name = loaded.config.rig_name;
+    overlay.provenance.source_recording = recording;
+    overlay.provenance.method =
+        "kinematic calibration: least squares (Ceres) of the potentiometer readings at " +
+        std::to_string(samples.size()) + " tracker-measured still samples";
+    overlay.provenance.tool = "hexa_calibrate";
+    char date[32];
+    const std::time_t now = std::time(nullptr);
+    std::strftime(date, sizeof(date), "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
+    overlay.provenance.date = date;
+    for (std::size_t i = 0; i < kNumLegs; ++i) {
+      hexa::config::LegOverride& leg = overlay.leg[i];
+      leg.p_BA_B_m = fit.calibration[i].p_BA_B_m;
+      leg.p_PB_P_m = fit.calibration[i].p_PB_P_m;
+      leg.potentiometer_offset_m = fit.calibration[i].potentiometer_offset_m;
+      leg.potentiometer_gain = fit.calibration[i].potentiometer_gain;
+    }
+    const std::string path = cli.Get("out");
+    {
+      std::ofstream file(path);
+      file << hexa::config::ToTextFormat(overlay);
+      if (!file) {
+        std::fprintf(stderr, "error: cannot write %s\n", path.c_str());
+        return 1;
+      }
+    }
+    const auto check = hexa::config::LoadSystemConfig(cli.Get("rig"), {path});
+    if (!check.ok) {
+      std::fprintf(stderr, "error: the written overlay does not validate: %s\n", check.error.c_str());
+      return 1;
+    }
+    std::printf("\nwrote the calibrated rig overlay %s (validated against %s); use it with "
+                "--rig-overlay %s\n", path.c_str(), cli.Get("rig").c_str(), path.c_str());
+  }
+
+  // 5. Against the simulated plant's truth.
   if (cli.Has("truth-seed")) {
     const auto seed = cli.GetInt("truth-seed", 0, 1LL << 62);
     const auto profile = loaded.config.profiles.find(cli.Get("truth-profile"));

@@ -22,7 +22,7 @@ namespace {
 bool CalibrateInProcess(const hexa::LockstepConfig& base, hexa::KinematicCalibration& out) {
   hexa::LockstepConfig config = base;
   config.tracker.enabled = true;
-  config.calibration.reset();
+  config.controllers.reset();  // nominal model: what is being calibrated
   // The outer loop integrates estimation noise at rest (docs/task_space.md, idle wander:
   // ~1 mm); the calibration wants the legs still where they are commanded.
   config.supervisor.outer_loop.enabled = false;
@@ -109,6 +109,9 @@ int main(int argc, char** argv) {
   cli.AddOption("seed", "N", "plant seed", "1");
   cli.AddOption("periods", "N", "periods (0 = default)", "0");
   cli.AddOption("rig", "file", "rig file", HEXA_DEFAULT_RIG_FILE);
+  cli.AddRepeatable("rig-overlay", "file",
+                    "rig overlay for the controllers and the supervisor (the plant keeps the rig "
+                    "file + profile), applied in order as the services do");
   cli.AddFlag("no-outer-loop", "disable the outer loop");
   cli.AddFlag("least-squares", "six-leg least-squares estimator instead of GQFK");
   cli.AddFlag("no-feedforward", "no inverse-dynamics feed-forward (paper-faithful)");
@@ -123,7 +126,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: %s\n", cli.error().c_str());
     return 2;
   }
-  const auto loaded = hexa::config::LoadSystemConfig(cli.Get("rig"));
+  const auto loaded = hexa::config::LoadSystemConfig(cli.Get("rig"), cli.GetAll("rig-overlay"));
   if (!loaded.ok) {
     std::fprintf(stderr, "%s\n", loaded.error.c_str());
     return 1;
@@ -132,6 +135,7 @@ int main(int argc, char** argv) {
   config.rig = loaded.config.rig;
   config.leg_controller = loaded.config.leg_controller;
   config.supervisor = loaded.config.supervisor;
+  config.controllers = hexa::config::MakeControllerModel(loaded.config);  // as the services
   const auto profile = loaded.config.profiles.find(cli.Get("profile"));
   if (profile == loaded.config.profiles.end()) {
     std::fprintf(stderr, "error: profile '%s' not in %s\n", cli.Get("profile").c_str(),
@@ -146,10 +150,19 @@ int main(int argc, char** argv) {
   if (cli.Flag("least-squares")) config.supervisor.least_squares_estimator = true;
   if (cli.Flag("no-feedforward")) config.supervisor.feedforward_enabled = false;
 
+  bool calibrated = false;
   if (cli.Flag("calibrate")) {
     hexa::KinematicCalibration calibration;
     if (!CalibrateInProcess(config, calibration)) return 1;
-    config.calibration = calibration;
+    // The fitted calibration reaches the controllers as a rig overlay would (ControllerModel).
+    hexa::ControllerModel model = *config.controllers;
+    model.geometry = hexa::CalibratedGeometry(model.geometry, calibration);
+    for (std::size_t i = 0; i < hexa::kNumLegs; ++i) {
+      model.legs[i].potentiometer.offset_m = calibration[i].potentiometer_offset_m;
+      model.legs[i].potentiometer.gain = calibration[i].potentiometer_gain;
+    }
+    config.controllers = model;
+    calibrated = true;
   }
 
   std::vector<hexa::PaperMotion> motions;
@@ -169,7 +182,11 @@ int main(int argc, char** argv) {
               cli.Get("controller").c_str(), cli.Get("profile").c_str(), *seed,
               config.supervisor.outer_loop.enabled ? "on" : "off",
               config.supervisor.feedforward_enabled ? "on" : "off",
-              config.calibration ? "fitted" : "nominal");
+              calibrated ? "fitted" : (loaded.config.overlays.empty() ? "nominal" : "overlay"));
+  for (const auto& o : loaded.config.overlays) {
+    std::printf("rig overlay %s (%s, %s)\n", o.source_path.c_str(), o.provenance.method.c_str(),
+                o.provenance.date.c_str());
+  }
   std::printf("%-9s %-4s | %8s %8s %8s | %8s %8s %8s | %s\n", "traj", "vs", "X cm", "Y cm",
               "Z cm", "rotX deg", "rotY deg", "rotZ deg", "leg RMSE mm (1..6)");
   int failures = 0;

@@ -6,10 +6,12 @@
 // allocates and never outputs a non-finite number.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 #include "hexa/core/bssmc_controller.hpp"
 #include "hexa/core/control_params.hpp"
+#include "hexa/core/controller_model.hpp"
 #include "hexa/core/pi_controller.hpp"
 #include "hexa/core/rig.hpp"
 
@@ -42,9 +44,16 @@ struct LegControllerConfig {
   double max_correction_m = 0.05;
   double max_feedforward_force_n = 2000.0;        // |force| beyond -> bad input
   double max_feedforward_force_rate_n_s = 1.0e5;  // |rate| beyond -> bad input
+  // Calibration of this leg's potentiometer from a rig overlay (reading = offset + gain x).
+  // Carried to the controller for the kinematic calibration (docs/config.md, "Rig
+  // overlays"); identity by default.
+  PotentiometerCalibrationParams potentiometer;
 
   static LegControllerConfig FromRig(const RigParams& rig, const LegControllerParams& params,
                                      LegControllerKind kind);
+  // Leg `leg_index` (0-based) of a per-leg controller model (rig file + overlays).
+  static LegControllerConfig FromModel(const ControllerModel& model, std::size_t leg_index,
+                                       LegControllerKind kind);
   void Validate() const;  // throws std::invalid_argument naming field, value and limit
 };
 
@@ -109,6 +118,7 @@ class LegController {
   BsSmcController bssmc_;
   PiController pi_;
   bool active_ = false;  // the control law ran last tick (histories valid)
+  bool potentiometer_calibrated_ = false;  // config_.potentiometer is not the identity
   double last_desired_length_m_ = 0.0;
 };
 

@@ -16,6 +16,7 @@
 #include "hexa/core/calibration.hpp"
 #include "hexa/core/command_hygiene.hpp"
 #include "hexa/core/control_params.hpp"
+#include "hexa/core/controller_model.hpp"
 #include "hexa/core/leg_controller.hpp"
 #include "hexa/core/lockstep_protocol.hpp"
 #include "hexa/core/metrics.hpp"
@@ -32,10 +33,10 @@ struct LockstepConfig {
   std::uint64_t seed = 1;
   LegControllerKind controller = LegControllerKind::kBsSmc;
   TrackerParams tracker;  // the plant's external pose instrument (calibration runs only)
-  // Kinematic calibration the controllers use (hexa_calibrate): the supervisor's geometry
-  // and every potentiometer reading the leg controllers and the supervisor see are
-  // corrected. Unset: the nominal rig (as before).
-  std::optional<KinematicCalibration> calibration;
+  // The controllers' and supervisor's per-leg view of the rig (rig file + overlays, exactly
+  // as the services build it: config::MakeControllerModel). Unset: every leg uses `rig` and
+  // `leg_controller`. The plant always simulates `rig` + `disturbance`.
+  std::optional<ControllerModel> controllers;
   double tick_s = 0.001;
   int supervisor_every_ticks = 5;
   void Validate() const;  // throws std::invalid_argument naming the field and value
@@ -67,7 +68,6 @@ class LockstepSimulation {
   const LockstepConfig& config() const { return config_; }
 
  private:
-  double SensedLengthM(std::size_t leg) const;  // potentiometer reading, calibrated if set
   LockstepConfig config_;
   std::unique_ptr<PlatformPlant> plant_;
   std::unique_ptr<Supervisor> supervisor_;

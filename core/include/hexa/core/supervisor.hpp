@@ -114,8 +114,11 @@ struct SupervisorOutput {
 
 class Supervisor {
  public:
-  // Throws std::invalid_argument for inconsistent parameters (values named).
-  Supervisor(const RigParams& rig, const SupervisorParams& params);
+  // Throws std::invalid_argument for inconsistent parameters (values named). `potentiometer`:
+  // the calibration of each leg's potentiometer (rig overlay, kinematic calibration, issue
+  // 14); every measured length is corrected with it before use. Identity by default.
+  Supervisor(const RigParams& rig, const SupervisorParams& params,
+             const LegArray<PotentiometerCalibrationParams>& potentiometer = {});
 
   // One 5 ms tick. Neither throws nor allocates.
   void Update(const SupervisorInput& input, SupervisorOutput& output) noexcept;
@@ -153,6 +156,9 @@ class Supervisor {
   OuterLoop outer_loop_;
   LegEnvelope envelope_;
   PlatformInertialParams inertial_;  // nominal masses for the feed-forward
+  LegArray<PotentiometerCalibrationParams> potentiometer_{};
+  bool potentiometer_calibrated_ = false;
+  LegArray<double> sensed_length_m_{};  // this tick's lengths, potentiometers calibrated
   Vector6d home_;
   std::shared_ptr<const ConstantMotion> home_motion_;  // preallocated for the home command
 
