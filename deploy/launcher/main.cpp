@@ -108,6 +108,7 @@ int main(int argc, char** argv) {
                         "supervisor and recorder as separate processes over loopback DDS.");
   cli.AddOption("trajectory", "name|file.csv",
                 "x y z roll pitch yaw (pure motions, Table 9), combined (eq 49, Table 10), "
+                "calibration (kinematic calibration poses, with --tracker; docs/calibration.md), "
                 "or a CSV file (docs/task_space.md)", "combined");
   cli.AddChoice("controller", {"bssmc", "pi"}, "leg position controller", "bssmc");
   cli.AddChoice("profile", {"realistic", "ideal"}, "plant disturbance profile", "realistic");
@@ -182,10 +183,11 @@ int main(int argc, char** argv) {
   o.timeout_s = *timeout;
   o.stale_ticks = *stale_ticks;
   o.domain = *domain;
-  static const std::vector<std::string> kNamed{"x", "y", "z", "roll", "pitch", "yaw", "combined"};
+  static const std::vector<std::string> kNamed{"x",   "y",        "z",          "roll",
+                                                "pitch", "yaw", "combined", "calibration"};
   if (std::find(kNamed.begin(), kNamed.end(), o.trajectory) == kNamed.end()) {
     if (!fs::exists(o.trajectory)) {
-      std::fprintf(stderr, "error: --trajectory '%s' is neither one of x y z roll pitch yaw "
+      std::fprintf(stderr, "error: --trajectory '%s' is neither one of x y z roll pitch yaw calibration "
                    "combined nor an existing CSV file\n", o.trajectory.c_str());
       return 2;
     }
