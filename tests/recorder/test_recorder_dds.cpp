@@ -161,7 +161,7 @@ TEST_F(RecorderDds, RecordsEveryPublishedSampleWithLossFromTicks) {
   ASSERT_TRUE(info.complete);
   std::map<std::string, const ChannelInfo*> by_topic;
   for (const auto& c : info.channels) by_topic[c.topic] = &c;
-  ASSERT_EQ(by_topic.size(), 9u);  // every topic has a channel, even without data
+  ASSERT_EQ(by_topic.size(), 10u);  // every topic has a channel, even without data
   EXPECT_EQ(by_topic["hexa_LegSensors"]->count, sent_sensors);
   EXPECT_EQ(by_topic["hexa_LegSensors"]->missing, 3u);
   EXPECT_EQ(by_topic["hexa_ImuSample"]->count, sent_imu);
