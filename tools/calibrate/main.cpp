@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
   cli.AddOption("noise-mm", "mm",
                 "1-sigma error of one averaged still sample (reading and pose), for the "
                 "identifiability check", "0.035");
-  cli.AddOption("max-poses", "N", "use only the first N still windows (0 = all)", "0");
+  cli.AddOption("max-poses", "N", "use only the first N samples (0 = all; to test the refusal)", "0");
   cli.AddOption("out", "file",
                 "write the calibrated rig overlay here (joints, potentiometer offset and gain; "
                 "services accept it with --rig-overlay)");
@@ -126,8 +126,8 @@ int main(int argc, char** argv) {
   if (*max_poses > 0 && samples.size() > static_cast<std::size_t>(*max_poses)) {
     samples.resize(static_cast<std::size_t>(*max_poses));
   }
-  std::printf("hexa_calibrate: %s: %zu tracker samples, %zu still windows used (>= %.2f s still, "
-              "last %.2f s averaged)\n",
+  std::printf("hexa_calibrate: %s: %zu tracker measurements, %zu used as samples (still windows "
+              ">= %.2f s, their last %.2f s; readings averaged over each measurement's 10 ms)\n",
               recording.c_str(), tracker_samples, samples.size(), *min_still, *window);
 
   // 3. Identifiability, then the fit.
@@ -136,7 +136,7 @@ int main(int argc, char** argv) {
   const hexa::KinematicCalibration nominal = hexa::NominalCalibration(rig.geometry);
   const hexa::calib::FitResult fit =
       hexa::calib::FitKinematicCalibration(samples, mid, nominal, options);
-  std::printf("\nidentifiability (column-scaled Jacobian, %d poses, %.4f mm noise):\n",
+  std::printf("\nidentifiability (column-scaled Jacobian, %d samples, %.4f mm noise each):\n",
               fit.identifiability.samples, *noise_mm);
   std::printf("leg | rank | condition | predicted 1-sigma: joint max mm, offset mm, gain | weakest\n");
   for (std::size_t i = 0; i < kNumLegs; ++i) {
