@@ -146,7 +146,7 @@ int main(int argc, char** argv) {
                 l.predicted_std[7], l.weakest.c_str());
   }
   if (!fit.identifiability.identifiable) {
-    std::fprintf(stderr, "\nhexa_calibrate: REFUSED: %s\n", fit.message.c_str());
+    std::fprintf(stderr, "\nhexa_calibrate: %s\n", fit.message.c_str());
     return 3;
   }
   std::printf("\nfit (Ceres, per leg):\nleg | converged | iterations | reading rms mm before -> after\n");
