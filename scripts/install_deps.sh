@@ -10,6 +10,7 @@ packages=(
   libprotobuf-dev protobuf-compiler
   libspdlog-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libceres-dev
   python3-numpy python3-matplotlib
   iproute2 procps
   rt-tests stress-ng   # bench/loop: cyclictest (the machine's wake-up latency), a CPU hog

@@ -40,6 +40,7 @@ std::string_view TopicName(TopicKind kind) {
     case TopicKind::kOperatorCommand: return kOperatorCommandTopic;
     case TopicKind::kNodeStatus: return kNodeStatusTopic;
     case TopicKind::kFaultEvent: return kFaultEventTopic;
+    case TopicKind::kTrackerPose: return kTrackerPoseTopic;
   }
   return "hexa_unknown";
 }
@@ -52,6 +53,7 @@ std::optional<double> NominalPeriod_s(TopicKind kind) {
     case TopicKind::kImuSample:
     case TopicKind::kLegSetpoint:
     case TopicKind::kPoseReport: return 0.005;
+    case TopicKind::kTrackerPose: return 0.01;
     case TopicKind::kOperatorCommand:
     case TopicKind::kNodeStatus:  // 10 Hz + on change: no rate to enforce, state is what counts
     case TopicKind::kFaultEvent: return std::nullopt;
@@ -112,6 +114,7 @@ int32_t WriterHistoryDepth(TopicKind kind) {
     case TopicKind::kImuSample:
     case TopicKind::kLegSetpoint:
     case TopicKind::kPoseReport: return 200;  // 1 s at 200 Hz
+    case TopicKind::kTrackerPose: return 100;  // 1 s at 100 Hz
     case TopicKind::kNodeStatus: return 1;   // per node: the current status is what matters
     case TopicKind::kFaultEvent: return 64;  // the last 64 faults for late joiners
     case TopicKind::kOperatorCommand: return 0;  // keep-all

@@ -21,11 +21,18 @@
 #include "hexa/config/rig_config.hpp"
 #include "internal.hpp"
 #include "rig.pb.h"
+#include "text_format.hpp"
 
 namespace hexa::config {
 
 namespace gp = google::protobuf;
+using internal::CollectingErrors;
+using internal::CountLines;
+using internal::ElementSelector;
 using internal::FormatDouble;
+using internal::FromRange;
+using internal::Locate;
+using internal::Location;
 using ParseInfoTree = gp::TextFormat::ParseInfoTree;
 
 std::string ConfigIssue::ToString() const {
@@ -46,139 +53,6 @@ std::string ConfigIssue::ToString() const {
 std::string DefaultRigFile() { return HEXA_DEFAULT_RIG_FILE; }
 
 namespace {
-
-struct Location {
-  int line = 0;    // 1-based, 0 = unknown
-  int column = 0;  // 1-based
-  int end_line = 0;
-};
-
-Location FromRange(const gp::TextFormat::ParseLocationRange& range) {
-  Location loc;
-  if (range.start.line >= 0) {
-    loc.line = range.start.line + 1;
-    loc.column = range.start.column + 1;
-    loc.end_line = range.end.line + 1;
-  }
-  return loc;
-}
-
-class CollectingErrors : public gp::io::ErrorCollector {
- public:
-  struct Error {
-    int line;
-    int column;
-    std::string message;
-  };
-  void AddError(int line, gp::io::ColumnNumber column, const std::string& message) override {
-    errors.push_back({line, column, message});
-  }
-  void AddWarning(int, gp::io::ColumnNumber, const std::string&) override {}
-  std::vector<Error> errors;
-};
-
-// Levenshtein distance, for "did you mean" on unknown field names.
-std::size_t EditDistance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diag = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0u : 1u)});
-      diag = up;
-    }
-  }
-  return row[b.size()];
-}
-
-// Every path in the schema where a message type appears ("cylinder", "friction.extend").
-void PathsOfType(const gp::Descriptor* root, const gp::Descriptor* type, const std::string& prefix,
-                 std::vector<std::string>& out, int depth = 0) {
-  if (depth > 8) return;
-  for (int i = 0; i < root->field_count(); ++i) {
-    const gp::FieldDescriptor* fd = root->field(i);
-    if (fd->cpp_type() != gp::FieldDescriptor::CPPTYPE_MESSAGE) continue;
-    const std::string path = prefix.empty() ? fd->name() : prefix + "." + fd->name();
-    if (fd->message_type() == type) out.push_back(path);
-    PathsOfType(fd->message_type(), type, path, out, depth + 1);
-  }
-}
-
-// Turns the parser's "Message type "X" has no field named "y"." into an issue with the
-// field path (when the type is used in one place only), the known fields and a guess.
-ConfigIssue ParserIssue(const CollectingErrors::Error& e, const std::string& file) {
-  ConfigIssue issue;
-  issue.file = file;
-  issue.line = e.line + 1;
-  issue.column = e.column + 1;
-  issue.message = e.message;
-  static const std::regex kUnknown(R"re(Message type "([^"]+)" has no field named "([^"]+)")re");
-  std::smatch m;
-  if (!std::regex_search(e.message, m, kUnknown)) {
-    issue.message = "syntax error: " + e.message;
-    return issue;
-  }
-  const std::string type_name = m[1];
-  const std::string field_name = m[2];
-  const gp::Descriptor* type = gp::DescriptorPool::generated_pool()->FindMessageTypeByName(type_name);
-  issue.value = field_name;
-  if (type == nullptr) {
-    issue.message = "unknown field name";
-    return issue;
-  }
-  std::vector<std::string> paths;
-  if (type == pb::RigFile::descriptor()) paths.push_back("");
-  PathsOfType(pb::RigFile::descriptor(), type, "", paths);
-  std::string known;
-  std::string best;
-  std::size_t best_distance = 1000;
-  for (int i = 0; i < type->field_count(); ++i) {
-    const std::string& name = type->field(i)->name();
-    known += (known.empty() ? "" : ", ") + name;
-    const std::size_t d = EditDistance(field_name, name);
-    if (d < best_distance) {
-      best_distance = d;
-      best = name;
-    }
-  }
-  std::string where;
-  if (paths.size() == 1) {
-    where = paths[0].empty() ? "the top level" : "block '" + paths[0] + "'";
-    issue.field = paths[0].empty() ? field_name : paths[0] + "." + field_name;
-  } else {
-    where = "a " + type->name() + " block";
-    issue.field = field_name;
-  }
-  issue.message = "unknown field name in " + where;
-  if (best_distance <= std::max<std::size_t>(2, field_name.size() / 3)) {
-    issue.message += " (did you mean '" + best + "'?)";
-  }
-  issue.limit = "one of: " + known;
-  return issue;
-}
-
-int CountLines(const std::string& text) {
-  int lines = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
-  if (!text.empty() && text.back() != '\n') ++lines;
-  return std::max(lines, 1);
-}
-
-// Selector of a repeated element in a path: "[id=3]", "[name=ideal]" or "[2]".
-std::string ElementSelector(const gp::Message& element, int index) {
-  const gp::Descriptor* d = element.GetDescriptor();
-  const gp::Reflection* r = element.GetReflection();
-  if (const gp::FieldDescriptor* id = d->FindFieldByName("id");
-      id != nullptr && id->cpp_type() == gp::FieldDescriptor::CPPTYPE_INT32 && r->HasField(element, id)) {
-    return "[id=" + std::to_string(r->GetInt32(element, id)) + "]";
-  }
-  if (const gp::FieldDescriptor* name = d->FindFieldByName("name");
-      name != nullptr && name->cpp_type() == gp::FieldDescriptor::CPPTYPE_STRING && r->HasField(element, name)) {
-    return "[name=" + r->GetString(element, name) + "]";
-  }
-  return "[" + std::to_string(index) + "]";
-}
 
 struct PresenceContext {
   const std::string& file;
@@ -242,56 +116,6 @@ void CheckPresence(const gp::Message& msg, const ParseInfoTree* tree, const std:
       }
     }
   }
-}
-
-// Maps a field path ("geometry.leg[id=3].p_BA_B_m.y", "disturbance_profile[name=ideal]")
-// to the location of the deepest part of it that is written in the file.
-Location Locate(const pb::RigFile& file, const ParseInfoTree& root, const std::string& path) {
-  const gp::Message* msg = &file;
-  const ParseInfoTree* tree = &root;
-  Location best;
-  std::size_t pos = 0;
-  while (pos < path.size() && msg != nullptr && tree != nullptr) {
-    std::size_t end = pos;
-    while (end < path.size() && path[end] != '.' && path[end] != '[') ++end;
-    const std::string name = path.substr(pos, end - pos);
-    std::string selector;
-    bool has_selector = false;
-    if (end < path.size() && path[end] == '[') {
-      const std::size_t close = path.find(']', end);
-      if (close == std::string::npos) break;
-      selector = path.substr(end + 1, close - end - 1);
-      has_selector = true;
-      end = close + 1;
-    }
-    pos = (end < path.size() && path[end] == '.') ? end + 1 : end;
-
-    const gp::Descriptor* d = msg->GetDescriptor();
-    const gp::Reflection* r = msg->GetReflection();
-    const gp::FieldDescriptor* fd = d->FindFieldByName(name);
-    if (fd == nullptr) break;
-    int index = -1;
-    if (fd->is_repeated()) {
-      if (!has_selector || fd->cpp_type() != gp::FieldDescriptor::CPPTYPE_MESSAGE) {
-        const Location loc = FromRange(tree->GetLocationRange(fd, 0));
-        if (loc.line > 0) best = loc;
-        break;
-      }
-      for (int k = 0; k < r->FieldSize(*msg, fd) && index < 0; ++k) {
-        if (ElementSelector(r->GetRepeatedMessage(*msg, fd, k), k) == "[" + selector + "]" ||
-            selector == std::to_string(k)) {
-          index = k;
-        }
-      }
-      if (index < 0) break;
-    }
-    const Location loc = FromRange(tree->GetLocationRange(fd, index));
-    if (loc.line > 0) best = loc;
-    if (fd->cpp_type() != gp::FieldDescriptor::CPPTYPE_MESSAGE) break;
-    msg = index >= 0 ? &r->GetRepeatedMessage(*msg, fd, index) : &r->GetMessage(*msg, fd);
-    tree = tree->GetTreeForNested(fd, index);
-  }
-  return best;
 }
 
 Eigen::Vector3d FromPb(const pb::Vector3& v) { return {v.x(), v.y(), v.z()}; }
@@ -441,6 +265,7 @@ SystemConfig Translate(const pb::RigFile& f) {
   c.leg_controller.pi.integrator_limit_v = lc.pi().integrator_limit_v();
   c.leg_controller.pi.velocity_feedforward_v_s_m = lc.pi().velocity_feedforward_v_s_m();
   c.leg_controller.pi.rate_damping_v_s_m = lc.pi().rate_damping_v_s_m();
+  c.leg_controller.pi.force_feedforward_v_n = lc.pi().force_feedforward_v_n();
   c.leg_controller.setpoint_timeout_s = lc.setpoint_timeout_s();
 
   const pb::SupervisorConfig& sv = f.supervisor();
@@ -455,6 +280,7 @@ SystemConfig Translate(const pb::RigFile& f) {
   c.supervisor.workspace_max_rotation_rad = sv.workspace_max_rotation_rad();
   c.supervisor.least_squares_estimator = sv.least_squares_estimator();
   c.supervisor.estimator_outlier_threshold_m = sv.estimator_outlier_threshold_m();
+  c.supervisor.feedforward_enabled = sv.feedforward_enabled();
   c.supervisor.outer_loop.enabled = sv.outer_loop().enabled();
   c.supervisor.outer_loop.gain = sv.outer_loop().gain();
   c.supervisor.outer_loop.max_correction_m = sv.outer_loop().max_correction_m();
@@ -548,7 +374,7 @@ ConfigResult ParseSystemConfig(const std::string& text, const std::string& displ
     parser.WriteLocationsTo(&tree);
     if (!parser.ParseFromString(text, &file)) {
       std::vector<ConfigIssue> issues;
-      for (const auto& e : errors.errors) issues.push_back(ParserIssue(e, display_name));
+      for (const auto& e : errors.errors) issues.push_back(internal::ParserIssue(e, display_name, pb::RigFile::descriptor()));
       if (issues.empty()) issues.push_back({display_name, 1, 1, "", "text format parse failed", "", ""});
       return Fail(std::move(issues));
     }
@@ -701,6 +527,7 @@ std::string ToTextFormat(const SystemConfig& c) {
   lc->mutable_pi()->set_integrator_limit_v(c.leg_controller.pi.integrator_limit_v);
   lc->mutable_pi()->set_velocity_feedforward_v_s_m(c.leg_controller.pi.velocity_feedforward_v_s_m);
   lc->mutable_pi()->set_rate_damping_v_s_m(c.leg_controller.pi.rate_damping_v_s_m);
+  lc->mutable_pi()->set_force_feedforward_v_n(c.leg_controller.pi.force_feedforward_v_n);
   lc->set_setpoint_timeout_s(c.leg_controller.setpoint_timeout_s);
 
   pb::SupervisorConfig* sv = f.mutable_supervisor();
@@ -715,6 +542,7 @@ std::string ToTextFormat(const SystemConfig& c) {
   sv->set_workspace_max_rotation_rad(c.supervisor.workspace_max_rotation_rad);
   sv->set_least_squares_estimator(c.supervisor.least_squares_estimator);
   sv->set_estimator_outlier_threshold_m(c.supervisor.estimator_outlier_threshold_m);
+  sv->set_feedforward_enabled(c.supervisor.feedforward_enabled);
   sv->mutable_outer_loop()->set_enabled(c.supervisor.outer_loop.enabled);
   sv->mutable_outer_loop()->set_gain(c.supervisor.outer_loop.gain);
   sv->mutable_outer_loop()->set_max_correction_m(c.supervisor.outer_loop.max_correction_m);
@@ -745,6 +573,12 @@ std::string Summary(const SystemConfig& c) {
     first = false;
   }
   out << "}, default " << c.default_profile;
+  for (const RigOverlay& o : c.overlays) {
+    int legs = 0;
+    for (const LegOverride& l : o.leg) legs += l.empty() ? 0 : 1;
+    out << "; overlay " << o.source_path << " (" << legs << " legs, " << o.provenance.method << ", "
+        << o.provenance.date << ")";
+  }
   return out.str();
 }
 

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <tuple>
 
 #include "hexa/config/rig_config.hpp"
 #include "hexa/core/kinematics.hpp"
@@ -436,6 +437,7 @@ void CheckLegController(Checker& c, const LegControllerParams& p, const Supervis
   c.NonNegative("leg_controller.pi.integrator_limit_v", p.pi.integrator_limit_v, "limit");
   c.NonNegative("leg_controller.pi.velocity_feedforward_v_s_m", p.pi.velocity_feedforward_v_s_m, "gain");
   c.NonNegative("leg_controller.pi.rate_damping_v_s_m", p.pi.rate_damping_v_s_m, "gain");
+  c.NonNegative("leg_controller.pi.force_feedforward_v_n", p.pi.force_feedforward_v_n, "gain");
   if (c.Finite("leg_controller.setpoint_timeout_s", p.setpoint_timeout_s) &&
       std::isfinite(sup.period_s) && !(p.setpoint_timeout_s >= sup.period_s && p.setpoint_timeout_s > 0.0)) {
     // Setpoints arrive once per supervisor period: a shorter timeout holds every cycle.
@@ -490,7 +492,81 @@ void CheckProfile(Checker& c, const DisturbanceProfile& p, const std::string& pa
   }
 }
 
+// Plausibility of a kinematic calibration: a calibration corrects millimetres; a joint moved
+// further, or a potentiometer this far off, is a different rig (edit the rig file).
+constexpr double kMaxJointCalibration_m = 0.02;
+constexpr double kMaxPotentiometerOffset_m = 0.01;
+constexpr double kMinPotentiometerGain = 0.9;
+constexpr double kMaxPotentiometerGain = 1.1;
+
+std::string OverlayLegPath(std::size_t i) { return "leg[leg_id=" + std::to_string(i + 1) + "]"; }
+
+// geometry.leg[id=N].member -> leg[leg_id=N].member (the overlay's own path for the field).
+std::string ToOverlayPath(const std::string& rig_path) {
+  const std::string prefix = "geometry.leg[id=";
+  if (rig_path.rfind(prefix, 0) != 0) return rig_path;
+  return "leg[leg_id=" + rig_path.substr(prefix.size());
+}
+
 }  // namespace
+
+std::vector<ConfigIssue> ValidateControllerModel(const SystemConfig& config) {
+  std::vector<ConfigIssue> issues;
+  Checker c(issues);
+  const ControllerModel model = MakeControllerModel(config);
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    const LegOverride& o = config.leg_override[i];
+    if (o.empty()) continue;  // the rig file's values, validated with the rig file
+    const std::string leg = OverlayLegPath(i);
+    const LegControllerModel& m = model.legs[i];
+    CheckFrictionDirection(c, m.model.friction.extend, leg + ".friction.extend");
+    CheckFrictionDirection(c, m.model.friction.retract, leg + ".friction.retract");
+    CheckPolytropic(c, m.model.polytropic.extend, leg + ".polytropic.extend");
+    CheckPolytropic(c, m.model.polytropic.retract, leg + ".polytropic.retract");
+    const double cf = m.model.valve.discharge_coefficient;
+    if (c.Finite(leg + ".discharge_coefficient", cf) && !(cf > 0.0 && cf <= 1.0)) {
+      c.Fail(leg + ".discharge_coefficient", "discharge coefficient is out of range", FormatDouble(cf),
+             "(0, 1]");
+    }
+    c.Positive(leg + ".effective_mass_kg", m.params.bssmc.effective_mass_kg, "mass");
+    const double g = m.params.bssmc.gravity_load_n;
+    if (c.Finite(leg + ".gravity_load_n", g) && !(std::abs(g) < 1e4)) {
+      c.Fail(leg + ".gravity_load_n", "gravity load is implausible", FormatDouble(g), "|value| < 10000 N");
+    }
+    const double offset = m.potentiometer.offset_m;
+    if (c.Finite(leg + ".potentiometer_offset_m", offset) &&
+        !(std::abs(offset) <= kMaxPotentiometerOffset_m)) {
+      c.Fail(leg + ".potentiometer_offset_m", "potentiometer offset is implausibly large for a calibration",
+             FormatDouble(offset), "|value| <= " + FormatDouble(kMaxPotentiometerOffset_m) + " m");
+    }
+    c.InClosed(leg + ".potentiometer_gain", m.potentiometer.gain, kMinPotentiometerGain,
+               kMaxPotentiometerGain, "potentiometer gain");
+    for (const auto& [member, calibrated, nominal] :
+         {std::tuple{"p_BA_B_m", model.geometry.p_BA_B[i], config.rig.geometry.p_BA_B[i]},
+          std::tuple{"p_PB_P_m", model.geometry.p_PB_P[i], config.rig.geometry.p_PB_P[i]}}) {
+      const double moved = (calibrated - nominal).norm();
+      if (!calibrated.allFinite()) continue;  // reported by the parser
+      if (!(moved <= kMaxJointCalibration_m)) {
+        c.Fail(leg + "." + member,
+               "calibrated joint is implausibly far from the rig file's (geometry.leg[id=" +
+                   std::to_string(i + 1) + "]." + member + ")",
+               FormatDouble(moved) + " m", "<= " + FormatDouble(kMaxJointCalibration_m) + " m");
+      }
+    }
+  }
+  // The calibrated geometry must still be a proper 6-6 platform with home inside the stroke.
+  SystemConfig calibrated = config;
+  calibrated.rig.geometry = model.geometry;
+  std::vector<ConfigIssue> geometry_issues;
+  Checker g(geometry_issues);
+  CheckGeometry(g, calibrated);
+  for (ConfigIssue& issue : geometry_issues) {
+    issue.field = ToOverlayPath(issue.field);
+    issue.message += " (with the overlay's calibrated joints)";
+    issues.push_back(std::move(issue));
+  }
+  return issues;
+}
 
 std::vector<ConfigIssue> ValidateSystemConfig(const SystemConfig& config) {
   std::vector<ConfigIssue> issues;

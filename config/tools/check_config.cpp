@@ -3,19 +3,23 @@
 #include <cstring>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "hexa/config/rig_config.hpp"
 
 namespace {
 
 void PrintUsage(std::ostream& out) {
-  out << "usage: hexa_check_config [--profile NAME] [--print] [FILE]\n"
+  out << "usage: hexa_check_config [--profile NAME] [--rig-overlay OVERLAY]... [--print] [FILE]\n"
          "\n"
          "Loads and validates a HexaTaar rig file (protobuf text format, schema\n"
          "proto/rig.proto, see docs/config.md).\n"
          "  FILE            rig file; default " << hexa::config::DefaultRigFile() << "\n"
          "  --profile NAME  also check that disturbance profile NAME is defined\n"
-         "  --print         print the loaded configuration in text format\n"
+         "  --rig-overlay OVERLAY\n"
+         "                  apply a rig overlay (proto/rig_overlay.proto) on top of FILE and\n"
+         "                  validate the result; repeatable, applied in order\n"
+         "  --print         print the loaded configuration in text format (rig file part)\n"
          "  -h, --help      this help\n"
          "Exit status: 0 valid, 1 invalid (messages on stderr), 2 usage error.\n";
 }
@@ -26,6 +30,7 @@ int main(int argc, char** argv) {
   std::string path;
   std::string profile;
   bool print = false;
+  std::vector<std::string> overlays;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "-h" || arg == "--help") {
@@ -33,6 +38,8 @@ int main(int argc, char** argv) {
       return 0;
     } else if (arg == "--profile" && i + 1 < argc) {
       profile = argv[++i];
+    } else if (arg == "--rig-overlay" && i + 1 < argc) {
+      overlays.push_back(argv[++i]);
     } else if (arg == "--print") {
       print = true;
     } else if (!arg.empty() && arg[0] == '-') {
@@ -48,7 +55,7 @@ int main(int argc, char** argv) {
   }
   if (path.empty()) path = hexa::config::DefaultRigFile();
 
-  const hexa::config::ConfigResult result = hexa::config::LoadSystemConfig(path);
+  const hexa::config::ConfigResult result = hexa::config::LoadSystemConfig(path, overlays);
   if (!result.ok) {
     std::cerr << result.error << "\n";
     return 1;

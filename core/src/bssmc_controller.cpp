@@ -159,10 +159,19 @@ void BsSmcController::Update(const BsSmcInput& in, BsSmcOutput& out) {
   const double vd = in.desired_velocity_m_s;
   const FrictionDirectionParams& fd = vd >= 0.0 ? m.friction.extend : m.friction.retract;
   const double b_hat = p.viscous_estimate_scale * fd.viscous_n_s_m;  // eq 21
-  const double c_hat = -m.air.atmosphere_pressure_pa * cyl.rod_area_m2 - p.gravity_load_n -
-                       FrictionEstimateN(vd);  // eq 14
-  const double phi_hat = p.effective_mass_kg * (in.desired_acceleration_m_s2 - p.lambda_1_s * edot_m_s) +
-                         b_hat * vd - c_hat;                                    // eq 25
+  double phi_hat = 0.0;
+  if (in.has_feedforward) {
+    // Known load (issue 14): the platform inverse dynamics takes the place of M x_ddot_d and
+    // of the lumped gravity constant F_g; M stays as the gain of the feedback M lambda e_dot.
+    const double c_hat = -m.air.atmosphere_pressure_pa * cyl.rod_area_m2 - in.feedforward_force_n -
+                         FrictionEstimateN(vd);  // eq 14
+    phi_hat = -p.effective_mass_kg * p.lambda_1_s * edot_m_s + b_hat * vd - c_hat;  // eq 25
+  } else {
+    const double c_hat = -m.air.atmosphere_pressure_pa * cyl.rod_area_m2 - p.gravity_load_n -
+                         FrictionEstimateN(vd);  // eq 14
+    phi_hat = p.effective_mass_kg * (in.desired_acceleration_m_s2 - p.lambda_1_s * edot_m_s) +
+              b_hat * vd - c_hat;  // eq 25
+  }
   // Integral of S (not in the paper, control_params.hpp): removes the steady error that
   // static friction leaves against the bounded terms. The clamp is the anti-windup.
   if (std::isfinite(s_m_s)) {

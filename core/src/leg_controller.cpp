@@ -29,6 +29,8 @@ PiConfig MakePiConfig(const LegControllerConfig& c) {
   p.params = c.params.pi;
   p.differentiator = c.params.differentiator;
   p.valve = c.model.valve;
+  p.cylinder = c.model.cylinder;
+  p.atmosphere_pressure_pa = c.model.air.atmosphere_pressure_pa;
   p.period_s = c.period_s;
   return p;
 }
@@ -55,6 +57,17 @@ LegControllerConfig LegControllerConfig::FromRig(const RigParams& rig, const Leg
   return c;
 }
 
+LegControllerConfig LegControllerConfig::FromModel(const ControllerModel& model,
+                                                   std::size_t leg_index, LegControllerKind kind) {
+  const LegControllerModel& leg = model.legs.at(leg_index);
+  LegControllerConfig c;
+  c.kind = kind;
+  c.params = leg.params;
+  c.model = leg.model;
+  c.potentiometer = leg.potentiometer;
+  return c;
+}
+
 void LegControllerConfig::Validate() const {
   Require(std::isfinite(params.setpoint_timeout_s) && params.setpoint_timeout_s > 0,
           "setpoint_timeout_s", params.setpoint_timeout_s, "finite and > 0");
@@ -71,6 +84,14 @@ void LegControllerConfig::Validate() const {
           "max_setpoint_acceleration_m_s2", max_setpoint_acceleration_m_s2, "finite and > 0");
   Require(std::isfinite(max_correction_m) && max_correction_m >= 0, "max_correction_m", max_correction_m,
           "finite and >= 0");
+  Require(std::isfinite(max_feedforward_force_n) && max_feedforward_force_n > 0,
+          "max_feedforward_force_n", max_feedforward_force_n, "finite and > 0");
+  Require(std::isfinite(max_feedforward_force_rate_n_s) && max_feedforward_force_rate_n_s > 0,
+          "max_feedforward_force_rate_n_s", max_feedforward_force_rate_n_s, "finite and > 0");
+  Require(std::isfinite(potentiometer.offset_m), "potentiometer.offset_m", potentiometer.offset_m,
+          "finite");
+  Require(std::isfinite(potentiometer.gain) && potentiometer.gain > 0, "potentiometer.gain",
+          potentiometer.gain, "finite and > 0");
   MakeBsSmcConfig(*this).Validate();
   MakePiConfig(*this).Validate();
 }
@@ -79,7 +100,10 @@ LegController::LegController(const LegControllerConfig& config)
     : config_((config.Validate(), config)),
       bssmc_(MakeBsSmcConfig(config)),
       pi_(MakePiConfig(config)),
-      last_desired_length_m_(config.model.cylinder.mid_stroke_length_m) {}
+      last_desired_length_m_(config.model.cylinder.mid_stroke_length_m) {
+  potentiometer_calibrated_ =
+      config_.potentiometer.offset_m != 0.0 || config_.potentiometer.gain != 1.0;
+}
 
 void LegController::Interpolate(const LegControllerInput& in, double& length_m, double& velocity_m_s,
                                 double& acceleration_m_s2) {
@@ -121,6 +145,7 @@ void LegController::Hold(LegControlStatus status, LegControllerOutput& out) {
   out.status = status;
   out.desired_length_m = last_desired_length_m_;
   out.desired_velocity_m_s = 0.0;
+  out.feedforward_force_n = 0.0;
   out.sliding_surface_m_s = 0.0;
   out.velocity_m_s = 0.0;
   out.desired_force_n = 0.0;
@@ -128,7 +153,19 @@ void LegController::Hold(LegControlStatus status, LegControllerOutput& out) {
   out.desired_force_rate_n_s = 0.0;
 }
 
-void LegController::Update(const LegControllerInput& in, LegControllerOutput& out) {
+void LegController::Update(const LegControllerInput& raw, LegControllerOutput& out) {
+  // Kinematic calibration of the potentiometer (rig overlay, issue 14): the reading of piston
+  // position x is offset + gain x; the law works on the corrected length.
+  LegControllerInput calibrated;
+  const LegControllerInput* input = &raw;
+  if (potentiometer_calibrated_) {
+    calibrated = raw;
+    const double mid = config_.model.cylinder.mid_stroke_length_m;
+    calibrated.length_m =
+        mid + (raw.length_m - mid - config_.potentiometer.offset_m) / config_.potentiometer.gain;
+    input = &calibrated;
+  }
+  const LegControllerInput& in = *input;
   out.tick = in.tick;
   out.setpoint_tick = in.setpoint_tick;
   if (!SensorsValid(in)) return Hold(LegControlStatus::kHoldBadInput, out);
@@ -147,6 +184,19 @@ void LegController::Update(const LegControllerInput& in, LegControllerOutput& ou
       std::abs(in.correction_m) > config_.max_correction_m) {
     return Hold(LegControlStatus::kHoldBadInput, out);
   }
+  if (in.feedforward_valid &&
+      (!std::isfinite(in.feedforward_force_n) || !std::isfinite(in.feedforward_force_rate_n_s) ||
+       std::abs(in.feedforward_force_n) > config_.max_feedforward_force_n ||
+       std::abs(in.feedforward_force_rate_n_s) > config_.max_feedforward_force_rate_n_s)) {
+    return Hold(LegControlStatus::kHoldBadInput, out);
+  }
+  // Feed-forward force at this tick: first-order hold over the setpoint period (none in a
+  // supervisor hold: the force of a held setpoint is already the static load).
+  double ff_n = 0.0;
+  if (in.feedforward_valid) {
+    const double dt = in.hold ? 0.0 : std::max(0.0, in.time_s - in.setpoint_time_s);
+    ff_n = in.feedforward_force_n + in.feedforward_force_rate_n_s * dt;
+  }
   double ld_m = 0.0, vd_m_s = 0.0, ad_m_s2 = 0.0;
   Interpolate(in, ld_m, vd_m_s, ad_m_s2);
   if (!LengthPlausible(ld_m) || !std::isfinite(vd_m_s)) return Hold(LegControlStatus::kHoldBadInput, out);
@@ -156,6 +206,7 @@ void LegController::Update(const LegControllerInput& in, LegControllerOutput& ou
   out.status = in.hold ? LegControlStatus::kHoldSupervisor : LegControlStatus::kOk;
   out.desired_length_m = ld_m;
   out.desired_velocity_m_s = vd_m_s;
+  out.feedforward_force_n = ff_n;
   if (config_.kind == LegControllerKind::kBsSmc) {
     BsSmcInput b;
     b.length_m = in.length_m;
@@ -165,6 +216,8 @@ void LegController::Update(const LegControllerInput& in, LegControllerOutput& ou
     b.desired_length_m = ld_m;
     b.desired_velocity_m_s = vd_m_s;
     b.desired_acceleration_m_s2 = ad_m_s2;
+    b.has_feedforward = in.feedforward_valid;
+    b.feedforward_force_n = ff_n;
     BsSmcOutput o;
     bssmc_.Update(b, o);
     out.valve_v = o.valve_v;
@@ -178,6 +231,10 @@ void LegController::Update(const LegControllerInput& in, LegControllerOutput& ou
     p.length_m = in.length_m;
     p.desired_length_m = ld_m;
     p.desired_velocity_m_s = vd_m_s;
+    p.has_feedforward = in.feedforward_valid;
+    p.feedforward_force_n = ff_n;
+    p.cap_pressure_pa = in.cap_pressure_pa;
+    p.rod_pressure_pa = in.rod_pressure_pa;
     PiOutput o;
     pi_.Update(p, o);
     out.valve_v = o.valve_v;

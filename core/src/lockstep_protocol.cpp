@@ -22,6 +22,9 @@ void SetSetpointInput(const IssuedSetpoint* setpoint, LegControllerInput& input)
   input.setpoint_acceleration_m_s2 = setpoint->value.acceleration_m_s2;
   input.correction_m = setpoint->value.correction_m;
   input.hold = setpoint->value.hold;
+  input.feedforward_valid = setpoint->value.feedforward_valid;
+  input.feedforward_force_n = setpoint->value.feedforward_force_n;
+  input.feedforward_force_rate_n_s = setpoint->value.feedforward_force_rate_n_s;
 }
 
 void LockstepBarrier::Begin(std::uint64_t tick, LegMask awaited, std::int64_t now_ns) {

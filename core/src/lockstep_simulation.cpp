@@ -24,14 +24,23 @@ LockstepSimulation::LockstepSimulation(const LockstepConfig& config) : config_(c
   plant_config.rig = config_.rig;
   plant_config.disturbance = config_.disturbance;
   plant_config.seed = config_.seed;
+  plant_config.tracker = config_.tracker;
   plant_ = std::make_unique<PlatformPlant>(plant_config);
-  supervisor_ = std::make_unique<Supervisor>(config_.rig, config_.supervisor);
-  const LegControllerConfig leg_config =
-      LegControllerConfig::FromRig(config_.rig, config_.leg_controller, config_.controller);
-  for (auto& leg : legs_) leg = std::make_unique<LegController>(leg_config);
+  const ControllerModel model = config_.controllers
+                                    ? *config_.controllers
+                                    : ControllerModel::FromRig(config_.rig, config_.leg_controller);
+  LegArray<PotentiometerCalibrationParams> potentiometer{};
+  for (std::size_t i = 0; i < kNumLegs; ++i) potentiometer[i] = model.legs[i].potentiometer;
+  supervisor_ = std::make_unique<Supervisor>(model.SupervisorRig(config_.rig), config_.supervisor,
+                                             potentiometer);
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    legs_[i] = std::make_unique<LegController>(
+        LegControllerConfig::FromModel(model, i, config_.controller));
+  }
   hygiene_ = CommandHygieneParams::FromValve(config_.rig.valve, 0);
   schedule_.supervisor_every_ticks = config_.supervisor_every_ticks;
 }
+
 
 PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartRequest* start) {
   plant_before_ = plant_->output();
@@ -62,7 +71,7 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
     in.tick = tick_;
     in.time_s = now_s;
     const LegSensorReading& s = plant_before_.legs[i];
-    in.length_m = s.length_m;
+    in.length_m = plant_before_.legs[i].length_m;
     in.cap_pressure_pa = s.chamber1_pressure_pa;
     in.rod_pressure_pa = s.chamber2_pressure_pa;
     in.supply_pressure_pa = s.supply_pressure_pa;

@@ -28,6 +28,8 @@ void PiConfig::Validate() const {
           "velocity_feedforward_v_s_m", params.velocity_feedforward_v_s_m, "finite and >= 0");
   Require(std::isfinite(params.rate_damping_v_s_m) && params.rate_damping_v_s_m >= 0,
           "rate_damping_v_s_m", params.rate_damping_v_s_m, "finite and >= 0");
+  Require(std::isfinite(params.force_feedforward_v_n) && params.force_feedforward_v_n >= 0,
+          "force_feedforward_v_n", params.force_feedforward_v_n, "finite and >= 0");
   Require(std::isfinite(period_s) && period_s > 0, "period_s", period_s, "finite and > 0");
   Require(std::isfinite(valve.spool_gain_m_v) && valve.spool_gain_m_v != 0, "valve.spool_gain_m_v",
           valve.spool_gain_m_v, "finite and != 0");
@@ -71,8 +73,16 @@ void PiController::Update(const PiInput& in, PiOutput& out) {
   const double v_m_s = velocity_diff_.Update(in.length_m);  // eq 40
   // Velocity terms: the valve opening sets a flow, i.e. roughly a piston speed, so the
   // setpoint speed is fed forward and the velocity error is damped.
-  const double rate_v = p.velocity_feedforward_v_s_m * in.desired_velocity_m_s +
-                        p.rate_damping_v_s_m * (in.desired_velocity_m_s - v_m_s);
+  double rate_v = p.velocity_feedforward_v_s_m * in.desired_velocity_m_s +
+                  p.rate_damping_v_s_m * (in.desired_velocity_m_s - v_m_s);
+  if (in.has_feedforward) {
+    // Known load (issue 14): drive the measured pneumatic force towards the feed-forward.
+    const CylinderParams& c = config_.cylinder;
+    const double force_n = in.cap_pressure_pa * c.cap_area_m2 - in.rod_pressure_pa * c.annulus_area_m2 -
+                           config_.atmosphere_pressure_pa * c.rod_area_m2;
+    const double term_v = p.force_feedforward_v_n * (in.feedforward_force_n - force_n);
+    if (std::isfinite(term_v)) rate_v += term_v;
+  }
   auto voltage = [&](double integral_v) {
     return valve.null_voltage_v + direction * (p.proportional_v_m * e_m + integral_v + rate_v);
   };

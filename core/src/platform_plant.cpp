@@ -103,7 +103,9 @@ GeometryParams TrueGeometry(const GeometryParams& nominal, const DisturbanceProf
 }
 
 PlatformPlant::PlatformPlant(const PlatformPlantConfig& config)
-    : config_(config), sensors_(config.rig, config.disturbance, config.seed) {
+    : config_(config),
+      sensors_(config.rig, config.disturbance, config.seed),
+      tracker_(config.tracker, config.seed) {
   config_.Validate();
   const RigParams& rig = config_.rig;
   const DisturbanceProfile& dist = config_.disturbance;
@@ -132,6 +134,7 @@ double PlatformPlant::SupplyPressurePa(double time_s) const {
 
 void PlatformPlant::Reset() {
   sensors_.Reset();
+  tracker_.Reset();
   time_s_ = 0.0;
   tick_ = 0;
   min_dissipation_w_ = std::numeric_limits<double>::infinity();
@@ -338,6 +341,7 @@ void PlatformPlant::SampleSensors() {
   st.q_BP = output_.truth.q_BP;
   st.angular_rate_B_rad_s = output_.truth.twist_B.tail<3>();
   sensors_.Sample(st, time_s_, output_.legs, output_.imu);
+  tracker_.Sample(output_.truth.pose.p_BP_B_m, output_.truth.q_BP, time_s_, output_.tracker);
 }
 
 PlantStatus PlatformPlant::Step(const LegArray<double>& valve_v, double dt_s) {
@@ -445,6 +449,8 @@ void PlatformPlant::SetState(const PlatformTrueState& s) {
   Derivative(state_, time_s_, rate_at_state_, true);
   FillTruth();
 }
+
+Vector6d PlatformPlant::twist_rate_B() const { return rate_at_state_.segment<6>(kV); }
 
 double PlatformPlant::TotalEnergyJ() const {
   const PlatformTrueState& t = output_.truth;

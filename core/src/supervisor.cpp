@@ -77,7 +77,8 @@ const char* ToString(CommandResult result) {
   return "?";
 }
 
-Supervisor::Supervisor(const RigParams& rig, const SupervisorParams& params)
+Supervisor::Supervisor(const RigParams& rig, const SupervisorParams& params,
+                       const LegArray<PotentiometerCalibrationParams>& potentiometer)
     : rig_(rig),
       params_(params),
       estimator_(rig.geometry, PoseEstimatorConfig{params.least_squares_estimator,
@@ -85,6 +86,8 @@ Supervisor::Supervisor(const RigParams& rig, const SupervisorParams& params)
                                                    kGqfkDefaultLegs, 0.01}),
       outer_loop_(rig.geometry, params.outer_loop),
       envelope_(MakeLegEnvelope(rig, params)),
+      inertial_(PlatformInertialParams::FromRig(rig)),
+      potentiometer_(potentiometer),
       home_(HomePoseVector(rig.geometry.home_position_m)),
       home_motion_(std::make_shared<const ConstantMotion>(home_)) {
   Require(params.period_s > 0.0, "period_s", params.period_s, "must be > 0");
@@ -100,6 +103,11 @@ Supervisor::Supervisor(const RigParams& rig, const SupervisorParams& params)
           params.workspace_max_rotation_rad, "must be > 0");
   Require(envelope_.max_length_m > envelope_.min_length_m, "stroke_margin_m",
           params.stroke_margin_m, "leaves no usable stroke");
+  for (const auto& pot : potentiometer_) {
+    Require(std::isfinite(pot.offset_m) && std::isfinite(pot.gain) && pot.gain > 0.0,
+            "potentiometer.gain", pot.gain, "must be finite and > 0 (offset finite)");
+    potentiometer_calibrated_ = potentiometer_calibrated_ || pot.offset_m != 0.0 || pot.gain != 1.0;
+  }
   rest_ = home_;
   last_desired_.pose = PoseFromVector(home_);
   last_desired_.vector.q = home_;
@@ -136,6 +144,33 @@ void Supervisor::StartTrajectory(const Trajectory& trajectory, double time_s) {
   state_ = SupervisorState::kBlending;
 }
 
+void Supervisor::FillFeedforward(const TrajectorySample& desired, bool moving,
+                                 LegArray<SupervisorLegSetpoint>& setpoint) const {
+  for (auto& sp : setpoint) {
+    sp.feedforward_valid = false;
+    sp.feedforward_force_n = 0.0;
+    sp.feedforward_force_rate_n_s = 0.0;
+  }
+  if (!params_.feedforward_enabled) return;
+  PlatformMotion motion{desired.pose, desired.twist_B, desired.twist_rate_B};
+  LegForceResult now;
+  if (LegForcesForMotion(rig_.geometry, inertial_, motion, now) != KinStatus::kOk) return;
+  LegForceResult next = now;
+  if (moving) {
+    // The force one supervisor period ahead on the same trajectory: the legs interpolate
+    // force + rate * dt between setpoints, as they do the length (no 200 Hz staircase).
+    TrajectorySample ahead;
+    trajectory_.EvaluateStopped(trajectory_time_s_ + params_.period_s, stop_at_s_, ahead);
+    const PlatformMotion m{ahead.pose, ahead.twist_B, ahead.twist_rate_B};
+    if (LegForcesForMotion(rig_.geometry, inertial_, m, next) != KinStatus::kOk) next = now;
+  }
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    setpoint[i].feedforward_valid = true;
+    setpoint[i].feedforward_force_n = now.force_n[i];
+    setpoint[i].feedforward_force_rate_n_s = (next.force_n[i] - now.force_n[i]) / params_.period_s;
+  }
+}
+
 void Supervisor::EnterHold(FaultReason reason, int leg, const char* detail,
                            SupervisorOutput& output) {
   state_ = SupervisorState::kHold;
@@ -153,6 +188,9 @@ void Supervisor::EnterHold(FaultReason reason, int leg, const char* detail,
   last_desired_.vector.q_ddot.setZero();
   last_desired_.twist_B.setZero();
   last_desired_.twist_rate_B.setZero();
+  // Held at rest: the feed-forward becomes the static load of the frozen pose (the force
+  // of the last setpoint would keep the motion's inertial part).
+  if (initialized_) FillFeedforward(last_desired_, false, last_setpoint_);
 }
 
 void Supervisor::HandleCommand(const SupervisorInput& input, SupervisorOutput& output) {
@@ -309,9 +347,19 @@ void Supervisor::Update(const SupervisorInput& input, SupervisorOutput& output) 
   output.command_result = CommandResult::kNone;
   output.fault_raised = false;
 
+  // 0. Calibrated lengths (reading of piston position x = offset + gain x, issue 14).
+  sensed_length_m_ = input.length_m;
+  if (potentiometer_calibrated_) {
+    const double mid = rig_.cylinder.mid_stroke_length_m;
+    for (std::size_t i = 0; i < kNumLegs; ++i) {
+      sensed_length_m_[i] =
+          mid + (input.length_m[i] - mid - potentiometer_[i].offset_m) / potentiometer_[i].gain;
+    }
+  }
+
   // 1. Estimate (IMU orientation + GQFK / LSQ position).
   PoseEstimatorInput est_in;
-  est_in.length_m = input.length_m;
+  est_in.length_m = sensed_length_m_;
   est_in.orientation_wxyz = input.orientation_wxyz;
   estimator_.Update(est_in, output.estimate);
 
@@ -321,7 +369,7 @@ void Supervisor::Update(const SupervisorInput& input, SupervisorOutput& output) 
     rest_ = output.estimate.xyz_rpy;
     // What a fault at this very tick freezes: the legs where they are.
     for (std::size_t i = 0; i < kNumLegs; ++i) {
-      last_setpoint_[i] = SupervisorLegSetpoint{input.length_m[i], 0.0, 0.0, 0.0, false};
+      last_setpoint_[i] = SupervisorLegSetpoint{sensed_length_m_[i], 0.0, 0.0, 0.0, false};
     }
     last_desired_ = TrajectorySample{};
     last_desired_.vector.q = rest_;
@@ -379,7 +427,7 @@ void Supervisor::Update(const SupervisorInput& input, SupervisorOutput& output) 
   } else if (!initialized_) {
     // No pose yet: hold the legs where they are.
     for (std::size_t i = 0; i < kNumLegs; ++i) {
-      output.setpoint[i] = SupervisorLegSetpoint{input.length_m[i], 0.0, 0.0, 0.0, true};
+      output.setpoint[i] = SupervisorLegSetpoint{sensed_length_m_[i], 0.0, 0.0, 0.0, true};
     }
     output.outer_loop = OuterLoopOutput{};
     output.desired = desired;
@@ -392,6 +440,7 @@ void Supervisor::Update(const SupervisorInput& input, SupervisorOutput& output) 
       output.setpoint[i] = SupervisorLegSetpoint{length_m[i], speed_m_s[i], accel_m_s2[i],
                                                  output.outer_loop.correction_m[i], false};
     }
+    FillFeedforward(desired, state_ != SupervisorState::kIdle, output.setpoint);
     last_setpoint_ = output.setpoint;
     last_desired_ = desired;
     output.desired = desired;

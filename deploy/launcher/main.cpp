@@ -48,12 +48,14 @@ std::string TailOf(const std::string& path, int lines) {
 struct Options {
   std::string trajectory, controller, profile, mode, out_dir, rig, dds_config;
   long long seed = 1, domain = 0, periods = 0, stale_ticks = 15;
-  bool recorder = true, standby = false, outer_loop = true, rt_sched = true, bridge = false;
+  bool recorder = true, standby = false, outer_loop = true, rt_sched = true, bridge = false,
+       feedforward = true, tracker = false;
   std::string cpus_control, cpus_recorder;
   std::string bridge_listen, bridge_port, bridge_queue_kb;
   int fault_leg = 0;
   std::string fault_kind, fault_at;
   double timeout_s = 0;
+  std::vector<std::string> rig_overlays;  // absolute paths, for the legs and the supervisor
 };
 
 // CPU time of every process over its whole life (start-up and discovery included), per
@@ -107,6 +109,7 @@ int main(int argc, char** argv) {
                         "supervisor and recorder as separate processes over loopback DDS.");
   cli.AddOption("trajectory", "name|file.csv",
                 "x y z roll pitch yaw (pure motions, Table 9), combined (eq 49, Table 10), "
+                "calibration (kinematic calibration poses, with --tracker; docs/calibration.md), "
                 "or a CSV file (docs/task_space.md)", "combined");
   cli.AddChoice("controller", {"bssmc", "pi"}, "leg position controller", "bssmc");
   cli.AddChoice("profile", {"realistic", "ideal"}, "plant disturbance profile", "realistic");
@@ -114,12 +117,19 @@ int main(int argc, char** argv) {
   cli.AddOption("seed", "N", "random seed of the plant (noise, calibration errors)", "1");
   cli.AddOption("out", "dir", "output directory (default: out/session-<timestamp>)");
   cli.AddOption("rig", "file", "rig file (protobuf text format)", HEXA_DEFAULT_RIG_FILE);
+  cli.AddRepeatable("rig-overlay", "file",
+                    "rig overlay (identified / calibrated values) for the leg controllers and the "
+                    "supervisor; the plant keeps the rig file + profile (docs/config.md)");
   cli.AddOption("dds-config", "file", "Cyclone DDS configuration", HEXA_DEFAULT_CYCLONE_CONFIG);
   cli.AddOption("domain", "id", "DDS domain id (default: derived from the pid, 100-199)");
   cli.AddOption("periods", "N", "trajectory periods to track (0 = the trajectory's default)", "0");
   cli.AddOption("timeout", "s", "wall-clock limit of the session (0 = none)", "0");
   cli.AddFlag("no-recorder", "do not record (no report)");
   cli.AddFlag("no-outer-loop", "disable the task-space outer loop");
+  cli.AddFlag("no-feedforward",
+              "no platform inverse-dynamics feed-forward on the leg setpoints (paper-faithful)");
+  cli.AddFlag("tracker", "the plant publishes the external pose instrument (hexa_TrackerPose, for "
+                         "hexa_calibrate; use with --trajectory calibration)");
   cli.AddFlag("standby", "also start a hot-standby controller per leg");
   cli.AddOption("cpus-control", "list|auto|none",
                 "pin the plant, the leg controllers and the supervisor to these CPUs; auto: the "
@@ -181,6 +191,8 @@ int main(int argc, char** argv) {
   o.bridge_listen = cli.Get("bridge-listen");
   o.bridge_port = cli.Get("bridge-port");
   o.bridge_queue_kb = cli.Get("bridge-queue-kb");
+  o.feedforward = !cli.Flag("no-feedforward");
+  o.tracker = cli.Flag("tracker");
   auto seed = cli.GetInt("seed", 0, (1LL << 62));
   auto periods = cli.GetInt("periods", 0, 1000);
   auto timeout = cli.GetDouble("timeout", 0, 1e6);
@@ -196,14 +208,22 @@ int main(int argc, char** argv) {
   o.timeout_s = *timeout;
   o.stale_ticks = *stale_ticks;
   o.domain = *domain;
-  static const std::vector<std::string> kNamed{"x", "y", "z", "roll", "pitch", "yaw", "combined"};
+  static const std::vector<std::string> kNamed{"x",   "y",        "z",          "roll",
+                                                "pitch", "yaw", "combined", "calibration"};
   if (std::find(kNamed.begin(), kNamed.end(), o.trajectory) == kNamed.end()) {
     if (!fs::exists(o.trajectory)) {
-      std::fprintf(stderr, "error: --trajectory '%s' is neither one of x y z roll pitch yaw "
+      std::fprintf(stderr, "error: --trajectory '%s' is neither one of x y z roll pitch yaw calibration "
                    "combined nor an existing CSV file\n", o.trajectory.c_str());
       return 2;
     }
     o.trajectory = fs::absolute(o.trajectory).string();
+  }
+  for (const auto& overlay : cli.GetAll("rig-overlay")) {
+    o.rig_overlays.push_back(fs::absolute(overlay).string());
+    if (!fs::exists(o.rig_overlays.back())) {
+      std::fprintf(stderr, "error: rig overlay '%s' does not exist\n", overlay.c_str());
+      return 2;
+    }
   }
   for (const auto& [what, path] : {std::pair{"rig file", o.rig}, {"DDS config", o.dds_config}}) {
     if (!fs::exists(path)) {
@@ -248,6 +268,11 @@ int main(int argc, char** argv) {
   log->info("CPUs: control processes {}, recorder {}",
             o.cpus_control.empty() ? "any" : o.cpus_control,
             o.cpus_recorder.empty() ? "any" : o.cpus_recorder);
+  std::vector<std::string> overlay_args;  // legs and supervisor only: the plant keeps its truth
+  for (const auto& overlay : o.rig_overlays) {
+    log->info("rig overlay for the controllers and the supervisor: {}", overlay);
+    overlay_args.insert(overlay_args.end(), {"--rig-overlay", overlay});
+  }
 
   const std::string bin = HEXA_BINARY_DIR;
   const std::map<std::string, std::string> env{
@@ -302,6 +327,7 @@ int main(int argc, char** argv) {
   }
   for (int leg = 1; leg <= 6; ++leg) {
     std::vector<std::string> leg_args{"--leg", std::to_string(leg), "--controller", o.controller};
+    leg_args.insert(leg_args.end(), overlay_args.begin(), overlay_args.end());
     // With a recorder, a leg runs only once the recorder has matched its valve commands too:
     // otherwise a recorder that discovers a leg late misses its first ticks.
     if (o.recorder) leg_args.insert(leg_args.end(), {"--valve-readers", "2"});
@@ -318,13 +344,18 @@ int main(int argc, char** argv) {
                              std::vector<std::string> a{"--leg", std::to_string(leg),
                                                         "--controller", o.controller,
                                                         "--standby"};
+                             a.insert(a.end(), overlay_args.begin(), overlay_args.end());
                              if (o.recorder) a.insert(a.end(), {"--valve-readers", "2"});
                              return a;
                            }()));
   }
   std::vector<std::string> sup_args{"--trajectory", o.trajectory, "--autostart",
                                     "--exit-when-done", "--periods", std::to_string(o.periods)};
-  if (!o.outer_loop) sup_args.push_back("--no-outer-loop");
+  // The calibration procedure holds the platform still at each pose: the outer loop would
+  // integrate estimation noise there (idle wander, docs/task_space.md), so it is off.
+  if (!o.outer_loop || o.trajectory == "calibration") sup_args.push_back("--no-outer-loop");
+  if (!o.feedforward) sup_args.push_back("--no-feedforward");
+  sup_args.insert(sup_args.end(), overlay_args.begin(), overlay_args.end());
   if (o.recorder) sup_args.insert(sup_args.end(), {"--pose-readers", "1"});
   specs.push_back(spec("supervisor", "/services/task_space/hexa_task_space", sup_args));
   std::vector<std::string> plant_args{"--profile", o.profile, "--seed", std::to_string(o.seed),
@@ -332,6 +363,7 @@ int main(int argc, char** argv) {
                                       o.out_dir + "/plant.json", "--stale-ticks",
                                       std::to_string(o.stale_ticks)};
   if (o.recorder) plant_args.push_back("--expect-recorder");
+  if (o.tracker) plant_args.push_back("--tracker");
   specs.push_back(spec("plant", "/services/plant_sim/hexa_plant_sim", plant_args));
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -417,7 +449,13 @@ int main(int argc, char** argv) {
               "--meta", "profile=" + o.profile, "--meta", "mode=" + o.mode,
               "--meta", "seed=" + std::to_string(o.seed),
               "--meta", std::string("outer_loop=") + (o.outer_loop ? "on" : "off"),
+              "--meta", std::string("feedforward=") + (o.feedforward ? "on" : "off"),
               "--meta", std::string("completed=") + (completed ? "yes" : "NO")};
+    if (!o.rig_overlays.empty()) {
+      std::string list;
+      for (const auto& overlay : o.rig_overlays) list += (list.empty() ? "" : " ") + overlay;
+      r.argv.insert(r.argv.end(), {"--meta", "rig_overlays=" + list});
+    }
     if (o.fault_leg != 0)
       r.argv.insert(r.argv.end(), {"--meta", "fault=leg " + std::to_string(o.fault_leg) + " " +
                                                  o.fault_kind + " at " + o.fault_at + " s"});

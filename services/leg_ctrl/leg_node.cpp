@@ -71,8 +71,7 @@ LegNode::LegNode(const LegNodeOptions& options, const config::SystemConfig& conf
     : options_(options),
       log_(std::move(log)),
       name_("leg" + std::to_string(options.leg) + (options.standby ? "_standby" : "")),
-      controller_(LegControllerConfig::FromRig(config.rig, config.leg_controller,
-                                               options.controller)),
+      controller_(config::MakeLegControllerConfig(config, options.leg, options.controller)),
       participant_(static_cast<dds_domainid_t>(options.common.domain_id)),
       shutdown_(participant_),
       sensors_topic_(participant_),
@@ -137,6 +136,9 @@ void LegNode::TakeSetpoints() {
       issued.value.acceleration_m_s2 = s.acceleration_m_s2;
       issued.value.correction_m = s.correction_m;
       issued.value.hold = s.hold;
+      issued.value.feedforward_valid = s.feedforward_valid;
+      issued.value.feedforward_force_n = s.feedforward_force_n;
+      issued.value.feedforward_force_rate_n_s = s.feedforward_force_rate_n_s;
       setpoints_.Add(issued);  // an older or repeated one is ignored
     }
   }

@@ -52,7 +52,7 @@ int main(int argc, char** argv) {
   auto log = hexa::logging::Init(name, o.common.log_file, o.common.log_level);
   try {
     hexa::comm::EnsureDdsConfig(o.common.dds_config);
-    auto config = hexa::node::LoadConfig(o.common.rig_path, *log);
+    auto config = hexa::node::LoadConfig(o.common, *log);
     if (!config) return 1;
     // Before the participant exists: Cyclone's threads inherit the policy (PLATFORM_NOTES).
     hexa::node::ApplyScheduling(o.common, 70, *log);

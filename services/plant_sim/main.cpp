@@ -19,6 +19,8 @@ int main(int argc, char** argv) {
   cli.AddFlag("expect-recorder", "wait for the recorder before the first tick");
   cli.AddOption("duration", "s", "stop after this simulated time (0 = until stopped)", "0");
   cli.AddOption("startup-timeout", "s", "peers must be ready within this", "30");
+  cli.AddFlag("tracker", "publish the external pose instrument hexa_TrackerPose (laser tracker, "
+                         "100 Hz, for kinematic calibration; never read by a controller)");
   // 15 ms: this VM shows scheduling stalls of several ms even under SCHED_FIFO
   // (PLATFORM_NOTES.md), and a hot-standby hand-over takes the 10 ms liveliness lease + 0.5 ms;
   // a late command is still used within it, beyond it the valve closes.
@@ -52,12 +54,17 @@ int main(int argc, char** argv) {
   o.realtime_stale_ticks = static_cast<std::uint64_t>(*stale);
   o.startup_grace_ticks = static_cast<std::uint64_t>(*grace);
   o.summary_path = cli.Get("summary");
+  o.tracker = cli.Flag("tracker");
 
   auto log = hexa::logging::Init("plant", o.common.log_file, o.common.log_level);
   try {
     hexa::comm::EnsureDdsConfig(o.common.dds_config);
     auto config = hexa::node::LoadConfig(o.common.rig_path, *log);
     if (!config) return 1;
+    for (const auto& overlay : o.common.rig_overlays) {
+      log->info("rig overlay {} not applied to the plant: it simulates the rig file and profile "
+                "'{}' (overlays configure the controllers and the supervisor)", overlay, o.profile);
+    }
     if (config->profiles.count(o.profile) == 0) {
       std::string names;
       for (const auto& [name, p] : config->profiles) names += " " + name;

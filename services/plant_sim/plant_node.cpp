@@ -31,6 +31,7 @@ PlatformPlantConfig MakePlantConfig(const PlantNodeOptions& o, const config::Sys
   p.rig = c.rig;
   p.disturbance = c.profiles.at(o.profile);
   p.seed = o.seed;
+  p.tracker.enabled = o.tracker;
   return p;
 }
 
@@ -114,6 +115,9 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
       imu_writer_(participant_, imu_topic_, node::QosFor(options.common, comm::TopicKind::kImuSample)),
       truth_writer_(participant_, truth_topic_,
                     node::QosFor(options.common, comm::TopicKind::kGroundTruth)),
+      tracker_topic_(participant_),
+      tracker_writer_(participant_, tracker_topic_,
+                      node::QosFor(options.common, comm::TopicKind::kTrackerPose)),
       valve_reader_(participant_, valve_topic_, comm::EndpointRole::kControlReader,
                     node::QosFor(options.common, comm::TopicKind::kValveCommand), 64),
       status_(participant_, "plant"),
@@ -246,6 +250,16 @@ void PlantNode::PublishTick(int only_leg) {
     g.applied_valve_v[i] = truth.applied_valve_v[i];
   }
   truth_writer_.Write(g, now_ns);
+  if (out.tracker.fresh) {  // external instrument (calibration only), 100 Hz when on
+    hexa_msg_TrackerPose tp{};
+    comm::FillHeader(tp.header, tick_, t, now_ns);
+    for (int k = 0; k < 3; ++k) tp.position_m[k] = out.tracker.p_BP_B_m[k];
+    tp.orientation_wxyz[0] = out.tracker.q_BP.w();
+    tp.orientation_wxyz[1] = out.tracker.q_BP.x();
+    tp.orientation_wxyz[2] = out.tracker.q_BP.y();
+    tp.orientation_wxyz[3] = out.tracker.q_BP.z();
+    tracker_writer_.Write(tp, now_ns);
+  }
 }
 
 void PlantNode::TakeCommands(bool feed_barrier) {

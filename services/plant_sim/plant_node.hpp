@@ -47,6 +47,7 @@ struct PlantNodeOptions {
   // older than that could no longer be repaired). 0 = never.
   std::uint64_t recorder_sync_ticks = 100;
   std::string summary_path;        // write the run's figures here as JSON at exit ("" = no)
+  bool tracker = false;            // publish the external pose instrument (calibration, issue 14)
 };
 
 // Age of the command the plant applied at a tick, in ticks (tick - answered tick; 0 = the
@@ -128,6 +129,8 @@ class PlantNode {
   comm::LegRoutedWriter<hexa_msg_LegSensors> sensors_writer_;
   comm::Writer<hexa_msg_ImuSample> imu_writer_;
   comm::Writer<hexa_msg_GroundTruth> truth_writer_;
+  comm::Topic<hexa_msg_TrackerPose> tracker_topic_;
+  comm::Writer<hexa_msg_TrackerPose> tracker_writer_;
   comm::Reader<hexa_msg_ValveCommand> valve_reader_;
   node::StatusPublisher status_;
   node::FaultPublisher faults_;

@@ -18,6 +18,8 @@ int main(int argc, char** argv) {
   cli.AddFlag("autostart", "start the trajectory as soon as the pose is known");
   cli.AddFlag("exit-when-done", "exit 0 when the trajectory has finished (5 after 1 s in HOLD)");
   cli.AddFlag("no-outer-loop", "disable the task-space outer loop");
+  cli.AddFlag("no-feedforward",
+              "no platform inverse-dynamics feed-forward on the leg setpoints (paper-faithful)");
   cli.AddFlag("least-squares", "six-leg least-squares position estimate instead of GQFK");
   cli.AddOption("startup-timeout", "s", "peers must match within this", "30");
   cli.AddOption("pose-readers", "N",
@@ -39,13 +41,14 @@ int main(int argc, char** argv) {
   o.exit_when_done = cli.Flag("exit-when-done");
   o.outer_loop = !cli.Flag("no-outer-loop");
   o.least_squares = cli.Flag("least-squares");
+  o.feedforward = !cli.Flag("no-feedforward");
   o.startup_timeout_s = *startup;
   o.pose_readers = static_cast<int>(*pose_readers);
 
   auto log = hexa::logging::Init("supervisor", o.common.log_file, o.common.log_level);
   try {
     hexa::comm::EnsureDdsConfig(o.common.dds_config);
-    auto config = hexa::node::LoadConfig(o.common.rig_path, *log);
+    auto config = hexa::node::LoadConfig(o.common, *log);
     if (!config) return 1;
     // Before the participant exists: Cyclone's threads inherit the policy (PLATFORM_NOTES).
     hexa::node::ApplyScheduling(o.common, 75, *log);

@@ -1,5 +1,7 @@
 #include "supervisor_node.hpp"
 
+#include "hexa/core/calibration.hpp"
+
 #include <cmath>
 #include <cstring>
 
@@ -11,10 +13,19 @@ constexpr dds_attach_t kTokenOperator = 2;
 constexpr dds_attach_t kTokenFault = 3;
 constexpr dds_attach_t kTokenDone = 4;
 
+// Each leg's potentiometer calibration (rig overlay; identity without one).
+LegArray<PotentiometerCalibrationParams> PotentiometersFrom(const config::SystemConfig& c) {
+  const ControllerModel model = config::MakeControllerModel(c);
+  LegArray<PotentiometerCalibrationParams> p{};
+  for (std::size_t i = 0; i < kNumLegs; ++i) p[i] = model.legs[i].potentiometer;
+  return p;
+}
+
 SupervisorParams ParamsFrom(const SupervisorNodeOptions& o, const config::SystemConfig& c) {
   SupervisorParams p = c.supervisor;
   if (!o.outer_loop) p.outer_loop.enabled = false;
   if (o.least_squares) p.least_squares_estimator = true;
+  if (!o.feedforward) p.feedforward_enabled = false;
   return p;
 }
 
@@ -29,7 +40,8 @@ SupervisorNode::SupervisorNode(const SupervisorNodeOptions& options,
                                std::shared_ptr<spdlog::logger> log)
     : options_(options),
       log_(std::move(log)),
-      supervisor_(config.rig, ParamsFrom(options, config)),
+      supervisor_(config::MakeSupervisorRig(config), ParamsFrom(options, config),
+                  PotentiometersFrom(config)),
       // The six legs' samples of a tick leave in one datagram per reader (comm/writer.hpp).
       participant_(static_cast<dds_domainid_t>(options.common.domain_id),
                    comm::WriteBatching::kOn),
@@ -127,9 +139,14 @@ bool SupervisorNode::TakeImu() {
 
 bool SupervisorNode::PrepareStart(const std::string& trajectory, int periods) {
   PaperMotion motion;
-  StartRequest request = ParsePaperMotion(trajectory, motion)
-                             ? supervisor_.PreparePaperStart(motion, periods)
-                             : supervisor_.PrepareCsvStart(trajectory);
+  StartRequest request =
+      trajectory == "calibration"
+          // Kinematic calibration poses (issue 14, core/calibration.hpp), record with --tracker.
+          ? supervisor_.PrepareStart(MakeCalibrationTrajectory(
+                supervisor_.rig(), supervisor_.rest_xyz_rpy(), supervisor_.home_xyz_rpy(),
+                supervisor_.timing(), CalibrationProcedureParams{}))
+      : ParsePaperMotion(trajectory, motion) ? supervisor_.PreparePaperStart(motion, periods)
+                                             : supervisor_.PrepareCsvStart(trajectory);
   if (!request.feasibility.feasible) {
     log_->error("trajectory '{}' rejected before any motion: {}", trajectory,
                 request.feasibility.message);
@@ -280,6 +297,9 @@ void SupervisorNode::Publish(std::uint64_t tick, double time_s) {
     s.acceleration_m_s2 = sp.acceleration_m_s2;
     s.correction_m = sp.correction_m;
     s.hold = sp.hold;
+    s.feedforward_valid = sp.feedforward_valid;
+    s.feedforward_force_n = sp.feedforward_force_n;
+    s.feedforward_force_rate_n_s = sp.feedforward_force_rate_n_s;
     setpoint_writer_.WriteDeferred(s, now_ns);
   }
   setpoint_writer_.Flush();
@@ -334,8 +354,9 @@ int SupervisorNode::Run() {
   }
   PublishStatus(hexa_msg_NODE_RUNNING, "idle");
   autostart_pending_ = options_.autostart;
-  log_->info("supervisor running ({}, outer loop {}, estimator {})",
+  log_->info("supervisor running ({}, outer loop {}, feed-forward {}, estimator {})",
              realtime ? "real time" : "lockstep", options_.outer_loop ? "on" : "off",
+             supervisor_.params().feedforward_enabled ? "on" : "off",
              options_.least_squares ? "six-leg least squares" : "GQFK (eq 47)");
   {
     std::lock_guard<std::mutex> lock(mutex_);

@@ -29,6 +29,7 @@ struct SupervisorNodeOptions {
   bool exit_when_done = false;
   bool outer_loop = true;
   bool least_squares = false;
+  bool feedforward = true;  // false: no inverse-dynamics feed-forward (whatever the rig file says)
   double startup_timeout_s = 30.0;
   int pose_readers = 0;  // matched PoseReport readers required before RUNNING (the recorder)
 };

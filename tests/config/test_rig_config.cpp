@@ -145,6 +145,7 @@ void ExpectLegControllerEq(const hexa::LegControllerParams& a, const hexa::LegCo
   EXPECT_EQ(a.pi.integrator_limit_v, b.pi.integrator_limit_v);
   EXPECT_EQ(a.pi.velocity_feedforward_v_s_m, b.pi.velocity_feedforward_v_s_m);
   EXPECT_EQ(a.pi.rate_damping_v_s_m, b.pi.rate_damping_v_s_m);
+  EXPECT_EQ(a.pi.force_feedforward_v_n, b.pi.force_feedforward_v_n);
   EXPECT_EQ(a.setpoint_timeout_s, b.setpoint_timeout_s);
 }
 
@@ -164,6 +165,7 @@ void ExpectSupervisorEq(const hexa::SupervisorParams& a, const hexa::SupervisorP
   EXPECT_EQ(a.outer_loop.gain, b.outer_loop.gain);
   EXPECT_EQ(a.outer_loop.max_correction_m, b.outer_loop.max_correction_m);
   EXPECT_EQ(a.outer_loop.translation_gain_scale, b.outer_loop.translation_gain_scale);
+  EXPECT_EQ(a.feedforward_enabled, b.feedforward_enabled);
 }
 
 void ExpectProfileEq(const hexa::DisturbanceProfile& a, const hexa::DisturbanceProfile& b) {
@@ -237,10 +239,10 @@ TEST(RigConfigReference, CoreStructsHaveNotGrownPastTheSchema) {
   EXPECT_EQ(sizeof(hexa::DisturbanceProfile), 9 * sizeof(double));  // bool (padded) + 8 doubles
   EXPECT_EQ(sizeof(hexa::DifferentiatorParams), 3 * sizeof(double));  // int (padded) + 2 doubles
   EXPECT_EQ(sizeof(hexa::BsSmcParams), 17 * sizeof(double));
-  EXPECT_EQ(sizeof(hexa::PiParams), 5 * sizeof(double));
-  EXPECT_EQ(sizeof(hexa::LegControllerParams), 26 * sizeof(double));
+  EXPECT_EQ(sizeof(hexa::PiParams), 6 * sizeof(double));
+  EXPECT_EQ(sizeof(hexa::LegControllerParams), 27 * sizeof(double));
   EXPECT_EQ(sizeof(hexa::OuterLoopParams), 4 * sizeof(double));
-  EXPECT_EQ(sizeof(hexa::SupervisorParams), 15 * sizeof(double));
+  EXPECT_EQ(sizeof(hexa::SupervisorParams), 16 * sizeof(double));  // + feedforward_enabled (padded)
 }
 
 TEST(RigConfigReference, DefaultsBuiltInCodeAreValid) {

@@ -5,6 +5,9 @@
 //   platform_study [--rig file|default] [--seed N] [--controller bssmc|pi] [--ideal] [--traj all|x,y,...]
 //                  [--periods N] [key=value ...]
 //   platform_study trace <traj> [options]      per-tick CSV of the legs (stdout)
+//   platform_study fit <traj> [options]        first-harmonic fit of the tracking window:
+//        per axis and per leg the amplitude ratio true/desired, the phase lag, the mean peak
+//        overshoot and what remains after removing the fitted harmonic (issue 14)
 //
 // Overrides (key=value) start from the struct defaults (= deploy/rigs/hexataar_r.textproto):
 // see kKeys below. Output: per trajectory the RMSE vs ground truth per axis (cm, deg), leg
@@ -61,6 +64,15 @@ std::vector<Key> Keys() {
       {"ol_gain", [](auto& c, double v) { c.supervisor.outer_loop.gain = v; }},
       {"ol_pos", [](auto& c, double v) { c.supervisor.outer_loop.translation_gain_scale = v; }},
       {"ol_max", [](auto& c, double v) { c.supervisor.outer_loop.max_correction_m = v; }},
+      {"ff", [](auto& c, double v) { c.supervisor.feedforward_enabled = v != 0.0; }},
+      {"kf", [](auto& c, double v) { c.leg_controller.pi.force_feedforward_v_n = v; }},
+      // Supervisor period in ticks (5 = the system's 5 ms; 1 = a setpoint every tick, no
+      // interpolation inside the period). The outer-loop gain is per supervisor step: scale
+      // it with ol_gain to keep its integral rate.
+      {"sup_every", [](auto& c, double v) {
+         c.supervisor_every_ticks = static_cast<int>(v);
+         c.supervisor.period_s = v * c.tick_s;
+       }},
   };
 }
 
@@ -215,6 +227,121 @@ void Trace(const hexa::LockstepConfig& config, PaperMotion motion, int periods) 
   }
 }
 
+// Least-squares fit y ~ c + a sin(w t) + b cos(w t).
+struct Harmonic {
+  double c = 0, a = 0, b = 0;
+  double amplitude() const { return std::hypot(a, b); }
+  double phase_rad() const { return std::atan2(b, a); }
+};
+Harmonic FitHarmonic(const std::vector<double>& t, const std::vector<double>& y, double w) {
+  double m[3][3] = {}, r[3] = {};
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    const double f[3] = {1.0, std::sin(w * t[k]), std::cos(w * t[k])};
+    for (int i = 0; i < 3; ++i) {
+      r[i] += f[i] * y[k];
+      for (int j = 0; j < 3; ++j) m[i][j] += f[i] * f[j];
+    }
+  }
+  // 3x3 Gauss elimination (well conditioned over whole periods).
+  for (int i = 0; i < 3; ++i) {
+    for (int k = i + 1; k < 3; ++k) {
+      const double q = m[k][i] / m[i][i];
+      for (int j = i; j < 3; ++j) m[k][j] -= q * m[i][j];
+      r[k] -= q * r[i];
+    }
+  }
+  double x[3];
+  for (int i = 2; i >= 0; --i) {
+    double s = r[i];
+    for (int j = i + 1; j < 3; ++j) s -= m[i][j] * x[j];
+    x[i] = s / m[i][i];
+  }
+  return Harmonic{x[0], x[1], x[2]};
+}
+
+void Fit(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
+  hexa::LockstepSimulation sim(config);
+  sim.Tick();
+  const hexa::StartRequest start = sim.supervisor().PreparePaperStart(motion, periods);
+  const double f_hz = motion == PaperMotion::kCombined ? 1.0 : 0.1;
+  const double w = 2.0 * 3.14159265358979323846 * f_hz;
+  std::vector<double> t;
+  std::vector<double> des[6], tru[6], leg_des[6], leg_true[6], leg_corr[6];
+  bool started = false, left_idle = false;
+  while (sim.time_s() < 600.0) {
+    const bool due = sim.supervisor_due();
+    auto cmd = (due && !started) ? hexa::OperatorCommandKind::kStart : hexa::OperatorCommandKind::kNone;
+    if (sim.Tick(cmd, cmd == hexa::OperatorCommandKind::kStart ? &start : nullptr) !=
+        hexa::PlantStatus::kOk)
+      break;
+    if (!due) continue;
+    started = true;
+    const auto& out = sim.supervisor_output();
+    if (out.state != hexa::SupervisorState::kIdle) left_idle = true;
+    if (out.state == hexa::SupervisorState::kHold || (left_idle && out.state == hexa::SupervisorState::kIdle)) break;
+    if (out.state != hexa::SupervisorState::kTracking) continue;
+    t.push_back(out.trajectory_time_s);
+    const hexa::Vector6d truth = hexa::VectorFromPose(sim.plant_before_step().truth.pose);
+    for (int k = 0; k < 6; ++k) {
+      des[k].push_back(out.desired_xyz_rpy[k]);
+      tru[k].push_back(truth[k]);
+      leg_des[k].push_back(out.setpoint[k].length_m);
+      leg_true[k].push_back(sim.plant_before_step().truth.length_m[k]);
+      leg_corr[k].push_back(out.setpoint[k].correction_m);
+    }
+  }
+  const char* names[6] = {"x", "y", "z", "roll", "pitch", "yaw"};
+  std::printf("axis   | desired amp | gain true/des | lag deg  lag ms | peak over | rmse | rmse w/o 1st harmonic\n");
+  for (int k = 0; k < 6; ++k) {
+    const double unit = k < 3 ? 100.0 : 57.29577951308232;
+    const Harmonic hd = FitHarmonic(t, des[k], w), ht = FitHarmonic(t, tru[k], w);
+    double lag = hd.phase_rad() - ht.phase_rad();
+    while (lag > 3.14159265358979323846) lag -= 2 * 3.14159265358979323846;
+    while (lag < -3.14159265358979323846) lag += 2 * 3.14159265358979323846;
+    // Mean over periods of (max true - max desired) in each period window.
+    const double period = 1.0 / f_hz;
+    double over = 0.0;
+    int n_periods = 0;
+    for (double t0 = t.front(); t0 + period <= t.back() + 1e-9; t0 += period) {
+      double md = -1e9, mt = -1e9;
+      for (std::size_t s = 0; s < t.size(); ++s) {
+        if (t[s] < t0 || t[s] >= t0 + period) continue;
+        md = std::max(md, des[k][s] - hd.c);
+        mt = std::max(mt, tru[k][s] - hd.c);
+      }
+      over += mt - md;
+      ++n_periods;
+    }
+    over /= std::max(1, n_periods);
+    double se = 0.0, sr = 0.0;
+    for (std::size_t s = 0; s < t.size(); ++s) {
+      const double e = tru[k][s] - des[k][s];
+      const double fit_e = (ht.c + ht.a * std::sin(w * t[s]) + ht.b * std::cos(w * t[s])) -
+                           (hd.c + hd.a * std::sin(w * t[s]) + hd.b * std::cos(w * t[s]));
+      se += e * e;
+      sr += (e - fit_e) * (e - fit_e);
+    }
+    const double n = static_cast<double>(t.size());
+    std::printf("%-6s | %10.4f | %12.4f | %7.2f %7.2f | %9.4f | %.4f | %.4f\n", names[k],
+                unit * hd.amplitude(), hd.amplitude() > 1e-9 ? ht.amplitude() / hd.amplitude() : 0.0,
+                lag * 57.29577951308232, 1000.0 * lag / w, unit * over, unit * std::sqrt(se / n),
+                unit * std::sqrt(sr / n));
+  }
+  std::printf("leg | desired amp mm | gain true/des | lag ms | correction amp mm (lag ms vs desired)\n");
+  for (int i = 0; i < 6; ++i) {
+    const Harmonic hd = FitHarmonic(t, leg_des[i], w), ht = FitHarmonic(t, leg_true[i], w),
+                   hc = FitHarmonic(t, leg_corr[i], w);
+    double lag = hd.phase_rad() - ht.phase_rad(), lag_c = hd.phase_rad() - hc.phase_rad();
+    for (double* l : {&lag, &lag_c}) {
+      while (*l > 3.14159265358979323846) *l -= 2 * 3.14159265358979323846;
+      while (*l < -3.14159265358979323846) *l += 2 * 3.14159265358979323846;
+    }
+    std::printf("%d   | %8.3f | %8.4f | %7.2f | %7.3f (%7.2f)\n", i + 1, 1000 * hd.amplitude(),
+                ht.amplitude() / hd.amplitude(), 1000.0 * lag / w, 1000 * hc.amplitude(),
+                1000.0 * lag_c / w);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -224,13 +351,13 @@ int main(int argc, char** argv) {
                                       PaperMotion::kRoll, PaperMotion::kPitch, PaperMotion::kYaw,
                                       PaperMotion::kCombined};
   int periods = 0;
-  bool trace = false;
+  bool trace = false, fit = false;
   const auto keys = Keys();
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
     auto next = [&]() -> std::string { return a + 1 < argc ? argv[++a] : std::string(); };
-    if (arg == "trace") {
-      trace = true;
+    if (arg == "trace" || arg == "fit") {
+      (arg == "trace" ? trace : fit) = true;
       PaperMotion m;
       if (!hexa::ParsePaperMotion(next(), m)) return Usage();
       motions = {m};
@@ -288,6 +415,10 @@ int main(int argc, char** argv) {
   }
   if (trace) {
     Trace(config, motions.front(), periods);
+    return 0;
+  }
+  if (fit) {
+    Fit(config, motions.front(), periods);
     return 0;
   }
   double score = 0.0;

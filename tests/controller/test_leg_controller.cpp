@@ -194,6 +194,61 @@ TEST(LegController, InterpolatesTheSetpointInsideItsPeriodAndAddsTheCorrection) 
   }
 }
 
+TEST(LegController, FeedforwardIsInterpolatedAndMovesPhiByTheLoad) {
+  // BS-SMC: with the feed-forward valid, phi carries the known load (force + rate * dt)
+  // instead of M a_d + F_g; the difference of phi between two otherwise identical
+  // controllers is exactly the load difference.
+  for (LegControllerKind kind : {LegControllerKind::kBsSmc, LegControllerKind::kPi}) {
+    LegController with(MakeConfig(kind)), without(MakeConfig(kind)), heavier(MakeConfig(kind));
+    LegControllerInput in = RestInput(0.5, 0.5);
+    in.setpoint_time_s = 1.000;
+    in.setpoint_acceleration_m_s2 = 0.0;
+    in.feedforward_valid = true;
+    in.feedforward_force_n = 40.0;
+    in.feedforward_force_rate_n_s = 500.0;
+    LegControllerInput in_none = in;
+    in_none.feedforward_valid = false;
+    LegControllerInput in_heavier = in;
+    in_heavier.feedforward_force_n = 50.0;
+    LegControllerOutput out, out_none, out_heavier;
+    for (int k = 0; k < 5; ++k) {
+      in.time_s = in_none.time_s = in_heavier.time_s = 1.000 + 0.001 * k;
+      with.Update(in, out);
+      without.Update(in_none, out_none);
+      heavier.Update(in_heavier, out_heavier);
+      ASSERT_EQ(out.status, LegControlStatus::kOk);
+      EXPECT_NEAR(out.feedforward_force_n, 40.0 + 500.0 * 0.001 * k, 1e-12);
+      EXPECT_EQ(out_none.feedforward_force_n, 0.0);
+      if (kind == LegControllerKind::kBsSmc) {
+        const double gravity = LegControllerParams{}.bssmc.gravity_load_n;
+        EXPECT_NEAR(out.desired_force_n - out_none.desired_force_n,
+                    out.feedforward_force_n - gravity, 1e-9);
+        EXPECT_NEAR(out_heavier.desired_force_n - out.desired_force_n, 10.0, 1e-9);
+      } else {
+        // PI: a larger load asks for more extension (a voltage below null, eq 42).
+        EXPECT_LT(out_heavier.valve_v, out.valve_v);
+      }
+    }
+  }
+}
+
+TEST(LegController, NonFiniteOrHugeFeedforwardIsBadInput) {
+  LegController c(MakeConfig(LegControllerKind::kBsSmc));
+  LegControllerInput in = RestInput(0.5, 0.5);
+  in.feedforward_valid = true;
+  in.feedforward_force_n = std::numeric_limits<double>::quiet_NaN();
+  LegControllerOutput out;
+  c.Update(in, out);
+  EXPECT_EQ(out.status, LegControlStatus::kHoldBadInput);
+  EXPECT_EQ(out.valve_v, 5.0);
+  in.feedforward_force_n = 1e6;
+  c.Update(in, out);
+  EXPECT_EQ(out.status, LegControlStatus::kHoldBadInput);
+  in.feedforward_valid = false;  // ignored when not valid
+  c.Update(in, out);
+  EXPECT_EQ(out.status, LegControlStatus::kOk);
+}
+
 TEST(LegController, SupervisorHoldKeepsTheLengthAtRest) {
   LegController c(MakeConfig(LegControllerKind::kBsSmc));
   LegControllerInput in = RestInput(0.5, 0.51);

@@ -65,15 +65,20 @@ inline SessionRun RunSession(const std::string& name, int domain, std::vector<st
 // Replays a paper trajectory in the in-process lockstep simulation with the shipped rig
 // file and compares the valve voltages the plant applied at every tick, bit for bit.
 // GroundTruth(n + 1) carries the voltages applied during step n.
+// `rig_overlays`: applied as the services apply them (config::MakeControllerModel).
 inline void ExpectSameAsInProcess(const recorder::SessionReport& report, PaperMotion motion,
                                   int periods, std::uint64_t seed,
                                   LegControllerKind controller = LegControllerKind::kBsSmc,
-                                  std::uint64_t up_to_tick = UINT64_MAX) {
-  const auto cfg = config::LoadSystemConfigOrThrow(config::DefaultRigFile());
+                                  std::uint64_t up_to_tick = UINT64_MAX,
+                                  const std::vector<std::string>& rig_overlays = {}) {
+  const auto loaded = config::LoadSystemConfig(config::DefaultRigFile(), rig_overlays);
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+  const config::SystemConfig& cfg = loaded.config;
   LockstepConfig lc;
   lc.rig = cfg.rig;
   lc.leg_controller = cfg.leg_controller;
   lc.supervisor = cfg.supervisor;
+  lc.controllers = config::MakeControllerModel(cfg);
   lc.disturbance = cfg.profiles.at("realistic");
   lc.seed = seed;
   lc.controller = controller;

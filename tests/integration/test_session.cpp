@@ -54,4 +54,46 @@ TEST(Session, CombinedLockstepEndToEnd) {
   hexa::testing::ExpectSameAsInProcess(run.report, hexa::PaperMotion::kCombined, 1, 3);
 }
 
+// A rig overlay (three legs: friction and polytropic coefficients, a gravity load, a
+// calibrated joint that moves the supervisor's kinematics) reaches the DDS services exactly
+// as hexa_sim applies it: the session equals the in-process simulation with the overlay, and
+// differs from the one without it.
+TEST(Session, RigOverlayReachesTheServicesAsInProcess) {
+  const std::string overlay = HEXA_EXAMPLE_OVERLAY;
+  const auto run = RunSession("session_overlay", 73,
+                              {"--trajectory", "combined", "--periods", "1", "--seed", "2",
+                               "--rig-overlay", overlay});
+  ASSERT_EQ(run.exit_code, 0) << Slurp(run.dir + "/session.log");
+  ASSERT_TRUE(run.has_report);
+  const std::string legs = Slurp(run.dir + "/leg2.log") + Slurp(run.dir + "/supervisor.log");
+  EXPECT_NE(legs.find("rig overlay " + overlay + " applied"), std::string::npos) << legs;
+  EXPECT_EQ(Slurp(run.dir + "/plant.log").find("rig overlay"), std::string::npos)
+      << "the launcher gives overlays to the controllers and the supervisor only";
+  {
+    SCOPED_TRACE("with the overlay: bit for bit");
+    hexa::testing::ExpectSameAsInProcess(run.report, hexa::PaperMotion::kCombined, 1, 2,
+                                         hexa::LegControllerKind::kBsSmc, UINT64_MAX, {overlay});
+  }
+  // Without the overlay the in-process run differs: the check above can fail.
+  const auto cfg = hexa::config::LoadSystemConfigOrThrow(hexa::config::DefaultRigFile());
+  hexa::LockstepConfig lc;
+  lc.rig = cfg.rig;
+  lc.leg_controller = cfg.leg_controller;
+  lc.supervisor = cfg.supervisor;
+  lc.disturbance = cfg.profiles.at("realistic");
+  lc.seed = 2;
+  hexa::LockstepSimulation sim(lc);
+  sim.Tick();
+  const hexa::StartRequest start = sim.supervisor().PreparePaperStart(hexa::PaperMotion::kCombined, 1);
+  bool differs = false;
+  for (std::uint64_t n = 1; n + 1 < run.report.applied_valve_v.size() && !differs; ++n) {
+    sim.Tick(n == 5 ? hexa::OperatorCommandKind::kStart : hexa::OperatorCommandKind::kNone,
+             n == 5 ? &start : nullptr);
+    for (int i = 0; i < 6; ++i) {
+      differs = differs || run.report.applied_valve_v[n + 1][i] != sim.applied_valve_v()[i];
+    }
+  }
+  EXPECT_TRUE(differs) << "the overlay changed nothing the plant applied";
+}
+
 }  // namespace

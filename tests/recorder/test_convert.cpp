@@ -129,6 +129,9 @@ TEST(Convert, LegSetpointBothWays) {
   d.acceleration_m_s2 = -1.5;
   d.correction_m = 2e-4;
   d.hold = true;
+  d.feedforward_valid = true;
+  d.feedforward_force_n = 23.5;
+  d.feedforward_force_rate_n_s = -310.25;
   rec::LegSetpoint p;
   ToProto(d, p);
   EXPECT_EQ(p.leg_id(), 6u);
@@ -138,6 +141,9 @@ TEST(Convert, LegSetpointBothWays) {
   EXPECT_EQ(p.acceleration_m_s2(), -1.5);
   EXPECT_EQ(p.correction_m(), 2e-4);
   EXPECT_TRUE(p.hold());
+  EXPECT_TRUE(p.feedforward_valid());
+  EXPECT_EQ(p.feedforward_force_n(), 23.5);
+  EXPECT_EQ(p.feedforward_force_rate_n_s(), -310.25);
   auto b = Zeroed<hexa_msg_LegSetpoint>();
   ASSERT_TRUE(FromProto(p, b));
   EXPECT_EQ(b.leg_id, 6);
@@ -147,6 +153,9 @@ TEST(Convert, LegSetpointBothWays) {
   EXPECT_EQ(b.acceleration_m_s2, -1.5);
   EXPECT_EQ(b.correction_m, 2e-4);
   EXPECT_TRUE(b.hold);
+  EXPECT_TRUE(b.feedforward_valid);
+  EXPECT_EQ(b.feedforward_force_n, 23.5);
+  EXPECT_EQ(b.feedforward_force_rate_n_s, -310.25);
 }
 
 TEST(Convert, PoseReportBothWays) {
@@ -319,7 +328,7 @@ TEST(Convert, FaultEventBothWays) {
 
 TEST(Convert, RegistryCoversEveryPublishedTypeAndDispatchesToTheTypedFunctions) {
   const auto& types = WireTypes();
-  ASSERT_EQ(types.size(), 9u);  // every IDL struct but SampleHeader
+  ASSERT_EQ(types.size(), 10u);  // every IDL struct but SampleHeader
   for (const auto& t : types) {
     EXPECT_EQ(FindWireType(t.name), &t);
     EXPECT_EQ(FindWireType(t.prototype->GetDescriptor()->full_name()), &t);

@@ -182,7 +182,7 @@ TEST(McapFile, EveryRecordingTypeRoundTripsWithEveryField) {
     }
     w.Close();
   }
-  ASSERT_EQ(sent.size(), 10u);  // SampleHeader + the nine published types
+  ASSERT_EQ(sent.size(), 11u);  // SampleHeader + the ten published types
   size_t i = 0;
   const McapScanResult r = ReadRecording(
       path, [&](const McapChannel& ch, const McapMessageView& view, const gp::Message& decoded) {

@@ -161,8 +161,9 @@ TEST_F(RecorderDds, RecordsEveryPublishedSampleWithLossFromTicks) {
   ASSERT_TRUE(info.complete);
   std::map<std::string, const ChannelInfo*> by_topic;
   for (const auto& c : info.channels) by_topic[c.topic] = &c;
-  // Every topic has a channel, even without data, and so has the 3-D scene (docs/foxglove.md).
-  ASSERT_EQ(by_topic.size(), 9u + 2u);
+  // Every topic has a channel, even without data (10 topics with the tracker's), and so has
+  // the 3-D scene (docs/foxglove.md).
+  ASSERT_EQ(by_topic.size(), 10u + 2u);
   ASSERT_EQ(by_topic.count("hexa_Scene") + by_topic.count("hexa_FrameTransforms"), 2u);
   EXPECT_EQ(by_topic["hexa_LegSensors"]->count, sent_sensors);
   EXPECT_EQ(by_topic["hexa_LegSensors"]->missing, 3u);

@@ -222,6 +222,9 @@ std::map<uint64_t, hexa::LegControllerOutput> OfflineController(
         in.setpoint_acceleration_m_s2 = p.acceleration_m_s2();
         in.correction_m = p.correction_m();
         in.hold = p.hold();
+        in.feedforward_valid = p.feedforward_valid();
+        in.feedforward_force_n = p.feedforward_force_n();
+        in.feedforward_force_rate_n_s = p.feedforward_force_rate_n_s();
       }
     }
     c.Update(in, out[tick]);

@@ -110,6 +110,58 @@ TEST(Supervisor, NominalRunVisitsEveryStateInOrderWithContinuousSetpoints) {
   EXPECT_LT(max_error, 0.01);
 }
 
+TEST(Supervisor, FeedforwardIsTheInverseDynamicsOfTheDesiredMotionWithAConsistentRate) {
+  Bench bench;
+  bench.Tick();
+  const StartRequest request = bench.sup().PreparePaperStart(PaperMotion::kCombined, 2);
+  ASSERT_TRUE(request.feasibility.feasible) << request.feasibility.message;
+  bench.Tick(OperatorCommandKind::kStart, &request);
+  const RigParams rig = MakeReferenceRig();
+  const PlatformInertialParams inertial = PlatformInertialParams::FromRig(rig);
+  LegArray<SupervisorLegSetpoint> prev = bench.out.setpoint;
+  double max_force = 0.0, worst_rate_mismatch = 0.0;
+  for (int k = 0; k < 1200; ++k) {
+    bench.Tick();
+    LegForceResult expected;
+    const PlatformMotion m{bench.out.desired.pose, bench.out.desired.twist_B,
+                           bench.out.desired.twist_rate_B};
+    ASSERT_EQ(LegForcesForMotion(rig.geometry, inertial, m, expected), KinStatus::kOk);
+    for (std::size_t i = 0; i < kNumLegs; ++i) {
+      const auto& sp = bench.out.setpoint[i];
+      ASSERT_TRUE(sp.feedforward_valid);
+      EXPECT_NEAR(sp.feedforward_force_n, expected.force_n[i], 1e-9);
+      max_force = std::max(max_force, std::abs(sp.feedforward_force_n));
+      // The previous setpoint's force + rate * 5 ms is this setpoint's force (first-order
+      // hold over the period, evaluated on the same trajectory).
+      worst_rate_mismatch =
+          std::max(worst_rate_mismatch, std::abs(prev[i].feedforward_force_n +
+                                                 prev[i].feedforward_force_rate_n_s * 0.005 -
+                                                 sp.feedforward_force_n));
+    }
+    prev = bench.out.setpoint;
+  }
+  EXPECT_EQ(bench.out.state, SupervisorState::kIdle);
+  EXPECT_LT(worst_rate_mismatch, 1e-6);
+  EXPECT_GT(max_force, 20.0);  // the combined motion is far from the static ~13 N
+  // At rest again: the static load, no rate.
+  for (const auto& sp : bench.out.setpoint) EXPECT_EQ(sp.feedforward_force_rate_n_s, 0.0);
+}
+
+TEST(Supervisor, FeedforwardDisabledIsNotSent) {
+  SupervisorParams params;
+  params.feedforward_enabled = false;
+  Bench bench(Vector6d::Zero(), params);
+  bench.Tick();
+  const StartRequest request = bench.sup().PreparePaperStart(PaperMotion::kCombined, 1);
+  bench.Tick(OperatorCommandKind::kStart, &request);
+  bench.RunFor(3.0);
+  ASSERT_EQ(bench.out.state, SupervisorState::kTracking);
+  for (const auto& sp : bench.out.setpoint) {
+    EXPECT_FALSE(sp.feedforward_valid);
+    EXPECT_EQ(sp.feedforward_force_n, 0.0);
+  }
+}
+
 TEST(Supervisor, OperatorStopDuringTrackingStopsSmoothlyAtHome) {
   Bench bench;
   StartRequest request;

@@ -33,6 +33,14 @@ void Parser::AddFlag(const std::string& name, const std::string& help) {
   specs_[name] = Spec{"", help, std::nullopt, {}, true};
 }
 
+void Parser::AddRepeatable(const std::string& name, const std::string& value_name,
+                           const std::string& help) {
+  order_.push_back(name);
+  Spec spec{value_name, help + " (repeatable)", std::nullopt, {}, false};
+  spec.repeatable = true;
+  specs_[name] = spec;
+}
+
 bool Parser::Parse(int argc, const char* const* argv) {
   for (int i = 1; i < argc; ++i) {
     std::string arg = argv[i];
@@ -75,6 +83,7 @@ bool Parser::Parse(int argc, const char* const* argv) {
       return false;
     }
     values_[name] = value;
+    if (it->second.repeatable) all_values_[name].push_back(value);
   }
   return !help_requested_;
 }
@@ -113,6 +122,12 @@ std::string Parser::Get(const std::string& name) const {
 bool Parser::Fail(const std::string& message) {
   error_ = message;
   return false;
+}
+
+std::vector<std::string> Parser::GetAll(const std::string& name) const {
+  if (auto it = all_values_.find(name); it != all_values_.end()) return it->second;
+  if (Has(name)) return {Get(name)};
+  return {};
 }
 
 std::optional<long long> Parser::GetInt(const std::string& name, long long min, long long max) {

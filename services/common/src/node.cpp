@@ -10,6 +10,9 @@ namespace hexa::node {
 
 void AddCommonOptions(cli::Parser& p) {
   p.AddOption("rig", "file", "rig file (protobuf text format)", config::DefaultRigFile());
+  p.AddRepeatable("rig-overlay", "file",
+                  "rig overlay applied on top of the rig file for the controllers and the "
+                  "supervisor (identified / calibrated values; docs/config.md)");
   p.AddOption("domain", "id", "DDS domain id", "0");
   p.AddChoice("mode", {"lockstep", "realtime"}, "time base (docs/architecture.md)", "lockstep");
   p.AddOption("dds-config", "file",
@@ -26,6 +29,7 @@ void AddCommonOptions(cli::Parser& p) {
 
 bool ReadCommonOptions(cli::Parser& p, CommonOptions& o) {
   o.rig_path = p.Get("rig");
+  o.rig_overlays = p.GetAll("rig-overlay");
   const auto domain = p.GetInt("domain", 0, 230);
   const auto timeout = p.GetDouble("lockstep-timeout", 0.1, 3600);
   const auto d1 = p.GetDouble("rt-deadline-1ms", 0.001, 1.0);
@@ -94,6 +98,25 @@ std::optional<config::SystemConfig> LoadConfig(const std::string& path, spdlog::
     return std::nullopt;
   }
   log.info("rig file {} loaded (rig '{}')", path, result.config.rig_name);
+  return std::move(result.config);
+}
+
+std::optional<config::SystemConfig> LoadConfig(const CommonOptions& options, spdlog::logger& log) {
+  if (options.rig_overlays.empty()) return LoadConfig(options.rig_path, log);
+  auto result = config::LoadSystemConfig(options.rig_path, options.rig_overlays);
+  if (!result.ok) {
+    log.error("rig file or rig overlay rejected:\n{}", result.error);
+    return std::nullopt;
+  }
+  log.info("rig file {} loaded (rig '{}')", options.rig_path, result.config.rig_name);
+  for (const config::RigOverlay& o : result.config.overlays) {
+    std::string legs;
+    for (std::size_t i = 0; i < o.leg.size(); ++i)
+      if (!o.leg[i].empty()) legs += (legs.empty() ? "" : ",") + std::to_string(i + 1);
+    log.info("rig overlay {} applied: legs {}, method '{}', date {}, source '{}'", o.source_path,
+             legs.empty() ? "none" : legs, o.provenance.method, o.provenance.date,
+             o.provenance.source_recording);
+  }
   return std::move(result.config);
 }
 

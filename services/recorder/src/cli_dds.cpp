@@ -49,6 +49,7 @@ void ForEachTopicType(F&& f) {
   f(Pair<hexa_msg_LegSetpoint, rec::LegSetpoint>{});
   f(Pair<hexa_msg_PoseReport, rec::PoseReport>{});
   f(Pair<hexa_msg_GroundTruth, rec::GroundTruth>{});
+  f(Pair<hexa_msg_TrackerPose, rec::TrackerPose>{});
   f(Pair<hexa_msg_OperatorCommand, rec::OperatorCommand>{});
   f(Pair<hexa_msg_NodeStatus, rec::NodeStatus>{});
   f(Pair<hexa_msg_FaultEvent, rec::FaultEvent>{});
@@ -224,8 +225,8 @@ int RunRecord(const std::vector<std::string>& argv) {
         "control processes run SCHED_FIFO (a SCHED_OTHER recorder beside them is starved);\n"
         "--cpus LIST pins it (e.g. 0): both before DDS starts, so Cyclone's threads inherit.\n"
         "topics: hexa_LegSensors hexa_ValveCommand hexa_ImuSample hexa_LegSetpoint\n"
-        "        hexa_PoseReport hexa_GroundTruth hexa_OperatorCommand hexa_NodeStatus\n"
-        "        hexa_FaultEvent\n"
+        "        hexa_PoseReport hexa_GroundTruth hexa_TrackerPose hexa_OperatorCommand\n"
+        "        hexa_NodeStatus hexa_FaultEvent\n"
         "  --no-scene          do not add the 3-D scene\n",
         stdout);
     std::fputs(kSceneOptionsHelp, stdout);

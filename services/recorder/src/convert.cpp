@@ -112,6 +112,9 @@ void ToProto(const hexa_msg_LegSetpoint& in, rec::LegSetpoint& out) {
   out.set_acceleration_m_s2(in.acceleration_m_s2);
   out.set_correction_m(in.correction_m);
   out.set_hold(in.hold);
+  out.set_feedforward_valid(in.feedforward_valid);
+  out.set_feedforward_force_n(in.feedforward_force_n);
+  out.set_feedforward_force_rate_n_s(in.feedforward_force_rate_n_s);
 }
 
 void ToProto(const hexa_msg_PoseReport& in, rec::PoseReport& out) {
@@ -138,6 +141,12 @@ void ToProto(const hexa_msg_GroundTruth& in, rec::GroundTruth& out) {
   ArrayToProto(in.spool_position_m, out.mutable_spool_position_m());
   ArrayToProto(in.applied_valve_v, out.mutable_applied_valve_v());
   ArrayToProto(in.command_age_ticks, out.mutable_command_age_ticks());
+}
+
+void ToProto(const hexa_msg_TrackerPose& in, rec::TrackerPose& out) {
+  ToProto(in.header, *out.mutable_header());
+  ArrayToProto(in.position_m, out.mutable_position_m());
+  ArrayToProto(in.orientation_wxyz, out.mutable_orientation_wxyz());
 }
 
 void ToProto(const hexa_msg_OperatorCommand& in, rec::OperatorCommand& out) {
@@ -211,6 +220,9 @@ bool FromProto(const rec::LegSetpoint& in, hexa_msg_LegSetpoint& out) {
   out.acceleration_m_s2 = in.acceleration_m_s2();
   out.correction_m = in.correction_m();
   out.hold = in.hold();
+  out.feedforward_valid = in.feedforward_valid();
+  out.feedforward_force_n = in.feedforward_force_n();
+  out.feedforward_force_rate_n_s = in.feedforward_force_rate_n_s();
   return OctetFromProto(in.leg_id(), out.leg_id) && FromProto(in.header(), out.header);
 }
 
@@ -227,6 +239,11 @@ bool FromProto(const rec::PoseReport& in, hexa_msg_PoseReport& out) {
          ArrayFromProto(in.estimated_pose(), out.estimated_pose) &&
          ArrayFromProto(in.error_pose(), out.error_pose) &&
          OctetFromProto(in.estimator_status(), out.estimator_status);
+}
+
+bool FromProto(const rec::TrackerPose& in, hexa_msg_TrackerPose& out) {
+  return FromProto(in.header(), out.header) && ArrayFromProto(in.position_m(), out.position_m) &&
+         ArrayFromProto(in.orientation_wxyz(), out.orientation_wxyz);
 }
 
 bool FromProto(const rec::GroundTruth& in, hexa_msg_GroundTruth& out) {
@@ -285,6 +302,8 @@ const std::vector<WireType>& WireTypes() {
       MakeWireType<hexa_msg_PoseReport, rec::PoseReport>("PoseReport", &hexa_msg_PoseReport_desc),
       MakeWireType<hexa_msg_GroundTruth, rec::GroundTruth>("GroundTruth",
                                                            &hexa_msg_GroundTruth_desc),
+      MakeWireType<hexa_msg_TrackerPose, rec::TrackerPose>("TrackerPose",
+                                                           &hexa_msg_TrackerPose_desc),
       MakeWireType<hexa_msg_OperatorCommand, rec::OperatorCommand>(
           "OperatorCommand", &hexa_msg_OperatorCommand_desc),
       MakeWireType<hexa_msg_NodeStatus, rec::NodeStatus>("NodeStatus", &hexa_msg_NodeStatus_desc),

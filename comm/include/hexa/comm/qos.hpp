@@ -24,8 +24,9 @@ enum class TopicKind : uint8_t {
   kOperatorCommand,
   kNodeStatus,
   kFaultEvent,
+  kTrackerPose,  // external pose instrument, calibration only (issue 14)
 };
-inline constexpr int kTopicKindCount = 9;
+inline constexpr int kTopicKindCount = 10;
 
 // Topic names on the wire (the DDS topic name; the type name comes from the IDL).
 inline constexpr std::string_view kLegSensorsTopic = "hexa_LegSensors";
@@ -37,6 +38,7 @@ inline constexpr std::string_view kGroundTruthTopic = "hexa_GroundTruth";
 inline constexpr std::string_view kOperatorCommandTopic = "hexa_OperatorCommand";
 inline constexpr std::string_view kNodeStatusTopic = "hexa_NodeStatus";
 inline constexpr std::string_view kFaultEventTopic = "hexa_FaultEvent";
+inline constexpr std::string_view kTrackerPoseTopic = "hexa_TrackerPose";
 
 std::string_view TopicName(TopicKind kind);
 

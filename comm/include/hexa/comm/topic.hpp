@@ -37,6 +37,7 @@ HEXA_COMM_TOPIC_TRAITS(hexa_msg_GroundTruth, kGroundTruth, false);
 HEXA_COMM_TOPIC_TRAITS(hexa_msg_OperatorCommand, kOperatorCommand, false);
 HEXA_COMM_TOPIC_TRAITS(hexa_msg_NodeStatus, kNodeStatus, false);
 HEXA_COMM_TOPIC_TRAITS(hexa_msg_FaultEvent, kFaultEvent, false);
+HEXA_COMM_TOPIC_TRAITS(hexa_msg_TrackerPose, kTrackerPose, false);
 #undef HEXA_COMM_TOPIC_TRAITS
 
 // A generated type this layer knows.

@@ -9,16 +9,55 @@
 #pragma once
 
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "hexa/core/control_params.hpp"
+#include "hexa/core/controller_model.hpp"
+#include "hexa/core/leg_controller.hpp"
 #include "hexa/core/rig.hpp"
 
 namespace hexa::config {
 
-// Everything one rig file describes.
+// ---- Rig overlays (proto/rig_overlay.proto, docs/config.md "Rig overlays") ----------------
+// Per-leg corrections of what the controllers and the supervisor believe; an absent value
+// leaves the rig file's (or an earlier overlay's).
+struct FrictionDirectionOverride {
+  std::optional<double> stribeck_velocity_m_s, viscous_n_s_m, static_n, coulomb_n;
+};
+struct PolytropicOverride {
+  std::optional<double> inflow, outflow, volume;  // gamma_i, gamma_o, gamma_k
+};
+struct LegOverride {
+  FrictionDirectionOverride friction_extend, friction_retract;
+  PolytropicOverride polytropic_extend, polytropic_retract;
+  std::optional<double> discharge_coefficient;
+  std::optional<double> effective_mass_kg;  // leg_controller.bssmc
+  std::optional<double> gravity_load_n;     // leg_controller.bssmc
+  std::optional<Eigen::Vector3d> p_BA_B_m;  // kinematic calibration
+  std::optional<Eigen::Vector3d> p_PB_P_m;
+  std::optional<double> potentiometer_offset_m;
+  std::optional<double> potentiometer_gain;
+  bool empty() const;
+  // Fields written in `later` replace this one's.
+  void MergeFrom(const LegOverride& later);
+};
+struct OverlayProvenance {
+  std::string source_recording, method, date, tool, note;
+};
+// One overlay file.
+struct RigOverlay {
+  std::string rig_name;  // must equal the rig file's
+  OverlayProvenance provenance;
+  LegArray<LegOverride> leg{};  // index = leg id - 1
+  std::string source_path;      // file it was loaded from ("" if built in code)
+};
+
+// Everything one rig file describes (+ the overlays applied to it).
 struct SystemConfig {
   std::string rig_name;
   hexa::RigParams rig;
@@ -27,6 +66,10 @@ struct SystemConfig {
   std::map<std::string, hexa::DisturbanceProfile> profiles;  // by name
   std::string default_profile;  // the profile used when none is requested; in `profiles`
   std::string source_path;      // file it was loaded from (empty if built in code)
+  // Rig overlays applied, in order, and their merged per-leg corrections. The controllers
+  // and the supervisor see rig + leg_override (MakeControllerModel); the plant never does.
+  std::vector<RigOverlay> overlays;
+  LegArray<LegOverride> leg_override{};
 };
 
 // One problem found in a file. `line`/`column` are 1-based; 0 when not known (a config
@@ -52,6 +95,9 @@ struct ConfigResult {
 
 // Reads, parses and validates a rig file. Never throws.
 ConfigResult LoadSystemConfig(const std::string& path);
+// Same, then applies each overlay file in order (later ones win, field by field) and
+// validates the result with the rig file's rules; messages name the overlay file and line.
+ConfigResult LoadSystemConfig(const std::string& path, const std::vector<std::string>& overlay_paths);
 // Same, from text already in memory; `display_name` is used as the file name in messages.
 ConfigResult ParseSystemConfig(const std::string& text, const std::string& display_name);
 
@@ -83,7 +129,37 @@ ProfileResult SelectProfile(const SystemConfig& config, const std::string& name)
 // storing the configuration a session ran with.
 std::string ToTextFormat(const SystemConfig& config);
 
-// One line for logs: rig name, legs, home leg length, stroke, supply, profiles.
+// One line for logs: rig name, legs, home leg length, stroke, supply, profiles (+ overlays).
 std::string Summary(const SystemConfig& config);
+
+// ---- Rig overlays ---------------------------------------------------------------------------
+struct OverlayResult {
+  bool ok = false;
+  RigOverlay overlay;
+  std::string error;
+  std::vector<ConfigIssue> issues;
+};
+// Parses an overlay on its own: syntax, required rig_name and provenance, leg ids 1..6 at most
+// once, complete 3-vectors, finite values. Never throws.
+OverlayResult ParseRigOverlay(const std::string& text, const std::string& display_name);
+OverlayResult LoadRigOverlay(const std::string& path);
+// Applies a parsed overlay to `config` (the rig name must match) and validates the per-leg
+// result with the rig file's rules (ValidateControllerModel). `text` is the overlay's text
+// when known, so that issues carry its lines; "" leaves them at 0. Never throws.
+ConfigResult ApplyRigOverlay(const SystemConfig& config, const RigOverlay& overlay,
+                             const std::string& text = "");
+// The merged per-leg view checked with the rig file's value rules; field paths are those of
+// an overlay file ("leg[leg_id=2].friction.extend.static_n"). Never throws.
+std::vector<ConfigIssue> ValidateControllerModel(const SystemConfig& config);
+// The overlay in its text format (ParseRigOverlay reads it back to an equal overlay).
+std::string ToTextFormat(const RigOverlay& overlay);
+
+// What the controllers and the supervisor run with: rig file + overlays.
+hexa::ControllerModel MakeControllerModel(const SystemConfig& config);
+// Leg `leg_id` (1..6)'s controller configuration (its own model, gains, calibration).
+hexa::LegControllerConfig MakeLegControllerConfig(const SystemConfig& config, int leg_id,
+                                                  hexa::LegControllerKind kind);
+// The rig as the supervisor sees it (calibrated joint positions; the rest of the rig file).
+hexa::RigParams MakeSupervisorRig(const SystemConfig& config);
 
 }  // namespace hexa::config

@@ -50,6 +50,12 @@ struct BsSmcInput {
   double desired_length_m = 0.0;       // x_d + l_mid (incl. outer-loop correction)
   double desired_velocity_m_s = 0.0;   // x_dot_d
   double desired_acceleration_m_s2 = 0.0;  // x_ddot_d
+  // Known load of the leg (issue 14, platform inverse dynamics): the axial force the leg must
+  // deliver for the desired motion (inertia of platform and pistons, gravity). With it,
+  // M x_ddot_d + F_g of eq 14/25 is replaced by feedforward_force_n (M stays as the gain of
+  // the feedback term M lambda e_dot).
+  bool has_feedforward = false;
+  double feedforward_force_n = 0.0;
 };
 
 struct BsSmcOutput {

@@ -68,6 +68,11 @@ struct PiParams {
   double integrator_limit_v = 2.0;      // anti-windup clamp of the integral term
   double velocity_feedforward_v_s_m = 6.0;  // volts per (m/s) of setpoint velocity
   double rate_damping_v_s_m = 20.0;         // volts per (m/s) of velocity error v_d - v
+  // Force feed-forward (issue 14), used only when the setpoint carries one: volts per newton
+  // of (feed-forward force - measured pneumatic force P1 A1 - P2 A2 - Pa Ar). The PI's only
+  // output is a valve opening, i.e. a rate of force change, so the known load enters as a
+  // proportional force loop towards it (docs/controller.md "Feed-forward").
+  double force_feedforward_v_n = 0.01;
 };
 
 struct LegControllerParams {
@@ -102,6 +107,11 @@ struct SupervisorParams {
   bool least_squares_estimator = false; // GQFK (eq 47) by default; six-leg LSQ if true
   double estimator_outlier_threshold_m = 0.003;  // LSQ: residual beyond -> leg excluded
   OuterLoopParams outer_loop;
+  // Platform inverse-dynamics feed-forward (issue 14, core/platform_dynamics.hpp): every
+  // setpoint carries the axial force its leg must deliver for the desired motion (nominal
+  // masses, J^-T of eq 48), used by the BS-SMC as the known load of eq 14/15 and by the PI
+  // baseline as a force feed-forward. false = the paper's lumped load (paper-faithful).
+  bool feedforward_enabled = true;
 };
 
 }  // namespace hexa

@@ -6,10 +6,12 @@
 // allocates and never outputs a non-finite number.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 #include "hexa/core/bssmc_controller.hpp"
 #include "hexa/core/control_params.hpp"
+#include "hexa/core/controller_model.hpp"
 #include "hexa/core/pi_controller.hpp"
 #include "hexa/core/rig.hpp"
 
@@ -40,9 +42,18 @@ struct LegControllerConfig {
   double max_setpoint_speed_m_s = 2.0;
   double max_setpoint_acceleration_m_s2 = 100.0;
   double max_correction_m = 0.05;
+  double max_feedforward_force_n = 2000.0;        // |force| beyond -> bad input
+  double max_feedforward_force_rate_n_s = 1.0e5;  // |rate| beyond -> bad input
+  // Calibration of this leg's potentiometer from a rig overlay (reading = offset + gain x).
+  // Carried to the controller for the kinematic calibration (docs/config.md, "Rig
+  // overlays"); identity by default.
+  PotentiometerCalibrationParams potentiometer;
 
   static LegControllerConfig FromRig(const RigParams& rig, const LegControllerParams& params,
                                      LegControllerKind kind);
+  // Leg `leg_index` (0-based) of a per-leg controller model (rig file + overlays).
+  static LegControllerConfig FromModel(const ControllerModel& model, std::size_t leg_index,
+                                       LegControllerKind kind);
   void Validate() const;  // throws std::invalid_argument naming field, value and limit
 };
 
@@ -63,6 +74,11 @@ struct LegControllerInput {
   double setpoint_acceleration_m_s2 = 0.0;
   double correction_m = 0.0;  // outer-loop correction (Sec. 4.1), added to the length
   bool hold = false;
+  // Inverse-dynamics feed-forward of the setpoint (issue 14): force at setpoint_time_s and
+  // its rate; interpolated like the length. Not valid: the lumped load model (paper).
+  bool feedforward_valid = false;
+  double feedforward_force_n = 0.0;
+  double feedforward_force_rate_n_s = 0.0;
 };
 
 struct LegControllerOutput {
@@ -72,6 +88,7 @@ struct LegControllerOutput {
   LegControlStatus status = LegControlStatus::kHoldNoSetpoint;
   double desired_length_m = 0.0;    // interpolated setpoint + correction actually used
   double desired_velocity_m_s = 0.0;
+  double feedforward_force_n = 0.0; // interpolated feed-forward used (0 when none)
   double sliding_surface_m_s = 0.0; // S (eq 19); 0 for the PI baseline
   double velocity_m_s = 0.0;        // estimated leg velocity (BS-SMC), 0 for PI
   double desired_force_n = 0.0;     // phi (BS-SMC)
@@ -101,6 +118,7 @@ class LegController {
   BsSmcController bssmc_;
   PiController pi_;
   bool active_ = false;  // the control law ran last tick (histories valid)
+  bool potentiometer_calibrated_ = false;  // config_.potentiometer is not the identity
   double last_desired_length_m_ = 0.0;
 };
 

@@ -11,9 +11,12 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 
+#include "hexa/core/calibration.hpp"
 #include "hexa/core/command_hygiene.hpp"
 #include "hexa/core/control_params.hpp"
+#include "hexa/core/controller_model.hpp"
 #include "hexa/core/leg_controller.hpp"
 #include "hexa/core/lockstep_protocol.hpp"
 #include "hexa/core/metrics.hpp"
@@ -29,6 +32,11 @@ struct LockstepConfig {
   DisturbanceProfile disturbance = MakeRealisticDisturbanceProfile();
   std::uint64_t seed = 1;
   LegControllerKind controller = LegControllerKind::kBsSmc;
+  TrackerParams tracker;  // the plant's external pose instrument (calibration runs only)
+  // The controllers' and supervisor's per-leg view of the rig (rig file + overlays, exactly
+  // as the services build it: config::MakeControllerModel). Unset: every leg uses `rig` and
+  // `leg_controller`. The plant always simulates `rig` + `disturbance`.
+  std::optional<ControllerModel> controllers;
   double tick_s = 0.001;
   int supervisor_every_ticks = 5;
   void Validate() const;  // throws std::invalid_argument naming the field and value

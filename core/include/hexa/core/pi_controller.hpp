@@ -20,6 +20,8 @@ struct PiConfig {
   PiParams params;
   DifferentiatorParams differentiator;  // for the rate-damping velocity
   ValveParams valve;
+  CylinderParams cylinder;              // areas of the force feed-forward term
+  double atmosphere_pressure_pa = 1.0e5;
   double period_s = 0.001;
   void Validate() const;  // throws std::invalid_argument naming field, value, limit
 };
@@ -28,6 +30,12 @@ struct PiInput {
   double length_m = 0.0;
   double desired_length_m = 0.0;
   double desired_velocity_m_s = 0.0;
+  // Force feed-forward (issue 14): with has_feedforward the term
+  // Kf (F_ff - (P1 A1 - P2 A2 - Pa A_r)) is added (PiParams::force_feedforward_v_n).
+  bool has_feedforward = false;
+  double feedforward_force_n = 0.0;
+  double cap_pressure_pa = 1.0e5;
+  double rod_pressure_pa = 1.0e5;
 };
 
 struct PiOutput {

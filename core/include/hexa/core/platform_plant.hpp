@@ -15,6 +15,7 @@
 #include "hexa/core/pose.hpp"
 #include "hexa/core/rig.hpp"
 #include "hexa/core/sensor_model.hpp"
+#include "hexa/core/tracker_model.hpp"
 
 namespace hexa {
 
@@ -49,6 +50,8 @@ struct PlatformPlantConfig {
   double laminar_pressure_ratio = 0.995;
   double lugre_damping_fade_velocity_m_s = 0.05;
   bool friction_enabled = true;  // false only for energy-conservation tests
+  // External pose instrument for kinematic calibration (issue 14); off by default.
+  TrackerParams tracker;
 
   void Validate() const;  // throws std::invalid_argument naming field, value and limit
 };
@@ -80,6 +83,7 @@ struct PlatformPlantOutput {
   PlatformTrueState truth;
   LegArray<LegSensorReading> legs{};
   ImuReading imu;
+  TrackerReading tracker;  // fresh only when the tracker is enabled and due
   LegArray<LegForces> leg_forces{};
 };
 
@@ -113,6 +117,9 @@ class PlatformPlant {
   double TotalEnergyJ() const;
   // Smallest friction dissipation seen at any RK stage since Reset (>= 0 expected).
   double min_friction_dissipation_w() const { return min_dissipation_w_; }
+  // Rate of the twist, d/dt [v_BP_B; w_BP_B], at the present state and valve targets (the
+  // forward dynamics the integrator uses); tests compare inverse dynamics against it.
+  Vector6d twist_rate_B() const;
   // Substeps taken by the last successful Step (step control, docs/plant.md).
   int last_substep_count() const { return last_substep_count_; }
 
@@ -134,6 +141,7 @@ class PlatformPlant {
   GeometryParams true_geometry_;
   LegModel leg_model_;
   SensorModel sensors_;
+  TrackerModel tracker_;
   double platform_mass_kg_ = 0.0;
   Eigen::Matrix3d platform_inertia_P_ = Eigen::Matrix3d::Identity();
   double leg_mass_kg_ = 0.0;

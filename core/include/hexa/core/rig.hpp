@@ -124,6 +124,14 @@ struct DisturbanceProfile {
   double potentiometer_gain_error_max = 0.005;
 };
 
+// A potentiometer's calibration as the controllers apply it (rig overlay, docs/config.md):
+// the reading of piston position x is offset_m + gain * x (the convention of the plant's
+// calibration errors, sensor_model.hpp). Identity by default.
+struct PotentiometerCalibrationParams {
+  double offset_m = 0.0;
+  double gain = 1.0;
+};
+
 // Everything about the physical rig that the controllers may know (their model), plus
 // sensor characteristics. The plant applies a DisturbanceProfile on top.
 struct RigParams {

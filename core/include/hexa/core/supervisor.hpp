@@ -23,6 +23,7 @@
 #include "hexa/core/control_params.hpp"
 #include "hexa/core/feasibility.hpp"
 #include "hexa/core/outer_loop.hpp"
+#include "hexa/core/platform_dynamics.hpp"
 #include "hexa/core/pose_estimator.hpp"
 #include "hexa/core/rig.hpp"
 #include "hexa/core/trajectory.hpp"
@@ -88,6 +89,12 @@ struct SupervisorLegSetpoint {
   double acceleration_m_s2 = 0.0;
   double correction_m = 0.0;       // outer loop (Sec. 4.1); the leg tracks length + correction
   bool hold = false;
+  // Inverse-dynamics feed-forward (core/platform_dynamics.hpp): the leg's axial force for the
+  // desired motion at this setpoint's time and its rate over the next supervisor period (the
+  // leg interpolates force + rate * dt). Not valid: the leg uses its lumped load model.
+  bool feedforward_valid = false;
+  double feedforward_force_n = 0.0;
+  double feedforward_force_rate_n_s = 0.0;
 };
 
 struct SupervisorOutput {
@@ -107,8 +114,11 @@ struct SupervisorOutput {
 
 class Supervisor {
  public:
-  // Throws std::invalid_argument for inconsistent parameters (values named).
-  Supervisor(const RigParams& rig, const SupervisorParams& params);
+  // Throws std::invalid_argument for inconsistent parameters (values named). `potentiometer`:
+  // the calibration of each leg's potentiometer (rig overlay, kinematic calibration, issue
+  // 14); every measured length is corrected with it before use. Identity by default.
+  Supervisor(const RigParams& rig, const SupervisorParams& params,
+             const LegArray<PotentiometerCalibrationParams>& potentiometer = {});
 
   // One 5 ms tick. Neither throws nor allocates.
   void Update(const SupervisorInput& input, SupervisorOutput& output) noexcept;
@@ -136,12 +146,19 @@ class Supervisor {
                           int& leg, std::array<char, 160>& detail) const;
   void HandleCommand(const SupervisorInput& input, SupervisorOutput& output);
   void StartTrajectory(const Trajectory& trajectory, double time_s);
+  // Feed-forward of the desired sample (and of the next period's sample while moving).
+  void FillFeedforward(const TrajectorySample& desired, bool moving,
+                       LegArray<SupervisorLegSetpoint>& setpoint) const;
 
   RigParams rig_;
   SupervisorParams params_;
   PoseEstimator estimator_;
   OuterLoop outer_loop_;
   LegEnvelope envelope_;
+  PlatformInertialParams inertial_;  // nominal masses for the feed-forward
+  LegArray<PotentiometerCalibrationParams> potentiometer_{};
+  bool potentiometer_calibrated_ = false;
+  LegArray<double> sensed_length_m_{};  // this tick's lengths, potentiometers calibrated
   Vector6d home_;
   std::shared_ptr<const ConstantMotion> home_motion_;  // preallocated for the home command
 

@@ -21,6 +21,9 @@ class Parser {
   void AddChoice(const std::string& name, const std::vector<std::string>& choices,
                  const std::string& help, const std::string& default_value);
   void AddFlag(const std::string& name, const std::string& help);
+  // An option that may be given several times; GetAll returns every value in order.
+  void AddRepeatable(const std::string& name, const std::string& value_name,
+                     const std::string& help);
 
   // Returns false on error (message in error()) or when --help was asked (help_requested()).
   bool Parse(int argc, const char* const* argv);
@@ -31,6 +34,7 @@ class Parser {
   bool Has(const std::string& name) const;
   bool Flag(const std::string& name) const;
   std::string Get(const std::string& name) const;
+  std::vector<std::string> GetAll(const std::string& name) const;
   // Typed getters; on a bad value they return nullopt and set error().
   std::optional<long long> GetInt(const std::string& name, long long min, long long max);
   std::optional<double> GetDouble(const std::string& name, double min, double max);
@@ -46,12 +50,14 @@ class Parser {
     std::optional<std::string> default_value;
     std::vector<std::string> choices;
     bool is_flag = false;
+    bool repeatable = false;
   };
   std::string program_;
   std::string summary_;
   std::vector<std::string> order_;
   std::map<std::string, Spec> specs_;
   std::map<std::string, std::string> values_;
+  std::map<std::string, std::vector<std::string>> all_values_;  // repeatable options
   std::vector<std::string> positional_;
   bool help_requested_ = false;
   std::string error_;

@@ -23,6 +23,9 @@ enum class TimeMode { kLockstep, kRealtime };
 
 struct CommonOptions {
   std::string rig_path;
+  // --rig-overlay, in order: the controllers' and supervisor's corrections of the rig file
+  // (docs/config.md, "Rig overlays"). The plant ignores them (it simulates its truth).
+  std::vector<std::string> rig_overlays;
   int domain_id = 0;
   TimeMode mode = TimeMode::kLockstep;
   std::optional<std::string> dds_config;  // --dds-config; else CYCLONEDDS_URI; else loopback
@@ -39,8 +42,8 @@ struct CommonOptions {
   std::vector<int> cpus;       // --cpus: CPU affinity of every thread; empty = any CPU
 };
 
-// Adds --rig --domain --mode --dds-config --log-file --log-level --lockstep-timeout
-// --rt-deadline-1ms --rt-deadline-5ms --no-rt-sched --rt-priority --cpus.
+// Adds --rig --rig-overlay --domain --mode --dds-config --log-file --log-level
+// --lockstep-timeout --rt-deadline-1ms --rt-deadline-5ms --no-rt-sched --rt-priority --cpus.
 void AddCommonOptions(cli::Parser& parser);
 // Reads them back; false with parser.error() set on a bad value.
 bool ReadCommonOptions(cli::Parser& parser, CommonOptions& options);
@@ -52,6 +55,8 @@ comm::QosParams QosFor(const CommonOptions& options, comm::TopicKind kind);
 // Loads and validates the rig file; logs and returns nullopt on error (message names
 // file, line, field, value and limit).
 std::optional<config::SystemConfig> LoadConfig(const std::string& path, spdlog::logger& log);
+// The rig file and the --rig-overlay files (applied in order, validated like the rig file).
+std::optional<config::SystemConfig> LoadConfig(const CommonOptions& options, spdlog::logger& log);
 
 // SCHED_FIFO + mlockall when allowed (root); logs the outcome, never fails.
 void TryRealtimeScheduling(int priority, spdlog::logger& log);

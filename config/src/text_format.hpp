@@ -1,0 +1,55 @@
+// Protobuf text-format helpers shared by the rig-file and rig-overlay loaders (not
+// installed): parser errors turned into ConfigIssues with "did you mean", line lookup of a
+// field path through the parser's ParseInfoTree.
+#pragma once
+
+#include <google/protobuf/descriptor.h>
+#include <google/protobuf/io/tokenizer.h>
+#include <google/protobuf/message.h>
+#include <google/protobuf/text_format.h>
+
+#include <string>
+#include <vector>
+
+#include "hexa/config/rig_config.hpp"
+
+namespace hexa::config::internal {
+
+struct Location {
+  int line = 0;    // 1-based, 0 = unknown
+  int column = 0;  // 1-based
+  int end_line = 0;
+};
+
+Location FromRange(const google::protobuf::TextFormat::ParseLocationRange& range);
+
+class CollectingErrors : public google::protobuf::io::ErrorCollector {
+ public:
+  struct Error {
+    int line;
+    int column;
+    std::string message;
+  };
+  void AddError(int line, google::protobuf::io::ColumnNumber column,
+                const std::string& message) override;
+  void AddWarning(int, google::protobuf::io::ColumnNumber, const std::string&) override {}
+  std::vector<Error> errors;
+};
+
+// Turns the parser's "Message type "X" has no field named "y"." into an issue with the
+// field path under `root` (when the type is used in one place only), the known fields and a
+// guess; other parser errors become "syntax error: ...".
+ConfigIssue ParserIssue(const CollectingErrors::Error& e, const std::string& file,
+                        const google::protobuf::Descriptor* root);
+
+int CountLines(const std::string& text);
+
+// Selector of a repeated element in a path: "[id=3]", "[leg_id=3]", "[name=ideal]" or "[2]".
+std::string ElementSelector(const google::protobuf::Message& element, int index);
+
+// Maps a field path ("geometry.leg[id=3].p_BA_B_m.y", "leg[leg_id=2].friction.extend") to
+// the location of the deepest part of it that is written in the file parsed into `root`.
+Location Locate(const google::protobuf::Message& root,
+                const google::protobuf::TextFormat::ParseInfoTree& tree, const std::string& path);
+
+}  // namespace hexa::config::internal

@@ -1,0 +1,22 @@
+#include "hexa/core/controller_model.hpp"
+
+namespace hexa {
+
+ControllerModel ControllerModel::FromRig(const RigParams& rig, const LegControllerParams& params) {
+  ControllerModel m;
+  m.geometry = rig.geometry;
+  for (LegControllerModel& leg : m.legs) {
+    leg.model = NominalLegModel::FromRig(rig);
+    leg.params = params;
+    leg.potentiometer = PotentiometerCalibrationParams{};
+  }
+  return m;
+}
+
+RigParams ControllerModel::SupervisorRig(const RigParams& rig) const {
+  RigParams r = rig;
+  r.geometry = geometry;
+  return r;
+}
+
+}  // namespace hexa
