@@ -56,6 +56,7 @@ struct Options {
   std::string fault_kind, fault_at;
   double timeout_s = 0;
   std::vector<std::string> rig_overlays;  // absolute paths, for the legs and the supervisor
+  std::vector<std::string> plant_extra_args;  // --plant-arg, passed on as given
 };
 
 // CPU time of every process over its whole life (start-up and discovery included), per
@@ -151,6 +152,10 @@ int main(int argc, char** argv) {
   cli.AddOption("fault", "leg:kind:time_s",
                 "inject a fault into one primary leg controller, e.g. 3:crash:2.0 "
                 "(kinds: crash hang slow garbage silence)");
+  cli.AddRepeatable("plant-arg", "arg",
+                    "one more argument for hexa_plant_sim, e.g. --plant-arg "
+                    "--lose-supervisor-inputs --plant-arg 500 (fault injection; see "
+                    "hexa_plant_sim --help)");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
 
@@ -218,6 +223,7 @@ int main(int argc, char** argv) {
     }
     o.trajectory = fs::absolute(o.trajectory).string();
   }
+  o.plant_extra_args = cli.GetAll("plant-arg");
   for (const auto& overlay : cli.GetAll("rig-overlay")) {
     o.rig_overlays.push_back(fs::absolute(overlay).string());
     if (!fs::exists(o.rig_overlays.back())) {
@@ -364,6 +370,7 @@ int main(int argc, char** argv) {
                                       std::to_string(o.stale_ticks)};
   if (o.recorder) plant_args.push_back("--expect-recorder");
   if (o.tracker) plant_args.push_back("--tracker");
+  plant_args.insert(plant_args.end(), o.plant_extra_args.begin(), o.plant_extra_args.end());
   specs.push_back(spec("plant", "/services/plant_sim/hexa_plant_sim", plant_args));
 
   const auto t0 = std::chrono::steady_clock::now();

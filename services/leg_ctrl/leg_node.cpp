@@ -103,17 +103,25 @@ void LegNode::PublishStatus(hexa_msg_NodeState state, const char* detail) {
 }
 
 bool LegNode::WaitUntilMatched() {
+  const bool lockstep = options_.common.mode == node::TimeMode::kLockstep;
   const int64_t end = node::MonotonicNow_ns() + static_cast<int64_t>(options_.startup_timeout_s * 1e9);
   while (!shutdown_.requested()) {
     const bool sensors = sensors_reader_.Snapshot().subscription_matched_current >= 1;
     const uint32_t valve_readers = valve_writer_.Snapshot().publication_matched_current;
     const bool readers = valve_readers >= static_cast<uint32_t>(options_.valve_readers);
-    if (sensors && readers) return true;
+    // Lockstep: tick n > 0 cannot be answered without the supervisor's setpoint s(n), and a
+    // volatile sample that arrives before this side has matched its writer is dropped (the
+    // supervisor only knows that its side matched). So this node reports RUNNING, which the
+    // plant waits for before tick 0, only once it knows the setpoint writer. Real time needs
+    // no such wait: a lost first setpoint is replaced 5 ms later.
+    const bool setpoints = !lockstep || setpoint_reader_.Snapshot().subscription_matched_current >= 1;
+    if (sensors && readers && setpoints) return true;
     if (node::MonotonicNow_ns() > end) {
       log_->error("peers missing after {} s: sensor writer matched: {}, valve readers matched "
-                  "{} of {} (the plant{})",
+                  "{} of {} (the plant{}){}",
                   options_.startup_timeout_s, sensors, valve_readers, options_.valve_readers,
-                  options_.valve_readers > 1 ? " and the recorder" : "");
+                  options_.valve_readers > 1 ? " and the recorder" : "",
+                  setpoints ? "" : ", setpoint writer (the supervisor) not matched");
       return false;
     }
     waitset_.Wait(DDS_MSECS(20));  // match counts change without data: bounded re-check

@@ -29,6 +29,11 @@ int main(int argc, char** argv) {
   cli.AddOption("stale-ticks", "N", "real time: ticks a command may lag before null + fault", "15");
   cli.AddOption("startup-grace-ticks", "N",
                 "real time: ticks a leg's first command may take before it is missing", "500");
+  cli.AddOption("lose-supervisor-inputs", "tick",
+                "lockstep fault injection: withhold the supervisor's inputs of this tick (a "
+                "multiple of 5; its six leg samples in the all-legs partition and its IMU "
+                "sample) as if lost on the wire; the re-ask must recover them (-1 = none)",
+                "-1");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
 
@@ -39,8 +44,9 @@ int main(int argc, char** argv) {
   const auto startup = cli.GetDouble("startup-timeout", 0.1, 3600);
   const auto stale = cli.GetInt("stale-ticks", 0, 1000);
   const auto grace = cli.GetInt("startup-grace-ticks", 0, 600000);
+  const auto lose = cli.GetInt("lose-supervisor-inputs", -1, 1LL << 40);
   if (!hexa::node::ReadCommonOptions(cli, o.common) || !seed || !legs || !duration || !startup ||
-      !stale || !grace) {
+      !stale || !grace || !lose) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
@@ -55,6 +61,12 @@ int main(int argc, char** argv) {
   o.startup_grace_ticks = static_cast<std::uint64_t>(*grace);
   o.summary_path = cli.Get("summary");
   o.tracker = cli.Flag("tracker");
+  o.lose_supervisor_inputs_tick = *lose;
+  if (o.lose_supervisor_inputs_tick >= 0 && o.lose_supervisor_inputs_tick % 5 != 0) {
+    std::fprintf(stderr, "error: --lose-supervisor-inputs %lld: not a supervisor tick (a multiple "
+                 "of 5)\n", static_cast<long long>(o.lose_supervisor_inputs_tick));
+    return 2;
+  }
 
   auto log = hexa::logging::Init("plant", o.common.log_file, o.common.log_level);
   try {

@@ -200,6 +200,15 @@ void PlantNode::PublishTick(int only_leg) {
   const PlatformPlantOutput& out = plant_.output();
   const double t = static_cast<double>(tick_) * kTickS;
   const int64_t now_ns = comm::RealtimeNow_ns();
+  const bool lose_supervisor_inputs =
+      only_leg == 0 && !supervisor_inputs_lost_ &&
+      options_.lose_supervisor_inputs_tick == static_cast<std::int64_t>(tick_) &&
+      options_.common.mode == node::TimeMode::kLockstep;
+  if (lose_supervisor_inputs) {
+    supervisor_inputs_lost_ = true;
+    log_->warn("FAULT INJECTION: tick {}: the supervisor's inputs (six leg samples, IMU) "
+               "withheld as if lost", tick_);
+  }
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     if (only_leg != 0 && static_cast<int>(i) + 1 != only_leg) continue;
     hexa_msg_LegSensors s{};
@@ -213,7 +222,12 @@ void PlantNode::PublishTick(int only_leg) {
       sensors_writer_.WriteToLegOnly(s, now_ns);  // a re-ask: that leg's controllers only
       return;
     }
-    sensors_writer_.WriteDeferred(s, now_ns);
+    if (lose_supervisor_inputs) {
+      sensors_writer_.leg(static_cast<int>(i) + 1).WriteDeferred(s, now_ns);  // legs only
+    } else {
+      sensors_writer_.WriteDeferred(s, now_ns);
+    }
+    if (schedule_.SupervisorDue(tick_)) supervisor_sensors_[i] = s;
   }
   sensors_writer_.Flush();
   if (schedule_.SupervisorDue(tick_)) {
@@ -225,7 +239,9 @@ void PlantNode::PublishTick(int only_leg) {
     imu.orientation_wxyz[2] = q.y();
     imu.orientation_wxyz[3] = q.z();
     for (int k = 0; k < 3; ++k) imu.angular_rate_rad_s[k] = out.imu.angular_rate_B_rad_s[k];
-    imu_writer_.Write(imu, now_ns);
+    if (!lose_supervisor_inputs) imu_writer_.Write(imu, now_ns);
+    supervisor_imu_ = imu;
+    supervisor_inputs_valid_ = true;
   }
   // Ground truth of this tick (for the recorder only). Like applied_valve_v, the command ages
   // in it are those of the step that led to this state (filled in by ApplyAndStep).
@@ -260,6 +276,27 @@ void PlantNode::PublishTick(int only_leg) {
     tp.orientation_wxyz[3] = out.tracker.q_BP.z();
     tracker_writer_.Write(tp, now_ns);
   }
+}
+
+void PlantNode::ReaskSupervisor() {
+  // A leg cannot answer tick n > 0 without the setpoint of tick s(n) (core
+  // lockstep_protocol.hpp). If the supervisor lost its inputs of s(n), or a leg lost the
+  // setpoint, only the supervisor can repair it: it computes a tick it has not seen, and
+  // answers a repeated one by re-publishing that tick's setpoints. Readers that already have
+  // these samples (the recorder) count them as duplicates, not as loss.
+  // Only the first tick of each setpoint's span can lack it: a leg that answered tick
+  // s(n) + 1 had the setpoint of s(n).
+  std::uint64_t setpoint_tick = 0;
+  if (!options_.expect_supervisor || !supervisor_inputs_valid_ ||
+      !RequiredSetpointTick(tick_, schedule_.supervisor_every_ticks, setpoint_tick) ||
+      tick_ != setpoint_tick + 1 || supervisor_imu_.header.tick != setpoint_tick)
+    return;
+  const int64_t now_ns = comm::RealtimeNow_ns();
+  for (const hexa_msg_LegSensors& s : supervisor_sensors_)
+    sensors_writer_.all().WriteDeferred(s, now_ns);
+  sensors_writer_.all().Flush();
+  imu_writer_.Write(supervisor_imu_, now_ns);
+  ++supervisor_reasks_;
 }
 
 void PlantNode::TakeCommands(bool feed_barrier) {
@@ -387,11 +424,21 @@ void PlantNode::AdvanceIfComplete() {
     }
     if (options_.expect_recorder && options_.recorder_sync_ticks > 0 &&
         tick_ % options_.recorder_sync_ticks == 0) {
-      // The main thread waits for the acknowledgements (they arrive on this thread) and
-      // publishes tick_ then.
-      sync_pending_ = true;
-      wake_.Set();
-      return;
+      if (!ack_wait_requested_ && !ack_wait_active_) {
+        // The main thread waits for the acknowledgements (they arrive on this thread) while
+        // the loop goes on.
+        ack_wait_requested_ = true;
+        ack_wait_tick_ = tick_;
+        wake_.Set();
+      } else if (tick_ - ack_wait_tick_ >= options_.recorder_sync_window_ticks) {
+        // The wait begun at ack_wait_tick_ has not ended: the recorder is that far behind.
+        // The main thread publishes tick_ when it ends.
+        sync_pending_ = true;
+        sync_blocked_since_ns_ = now;
+        ++recorder_sync_blocks_;
+        wake_.Set();
+        return;
+      }
     }
     StartTick(now);
   }
@@ -419,28 +466,39 @@ int PlantNode::RunLockstep(std::uint64_t last_tick) {
   // keeps the loop within recorder_sync_ticks of the recorder.
   while (!shutdown_.requested()) {
     dds_duration_t wait = DDS_MSECS(10);
-    bool sync = false;
+    bool start_wait = false;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (exit_code_ >= 0) break;
-      sync = sync_pending_;
+      if (ack_wait_requested_) {
+        ack_wait_requested_ = false;
+        ack_wait_active_ = true;
+        start_wait = true;
+        wake_.Set(false);
+      }
     }
-    if (sync) {
-      const int64_t t0 = node::MonotonicNow_ns();
-      wake_.Set(false);
+    if (start_wait) {
       // Everything written so far is in every reliable reader's history (the recorder's
-      // too): from then on no sample of it can be lost by a keep-last writer history.
+      // too): from then on no sample of it can be lost by a keep-last writer history. The
+      // loop writes on meanwhile (Cyclone's writers are thread-safe); it takes about two
+      // heartbeat intervals (deploy/cyclonedds-loopback.xml, docs/performance.md).
       while (!shutdown_.requested() &&
              (sensors_writer_.WaitForAcks(DDS_MSECS(100)) == DDS_RETCODE_TIMEOUT ||
               truth_writer_.WaitForAcks(DDS_MSECS(100)) == DDS_RETCODE_TIMEOUT)) {
       }
       std::lock_guard<std::mutex> lock(mutex_);
-      sync_pending_ = false;
+      ack_wait_active_ = false;
       ++recorder_syncs_;
-      recorder_sync_wait_s_ += static_cast<double>(node::MonotonicNow_ns() - t0) * 1e-9;
-      if (running_) {
-        StartTick(node::MonotonicNow_ns());
-        AdvanceIfComplete();
+      if (sync_pending_) {
+        const int64_t now = node::MonotonicNow_ns();
+        sync_pending_ = false;
+        recorder_sync_wait_s_ += static_cast<double>(now - sync_blocked_since_ns_) * 1e-9;
+        if (running_) {
+          ack_wait_requested_ = true;  // the next wait starts at once
+          ack_wait_tick_ = tick_;
+          StartTick(now);
+          AdvanceIfComplete();
+        }
       }
       continue;
     }
@@ -461,6 +519,7 @@ int PlantNode::RunLockstep(std::uint64_t last_tick) {
               PublishTick(leg);
               ++resent_samples_;
             }
+          ReaskSupervisor();
           break;
         case LockstepBarrier::Action::kTimeout: {
           log_->error("lockstep: tick {} not answered within {} s by:{}", tick_,
@@ -511,6 +570,19 @@ int PlantNode::RunRealtime(std::uint64_t last_tick) {
     if (late_ns > 1'000'000) ++overruns_;
     cycle_times_.Add(static_cast<double>(late_ns) * 1e-9);
     tick_wall_.Add(late_ns);
+    if (late_ns > kSlipAfter_ns) {
+      // The host stalled this process (and, on one machine, the controllers with it). The
+      // simulated rig stops with it: the schedule restarts from now instead of stepping the
+      // missed ticks in a burst that no controller could answer (their commands would all
+      // look stale: a fault of the simulation, not of the controllers). A real rig does not
+      // stop; docs/performance.md says what this hides and how often it happens.
+      if (slips_ == 0)
+        log_->warn("tick {}: the plant woke {:.1f} ms late: its schedule slips (simulated time "
+                   "pauses with the host; counted, logged once)", tick_, late_ns * 1e-6);
+      ++slips_;
+      slipped_ns_ += late_ns;
+      clock_gettime(CLOCK_MONOTONIC, &next);
+    }
     if (!ApplyAndStep(options_.realtime_stale_ticks)) return 4;
     EndTick();
   }
@@ -549,6 +621,7 @@ void PlantNode::WriteSummary(int exit_code) const {
   std::fprintf(f, "{\n  \"mode\": \"%s\",\n  \"exit_code\": %d,\n  \"ticks\": %llu,\n"
                "  \"sim_time_s\": %.6f,\n  \"valve_deadline_misses\": %u,\n"
                "  \"loop_overruns\": %u,\n  \"lockstep_resends\": %llu,\n"
+               "  \"schedule_slips\": %llu,\n  \"slipped_s\": %.6f,\n"
                "  \"loop_wall_s\": %.6f,\n  \"%s\": {\"median\": %.6f, \"p99\": %.6f, "
                "\"max\": %.6f, \"mean\": %.6f},\n"
                "  \"command_age_bins\": [\"0\", \"1\", \"2\", \"3-7\", \"8-15\", \">=16\"],\n"
@@ -557,6 +630,7 @@ void PlantNode::WriteSummary(int exit_code) const {
                exit_code, static_cast<unsigned long long>(tick_),
                static_cast<double>(tick_) * kTickS, valve.requested_deadline_missed_total,
                overruns_, static_cast<unsigned long long>(resent_samples_),
+               static_cast<unsigned long long>(slips_), static_cast<double>(slipped_ns_) * 1e-9,
                static_cast<double>(loop_ended_ns_ - loop_started_ns_) * 1e-9,
                options_.common.mode == node::TimeMode::kRealtime ? "wake_lateness_s" : "tick_wall_s",
                tick_wall_.Quantile_s(0.5), tick_wall_.Quantile_s(0.99), tick_wall_.max_s(),
@@ -594,11 +668,13 @@ int PlantNode::Run() {
   for (auto f : faults_per_leg_) faults += f;
   const auto valve = valve_reader_.Snapshot();
   log_->info("stopped at tick {} (t = {:.3f} s): valve deadline misses {}, loop overruns {}, "
-             "command faults {}, lockstep resends {} (in {} re-asks), failed writes {}, "
-             "recorder syncs {} ({:.3f} s waited)",
+             "command faults {}, lockstep resends {} (in {} re-asks, {} to the supervisor), "
+             "failed writes {}, recorder syncs {} (the loop stood still for {} of them, "
+             "{:.3f} s), schedule slips {} ({:.1f} ms)",
              tick_, static_cast<double>(tick_) * kTickS, valve.requested_deadline_missed_total,
-             overruns_, faults, resent_samples_, barrier_.reasks_total(),
-             sensors_writer_.write_errors_total(), recorder_syncs_, recorder_sync_wait_s_);
+             overruns_, faults, resent_samples_, barrier_.reasks_total(), supervisor_reasks_,
+             sensors_writer_.write_errors_total(), recorder_syncs_, recorder_sync_blocks_,
+             recorder_sync_wait_s_, slips_, static_cast<double>(slipped_ns_) * 1e-6);
   LogCommandAges();
   WriteSummary(rc);
   if (rc != 4) PublishStatus(hexa_msg_NODE_STOPPING, "stopped");

@@ -40,12 +40,18 @@ struct PlantNodeOptions {
   // Real time: ticks a leg's first command may take (the loop starting up) before it is
   // missing; the stale check is armed by the first command.
   std::uint64_t startup_grace_ticks = 500;
+  // Lockstep fault injection (tests): the supervisor's inputs of this tick are not sent
+  // (as if lost); -1: none.
+  std::int64_t lose_supervisor_inputs_tick = -1;
   double resend_after_s = 0.05;    // lockstep: republish sensors of a silent leg after this
-  // Lockstep with a recorder: every this many ticks the plant waits until every reliable
-  // reader (the recorder's too) has acknowledged what it wrote, so that a fast loop never runs
-  // more than this far ahead of a slow recorder (its writers keep 1 s of history; samples
+  // Lockstep with a recorder: every recorder_sync_ticks the plant's main thread starts
+  // waiting, beside the loop, until every reliable reader (the recorder's too) has
+  // acknowledged what the plant wrote so far. The loop goes on, and stops only when such a
+  // wait, begun recorder_sync_window_ticks ago, has not ended: a fast loop never runs further
+  // ahead of a slow recorder than that (its writers keep 1 s = 1000 ticks of history; samples
   // older than that could no longer be repaired). 0 = never.
   std::uint64_t recorder_sync_ticks = 100;
+  std::uint64_t recorder_sync_window_ticks = 300;
   std::string summary_path;        // write the run's figures here as JSON at exit ("" = no)
   bool tracker = false;            // publish the external pose instrument (calibration, issue 14)
 };
@@ -101,6 +107,7 @@ class PlantNode {
   // Publishes the sensors of tick_ (all legs, or `only_leg` to that leg alone), and with all legs the IMU
   // (every 5th tick) and ground truth. Batched: each reader gets one datagram.
   void PublishTick(int only_leg = 0);
+  void ReaskSupervisor();  // lockstep: re-publishes the supervisor's inputs of s(n)
   void TakeCommands(bool feed_barrier);
   // Command hygiene and one plant step; false when the plant state became non-finite.
   bool ApplyAndStep(std::uint64_t stale_tolerance);
@@ -141,8 +148,17 @@ class PlantNode {
   std::uint64_t tick_ = 0;
   bool running_ = false;        // lockstep: the receive thread may advance
   bool sync_pending_ = false;   // lockstep: tick_ is not published until the recorder caught up
-  std::uint64_t recorder_syncs_ = 0;
-  double recorder_sync_wait_s_ = 0.0;
+  bool ack_wait_requested_ = false;  // the main thread is to start an acknowledgement wait
+  bool ack_wait_active_ = false;     // ... and is in it
+  std::uint64_t ack_wait_tick_ = 0;  // the tick at which it was requested
+  int64_t sync_blocked_since_ns_ = 0;
+  // Real time: wake-ups later than this restart the schedule (RunRealtime).
+  static constexpr int64_t kSlipAfter_ns = 2'000'000;
+  std::uint64_t slips_ = 0;
+  int64_t slipped_ns_ = 0;
+  std::uint64_t recorder_syncs_ = 0;      // acknowledgement waits
+  std::uint64_t recorder_sync_blocks_ = 0;  // of them, the loop stopped for
+  double recorder_sync_wait_s_ = 0.0;     // time the loop stood still for them
   int exit_code_ = -1;          // set when the run ends (>= 0)
   LegArray<LatestCommand> latest_{};
   LegArray<CommandEpisode> episodes_{};  // fault episodes per leg: one report each
@@ -157,6 +173,14 @@ class PlantNode {
   std::int64_t tick_started_ns_ = 0;
   std::uint32_t overruns_ = 0;
   std::uint64_t resent_samples_ = 0;  // lockstep: sensor samples re-published to silent legs
+  // Lockstep: the supervisor's inputs of the newest supervisor tick (six legs' sensors and
+  // the IMU), re-published with a re-ask: a leg that cannot answer may lack that tick's
+  // setpoint because the supervisor lost its inputs, or the leg lost the setpoint.
+  std::array<hexa_msg_LegSensors, kNumLegs> supervisor_sensors_{};
+  hexa_msg_ImuSample supervisor_imu_{};
+  bool supervisor_inputs_valid_ = false;
+  std::uint64_t supervisor_reasks_ = 0;
+  bool supervisor_inputs_lost_ = false;  // --lose-supervisor-inputs done
 };
 
 }  // namespace hexa::plant_sim

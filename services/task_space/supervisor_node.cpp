@@ -2,6 +2,7 @@
 
 #include "hexa/core/calibration.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -115,6 +116,7 @@ void SupervisorNode::TakeSensors() {
       const auto& s = sensors_reader_.sample(k);
       if (s.leg_id < 1 || s.leg_id > kNumLegs) continue;
       const std::size_t i = s.leg_id - 1;
+      sensor_ring_[i][sensor_ring_count_[i]++ % kSensorRing] = s;
       if (sensors_seen_[i] && s.header.tick < sensors_[i].header.tick) continue;
       sensors_[i] = s;
       sensors_seen_[i] = true;
@@ -122,12 +124,24 @@ void SupervisorNode::TakeSensors() {
   }
 }
 
-bool SupervisorNode::TakeImu() {
+const hexa_msg_LegSensors* SupervisorNode::RingSample(std::size_t leg_index,
+                                                      std::uint64_t tick) const {
+  const std::size_t n = std::min(sensor_ring_count_[leg_index], kSensorRing);
+  for (std::size_t k = 0; k < n; ++k) {
+    const hexa_msg_LegSensors& s = sensor_ring_[leg_index][k];
+    if (s.header.tick == tick) return &s;
+  }
+  return nullptr;
+}
+
+bool SupervisorNode::TakeImu(bool& repeated) {
   bool fresh = false;
+  repeated = false;
   while (imu_reader_.Take() > 0) {
     for (std::size_t k = 0; k < imu_reader_.count(); ++k) {
       if (!imu_reader_.info(k).valid_data) continue;
       const auto& s = imu_reader_.sample(k);
+      if (imu_seen_ && s.header.tick == imu_.header.tick) repeated = true;
       if (imu_seen_ && s.header.tick <= imu_.header.tick) continue;
       imu_ = s;
       imu_seen_ = true;
@@ -301,6 +315,7 @@ void SupervisorNode::Publish(std::uint64_t tick, double time_s) {
     s.feedforward_force_n = sp.feedforward_force_n;
     s.feedforward_force_rate_n_s = sp.feedforward_force_rate_n_s;
     setpoint_writer_.WriteDeferred(s, now_ns);
+    last_setpoints_[i] = s;
   }
   setpoint_writer_.Flush();
   hexa_msg_PoseReport r{};
@@ -317,6 +332,15 @@ void SupervisorNode::Publish(std::uint64_t tick, double time_s) {
   pose_writer_.Write(r, now_ns);
 }
 
+void SupervisorNode::RepublishSetpoints() {
+  const int64_t now_ns = comm::RealtimeNow_ns();
+  for (const hexa_msg_LegSetpoint& s : last_setpoints_) setpoint_writer_.WriteDeferred(s, now_ns);
+  setpoint_writer_.Flush();
+  if (setpoint_republishes_++ == 0)
+    log_->info("lockstep re-ask of tick {}: its setpoints published again (logged once)",
+               last_run_tick_);
+}
+
 void SupervisorNode::OnData(void* self) {
   auto* node = static_cast<SupervisorNode*>(self);
   std::lock_guard<std::mutex> lock(node->mutex_);
@@ -326,7 +350,8 @@ void SupervisorNode::OnData(void* self) {
 void SupervisorNode::RunCycle() {
   if (exit_code_ >= 0) return;
   TakeSensors();
-  const bool fresh_imu = TakeImu();
+  bool repeated_imu = false;
+  const bool fresh_imu = TakeImu(repeated_imu);
   if (!imu_seen_) return;
   const std::uint64_t m = imu_.header.tick;
   if (options_.common.mode == node::TimeMode::kRealtime) {
@@ -337,9 +362,18 @@ void SupervisorNode::RunCycle() {
     RunTick(m, imu_.header.sim_time_s);
   } else {
     // Lockstep: the IMU of tick m and the six legs' samples of tick m.
-    if (ran_once_ && m <= last_run_tick_) return;
+    // The plant re-asks the tick it last sent when a leg cannot answer the next one (core
+    // lockstep_protocol.hpp: that leg may lack this tick's setpoint): publish it again.
+    if (ran_once_ && m <= last_run_tick_) {
+      if (repeated_imu && m == last_run_tick_) RepublishSetpoints();
+      return;
+    }
     for (std::size_t i = 0; i < kNumLegs; ++i)
-      if (!sensors_seen_[i] || sensors_[i].header.tick != m) return;
+      if (RingSample(i, m) == nullptr) return;
+    for (std::size_t i = 0; i < kNumLegs; ++i) {
+      sensors_[i] = *RingSample(i, m);
+      sensors_seen_[i] = true;
+    }
     RunTick(m, imu_.header.sim_time_s);
   }
   if (exit_code_ >= 0) done_.Set();
@@ -388,9 +422,10 @@ int SupervisorNode::Run() {
   std::lock_guard<std::mutex> lock(mutex_);
   PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
   log_->info("supervisor stopped after {} cycles (state {}), compute median {:.1f} us max {:.1f} us, "
-             "failed writes {}",
+             "failed writes {}, setpoints re-published {} times (lockstep re-asks)",
              cycles_, ToString(output_.state), cycle_times_.Median() * 1e6,
-             cycle_times_.Max() * 1e6, setpoint_writer_.write_errors_total());
+             cycle_times_.Max() * 1e6, setpoint_writer_.write_errors_total(),
+             setpoint_republishes_);
   return exit_code_ < 0 ? 0 : exit_code_;
 }
 

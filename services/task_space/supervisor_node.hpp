@@ -9,6 +9,7 @@
 // One mutex guards the state shared by the two.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -43,13 +44,17 @@ class SupervisorNode {
  private:
   bool WaitUntilMatched();
   void TakeSensors();
-  bool TakeImu();
+  // Takes the IMU samples; true if a newer one came. `repeated`: the newest tick came again
+  // (a lockstep re-ask from the plant).
+  bool TakeImu(bool& repeated);
   void TakeOperatorCommands();
   void TakeFaults();
   static void OnData(void* self);
   void RunCycle();
   void RunTick(std::uint64_t tick, double time_s);
   void Publish(std::uint64_t tick, double time_s);
+  // Lockstep re-ask of tick last_run_tick_: its setpoints again (a leg may have lost them).
+  void RepublishSetpoints();
   bool PrepareStart(const std::string& trajectory, int periods);
   void PublishStatus(hexa_msg_NodeState state, const char* detail);
 
@@ -79,10 +84,19 @@ class SupervisorNode {
   std::int64_t last_imu_mono_ns_ = 0;  // real time: when the last IMU sample was taken
   LegArray<hexa_msg_LegSensors> sensors_{};
   LegArray<bool> sensors_seen_{};
+  // Lockstep: each leg's last samples by tick. The IMU of tick m is paired with the legs'
+  // samples of tick m even when newer ones came first (a re-asked tick arrives after the
+  // plant published the next ones; the plant runs up to 5 ticks ahead of this service).
+  static constexpr std::size_t kSensorRing = 16;
+  LegArray<std::array<hexa_msg_LegSensors, kSensorRing>> sensor_ring_{};
+  LegArray<std::size_t> sensor_ring_count_{};
+  const hexa_msg_LegSensors* RingSample(std::size_t leg_index, std::uint64_t tick) const;
   LegArray<std::uint64_t> sensor_tick_at_last_run_{};
   hexa_msg_ImuSample imu_{};
   bool imu_seen_ = false;
   std::uint64_t last_run_tick_ = 0;
+  std::array<hexa_msg_LegSetpoint, kNumLegs> last_setpoints_{};
+  std::uint64_t setpoint_republishes_ = 0;
   bool ran_once_ = false;
   int imu_misses_consecutive_ = 0;
   LegArray<int> leg_misses_consecutive_{};

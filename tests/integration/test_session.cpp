@@ -2,6 +2,7 @@
 // the launcher (nine processes + recorder over DDS), checked against fixed bounds, and
 // checked bit for bit against the in-process lockstep simulation of the same configuration.
 #include <filesystem>
+#include <regex>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -94,6 +95,28 @@ TEST(Session, RigOverlayReachesTheServicesAsInProcess) {
     }
   }
   EXPECT_TRUE(differs) << "the overlay changed nothing the plant applied";
+}
+
+// The supervisor's first inputs lost on the wire (the CI failure of stop 17: a reader that had
+// matched on one side only; tick 1 was never answered and the plant gave up after 10 s). The
+// plant withholds them (fault injection) and must recover them with its re-ask, which also
+// re-publishes the supervisor's inputs of the setpoint tick: the session completes and is
+// still bit-identical to the in-process simulation.
+TEST(Session, LockstepRecoversTheSupervisorsLostInputs) {
+  const auto run = RunSession("session_lost_inputs", 76,
+                              {"--trajectory", "combined", "--periods", "1", "--seed", "3",
+                               "--plant-arg", "--lose-supervisor-inputs", "--plant-arg", "0"});
+  const std::string plant = Slurp(run.dir + "/plant.log");
+  ASSERT_EQ(run.exit_code, 0) << Slurp(run.dir + "/session.log");
+  EXPECT_NE(plant.find("FAULT INJECTION: tick 0: the supervisor's inputs"), std::string::npos)
+      << plant;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(plant, m, std::regex("re-asks, ([0-9]+) to the supervisor")))
+      << plant;
+  EXPECT_GE(std::stoull(m[1]), 1u) << plant;
+  ASSERT_TRUE(run.has_report);
+  for (const auto& [topic, missing] : run.report.missing) EXPECT_EQ(missing, 0u) << topic;
+  hexa::testing::ExpectSameAsInProcess(run.report, hexa::PaperMotion::kCombined, 1, 3);
 }
 
 }  // namespace

@@ -30,7 +30,8 @@ std::string Config(const std::string& iface, const std::string& self, const std:
          "<AllowMulticast>false</AllowMulticast></General><Discovery>"
          "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>20</MaxAutoParticipantIndex>"
          "<Peers><Peer address=\"" + self + "\"/><Peer address=\"" + peer + "\"/></Peers>"
-         "</Discovery></Domain></CycloneDDS>\n";
+         "</Discovery><Internal><HeartbeatInterval minsched=\"10 ms\">10 ms</HeartbeatInterval>"
+         "</Internal></Domain></CycloneDDS>\n";
 }
 
 class TwoHosts : public ::testing::Test {
