@@ -222,6 +222,8 @@ def run_session(build, out, mode, recorder, periods, seed, extra):
         if key in summary:
             r["tick_ms_median"] = summary[key]["median"] * 1e3
             r["tick_ms_p99"] = summary[key]["p99"] * 1e3
+        r["schedule_slips"] = summary.get("schedule_slips")
+        r["slipped_ms"] = summary["slipped_s"] * 1e3 if "slipped_s" in summary else None
         legs = summary.get("legs", [])
         applied = sum(sum(l["command_age"]) for l in legs)
         late = sum(l["late_ticks"] for l in legs)
@@ -389,6 +391,8 @@ def print_table(res, builds):
             "fan-out, no recorder", fn and fn["cpu_s_per_sim_s"])
         print(f"| real time + recorder | {b} | sessions completed | {done} of "
               f"{len(res[b]['realtime'])} | | |")
+        row("real time + recorder", "CPU s per simulated s (all processes)",
+            rt["cpu_s_per_sim_s"], "fan-out + recorder", fr and fr["cpu_s_per_sim_s"])
         row("real time + recorder", "late ticks % (all legs)", rt["late_ticks_pct"],
             "cyclictest % > 0.5 ms", ct and ct["late_over_0_5ms_pct"])
         row("real time + recorder", "round trip median us", rt["round_trip_median_us"],
@@ -402,15 +406,19 @@ def print_table(res, builds):
     for b in builds:
         print(f"real-time runs ({b}): " + "; ".join(
             f"{'ok' if r['completed'] else 'FAILED exit ' + str(r['exit_code'])}"
-            f" late {fmt(r.get('late_ticks_pct'))} %" for r in res[b]["realtime"]))
-        procs = [r["processes"] for r in res[b]["lockstep_rec"] if r.get("processes")]
-        sims = [r["sim_time_s"] for r in res[b]["lockstep_rec"] if r.get("processes")]
-        if procs:
-            names = list(procs[0])
-            print(f"CPU s per simulated s per process, lockstep + recorder ({b}, whole life "
-                  f"incl. start-up, median): " + ", ".join(
-                      f"{n} {med([p.get(n, 0) / s for p, s in zip(procs, sims)]):.3f}"
-                      for n in names))
+            f" late {fmt(r.get('late_ticks_pct'))} %"
+            + (f", {r['schedule_slips']} slips ({fmt(r.get('slipped_ms'), '.1f')} ms)"
+               if r.get("schedule_slips") is not None else "")
+            for r in res[b]["realtime"]))
+        for kind, label in [("lockstep_rec", "lockstep + recorder"),
+                            ("realtime", "real time + recorder")]:
+            runs = [r for r in res[b][kind] if r.get("processes") and r.get("sim_time_s")]
+            if runs:
+                names = list(runs[0]["processes"])
+                print(f"CPU s per simulated s per process, {label} ({b}, whole life incl. "
+                      f"start-up, median): " + ", ".join(
+                          f"{n} {med([r['processes'].get(n, 0) / r['sim_time_s'] for r in runs]):.3f}"
+                          for n in names))
 
 
 if __name__ == "__main__":

@@ -107,14 +107,16 @@ int32_t WriterHistoryDepth(TopicKind kind) {
   switch (kind) {
     case TopicKind::kLegSensors:
     case TopicKind::kValveCommand:
-    // 1 s of samples per instance: what a reliable reader that stalls (the recorder behind
-    // an fdatasync or descheduled on a loaded machine) can still get retransmitted. A
-    // keep-last writer never blocks; the depth costs memory only while a reader lags.
-    case TopicKind::kGroundTruth: return 1000;  // 1 s at 1 kHz
+    // 3 s of samples per instance: what a reliable reader that stalls (the recorder behind
+    // an fdatasync or descheduled on a loaded machine) can still get retransmitted; the
+    // lockstep plant lets the loop run at most 1.3 s ahead of the recorder
+    // (recorder_sync_window_ticks). A keep-last writer never blocks; the depth costs memory
+    // only while a reader lags (about 1 MB for GroundTruth).
+    case TopicKind::kGroundTruth: return 3000;  // 3 s at 1 kHz
     case TopicKind::kImuSample:
     case TopicKind::kLegSetpoint:
-    case TopicKind::kPoseReport: return 200;  // 1 s at 200 Hz
-    case TopicKind::kTrackerPose: return 100;  // 1 s at 100 Hz
+    case TopicKind::kPoseReport: return 600;  // 3 s at 200 Hz
+    case TopicKind::kTrackerPose: return 300;  // 3 s at 100 Hz
     case TopicKind::kNodeStatus: return 1;   // per node: the current status is what matters
     case TopicKind::kFaultEvent: return 64;  // the last 64 faults for late joiners
     case TopicKind::kOperatorCommand: return 0;  // keep-all

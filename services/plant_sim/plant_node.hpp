@@ -48,10 +48,11 @@ struct PlantNodeOptions {
   // waiting, beside the loop, until every reliable reader (the recorder's too) has
   // acknowledged what the plant wrote so far. The loop goes on, and stops only when such a
   // wait, begun recorder_sync_window_ticks ago, has not ended: a fast loop never runs further
-  // ahead of a slow recorder than that (its writers keep 1 s = 1000 ticks of history; samples
-  // older than that could no longer be repaired). 0 = never.
+  // ahead of a slow recorder than that. The writers keep 3 s = 3000 ticks of history
+  // (comm WriterHistoryDepth); samples older than that could no longer be repaired, so the
+  // window plus one sync period stays within half of it (PlantNode checks). 0 = never.
   std::uint64_t recorder_sync_ticks = 100;
-  std::uint64_t recorder_sync_window_ticks = 300;
+  std::uint64_t recorder_sync_window_ticks = 1200;
   std::string summary_path;        // write the run's figures here as JSON at exit ("" = no)
   bool tracker = false;            // publish the external pose instrument (calibration, issue 14)
 };

@@ -36,7 +36,7 @@ TEST_F(CommUnit, QosProfilesMatchTheTopicTable) {
     int32_t depth = 0;
     ASSERT_TRUE(dds_qget_history(q.get(), &hist, &depth));
     EXPECT_EQ(hist, DDS_HISTORY_KEEP_LAST);
-    EXPECT_EQ(depth, 1000);  // 1 s at 1 kHz: what a stalled reliable reader can still get
+    EXPECT_EQ(depth, 3000);  // 3 s at 1 kHz: what a stalled reliable reader can still get
   }
   {
     const Qos q = MakeQos(TopicKind::kLegSetpoint, EndpointRole::kControlReader);
