@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <map>
 #include <cstdio>
 #include <ctime>
@@ -248,9 +249,10 @@ int main(int argc, char** argv) {
     const double at = o.fault_at.empty() ? -1 : std::strtod(o.fault_at.c_str(), &end);
     if (leg.size() != 1 || leg[0] < '1' || leg[0] > '6' ||
         std::find(kKinds.begin(), kKinds.end(), o.fault_kind) == kKinds.end() ||
-        end == nullptr || *end != '\0' || !(at >= 0)) {
+        end == nullptr || *end != '\0' || !(at >= 0) || !std::isfinite(at)) {
       std::fprintf(stderr, "error: --fault '%s': expected leg:kind:time_s with leg 1..6, kind "
-                   "one of crash hang slow garbage silence, time_s >= 0 (e.g. 3:crash:2.0)\n",
+                   "one of crash hang slow garbage silence, time_s a finite number >= 0 "
+                   "(e.g. 3:crash:2.0)\n",
                    f.c_str());
       return 2;
     }
