@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "hexa/core/csv_trajectory.hpp"
 
 namespace hexa {
 namespace {
@@ -126,15 +125,15 @@ StartRequest Supervisor::PreparePaperStart(PaperMotion motion, int periods,
       MakePaperTrajectory(motion, rest_, home_, timing(), periods, amplitude_scale));
 }
 
-StartRequest Supervisor::PrepareCsvStart(const std::string& csv_path) const {
-  try {
-    return PrepareStart(MakeCsvTrajectory(LoadCsvTrajectory(csv_path), rest_, home_, timing()));
-  } catch (const CsvTrajectoryError& error) {
-    StartRequest request;
-    request.feasibility.feasible = false;
-    request.feasibility.message = error.what();
-    return request;
-  }
+StartRequest Supervisor::PrepareRowsStart(std::shared_ptr<const CsvMotion> rows) const {
+  return PrepareStart(MakeCsvTrajectory(std::move(rows), rest_, home_, timing()));
+}
+
+StartRequest Supervisor::RejectedStart(std::string message) {
+  StartRequest request;
+  request.feasibility.feasible = false;
+  request.feasibility.message = std::move(message);
+  return request;
 }
 
 void Supervisor::StartTrajectory(const Trajectory& trajectory, double time_s) {
