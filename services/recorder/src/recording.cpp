@@ -166,12 +166,6 @@ class CollectErrors : public gp::DescriptorPool::ErrorCollector {
   std::string text;
 };
 
-// Owns the database behind a pool (the pool must not outlive it).
-struct PoolWithDb : gp::DescriptorPool {
-  PoolWithDb(std::unique_ptr<gp::SimpleDescriptorDatabase> db, ErrorCollector* errors)
-      : gp::DescriptorPool(db.get(), errors), database(std::move(db)) {}
-  std::unique_ptr<gp::SimpleDescriptorDatabase> database;
-};
 }  // namespace
 
 ProtoDecoder::ProtoDecoder() : factory_(std::make_unique<gp::DynamicMessageFactory>()) {}
@@ -183,7 +177,14 @@ ProtoDecoder::~ProtoDecoder() {
 }
 
 void ProtoDecoder::AddSchema(const McapSchema& schema) {
-  const std::string what = "schema " + std::to_string(schema.id) + " '" + schema.name + "'";
+  const std::string what = "schema " + std::to_string(schema.id) + " '" + text::Excerpt(schema.name) + "'";
+  if (auto it = schemas_.find(schema.id); it != schemas_.end()) {
+    const McapSchema& had = it->second.record;
+    if (had.name == schema.name && had.encoding == schema.encoding && had.data == schema.data) return;
+    // Replacing it would leave the channels decoded with it pointing into a deleted pool.
+    throw McapError(what + ": schema id " + std::to_string(schema.id) +
+                    " is defined again with different content (MCAP requires repeats to be identical)");
+  }
   if (schema.encoding != kProtobufEncoding)
     throw McapError(what + ": unknown schema encoding '" + schema.encoding +
                     "' (this tool decodes only \"protobuf\")");
@@ -195,21 +196,31 @@ void ProtoDecoder::AddSchema(const McapSchema& schema) {
     if (!db->Add(file))
       throw McapError(what + ": FileDescriptorSet holds a conflicting file '" + file.name() + "'");
   }
-  CollectErrors errors;
-  auto pool = std::make_unique<PoolWithDb>(std::move(db), &errors);
-  const gp::Descriptor* type = pool->FindMessageTypeByName(schema.name);
-  if (type == nullptr)
-    throw McapError(what + ": unknown schema: no message named '" + schema.name +
-                    "' in its FileDescriptorSet" +
-                    (errors.text.empty() ? std::string() : " (" + errors.text + ")"));
   SchemaEntry entry;
+  auto errors = std::make_unique<CollectErrors>();
+  entry.pool = std::make_unique<gp::DescriptorPool>(db.get(), errors.get());
+  entry.database = std::move(db);
+  const gp::Descriptor* type = entry.pool->FindMessageTypeByName(schema.name);
+  if (type == nullptr)
+    throw McapError(what + ": unknown schema: no message named '" + text::Excerpt(schema.name) +
+                    "' in its FileDescriptorSet" +
+                    (errors->text.empty() ? std::string() : " (" + text::Sanitize(errors->text, 1024) + ")"));
+  entry.errors = std::move(errors);
   entry.type = type;
-  entry.pool = std::move(pool);
+  entry.record = schema;
   schemas_[schema.id] = std::move(entry);
 }
 
 void ProtoDecoder::AddChannel(const McapChannel& channel) {
-  const std::string what = "channel " + std::to_string(channel.id) + " '" + channel.topic + "'";
+  const std::string what = "channel " + std::to_string(channel.id) + " '" + text::Excerpt(channel.topic) + "'";
+  if (auto it = channel_records_.find(channel.id); it != channel_records_.end()) {
+    const McapChannel& had = it->second;
+    if (had.schema_id == channel.schema_id && had.topic == channel.topic &&
+        had.message_encoding == channel.message_encoding && had.metadata == channel.metadata)
+      return;
+    throw McapError(what + ": channel id " + std::to_string(channel.id) +
+                    " is defined again with different content (MCAP requires repeats to be identical)");
+  }
   if (channel.message_encoding != kProtobufEncoding)
     throw McapError(what + ": unknown message encoding '" + channel.message_encoding +
                     "' (this tool decodes only \"protobuf\")");
@@ -217,6 +228,7 @@ void ProtoDecoder::AddChannel(const McapChannel& channel) {
   if (it == schemas_.end())
     throw McapError(what + ": unknown schema id " + std::to_string(channel.schema_id));
   channel_messages_[channel.id].reset(factory_->GetPrototype(it->second.type)->New());
+  channel_records_[channel.id] = channel;
   if (channel_topics_.size() <= channel.id) channel_topics_.resize(channel.id + 1u);
   channel_topics_[channel.id] = channel.topic;
 }

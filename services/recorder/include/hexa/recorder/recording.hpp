@@ -4,6 +4,7 @@
 #pragma once
 
 #include <google/protobuf/descriptor.h>
+#include <google/protobuf/descriptor_database.h>
 #include <google/protobuf/dynamic_message.h>
 #include <google/protobuf/message.h>
 
@@ -70,7 +71,9 @@ class ProtoDecoder {
   ProtoDecoder();
   ~ProtoDecoder();
   // Throw McapError naming the schema/channel: encoding not "protobuf", FileDescriptorSet that
-  // does not parse or build, message name absent from it, channel without a known schema.
+  // does not parse or build, message name absent from it, channel without a known schema, an
+  // id defined again with different content (the MCAP spec requires repeats to be identical;
+  // identical repeats are ignored).
   void AddSchema(const McapSchema& schema);
   void AddChannel(const McapChannel& channel);
   // The returned message is reused by the next Decode of the same channel. Throws McapError
@@ -87,11 +90,18 @@ class ProtoDecoder {
 
  private:
   struct SchemaEntry {
+    // Destroyed in reverse order: the pool before the database and the error collector it
+    // points to. (DescriptorPool has no virtual destructor: the pieces are owned here, not by
+    // a pool subclass - that leaked every schema's database, found by fuzz_mcap_reader.)
+    std::unique_ptr<google::protobuf::DescriptorDatabase> database;
+    std::unique_ptr<google::protobuf::DescriptorPool::ErrorCollector> errors;
     std::unique_ptr<google::protobuf::DescriptorPool> pool;
     const google::protobuf::Descriptor* type = nullptr;
+    McapSchema record;  // to recognise a repeated Schema record (the same id again)
   };
   std::map<uint16_t, SchemaEntry> schemas_;
   std::map<uint16_t, std::unique_ptr<google::protobuf::Message>> channel_messages_;
+  std::map<uint16_t, McapChannel> channel_records_;
   std::unique_ptr<google::protobuf::DynamicMessageFactory> factory_;
   std::vector<std::string> channel_topics_;
   std::map<uint16_t, Utf8Repairs> repairs_;
