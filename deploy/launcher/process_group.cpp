@@ -154,27 +154,9 @@ ProcessGroup::Event ProcessGroup::WaitEvent(std::chrono::milliseconds timeout) {
 
 std::optional<ChildExit> ProcessGroup::Stop(const std::string& name,
                                             std::chrono::milliseconds grace) {
-  auto it = std::find_if(running_.begin(), running_.end(),
-                         [&](const Child& c) { return c.spec.name == name; });
-  if (it == running_.end()) return std::nullopt;
-  const pid_t pid = it->pid;
-  kill(pid, SIGTERM);
-  const auto deadline = std::chrono::steady_clock::now() + grace;
-  sigset_t chld;
-  sigemptyset(&chld);
-  sigaddset(&chld, SIGCHLD);
-  while (true) {
-    if (auto e = Reap(pid, false)) return e;
-    const auto now = std::chrono::steady_clock::now();
-    if (now >= deadline) break;
-    const auto left = std::chrono::duration_cast<std::chrono::nanoseconds>(deadline - now);
-    timespec ts{static_cast<time_t>(left.count() / 1000000000),
-                static_cast<long>(left.count() % 1000000000)};
-    sigtimedwait(&chld, nullptr, &ts);  // wakes on any child's exit; SIGINT stays pending
-  }
-  kill(-pid, SIGKILL);  // the whole process group of the child
-  kill(pid, SIGKILL);
-  return Reap(pid, true);
+  std::vector<ChildExit> exits = StopTogether({name}, grace);
+  if (exits.empty()) return std::nullopt;
+  return exits.front();
 }
 
 std::vector<ChildExit> ProcessGroup::StopAll(std::chrono::milliseconds grace) {
