@@ -27,5 +27,8 @@ expect "unknown option '-domain'" "$B/services/task_space/hexa_operator" -domain
 expect "unknown option '-trajectory'" "$B/tools/hexa_sim" -trajectory x
 expect "unknown option '-o'" "$B/services/recorder/hexa_recorder" recover in.mcap -o out.mcap
 expect "unknown option '-out-dir'.*--out-dir" "$B/services/recorder/hexa_recorder" export in.mcap -out-dir d
-expect "expects a finite number" "$B/services/recorder/hexa_recorder" diff a.mcap b.mcap --tolerance-v inf
+expect "expects a finite number, got 'inf'" "$B/services/recorder/hexa_recorder" diff a.mcap b.mcap --tolerance-v inf
+expect "expects a finite number, got 'nan'" "$B/services/recorder/hexa_recorder" diff a.mcap b.mcap --tolerance-v nan
+expect "expects a finite number, got 'inf'" "$B/services/recorder/hexa_recorder" play a.mcap --lockstep --wait-readers-s inf
+expect "expects a number or inf, got '-inf'" "$B/services/recorder/hexa_recorder" play a.mcap --deadline-s -inf
 exit $fail

@@ -27,13 +27,16 @@ std::vector<std::string> Args::GetAll(const std::string& name) const {
   return out;
 }
 
-double Args::GetDouble(const std::string& name, double fallback) const {
+double Args::GetDouble(const std::string& name, double fallback, bool allow_infinity) const {
   if (!Has(name)) return fallback;
   const std::string v = Get(name, "");
   char* end = nullptr;
   const double d = std::strtod(v.c_str(), &end);
-  if (v.empty() || end == nullptr || *end != '\0' || !std::isfinite(d))
-    throw UsageError("--" + name + " expects a finite number, got '" + v + "'");
+  const bool value_ok = std::isfinite(d) || (allow_infinity && std::isinf(d) && d > 0.0);
+  if (v.empty() || end == nullptr || *end != '\0' || !value_ok)
+    throw UsageError("--" + name + (allow_infinity ? " expects a number or inf, got '"
+                                                    : " expects a finite number, got '") +
+                     v + "'");
   return d;
 }
 
