@@ -16,6 +16,7 @@ packages=(
   rt-tests stress-ng   # bench/loop: cyclictest (the machine's wake-up latency), a CPU hog
   libzstd-dev                                           # zstd MCAP chunks (recorder)
   libwebsocketpp-dev libasio-dev nlohmann-json3-dev     # hexa_bridge (Foxglove WebSocket)
+  clang-14 libclang-rt-14-dev   # tests/fuzz: libFuzzer, ASan, UBSan runtimes
 )
 # Node.js + npm (test clients only: the MCAP project's JS library reads recordings, Foxglove's
 # schemas and WebSocket client check the scene and hexa_bridge; tests/foxglove): machines

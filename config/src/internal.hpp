@@ -12,8 +12,6 @@ std::string FormatDouble(double value);
 // Ten significant digits, for values computed from the file (leg lengths, limits).
 std::string FormatDerived(double value);
 
-// The plant's tick (DESIGN.md "Time"): periods must be whole multiples of it.
-inline constexpr double kPlantTick_s = 0.001;
 
 // Geometry figures used by validation and by Summary().
 struct HomeGeometry {

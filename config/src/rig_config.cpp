@@ -397,10 +397,16 @@ ConfigResult ParseSystemConfig(const std::string& text, const std::string& displ
       issue.line = loc.line > 0 ? loc.line : 1;
       issue.column = loc.line > 0 ? loc.column : 1;
     }
-    if (!issues.empty()) return Fail(std::move(issues));
+    if (!issues.empty()) {
+      ConfigResult failed = Fail(std::move(issues));
+      failed.config = std::move(config);
+      failed.translated = true;
+      return failed;
+    }
 
     ConfigResult result;
     result.ok = true;
+    result.translated = true;
     result.config = std::move(config);
     return result;
   } catch (const std::exception& e) {  // e.g. std::bad_alloc; the status API never throws

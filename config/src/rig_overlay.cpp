@@ -435,6 +435,7 @@ ConfigResult ApplyRigOverlay(const SystemConfig& base, const RigOverlay& overlay
     return result;
   }
   result.ok = true;
+  result.translated = true;
   result.config = std::move(merged);
   return result;
 }

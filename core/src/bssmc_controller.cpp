@@ -1,5 +1,7 @@
 #include "hexa/core/bssmc_controller.hpp"
 
+#include "hexa/core/param_checks.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -8,13 +10,6 @@
 
 namespace hexa {
 namespace {
-
-void Require(bool ok, const char* field, double value, const char* limit) {
-  if (ok) return;
-  std::ostringstream m;
-  m << "bssmc: " << field << " = " << value << " must be " << limit;
-  throw std::invalid_argument(m.str());
-}
 
 DifferentiatorConfig DiffConfig(const BsSmcConfig& c) {
   DifferentiatorConfig d;
@@ -36,58 +31,17 @@ NominalLegModel NominalLegModel::FromRig(const RigParams& rig) {
 }
 
 void BsSmcConfig::Validate() const {
-  const BsSmcParams& p = params;
-  Require(std::isfinite(p.lambda_1_s) && p.lambda_1_s > 0, "lambda_1_s", p.lambda_1_s, "finite and > 0");
-  Require(std::isfinite(p.switching_gain_n) && p.switching_gain_n >= 0, "switching_gain_n",
-          p.switching_gain_n, "finite and >= 0");
-  Require(std::isfinite(p.boundary_layer_xi_s_m) && p.boundary_layer_xi_s_m > 0,
-          "boundary_layer_xi_s_m", p.boundary_layer_xi_s_m, "finite and > 0");
-  Require(std::isfinite(p.backstepping_beta_1_s) && p.backstepping_beta_1_s > 0,
-          "backstepping_beta_1_s", p.backstepping_beta_1_s, "finite and > 0");
-  Require(std::isfinite(p.effective_mass_kg) && p.effective_mass_kg > 0, "effective_mass_kg",
-          p.effective_mass_kg, "finite and > 0");
-  Require(std::isfinite(p.gravity_load_n) && std::abs(p.gravity_load_n) < 1e4, "gravity_load_n",
-          p.gravity_load_n, "finite and |.| < 1e4 N");
-  Require(std::isfinite(p.viscous_estimate_scale) && p.viscous_estimate_scale >= 0,
-          "viscous_estimate_scale", p.viscous_estimate_scale, "finite and >= 0");
-  Require(std::isfinite(p.friction_estimate_scale) && p.friction_estimate_scale >= 0,
-          "friction_estimate_scale", p.friction_estimate_scale, "finite and >= 0");
-  Require(std::isfinite(p.friction_smoothing_velocity_m_s) && p.friction_smoothing_velocity_m_s > 0,
-          "friction_smoothing_velocity_m_s", p.friction_smoothing_velocity_m_s, "finite and > 0");
-  Require(std::isfinite(p.reaching_proportional_n_s_m) && p.reaching_proportional_n_s_m >= 0,
-          "reaching_proportional_n_s_m", p.reaching_proportional_n_s_m, "finite and >= 0");
-  Require(std::isfinite(p.null_band_area_fraction) && p.null_band_area_fraction >= 0 &&
-              p.null_band_area_fraction <= 1,
-          "null_band_area_fraction", p.null_band_area_fraction, "finite and in [0, 1]");
-  Require(std::isfinite(p.spool_filter_time_constant_s) && p.spool_filter_time_constant_s >= 0 &&
-              p.spool_filter_time_constant_s <= 1,
-          "spool_filter_time_constant_s", p.spool_filter_time_constant_s, "finite and in [0, 1] s");
-  Require(std::isfinite(p.integral_gain_n_m) && p.integral_gain_n_m >= 0, "integral_gain_n_m",
-          p.integral_gain_n_m, "finite and >= 0");
-  Require(std::isfinite(p.integral_limit_n) && p.integral_limit_n >= 0, "integral_limit_n",
-          p.integral_limit_n, "finite and >= 0");
-  Require(std::isfinite(p.integral_active_below_m_s) && p.integral_active_below_m_s >= 0,
-          "integral_active_below_m_s", p.integral_active_below_m_s, "finite and >= 0");
-  Require(std::isfinite(p.integral_leak_time_constant_s) && p.integral_leak_time_constant_s > 0,
-          "integral_leak_time_constant_s", p.integral_leak_time_constant_s, "finite and > 0");
-  Require(std::isfinite(p.integral_deadband_m) && p.integral_deadband_m >= 0,
-          "integral_deadband_m", p.integral_deadband_m, "finite and >= 0");
-  Require(std::isfinite(period_s) && period_s > 0, "period_s", period_s, "finite and > 0");
-  const ValveParams& v = model.valve;
-  Require(std::isfinite(v.spool_gain_m_v) && v.spool_gain_m_v != 0, "valve.spool_gain_m_v",
-          v.spool_gain_m_v, "finite and != 0");
-  Require(v.max_spool_m > 0, "valve.max_spool_m", v.max_spool_m, "> 0");
-  Require(v.max_orifice_area_m2 > 0, "valve.max_orifice_area_m2", v.max_orifice_area_m2, "> 0");
-  Require(v.discharge_coefficient > 0, "valve.discharge_coefficient", v.discharge_coefficient, "> 0");
-  Require(v.max_voltage_v > v.min_voltage_v, "valve.max_voltage_v", v.max_voltage_v,
-          "> valve.min_voltage_v");
-  const CylinderParams& c = model.cylinder;
-  Require(c.cap_area_m2 > 0, "cylinder.cap_area_m2", c.cap_area_m2, "> 0");
-  Require(c.annulus_area_m2 > 0, "cylinder.annulus_area_m2", c.annulus_area_m2, "> 0");
-  Require(c.stroke_m > 0, "cylinder.stroke_m", c.stroke_m, "> 0");
-  Require(c.dead_volume_m3 > 0, "cylinder.dead_volume_m3", c.dead_volume_m3, "> 0");
-  Require(model.air.temperature_k > 0, "air.temperature_k", model.air.temperature_k, "> 0");
-  Require(model.air.heat_ratio > 1, "air.heat_ratio", model.air.heat_ratio, "> 1");
+  // The gains and the controller's nominal model with the rig file's rules (param_checks.hpp).
+  std::vector<ParamIssue> issues;
+  ParamChecker c(issues);
+  CheckBsSmcParams(c, params);
+  CheckAirParams(c, model.air);
+  CheckCylinderParams(c, model.cylinder);
+  CheckValveParams(c, model.valve);
+  CheckFrictionParams(c, model.friction);
+  CheckPolytropicSet(c, model.polytropic);
+  c.Positive("period_s", period_s, "control period");
+  ThrowIfIssues(issues, "BsSmcConfig");
   DiffConfig(*this).Validate();
 }
 

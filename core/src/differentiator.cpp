@@ -1,5 +1,7 @@
 #include "hexa/core/differentiator.hpp"
 
+#include "hexa/core/param_checks.hpp"
+
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -7,29 +9,11 @@
 namespace hexa {
 
 void DifferentiatorConfig::Validate() const {
-  auto fail = [](const std::string& what) { throw std::invalid_argument("differentiator: " + what); };
-  if (params.window < 2 || params.window > GaussianDifferentiator::kMaxWindow) {
-    std::ostringstream m;
-    m << "window = " << params.window << " outside [2, " << GaussianDifferentiator::kMaxWindow << "]";
-    fail(m.str());
-  }
-  if (!(params.sigma > 0.0) || !std::isfinite(params.sigma)) {
-    std::ostringstream m;
-    m << "sigma = " << params.sigma << " must be finite and > 0 (samples)";
-    fail(m.str());
-  }
-  if (!std::isfinite(params.centre_lag_samples) || params.centre_lag_samples < 0.0 ||
-      params.centre_lag_samples > params.window - 1) {
-    std::ostringstream m;
-    m << "centre_lag_samples = " << params.centre_lag_samples << " outside [0, window-1 = "
-      << params.window - 1 << "]";
-    fail(m.str());
-  }
-  if (!(sample_period_s > 0.0) || !std::isfinite(sample_period_s)) {
-    std::ostringstream m;
-    m << "sample_period_s = " << sample_period_s << " must be finite and > 0";
-    fail(m.str());
-  }
+  std::vector<ParamIssue> issues;
+  ParamChecker c(issues);
+  CheckDifferentiatorParams(c, params, "differentiator");
+  c.Positive("sample_period_s", sample_period_s, "sample period");
+  ThrowIfIssues(issues, "DifferentiatorConfig");
 }
 
 GaussianDifferentiator::GaussianDifferentiator(const DifferentiatorConfig& config) {

@@ -118,6 +118,23 @@ FeasibilityReport CheckFeasibility(const RigParams& rig, const SupervisorParams&
   report.max_abs_acceleration_m_s2.fill(0.0);
 
   const double duration_s = trajectory.duration_s();
+  // Bounded work (the supervisor prepares a start between its ticks): a trajectory longer than
+  // kMaxTrajectoryDuration_s is rejected unchecked instead of being sampled for hours.
+  if (!(duration_s <= kMaxTrajectoryDuration_s) ||
+      !(duration_s / sample_period_s <= static_cast<double>(kMaxFeasibilitySamples))) {
+    report.feasible = false;
+    report.violation = FeasibilityViolation::kTooLong;
+    report.value = duration_s;
+    report.limit = std::min(kMaxTrajectoryDuration_s,
+                            static_cast<double>(kMaxFeasibilitySamples) * sample_period_s);
+    char buffer[200];
+    std::snprintf(buffer, sizeof(buffer),
+                  "trajectory lasts %.6g s (blend, motion and stop), more than the limit of "
+                  "%.6g s that can be checked before motion",
+                  duration_s, report.limit);
+    report.message = buffer;
+    return report;
+  }
   const long n = static_cast<long>(std::ceil(duration_s / sample_period_s));
   TrajectorySample sample;
   LegArray<double> length_m{}, speed_m_s{}, accel_m_s2{};
@@ -127,6 +144,7 @@ FeasibilityReport CheckFeasibility(const RigParams& rig, const SupervisorParams&
   // the earliest sample on a tie.
   auto rank = [](FeasibilityViolation v) {
     switch (v) {
+      case FeasibilityViolation::kTooLong: return 5;
       case FeasibilityViolation::kNotFinite: return 4;
       case FeasibilityViolation::kStroke: return 3;
       case FeasibilityViolation::kSpeed: return 2;
@@ -215,6 +233,7 @@ FeasibilityReport CheckFeasibility(const RigParams& rig, const SupervisorParams&
           "leg %d at t=%.3f s: length, speed or acceleration is not finite (%g, %g, %g)", leg, t,
           bad_length_m[leg - 1], bad_speed_m_s[leg - 1], bad_accel_m_s2[leg - 1]);
       break;
+    case FeasibilityViolation::kTooLong:
     case FeasibilityViolation::kNone: break;
   }
   return report;

@@ -1,5 +1,7 @@
 #include "hexa/core/leg_controller.hpp"
 
+#include "hexa/core/param_checks.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -7,13 +9,6 @@
 
 namespace hexa {
 namespace {
-
-void Require(bool ok, const char* field, double value, const char* limit) {
-  if (ok) return;
-  std::ostringstream m;
-  m << "leg_controller: " << field << " = " << value << " must be " << limit;
-  throw std::invalid_argument(m.str());
-}
 
 BsSmcConfig MakeBsSmcConfig(const LegControllerConfig& c) {
   BsSmcConfig b;
@@ -69,29 +64,24 @@ LegControllerConfig LegControllerConfig::FromModel(const ControllerModel& model,
 }
 
 void LegControllerConfig::Validate() const {
-  Require(std::isfinite(params.setpoint_timeout_s) && params.setpoint_timeout_s > 0,
-          "setpoint_timeout_s", params.setpoint_timeout_s, "finite and > 0");
-  Require(std::isfinite(period_s) && period_s > 0, "period_s", period_s, "finite and > 0");
-  Require(std::isfinite(length_margin_m) && length_margin_m >= 0, "length_margin_m", length_margin_m,
-          "finite and >= 0");
-  Require(std::isfinite(min_pressure_pa) && min_pressure_pa >= 0, "min_pressure_pa", min_pressure_pa,
-          "finite and >= 0");
-  Require(std::isfinite(max_pressure_pa) && max_pressure_pa > min_pressure_pa, "max_pressure_pa",
-          max_pressure_pa, "finite and > min_pressure_pa");
-  Require(std::isfinite(max_setpoint_speed_m_s) && max_setpoint_speed_m_s > 0, "max_setpoint_speed_m_s",
-          max_setpoint_speed_m_s, "finite and > 0");
-  Require(std::isfinite(max_setpoint_acceleration_m_s2) && max_setpoint_acceleration_m_s2 > 0,
-          "max_setpoint_acceleration_m_s2", max_setpoint_acceleration_m_s2, "finite and > 0");
-  Require(std::isfinite(max_correction_m) && max_correction_m >= 0, "max_correction_m", max_correction_m,
-          "finite and >= 0");
-  Require(std::isfinite(max_feedforward_force_n) && max_feedforward_force_n > 0,
-          "max_feedforward_force_n", max_feedforward_force_n, "finite and > 0");
-  Require(std::isfinite(max_feedforward_force_rate_n_s) && max_feedforward_force_rate_n_s > 0,
-          "max_feedforward_force_rate_n_s", max_feedforward_force_rate_n_s, "finite and > 0");
-  Require(std::isfinite(potentiometer.offset_m), "potentiometer.offset_m", potentiometer.offset_m,
-          "finite");
-  Require(std::isfinite(potentiometer.gain) && potentiometer.gain > 0, "potentiometer.gain",
-          potentiometer.gain, "finite and > 0");
+  std::vector<ParamIssue> issues;
+  ParamChecker c(issues);
+  CheckLegControllerParams(c, params);
+  c.Positive("period_s", period_s, "control period");
+  c.NonNegative("length_margin_m", length_margin_m, "length margin");
+  c.NonNegative("min_pressure_pa", min_pressure_pa, "pressure");
+  if (c.Finite("max_pressure_pa", max_pressure_pa) && !(max_pressure_pa > min_pressure_pa)) {
+    c.Fail("max_pressure_pa", "plausible pressure range is empty", FormatParam(max_pressure_pa),
+           "> min_pressure_pa (" + FormatParam(min_pressure_pa) + ")");
+  }
+  c.Positive("max_setpoint_speed_m_s", max_setpoint_speed_m_s, "speed");
+  c.Positive("max_setpoint_acceleration_m_s2", max_setpoint_acceleration_m_s2, "acceleration");
+  c.NonNegative("max_correction_m", max_correction_m, "correction bound");
+  c.Positive("max_feedforward_force_n", max_feedforward_force_n, "feed-forward force bound");
+  c.Positive("max_feedforward_force_rate_n_s", max_feedforward_force_rate_n_s,
+             "feed-forward force rate bound");
+  CheckPotentiometerCalibrationParams(c, potentiometer, "potentiometer");
+  ThrowIfIssues(issues, "LegControllerConfig");
   MakeBsSmcConfig(*this).Validate();
   MakePiConfig(*this).Validate();
 }

@@ -1,5 +1,7 @@
 #include "hexa/core/leg_model.hpp"
 
+#include "hexa/core/param_checks.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -9,14 +11,6 @@
 
 namespace hexa {
 namespace {
-
-void Require(bool ok, const char* field, double value, const char* limit) {
-  if (!ok) {
-    std::ostringstream msg;
-    msg << field << " = " << value << " violates " << limit;
-    throw std::invalid_argument(msg.str());
-  }
-}
 
 bool IsFinite(const LegPneumaticState& s) {
   return std::isfinite(s.chamber1_pressure_pa) && std::isfinite(s.chamber2_pressure_pa) &&
@@ -40,59 +34,22 @@ const char* ToString(PlantStatus status) {
 }
 
 void LegModelParams::Validate() const {
-  Require(air.heat_ratio > 1.0, "air.heat_ratio", air.heat_ratio, "> 1");
-  Require(air.temperature_k > 0.0, "air.temperature_k", air.temperature_k, "> 0");
-  Require(air.gas_constant_j_kg_k > 0.0, "air.gas_constant_j_kg_k", air.gas_constant_j_kg_k,
-          "> 0");
-  Require(air.atmosphere_pressure_pa > 0.0, "air.atmosphere_pressure_pa",
-          air.atmosphere_pressure_pa, "> 0");
-  Require(air.supply_pressure_pa > air.atmosphere_pressure_pa, "air.supply_pressure_pa",
-          air.supply_pressure_pa, "> atmosphere_pressure_pa");
-  Require(cylinder.cap_area_m2 > 0.0, "cylinder.cap_area_m2", cylinder.cap_area_m2, "> 0");
-  Require(cylinder.annulus_area_m2 > 0.0, "cylinder.annulus_area_m2",
-          cylinder.annulus_area_m2, "> 0");
-  Require(cylinder.rod_area_m2 >= 0.0, "cylinder.rod_area_m2", cylinder.rod_area_m2, ">= 0");
-  Require(cylinder.stroke_m > 0.0, "cylinder.stroke_m", cylinder.stroke_m, "> 0");
-  Require(cylinder.dead_volume_m3 > 0.0, "cylinder.dead_volume_m3", cylinder.dead_volume_m3,
-          "> 0");
-  Require(cylinder.moving_mass_kg >= 0.0, "cylinder.moving_mass_kg", cylinder.moving_mass_kg,
-          ">= 0");
-  Require(cylinder.end_stop_stiffness_n_m > 0.0, "cylinder.end_stop_stiffness_n_m",
-          cylinder.end_stop_stiffness_n_m, "> 0");
-  Require(cylinder.end_stop_damping_n_s_m >= 0.0, "cylinder.end_stop_damping_n_s_m",
-          cylinder.end_stop_damping_n_s_m, ">= 0");
-  Require(valve.max_voltage_v > valve.min_voltage_v, "valve.max_voltage_v",
-          valve.max_voltage_v, "> min_voltage_v");
-  Require(valve.max_spool_m > 0.0, "valve.max_spool_m", valve.max_spool_m, "> 0");
-  Require(valve.max_orifice_area_m2 >= 0.0, "valve.max_orifice_area_m2",
-          valve.max_orifice_area_m2, ">= 0");
-  Require(valve.discharge_coefficient > 0.0 && valve.discharge_coefficient <= 1.0,
-          "valve.discharge_coefficient", valve.discharge_coefficient, "(0, 1]");
-  Require(valve.spool_time_constant_s > 0.0, "valve.spool_time_constant_s",
-          valve.spool_time_constant_s, "> 0");
-  for (const FrictionDirectionParams* d : {&friction.extend, &friction.retract}) {
-    Require(d->stribeck_velocity_m_s > 0.0, "friction.stribeck_velocity_m_s (magnitude)",
-            d->stribeck_velocity_m_s, "> 0");
-    Require(d->viscous_n_s_m >= 0.0, "friction.viscous_n_s_m (magnitude)", d->viscous_n_s_m,
-            ">= 0");
-    Require(d->coulomb_n > 0.0, "friction.coulomb_n (magnitude)", d->coulomb_n, "> 0");
-    Require(d->static_n >= d->coulomb_n, "friction.static_n", d->static_n, ">= coulomb_n");
+  // The rig structs with the rules the rig file is checked with (param_checks.hpp); the
+  // polytropic coefficients here are already scaled by the disturbance profile.
+  std::vector<ParamIssue> issues;
+  ParamChecker c(issues);
+  CheckAirParams(c, air);
+  CheckCylinderParams(c, cylinder);
+  CheckValveParams(c, valve);
+  CheckFrictionParams(c, friction);
+  CheckPolytropicSet(c, polytropic);
+  if (!(laminar_pressure_ratio > 0.0 && laminar_pressure_ratio <= 1.0)) {
+    c.Fail("laminar_pressure_ratio", "laminar band edge (pressure ratio)",
+           FormatParam(laminar_pressure_ratio), "(0, 1]");
   }
-  Require(friction.bristle_stiffness_n_m > 0.0, "friction.bristle_stiffness_n_m",
-          friction.bristle_stiffness_n_m, "> 0");
-  Require(friction.bristle_damping_n_s_m >= 0.0, "friction.bristle_damping_n_s_m",
-          friction.bristle_damping_n_s_m, ">= 0");
-  for (const PolytropicParams* p : {&polytropic.extend, &polytropic.retract}) {
-    Require(p->inflow > 0.0, "polytropic.inflow", p->inflow, "> 0");
-    Require(p->outflow > 0.0, "polytropic.outflow", p->outflow, "> 0");
-    Require(p->volume > 0.0, "polytropic.volume", p->volume, "> 0");
-  }
-  Require(laminar_pressure_ratio > 0.0 && laminar_pressure_ratio <= 1.0,
-          "laminar_pressure_ratio", laminar_pressure_ratio, "(0, 1]");
-  Require(lugre_damping_fade_velocity_m_s > 0.0, "lugre_damping_fade_velocity_m_s",
-          lugre_damping_fade_velocity_m_s, "> 0");
-  Require(polytropic_blend_velocity_m_s > 0.0, "polytropic_blend_velocity_m_s",
-          polytropic_blend_velocity_m_s, "> 0");
+  c.Positive("lugre_damping_fade_velocity_m_s", lugre_damping_fade_velocity_m_s, "fade velocity");
+  c.Positive("polytropic_blend_velocity_m_s", polytropic_blend_velocity_m_s, "blend velocity");
+  ThrowIfIssues(issues, "LegModelParams");
 }
 
 LegModelParams MakeLegModelParams(const RigParams& rig, double friction_scale,
@@ -181,7 +138,7 @@ void LegModel::Evaluate(const LegPneumaticState& s, double x, double v,
     const double dvol2 = -cyl.annulus_area_m2 * v;
 
     // Eq 4-6, 43 and Tables 4, 5.
-    const double area = OrificeAreaM2(params_.valve, s.spool_m);
+    const double area = params_.chambers_sealed ? 0.0 : OrificeAreaM2(params_.valve, s.spool_m);
     const ChamberMassFlows flows =
         ValveMassFlows(orifice_, area, s.spool_m, supply_pressure_pa, pa, p1, p2);
     forces.chamber1_mass_flow_kg_s = flows.chamber1_kg_s;
@@ -215,9 +172,20 @@ void LegModel::Evaluate(const LegPneumaticState& s, double x, double v,
   forces.friction_dissipation_w = lugre.dissipation_w;
 }
 
+double LegModel::BristleRate1S(double v) const {
+  if (!params_.friction_enabled || params_.friction_model != LegModelParams::FrictionModel::kLugre) {
+    return 0.0;
+  }
+  const bool extend = v >= 0.0;
+  const FrictionDirectionParams& d = extend ? params_.friction.extend : params_.friction.retract;
+  const double qs = v * (extend ? inv_stribeck_extend_s_m_ : inv_stribeck_retract_s_m_);
+  const double g = d.coulomb_n + (d.static_n - d.coulomb_n) * std::exp(-qs * qs);
+  return params_.friction.bristle_stiffness_n_m * std::abs(v) / g;
+}
+
 double LegModel::PressureStiffnessBound1S(const LegPneumaticState& s, double x, double v,
                                           double spool_target_m, double horizon_s) const {
-  if (params_.chambers_vented) return 0.0;
+  if (params_.chambers_vented || params_.chambers_sealed) return 0.0;
   const CylinderParams& cyl = params_.cylinder;
   // The spool moves monotonically towards its target (first-order lag): the largest
   // opening over the horizon is the larger of the two.
@@ -264,12 +232,16 @@ double LegModel::StoredEnergyJ(const LegPneumaticState& s, double x) const {
 
 void SingleLegConfig::Validate() const {
   leg.Validate();
-  Require(load_mass_kg >= 0.0, "load_mass_kg", load_mass_kg, ">= 0");
-  Require(load_mass_kg + leg.cylinder.moving_mass_kg > 0.0, "load_mass_kg + moving_mass_kg",
-          load_mass_kg + leg.cylinder.moving_mass_kg, "> 0");
-  Require(gravity_m_s2 >= 0.0, "gravity_m_s2", gravity_m_s2, ">= 0");
-  Require(integrator_step_s > 0.0 && integrator_step_s <= 1.0e-3, "integrator_step_s",
-          integrator_step_s, "(0, 1e-3]");
+  std::vector<ParamIssue> issues;
+  ParamChecker c(issues);
+  c.NonNegative("load_mass_kg", load_mass_kg, "load mass");
+  c.NonNegative("gravity_m_s2", gravity_m_s2, "gravity");
+  if (c.Finite("integrator_step_s", integrator_step_s) &&
+      !(integrator_step_s > 0.0 && integrator_step_s <= kPlantTick_s)) {
+    c.Fail("integrator_step_s", "integrator step must be positive and at most the 1 ms tick",
+           FormatParam(integrator_step_s), "(0, 0.001]");
+  }
+  ThrowIfIssues(issues, "SingleLegConfig");
 }
 
 SingleLegPlant::SingleLegPlant(const SingleLegConfig& config) : config_(config) {

@@ -6,25 +6,16 @@
 #include <stdexcept>
 
 #include "hexa/core/kinematics.hpp"
+#include "hexa/core/param_checks.hpp"
 
 namespace hexa {
 
 OuterLoop::OuterLoop(const GeometryParams& geometry, const OuterLoopParams& params)
     : geometry_(geometry), params_(params) {
-  if (!(params_.gain >= 0.0) || !std::isfinite(params_.gain)) {
-    throw std::invalid_argument("OuterLoopParams.gain = " + std::to_string(params_.gain) +
-                                " must be finite and >= 0");
-  }
-  if (!(params_.translation_gain_scale >= 0.0) || !std::isfinite(params_.translation_gain_scale)) {
-    throw std::invalid_argument("OuterLoopParams.translation_gain_scale = " +
-                                std::to_string(params_.translation_gain_scale) +
-                                " must be finite and >= 0");
-  }
-  if (!(params_.max_correction_m >= 0.0) || !std::isfinite(params_.max_correction_m)) {
-    throw std::invalid_argument("OuterLoopParams.max_correction_m = " +
-                                std::to_string(params_.max_correction_m) +
-                                " must be finite and >= 0");
-  }
+  std::vector<ParamIssue> issues;
+  ParamChecker c(issues);
+  CheckOuterLoopParams(c, params_, "outer_loop");
+  ThrowIfIssues(issues, "OuterLoop");
 }
 
 void OuterLoop::Update(const OuterLoopInput& input, OuterLoopOutput& output) noexcept {

@@ -1,42 +1,20 @@
 #include "hexa/core/pi_controller.hpp"
 
+#include "hexa/core/param_checks.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
 namespace hexa {
-namespace {
-
-void Require(bool ok, const char* field, double value, const char* limit) {
-  if (ok) return;
-  std::ostringstream m;
-  m << "pi: " << field << " = " << value << " must be " << limit;
-  throw std::invalid_argument(m.str());
-}
-
-}  // namespace
-
 void PiConfig::Validate() const {
-  Require(std::isfinite(params.proportional_v_m) && params.proportional_v_m >= 0, "proportional_v_m",
-          params.proportional_v_m, "finite and >= 0");
-  Require(std::isfinite(params.integral_v_m_s) && params.integral_v_m_s >= 0, "integral_v_m_s",
-          params.integral_v_m_s, "finite and >= 0");
-  Require(std::isfinite(params.integrator_limit_v) && params.integrator_limit_v >= 0,
-          "integrator_limit_v", params.integrator_limit_v, "finite and >= 0");
-  Require(std::isfinite(params.velocity_feedforward_v_s_m) && params.velocity_feedforward_v_s_m >= 0,
-          "velocity_feedforward_v_s_m", params.velocity_feedforward_v_s_m, "finite and >= 0");
-  Require(std::isfinite(params.rate_damping_v_s_m) && params.rate_damping_v_s_m >= 0,
-          "rate_damping_v_s_m", params.rate_damping_v_s_m, "finite and >= 0");
-  Require(std::isfinite(params.force_feedforward_v_n) && params.force_feedforward_v_n >= 0,
-          "force_feedforward_v_n", params.force_feedforward_v_n, "finite and >= 0");
-  Require(std::isfinite(period_s) && period_s > 0, "period_s", period_s, "finite and > 0");
-  Require(std::isfinite(valve.spool_gain_m_v) && valve.spool_gain_m_v != 0, "valve.spool_gain_m_v",
-          valve.spool_gain_m_v, "finite and != 0");
-  Require(valve.max_voltage_v > valve.min_voltage_v, "valve.max_voltage_v", valve.max_voltage_v,
-          "> valve.min_voltage_v");
-  Require(valve.null_voltage_v >= valve.min_voltage_v && valve.null_voltage_v <= valve.max_voltage_v,
-          "valve.null_voltage_v", valve.null_voltage_v, "inside [min_voltage_v, max_voltage_v]");
+  std::vector<ParamIssue> issues;
+  ParamChecker c(issues);
+  CheckPiParams(c, params);
+  CheckValveParams(c, valve);
+  c.Positive("period_s", period_s, "control period");
+  ThrowIfIssues(issues, "PiConfig");
 }
 
 namespace {

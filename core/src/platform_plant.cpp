@@ -10,6 +10,8 @@
 #include <Eigen/Cholesky>
 
 #include "hexa/core/kinematics.hpp"
+#include "hexa/core/param_checks.hpp"
+#include "hexa/core/physical_limits.hpp"
 
 namespace hexa {
 namespace {
@@ -19,14 +21,6 @@ constexpr double kPi = 3.14159265358979323846;
 // State layout: p (0..2), q wxyz (3..6), v (7..9), w (10..12), then per leg
 // P1, P2, spool, bristle (13 + 4 i ...).
 constexpr int kP = 0, kQ = 3, kV = 7, kW = 10, kLeg0 = 13;
-
-void Require(bool ok, const char* field, double value, const char* limit) {
-  if (!ok) {
-    std::ostringstream msg;
-    msg << "PlatformPlantConfig." << field << " = " << value << " violates " << limit;
-    throw std::invalid_argument(msg.str());
-  }
-}
 
 Eigen::Vector3d UniformInBall(std::mt19937_64& rng, double radius) {
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
@@ -59,31 +53,31 @@ DisturbanceProfile MakeIdealDisturbanceProfile() {
 DisturbanceProfile MakeRealisticDisturbanceProfile() { return DisturbanceProfile{}; }
 
 void PlatformPlantConfig::Validate() const {
-  Require(integrator_step_s > 0.0 && integrator_step_s <= 1.0e-3, "integrator_step_s",
-          integrator_step_s, "(0, 1e-3]");
-  Require(stiffness_step_limit > 0.0 && stiffness_step_limit <= 2.5, "stiffness_step_limit",
-          stiffness_step_limit, "(0, 2.5]");
-  Require(disturbance.friction_scale > 0.0, "disturbance.friction_scale",
-          disturbance.friction_scale, "> 0");
-  Require(disturbance.polytropic_scale > 0.0, "disturbance.polytropic_scale",
-          disturbance.polytropic_scale, "> 0");
-  Require(disturbance.payload_scale > 0.0, "disturbance.payload_scale",
-          disturbance.payload_scale, "> 0");
-  Require(disturbance.supply_ripple_amplitude_pa >= 0.0 &&
-              disturbance.supply_ripple_amplitude_pa <
-                  rig.air.supply_pressure_pa - rig.air.atmosphere_pressure_pa,
-          "disturbance.supply_ripple_amplitude_pa", disturbance.supply_ripple_amplitude_pa,
-          "[0, P_s - P_a)");
-  Require(disturbance.joint_position_error_max_m >= 0.0,
-          "disturbance.joint_position_error_max_m", disturbance.joint_position_error_max_m,
-          ">= 0");
-  Require(rig.platform.mass_kg > 0.0, "rig.platform.mass_kg", rig.platform.mass_kg, "> 0");
-  Require(rig.platform.inertia_diag_kg_m2.minCoeff() > 0.0, "rig.platform.inertia_diag_kg_m2",
-          rig.platform.inertia_diag_kg_m2.minCoeff(), "> 0");
-  Require(rig.sensors.imu_period_s > 0.0, "rig.sensors.imu_period_s", rig.sensors.imu_period_s,
-          "> 0");
-  Require(rig.sensors.length_bits >= 1 && rig.sensors.length_bits <= 24,
-          "rig.sensors.length_bits", rig.sensors.length_bits, "[1, 24]");
+  // The rig and the profile with the rules the rig file is checked with, and the physical
+  // limits without which the plant's state would not stay finite: ideal-gas supply, legs able
+  // to hold the platform, spool lag and pressure ODE against this integrator step
+  // (physical_limits.hpp; the mechanical-mode bound is the rig file's, at the nominal step).
+  std::vector<ParamIssue> issues;
+  ParamChecker c(issues);
+  if (c.Finite("integrator_step_s", integrator_step_s) &&
+      !(integrator_step_s > 0.0 && integrator_step_s <= kPlantTick_s)) {
+    c.Fail("integrator_step_s", "integrator step must be positive and at most the 1 ms tick",
+           FormatParam(integrator_step_s), "(0, 0.001]");
+  }
+  if (c.Finite("stiffness_step_limit", stiffness_step_limit) &&
+      !(stiffness_step_limit > 0.0 && stiffness_step_limit <= 2.5)) {
+    c.Fail("stiffness_step_limit",
+           "step x rate bound of the step control (RK4 / SSPRK3 are stable to 2.78 / 2.51)",
+           FormatParam(stiffness_step_limit), "(0, 2.5]");
+  }
+  CheckRigParams(c, rig);
+  CheckDisturbanceProfile(c, disturbance, "disturbance");
+  CheckProfileAgainstRig(c, rig, disturbance, "disturbance");
+  if (issues.empty()) {
+    CheckPhysicalLimits(c, DerivePlantLimits(rig, {{"plant", disturbance}}, integrator_step_s,
+                                             /*include_mechanical_modes=*/false));
+  }
+  ThrowIfIssues(issues, "PlatformPlantConfig");
   LegModelParams leg = MakeLegModelParams(rig, disturbance.friction_scale,
                                           disturbance.polytropic_scale);
   leg.laminar_pressure_ratio = laminar_pressure_ratio;
@@ -114,6 +108,7 @@ PlatformPlant::PlatformPlant(const PlatformPlantConfig& config)
   leg.laminar_pressure_ratio = config_.laminar_pressure_ratio;
   leg.lugre_damping_fade_velocity_m_s = config_.lugre_damping_fade_velocity_m_s;
   leg.friction_enabled = config_.friction_enabled;
+  leg.chambers_sealed = config_.chambers_sealed;
   leg_model_ = LegModel(leg);
 
   // The plant's true geometry; the controllers keep the nominal one.
@@ -419,8 +414,9 @@ int PlatformPlant::SubstepCount(double dt_s) const {
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     const double xp = t.piston_position_m[i];
     const double v = t.piston_velocity_m_s[i];
-    const double lambda = leg_model_.PressureStiffnessBound1S(t.legs[i], xp, v,
-                                                              spool_target_m_[i], dt_s);
+    const double lambda = std::max(
+        leg_model_.PressureStiffnessBound1S(t.legs[i], xp, v, spool_target_m_[i], dt_s),
+        leg_model_.BristleRate1S(v));
     if (lambda * h_max > config_.stiffness_step_limit) {
       h_max = config_.stiffness_step_limit / lambda;
     }

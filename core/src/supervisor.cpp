@@ -1,23 +1,17 @@
 // Task-space supervisor state machine (see supervisor.hpp).
 #include "hexa/core/supervisor.hpp"
 
+#include "hexa/core/param_checks.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
-#include "hexa/core/csv_trajectory.hpp"
 
 namespace hexa {
 namespace {
 
 constexpr double kStartPoseTolerance = 1e-6;  // m and rad: a trajectory must start at rest_
-
-void Require(bool ok, const char* field, double value, const char* rule) {
-  if (!ok) {
-    throw std::invalid_argument(std::string("SupervisorParams.") + field + " = " +
-                                std::to_string(value) + ": " + rule);
-  }
-}
 
 void CopyDetail(std::array<char, 160>& dst, const char* src) {
   std::snprintf(dst.data(), dst.size(), "%s", src);
@@ -90,24 +84,21 @@ Supervisor::Supervisor(const RigParams& rig, const SupervisorParams& params,
       potentiometer_(potentiometer),
       home_(HomePoseVector(rig.geometry.home_position_m)),
       home_motion_(std::make_shared<const ConstantMotion>(home_)) {
-  Require(params.period_s > 0.0, "period_s", params.period_s, "must be > 0");
-  Require(params.blend_duration_s > 0.0, "blend_duration_s", params.blend_duration_s,
-          "must be > 0 (a zero blend would step the setpoints)");
-  Require(params.stop_duration_s > 0.0, "stop_duration_s", params.stop_duration_s,
-          "must be > 0 (a zero stop would step the velocity)");
-  Require(params.max_consecutive_deadline_misses >= 0, "max_consecutive_deadline_misses",
-          params.max_consecutive_deadline_misses, "must be >= 0");
-  Require(params.workspace_radius_m > 0.0, "workspace_radius_m", params.workspace_radius_m,
-          "must be > 0");
-  Require(params.workspace_max_rotation_rad > 0.0, "workspace_max_rotation_rad",
-          params.workspace_max_rotation_rad, "must be > 0");
-  Require(envelope_.max_length_m > envelope_.min_length_m, "stroke_margin_m",
-          params.stroke_margin_m, "leaves no usable stroke");
-  for (const auto& pot : potentiometer_) {
-    Require(std::isfinite(pot.offset_m) && std::isfinite(pot.gain) && pot.gain > 0.0,
-            "potentiometer.gain", pot.gain, "must be finite and > 0 (offset finite)");
+  std::vector<ParamIssue> issues;
+  ParamChecker c(issues);
+  CheckSupervisorParams(c, params);
+  if (!(envelope_.max_length_m > envelope_.min_length_m)) {
+    c.Fail("supervisor.stroke_margin_m", "stroke margin must leave a usable stroke",
+           FormatParam(params.stroke_margin_m),
+           "< cylinder.stroke_m / 2 (" + FormatParam(0.5 * rig.cylinder.stroke_m) + ")");
+  }
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    CheckPotentiometerCalibrationParams(c, potentiometer_[i],
+                                        "potentiometer[leg=" + std::to_string(i + 1) + "]");
+    const PotentiometerCalibrationParams& pot = potentiometer_[i];
     potentiometer_calibrated_ = potentiometer_calibrated_ || pot.offset_m != 0.0 || pot.gain != 1.0;
   }
+  ThrowIfIssues(issues, "Supervisor");
   rest_ = home_;
   last_desired_.pose = PoseFromVector(home_);
   last_desired_.vector.q = home_;
@@ -126,15 +117,15 @@ StartRequest Supervisor::PreparePaperStart(PaperMotion motion, int periods,
       MakePaperTrajectory(motion, rest_, home_, timing(), periods, amplitude_scale));
 }
 
-StartRequest Supervisor::PrepareCsvStart(const std::string& csv_path) const {
-  try {
-    return PrepareStart(MakeCsvTrajectory(LoadCsvTrajectory(csv_path), rest_, home_, timing()));
-  } catch (const CsvTrajectoryError& error) {
-    StartRequest request;
-    request.feasibility.feasible = false;
-    request.feasibility.message = error.what();
-    return request;
-  }
+StartRequest Supervisor::PrepareRowsStart(std::shared_ptr<const CsvMotion> rows) const {
+  return PrepareStart(MakeCsvTrajectory(std::move(rows), rest_, home_, timing()));
+}
+
+StartRequest Supervisor::RejectedStart(std::string message) {
+  StartRequest request;
+  request.feasibility.feasible = false;
+  request.feasibility.message = std::move(message);
+  return request;
 }
 
 void Supervisor::StartTrajectory(const Trajectory& trajectory, double time_s) {

@@ -8,7 +8,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <map>
+#include <optional>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
@@ -248,9 +250,10 @@ int main(int argc, char** argv) {
     const double at = o.fault_at.empty() ? -1 : std::strtod(o.fault_at.c_str(), &end);
     if (leg.size() != 1 || leg[0] < '1' || leg[0] > '6' ||
         std::find(kKinds.begin(), kKinds.end(), o.fault_kind) == kKinds.end() ||
-        end == nullptr || *end != '\0' || !(at >= 0)) {
+        end == nullptr || *end != '\0' || !(at >= 0) || !std::isfinite(at)) {
       std::fprintf(stderr, "error: --fault '%s': expected leg:kind:time_s with leg 1..6, kind "
-                   "one of crash hang slow garbage silence, time_s >= 0 (e.g. 3:crash:2.0)\n",
+                   "one of crash hang slow garbage silence, time_s a finite number >= 0 "
+                   "(e.g. 3:crash:2.0)\n",
                    f.c_str());
       return 2;
     }
@@ -387,6 +390,7 @@ int main(int argc, char** argv) {
   bool completed = false;
   bool failed = false;
   std::vector<hexa::deploy::ChildExit> exits;  // every child's exit, with its CPU time
+  bool recorder_clean = false;  // the recorder exited 0 after closing its file
   while (!completed && !failed) {
     auto ev = group.WaitEvent(std::chrono::milliseconds(1000));
     const double elapsed_s =
@@ -426,32 +430,81 @@ int main(int argc, char** argv) {
   // Stop order: plant first (the clock), then controllers, recorder last so that it
   // records everything the others published.
   bool clean = completed;
+  auto report_exit = [&](const hexa::deploy::ChildExit& e) {
+    exits.push_back(e);
+    const bool ok = e.signal == 0 && e.exit_code == 0;
+    if (!ok) clean = false;
+    if (e.name == "recorder") recorder_clean = ok;
+    (ok ? log->info("{}", e.Describe()) : log->error("{}", e.Describe()));
+  };
   auto stop = [&](const std::string& name) {
     if (!group.Running(name)) return;
-    auto e = group.Stop(name, std::chrono::milliseconds(5000));
-    if (!e) return;
-    exits.push_back(*e);
-    const bool ok = e->signal == 0 && e->exit_code == 0;
-    if (!ok) clean = false;
-    (ok ? log->info("{}", e->Describe()) : log->error("{}", e->Describe()));
+    if (auto e = group.Stop(name, std::chrono::milliseconds(5000))) report_exit(*e);
   };
-  stop("plant");
-  stop("supervisor");
-  for (const auto& name : group.RunningNames())
-    if (name != "recorder" && name != "bridge") stop(name);
-  stop("recorder");
-  stop("bridge");
+  if (o.recorder && !group.Running("recorder")) {
+    // The recorder died: there is nothing left to record, so the others stop together. One
+    // by one took ~10 s: each process needs about a second per DDS writer to delete it while
+    // its reliable samples to the dead recorder stay unacknowledged (Cyclone lingers on them).
+    log->warn("the recorder is gone: stopping the other processes together");
+    for (const auto& e : group.StopTogether(group.RunningNames(), std::chrono::milliseconds(5000)))
+      report_exit(e);
+  } else {
+    stop("plant");
+    stop("supervisor");
+    for (const auto& name : group.RunningNames())
+      if (name != "recorder" && name != "bridge") stop(name);
+    stop("recorder");
+    stop("bridge");
+  }
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   log->info("all processes stopped; session wall time {:.1f} s", wall_s);
   WriteProcessTable(o.out_dir, exits, wall_s, *log);
 
+  // Runs a short tool (recover, report) to its end; nullopt if it could not start or this
+  // process was interrupted.
+  auto run_tool = [&](const ChildSpec& spec) -> std::optional<hexa::deploy::ChildExit> {
+    std::string err;
+    if (group.Start(spec, err) < 0) {
+      log->error("cannot start {}: {}", spec.name, err);
+      return std::nullopt;
+    }
+    while (true) {
+      auto ev = group.WaitEvent(std::chrono::milliseconds(600000));
+      if (ev.kind == ProcessGroup::Event::kChildExited) return ev.exit;
+      if (ev.kind != ProcessGroup::Event::kTimeout) {
+        group.Stop(spec.name, std::chrono::milliseconds(2000));
+        return std::nullopt;
+      }
+    }
+  };
   // The report is written whenever there is a recording: after a fault it shows what
-  // happened. The session still exits non-zero unless it completed.
-  if (o.recorder && std::filesystem::exists(mcap)) {
+  // happened. The session still exits non-zero unless it completed. A recording whose
+  // recorder did not close it (killed, crashed) lacks its summary: it is recovered first
+  // (hexa_recorder recover) and the report is made from the recovered copy.
+  std::string recording = mcap;
+  if (o.recorder && std::filesystem::exists(mcap) && !recorder_clean) {
+    const std::string recovered = o.out_dir + "/session.recovered.mcap";
+    ChildSpec rc;
+    rc.name = "recover";
+    rc.argv = {bin + "/services/recorder/hexa_recorder", "recover", mcap, "--output", recovered};
+    rc.env = env;
+    rc.log_path = o.out_dir + "/recover.console.log";
+    const auto e = run_tool(rc);
+    if (e && e->signal == 0 && e->exit_code == 0) {
+      log->warn("the recorder did not close {}: recovered into {}:\n{}", mcap, recovered,
+                TailOf(rc.log_path, 15));
+      recording = recovered;
+    } else {
+      log->error("the recorder did not close {} and recovering it failed{}:\n{}", mcap,
+                 e ? ": " + e->Describe() : std::string(), TailOf(rc.log_path, 15));
+      clean = false;
+    }
+  }
+  if (o.recorder && std::filesystem::exists(recording)) {
     ChildSpec r;
     r.name = "report";
-    r.argv = {bin + "/services/recorder/hexa_recorder", "report", mcap, "--out", o.out_dir,
+    r.argv = {bin + "/services/recorder/hexa_recorder", "report", recording, "--out", o.out_dir,
               "--meta", "trajectory=" + o.trajectory, "--meta", "controller=" + o.controller,
               "--meta", "profile=" + o.profile, "--meta", "mode=" + o.mode,
               "--meta", "seed=" + std::to_string(o.seed),
@@ -466,28 +519,16 @@ int main(int argc, char** argv) {
     if (o.fault_leg != 0)
       r.argv.insert(r.argv.end(), {"--meta", "fault=leg " + std::to_string(o.fault_leg) + " " +
                                                  o.fault_kind + " at " + o.fault_at + " s"});
+    if (recording != mcap) r.argv.insert(r.argv.end(), {"--meta", "recording=recovered"});
     r.env = env;
     r.log_path = o.out_dir + "/report.console.log";
-    std::string err;
-    if (group.Start(r, err) < 0) {
-      log->error("cannot start the report: {}", err);
+    const auto e = run_tool(r);
+    if (!e || e->signal != 0 || e->exit_code != 0) {
+      log->error("report failed: {}\n{}", e ? e->Describe() : std::string("not run"),
+                 TailOf(r.log_path, 15));
       clean = false;
-    } else {
-      while (true) {
-        auto ev = group.WaitEvent(std::chrono::milliseconds(600000));
-        if (ev.kind == ProcessGroup::Event::kChildExited) {
-          if (ev.exit.signal != 0 || ev.exit.exit_code != 0) {
-            log->error("report failed: {}\n{}", ev.exit.Describe(),
-                       TailOf(r.log_path, 15));
-            clean = false;
-          }
-          break;
-        }
-        if (ev.kind != ProcessGroup::Event::kTimeout) {
-          clean = false;
-          break;
-        }
-      }
+    }
+    if (e) {
       std::ifstream md(o.out_dir + "/report.md");
       if (!completed) md.setstate(std::ios::failbit);  // the log says why; keep the tail short
       if (md) std::printf("\n%s\n", std::string(std::istreambuf_iterator<char>(md), {}).c_str());

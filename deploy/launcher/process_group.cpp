@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <map>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -153,27 +154,9 @@ ProcessGroup::Event ProcessGroup::WaitEvent(std::chrono::milliseconds timeout) {
 
 std::optional<ChildExit> ProcessGroup::Stop(const std::string& name,
                                             std::chrono::milliseconds grace) {
-  auto it = std::find_if(running_.begin(), running_.end(),
-                         [&](const Child& c) { return c.spec.name == name; });
-  if (it == running_.end()) return std::nullopt;
-  const pid_t pid = it->pid;
-  kill(pid, SIGTERM);
-  const auto deadline = std::chrono::steady_clock::now() + grace;
-  sigset_t chld;
-  sigemptyset(&chld);
-  sigaddset(&chld, SIGCHLD);
-  while (true) {
-    if (auto e = Reap(pid, false)) return e;
-    const auto now = std::chrono::steady_clock::now();
-    if (now >= deadline) break;
-    const auto left = std::chrono::duration_cast<std::chrono::nanoseconds>(deadline - now);
-    timespec ts{static_cast<time_t>(left.count() / 1000000000),
-                static_cast<long>(left.count() % 1000000000)};
-    sigtimedwait(&chld, nullptr, &ts);  // wakes on any child's exit; SIGINT stays pending
-  }
-  kill(-pid, SIGKILL);  // the whole process group of the child
-  kill(pid, SIGKILL);
-  return Reap(pid, true);
+  std::vector<ChildExit> exits = StopTogether({name}, grace);
+  if (exits.empty()) return std::nullopt;
+  return exits.front();
 }
 
 std::vector<ChildExit> ProcessGroup::StopAll(std::chrono::milliseconds grace) {
@@ -181,6 +164,47 @@ std::vector<ChildExit> ProcessGroup::StopAll(std::chrono::milliseconds grace) {
   while (!running_.empty()) {
     const std::string name = running_.back().spec.name;
     if (auto e = Stop(name, grace)) exits.push_back(*e);
+  }
+  return exits;
+}
+
+std::vector<ChildExit> ProcessGroup::StopTogether(const std::vector<std::string>& names,
+                                                  std::chrono::milliseconds grace) {
+  std::vector<pid_t> pids;
+  for (const auto& name : names) {
+    auto it = std::find_if(running_.begin(), running_.end(),
+                           [&](const Child& c) { return c.spec.name == name; });
+    if (it == running_.end()) continue;
+    pids.push_back(it->pid);
+    kill(it->pid, SIGTERM);
+  }
+  std::map<pid_t, ChildExit> done;
+  const auto deadline = std::chrono::steady_clock::now() + grace;
+  sigset_t chld;
+  sigemptyset(&chld);
+  sigaddset(&chld, SIGCHLD);
+  while (done.size() < pids.size()) {
+    for (pid_t pid : pids) {
+      if (done.count(pid) == 0) {
+        if (auto e = Reap(pid, false)) done.emplace(pid, *e);
+      }
+    }
+    if (done.size() == pids.size()) break;
+    const auto now = std::chrono::steady_clock::now();
+    if (now >= deadline) break;
+    const auto left = std::chrono::duration_cast<std::chrono::nanoseconds>(deadline - now);
+    timespec ts{static_cast<time_t>(left.count() / 1000000000),
+                static_cast<long>(left.count() % 1000000000)};
+    sigtimedwait(&chld, nullptr, &ts);  // wakes on any child's exit; SIGINT stays pending
+  }
+  std::vector<ChildExit> exits;
+  for (pid_t pid : pids) {
+    if (done.count(pid) == 0) {
+      kill(-pid, SIGKILL);
+      kill(pid, SIGKILL);
+      if (auto e = Reap(pid, true)) done.emplace(pid, *e);
+    }
+    if (done.count(pid)) exits.push_back(done.at(pid));
   }
   return exits;
 }

@@ -57,6 +57,11 @@ class ProcessGroup {
   std::optional<ChildExit> Stop(const std::string& name, std::chrono::milliseconds grace);
   // Stops every running child in reverse start order.
   std::vector<ChildExit> StopAll(std::chrono::milliseconds grace);
+  // SIGTERM to every named running child at once, one shared `grace`, then SIGKILL to those
+  // still running: the stop takes as long as the slowest child, not the sum. Exits in the
+  // order the names are given (names not running are skipped).
+  std::vector<ChildExit> StopTogether(const std::vector<std::string>& names,
+                                      std::chrono::milliseconds grace);
 
   bool Running(const std::string& name) const;
   std::vector<std::string> RunningNames() const;

@@ -8,6 +8,7 @@
 #include "hexa/services/cli.hpp"
 #include "hexa/services/logging.hpp"
 #include "hexa/services/node.hpp"
+#include "hexa/services/text.hpp"
 
 int main(int argc, char** argv) {
   hexa::cli::Parser cli("hexa_operator",
@@ -18,6 +19,7 @@ int main(int argc, char** argv) {
   cli.AddOption("trajectory", "name|file.csv", "for start: x y z roll pitch yaw combined or CSV",
                 "combined");
   cli.AddOption("wait", "s", "how long to wait for the supervisor to match", "5");
+  cli.AllowPositional("start|stop|reset|home|shutdown", 1);
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
   const auto domain = cli.GetInt("domain", 0, 230);
@@ -39,6 +41,16 @@ int main(int argc, char** argv) {
                  what.c_str());
     return 2;
   }
+  // A CSV path must reach the supervisor exactly: refuse what the wire cannot carry unchanged
+  // (OperatorCommand.csv_path is an IDL string<256>, recorded as a proto3 string: UTF-8).
+  const std::string traj = cli.Get("trajectory");
+  if (!hexa::text::IsClean(traj, sizeof(cmd.csv_path) - 1)) {
+    std::fprintf(stderr,
+                 "error: --trajectory '%s': a CSV path must be valid UTF-8 without control "
+                 "characters and at most %zu bytes (it is %zu bytes)\n",
+                 hexa::text::Excerpt(traj).c_str(), sizeof(cmd.csv_path) - 1, traj.size());
+    return 2;
+  }
   auto log = hexa::logging::Init("operator");
   try {
     std::optional<std::string> dds;
@@ -47,7 +59,6 @@ int main(int argc, char** argv) {
     hexa::comm::Participant participant(static_cast<dds_domainid_t>(*domain));
     hexa::comm::Topic<hexa_msg_OperatorCommand> topic(participant);
     hexa::comm::Writer<hexa_msg_OperatorCommand> writer(participant, topic);
-    const std::string traj = cli.Get("trajectory");
     const bool is_named = traj == "x" || traj == "y" || traj == "z" || traj == "roll" ||
                           traj == "pitch" || traj == "yaw" || traj == "combined";
     hexa::node::CopyBounded(cmd.trajectory, is_named ? traj.c_str() : "csv");

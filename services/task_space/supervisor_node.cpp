@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "hexa/config/csv_trajectory.hpp"
+
 namespace hexa::task_space {
 namespace {
 
@@ -153,14 +155,23 @@ bool SupervisorNode::TakeImu(bool& repeated) {
 
 bool SupervisorNode::PrepareStart(const std::string& trajectory, int periods) {
   PaperMotion motion;
-  StartRequest request =
-      trajectory == "calibration"
-          // Kinematic calibration poses (issue 14, core/calibration.hpp), record with --tracker.
-          ? supervisor_.PrepareStart(MakeCalibrationTrajectory(
-                supervisor_.rig(), supervisor_.rest_xyz_rpy(), supervisor_.home_xyz_rpy(),
-                supervisor_.timing(), CalibrationProcedureParams{}))
-      : ParsePaperMotion(trajectory, motion) ? supervisor_.PreparePaperStart(motion, periods)
-                                             : supervisor_.PrepareCsvStart(trajectory);
+  StartRequest request;
+  if (trajectory == "calibration") {
+    // Kinematic calibration poses (issue 14, core/calibration.hpp), record with --tracker.
+    request = supervisor_.PrepareStart(MakeCalibrationTrajectory(
+        supervisor_.rig(), supervisor_.rest_xyz_rpy(), supervisor_.home_xyz_rpy(),
+        supervisor_.timing(), CalibrationProcedureParams{}));
+  } else if (ParsePaperMotion(trajectory, motion)) {
+    request = supervisor_.PreparePaperStart(motion, periods);
+  } else {
+    // The file is read and validated here (config/), the core gets the rows; a file that does
+    // not parse becomes a rejected start: HOLD with the parser's message, a FaultEvent, exit 5.
+    try {
+      request = supervisor_.PrepareRowsStart(config::LoadCsvTrajectory(trajectory));
+    } catch (const std::exception& e) {  // config::CsvTrajectoryError, or the core's checks
+      request = Supervisor::RejectedStart(e.what());
+    }
+  }
   if (!request.feasibility.feasible) {
     log_->error("trajectory '{}' rejected before any motion: {}", trajectory,
                 request.feasibility.message);

@@ -103,6 +103,17 @@ CASES = {
     "unknown_profile": replace(r"^default_profile:", 'default_profile: "realsitic"', "misspelt profile"),
     "duplicate_profile": replace(r'name: "ideal"', 'name: "realistic"', "profile defined twice"),
     "duplicate_leg_id": replace(r"id: 6", "id: 5", "leg 5 twice"),
+    # Physical limits (docs/config.md): each value passes the per-struct rules.
+    "supply_beyond_ideal_gas": replace(r"supply_pressure_pa:", "supply_pressure_pa: 5e6",
+                                       "50 bar: air is no longer an ideal gas"),
+    "platform_too_heavy": replace(r"mass_kg: 6", "mass_kg: 1e30", "legs cannot hold it"),
+    "spool_faster_than_step": replace(r"spool_time_constant_s:", "spool_time_constant_s: 1e-9",
+                                      "spool lag shorter than the plant's step"),
+    "lambda_beyond_valve_chain": replace(r"lambda_1_s:", "lambda_1_s: 1e12",
+                                         "sliding surface faster than the valve chain"),
+    "end_stop_too_stiff": replace(r"end_stop_stiffness_n_m:", "end_stop_stiffness_n_m: 1e9",
+                                  "end stop stiffer than the plant's step resolves"),
+    "heat_ratio_above_monatomic": replace(r"heat_ratio:", "heat_ratio: 1.8", "k above 5/3"),
 }
 
 

@@ -14,7 +14,10 @@
 
 #include "hexa/config/rig_config.hpp"
 #include "hexa/core/control_params.hpp"
+#include "hexa/core/leg_controller.hpp"
+#include "hexa/core/platform_plant.hpp"
 #include "hexa/core/rig.hpp"
+#include "hexa/core/supervisor.hpp"
 
 namespace {
 
@@ -338,6 +341,19 @@ const std::vector<BrokenCase> kBrokenCases = {
     {"duplicate_profile", "disturbance_profile[1].name", "'realistic' is defined twice (first at line",
      "\"realistic\"", "unique"},
     {"duplicate_leg_id", "geometry.leg[5].id", "leg 5 is defined twice", "5", "exactly once"},
+    // Physical limits (issue 12: each of these was accepted and broke the plant or the control).
+    {"supply_beyond_ideal_gas", "air.supply_pressure_pa", "ideal gas", "5020000 Pa",
+     "<= 3055565.012 Pa"},
+    {"platform_too_heavy", "platform.mass_kg", "the legs must hold the platform", "1e+30 kg",
+     "<= 34.39010948 kg"},
+    {"spool_faster_than_step", "valve.spool_time_constant_s", "spool lag", "1e-09 s",
+     ">= 0.0003333333333 s"},
+    {"lambda_beyond_valve_chain", "leg_controller.bssmc.lambda_1_s", "lambda tau < pi/2",
+     "1e+12 1/s", "<= 196.3495408 1/s"},
+    {"end_stop_too_stiff", "cylinder.end_stop_stiffness_n_m", "end-stop contact mode", "0.0005 s",
+     "<= 5.129139494e-05 s"},
+    {"heat_ratio_above_monatomic", "air.heat_ratio", "heat capacity ratio of a gas", "1.8",
+     "(1, 1.6667]"},
 };
 
 class BrokenFile : public ::testing::TestWithParam<BrokenCase> {};
@@ -484,6 +500,126 @@ TEST(RigConfigLines, EveryNumericFieldRemovedIsReportedAsMissingAtItsBlock) {
     EXPECT_EQ(issue.field.substr(issue.field.size() - name.size()), name) << r.error;
     EXPECT_NE(issue.message.find("'" + name + "' is missing"), std::string::npos) << r.error;
   }
+}
+
+// ---------------------------------------------------------------- one rule per parameter
+
+// Issue 12: core constructors and the rig file checked the same parameter against different
+// limits (air.heat_ratio: > 1 in the plant and the controller, (1, 5/3] in the file). Now both
+// call the same per-struct check: a value the file rejects, the core rejects too, naming the
+// same field and limit.
+struct Mutation {
+  const char* field;
+  const char* limit;
+  void (*apply)(SystemConfig&);
+};
+
+TEST(RigConfigValidate, CoreConstructorsApplyTheSameRuleAsTheRigFile) {
+  const std::vector<Mutation> mutations = {
+      {"air.heat_ratio", "(1, 1.6667]", [](SystemConfig& c) { c.rig.air.heat_ratio = 1.8; }},
+      {"polytropic.retract.volume", "[1, 2]", [](SystemConfig& c) { c.rig.polytropic.retract.volume = 2.5; }},
+      {"friction.extend.coulomb_n", "> 0", [](SystemConfig& c) {
+         c.rig.friction.extend.coulomb_n = 0.0;
+         c.rig.friction.extend.static_n = 10.0;
+       }},
+      {"valve.spool_time_constant_s", "> 0", [](SystemConfig& c) { c.rig.valve.spool_time_constant_s = 0.0; }},
+      {"cylinder.rod_area_m2", "> 0", [](SystemConfig& c) { c.rig.cylinder.rod_area_m2 = 0.0; }},
+  };
+  for (const Mutation& m : mutations) {
+    SystemConfig c = DefaultsInCode();
+    m.apply(c);
+    const auto issues = hexa::config::ValidateSystemConfig(c);
+    bool file_rejects = false;
+    for (const auto& i : issues) file_rejects = file_rejects || (i.field == m.field && i.limit == m.limit);
+    EXPECT_TRUE(file_rejects) << m.field;
+    hexa::PlatformPlantConfig plant;
+    plant.rig = c.rig;
+    plant.disturbance = c.profiles.at("ideal");
+    try {
+      hexa::PlatformPlant p(plant);
+      ADD_FAILURE() << m.field << ": the plant accepted what the rig file rejects";
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(std::string(m.field) + ":"), std::string::npos) << what;
+      EXPECT_NE(what.find(std::string("limit ") + m.limit), std::string::npos) << what;
+    }
+    auto leg = hexa::LegControllerConfig::FromRig(c.rig, c.leg_controller, hexa::LegControllerKind::kBsSmc);
+    if (std::string(m.field).rfind("valve.spool_time", 0) == 0) continue;  // the plant's parameter
+    try {
+      hexa::LegController l(leg);
+      ADD_FAILURE() << m.field << ": the leg controller accepted what the rig file rejects";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string(m.field) + ":"), std::string::npos) << e.what();
+    }
+  }
+  // Controller and supervisor structs.
+  SystemConfig c = DefaultsInCode();
+  c.leg_controller.bssmc.null_band_area_fraction = 1.5;
+  c.supervisor.max_consecutive_deadline_misses = 0;
+  c.supervisor.outer_loop.gain = 2.0;
+  const auto issues = hexa::config::ValidateSystemConfig(c);
+  ASSERT_EQ(issues.size(), 3u);
+  EXPECT_THROW(hexa::LegController(hexa::LegControllerConfig::FromRig(c.rig, c.leg_controller,
+                                                                      hexa::LegControllerKind::kBsSmc)),
+               std::invalid_argument);
+  EXPECT_THROW(hexa::Supervisor(c.rig, c.supervisor), std::invalid_argument);
+}
+
+// The four values of issue 12, as a user would write them: each is rejected on its field with
+// a physical reason; the plant, whose state they made non-finite, rejects the plant ones too.
+TEST(RigConfigValidate, IssueExamplesAreRejectedWithAPhysicalReason) {
+  struct Case {
+    const char* field;
+    void (*apply)(SystemConfig&);
+    bool plant;
+  };
+  const std::vector<Case> cases = {
+      {"air.supply_pressure_pa", [](SystemConfig& c) { c.rig.air.supply_pressure_pa = 1e300; }, true},
+      {"platform.mass_kg", [](SystemConfig& c) { c.rig.platform.mass_kg = 1e30; }, true},
+      {"valve.spool_time_constant_s", [](SystemConfig& c) { c.rig.valve.spool_time_constant_s = 1e-9; }, true},
+      {"leg_controller.bssmc.lambda_1_s", [](SystemConfig& c) { c.leg_controller.bssmc.lambda_1_s = 1e12; }, false},
+  };
+  for (const Case& k : cases) {
+    SystemConfig c = DefaultsInCode();
+    k.apply(c);
+    const auto issues = hexa::config::ValidateSystemConfig(c);
+    bool found = false;
+    for (const auto& i : issues) {
+      if (i.field == k.field) {
+        found = true;
+        EXPECT_TRUE(i.physical_limit) << i.message;
+        EXPECT_NE(i.message.find("physical limit: "), std::string::npos) << i.message;
+      }
+    }
+    EXPECT_TRUE(found) << k.field;
+    if (!k.plant) continue;
+    hexa::PlatformPlantConfig plant;
+    plant.rig = c.rig;
+    plant.disturbance = c.profiles.at("realistic");
+    try {
+      hexa::PlatformPlant p(plant);
+      ADD_FAILURE() << k.field << ": the plant accepted it";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(k.field), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(RigConfigCli, ExplainPrintsEveryDerivedLimitWithItsReason) {
+  const RunResult r = RunCheckConfig("--explain '" + hexa::config::DefaultRigFile() + "'", "explain");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  for (const char* field : {"air.supply_pressure_pa", "platform.mass_kg", "valve.spool_time_constant_s",
+                            "cylinder.dead_volume_m3", "cylinder.end_stop_stiffness_n_m",
+                            "friction.bristle_stiffness_n_m", "leg_controller.bssmc.lambda_1_s",
+                            "leg_controller.bssmc.backstepping_beta_1_s",
+                            "leg_controller.bssmc.switching_gain_n", "leg_controller.pi.proportional_v_m"}) {
+    EXPECT_NE(r.out.find(std::string("[") + field + "]"), std::string::npos) << field << "\n" << r.out;
+  }
+  EXPECT_EQ(r.out.find("VIOLATED"), std::string::npos) << r.out;
+  const RunResult bad = RunCheckConfig("--explain '" + kTestDir + "/broken/platform_too_heavy.textproto'", "explain_bad");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.out.find("VIOLATED  platform mass [platform.mass_kg]: 1e+30 kg, limit <= 34.39010948 kg"),
+            std::string::npos) << bad.out;
 }
 
 }  // namespace

@@ -76,7 +76,7 @@ TEST(SingleLeg, RejectsNonFiniteInputWithoutAdvancing) {
 // sum P_i V_i / (k - 1) + P_a A_r x is a first integral (docs/plant.md).
 SingleLegConfig ConservativeLeg(double step_s) {
   SingleLegConfig config = DefaultLeg();
-  config.leg.valve.max_orifice_area_m2 = 0.0;
+  config.leg.chambers_sealed = true;
   config.leg.friction_enabled = false;
   const double k = config.leg.air.heat_ratio;
   config.leg.polytropic.extend = {k, k, k};
@@ -112,7 +112,7 @@ TEST(SingleLegEnergy, ConservedWithClosedChambersAndNoFriction) {
 
 TEST(SingleLegEnergy, FrictionNeverAddsEnergyWithClosedValves) {
   SingleLegConfig config = DefaultLeg();
-  config.leg.valve.max_orifice_area_m2 = 0.0;
+  config.leg.chambers_sealed = true;
   const double k = config.leg.air.heat_ratio;
   config.leg.polytropic.extend = {k, k, k};
   config.leg.polytropic.retract = {k, k, k};

@@ -72,7 +72,7 @@ PlatformPlantConfig Conservative(double step_s,
                                  PlantIntegrator integrator = PlatformPlantConfig{}.integrator) {
   PlatformPlantConfig c = Config(false);
   c.integrator = integrator;
-  c.rig.valve.max_orifice_area_m2 = 0.0;  // chambers closed
+  c.chambers_sealed = true;  // chambers closed
   c.friction_enabled = false;
   const double k = c.rig.air.heat_ratio;
   c.rig.polytropic.extend = {k, k, k};

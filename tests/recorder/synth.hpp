@@ -44,9 +44,11 @@ inline void FillHeader(rec::SampleHeader* h, uint64_t tick) {
 
 // Writes the synthetic recording; valve_offset_v shifts every valve_v of leg
 // `offset_leg` from tick `offset_from_tick` on (for diff tests).
+// invalid_utf8_detail: the two FaultEvent details hold bytes that are not UTF-8 (as recorders
+// before the sanitiser wrote them when a node published such text).
 inline void WriteSynthRecording(const std::string& path, McapWriterConfig config = {},
                                 double valve_offset_v = 0.0, uint32_t offset_leg = 0,
-                                uint64_t offset_from_tick = 0) {
+                                uint64_t offset_from_tick = 0, bool invalid_utf8_detail = false) {
   config.sync = McapSyncMode::kNone;
   RecordingWriter w(config);
   w.Open(path);
@@ -181,7 +183,7 @@ inline void WriteSynthRecording(const std::string& path, McapWriterConfig config
       f.set_leg_id(4);
       f.set_tick(tick);
       f.set_reason(rec::FAULT_COMMAND_STALE);
-      f.set_detail("synthetic");
+      f.set_detail(invalid_utf8_detail ? std::string("bad header \"\xff\xfe\xc0\xaf\x80\"") : "synthetic");
       f.set_source_time_ns(static_cast<int64_t>(kSynthStartNs + tick * 1'000'000ull));
       put(c_fault, tick, 70'000, f);
     }

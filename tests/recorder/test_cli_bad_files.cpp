@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include "hexa/recorder/mcap.hpp"
 #include "hexa/recorder/recording.hpp"
@@ -81,6 +82,19 @@ class CliTest : public ::testing::Test {
     }
     ADD_FAILURE() << "no record with opcode " << int(opcode);
     return 0;
+  }
+  // Offset of the last record with `opcode` in the data section.
+  uint64_t LastRecord(uint8_t opcode) const {
+    uint64_t pos = 8, last = 0;
+    while (pos + 9 <= bytes_.size()) {
+      uint64_t len;
+      std::memcpy(&len, bytes_.data() + pos + 1, 8);
+      if (static_cast<uint8_t>(bytes_[pos]) == opcode) last = pos;
+      if (static_cast<uint8_t>(bytes_[pos]) == 0x0F) break;  // DataEnd
+      pos += 9 + len;
+    }
+    EXPECT_NE(last, 0u) << "no record with opcode " << int(opcode);
+    return last;
   }
   // The bad file must fail `info` with exit 2 and a message naming the problem.
   void ExpectRejected(const std::string& name, const std::string& bytes,
@@ -249,6 +263,72 @@ TEST_F(CliTest, RecoverRepairsATruncatedFileAndInfoThenAgreesWithTheIntactPart) 
   ASSERT_EQ(rec2.code, 0) << rec2.err;
   EXPECT_NE(rec2.out.find("1 corrupt chunks skipped"), std::string::npos) << rec2.out;
   EXPECT_TRUE(Inspect(fixed.string()).complete);
+}
+
+// A recording whose FaultEvent.detail strings are not UTF-8 (written by recorders before the
+// sanitiser; issue 12: a CSV of random bytes made the session's recording unreadable): info,
+// export and report read it, repair the strings (U+FFFD) and say so; recover does not call it
+// complete, repairs it, and its output then reads without any repair.
+TEST_F(CliTest, InvalidUtf8StringsAreRepairedOnReadAndReported) {
+  const fs::path bad = dir_ / "bad_utf8.mcap", fixed = dir_ / "fixed.mcap";
+  test::WriteSynthRecording(bad.string(), {}, 0.0, 0, 0, true);
+  const CliResult info = Run("info '" + bad.string() + "'");
+  ASSERT_EQ(info.code, 0) << info.err;
+  EXPECT_NE(info.out.find("channel 'hexa_FaultEvent': 2 message(s) with invalid UTF-8"),
+            std::string::npos) << info.out;
+  EXPECT_NE(info.out.find("messages:  14616 in"), std::string::npos) << info.out;
+
+  const fs::path csv = dir_ / "csv";
+  const CliResult exp = Run("export '" + bad.string() + "' --out-dir '" + csv.string() + "'");
+  ASSERT_EQ(exp.code, 0) << exp.err;
+  EXPECT_NE(exp.err.find("warning: channel 'hexa_FaultEvent'"), std::string::npos) << exp.err;
+  const std::string faults = Slurp(csv / "hexa_FaultEvent.csv");
+  EXPECT_NE(faults.find("bad header \"\"\xEF\xBF\xBD"), std::string::npos) << faults;
+
+  const fs::path out = dir_ / "report";
+  const CliResult rep = Run("report '" + bad.string() + "' --out '" + out.string() + "' --no-plots");
+  ASSERT_EQ(rep.code, 0) << rep.err;
+  EXPECT_NE(Slurp(out / "report.md").find("recording warning: channel 'hexa_FaultEvent'"),
+            std::string::npos);
+
+  const CliResult rec = Run("recover '" + bad.string() + "' --output '" + fixed.string() + "'");
+  ASSERT_EQ(rec.code, 0) << rec.err;
+  EXPECT_NE(rec.out.find("complete in structure but not readable as it was"), std::string::npos)
+      << rec.out;
+  EXPECT_NE(rec.out.find("2 messages repaired"), std::string::npos) << rec.out;
+  const RecordingInfo after = Inspect(fixed.string());
+  EXPECT_TRUE(after.complete);
+  EXPECT_TRUE(after.problems.empty()) << after.problems.front();
+  EXPECT_EQ(after.messages, 14616u);
+  // A good file is readable as it is.
+  const CliResult again = Run("recover '" + good_.string() + "' --output '" + fixed.string() + "'");
+  ASSERT_EQ(again.code, 0) << again.err;
+  EXPECT_NE(again.out.find("input was complete;"), std::string::npos) << again.out;
+}
+
+// recover exits 2, with a message and without an output file, when nothing was recovered.
+TEST_F(CliTest, RecoverOfNothingFails) {
+  const fs::path cut = dir_ / "header_only.mcap", fixed = dir_ / "fixed.mcap";
+  Spit(cut, bytes_.substr(0, FirstRecord(0x06)));  // header, schemas, channels: no chunk
+  const CliResult rec = Run("recover '" + cut.string() + "' --output '" + fixed.string() + "'");
+  EXPECT_EQ(rec.code, 2) << rec.out << rec.err;
+  EXPECT_NE(rec.err.find("nothing recovered"), std::string::npos) << rec.err;
+  EXPECT_FALSE(fs::exists(fixed));
+}
+
+// export is all or nothing: a recording that turns out corrupt near its end leaves no CSV.
+TEST_F(CliTest, ExportLeavesNoPartialCsvOnError) {
+  std::string b = bytes_;
+  b[LastRecord(0x06) + 9 + 100] ^= 0x40;  // CRC error in the last chunk
+  const fs::path p = dir_ / "late_corruption.mcap", csv = dir_ / "csv";
+  Spit(p, b);
+  const CliResult exp = Run("export '" + p.string() + "' --out-dir '" + csv.string() + "'");
+  EXPECT_EQ(exp.code, 2) << exp.out;
+  EXPECT_NE(exp.err.find("CRC"), std::string::npos) << exp.err;
+  ASSERT_TRUE(fs::exists(csv));
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(csv)) left.push_back(e.path().filename().string());
+  EXPECT_TRUE(left.empty()) << left.size() << " file(s) left, e.g. " << left.front();
 }
 
 }  // namespace

@@ -326,6 +326,34 @@ TEST(Convert, FaultEventBothWays) {
   EXPECT_FALSE(FromProto(p, b));
 }
 
+// Any process may publish bytes that are not UTF-8 in a string field (issue 12: a CSV of random
+// bytes ended up in FaultEvent.detail). The recorded protobuf must still parse: proto3 parsers
+// reject invalid UTF-8, so ToProto sanitises. Clean text is kept exactly (FaultEventBothWays).
+TEST(Convert, StringsThatAreNotUtf8AreRecordedReadably) {
+  auto f = Zeroed<hexa_msg_FaultEvent>();
+  std::strcpy(f.source_node, "supervisor\xff");
+  std::strcpy(f.detail, "trajectory.csv:1: bad header \"\xc0\xaf\x80\xfe\x1b[2J\"");
+  rec::FaultEvent p;
+  ToProto(f, p);
+  rec::FaultEvent back;
+  ASSERT_TRUE(back.ParseFromString(p.SerializeAsString()));
+  EXPECT_EQ(back.detail().rfind("trajectory.csv:1: bad header \"", 0), 0u) << back.detail();
+  EXPECT_EQ(back.detail().find('\x1b'), std::string::npos);
+  auto n = Zeroed<hexa_msg_NodeStatus>();
+  std::memset(n.detail, '\xe2', sizeof n.detail - 1);  // 160 bytes of truncated sequences
+  rec::NodeStatus np;
+  ToProto(n, np);
+  rec::NodeStatus nback;
+  ASSERT_TRUE(nback.ParseFromString(np.SerializeAsString()));
+  EXPECT_LE(nback.detail().size(), 160u);
+  auto c = Zeroed<hexa_msg_OperatorCommand>();
+  std::strcpy(c.csv_path, "/tmp/\xff.csv");
+  rec::OperatorCommand cp;
+  ToProto(c, cp);
+  rec::OperatorCommand cback;
+  ASSERT_TRUE(cback.ParseFromString(cp.SerializeAsString()));
+}
+
 TEST(Convert, RegistryCoversEveryPublishedTypeAndDispatchesToTheTypedFunctions) {
   const auto& types = WireTypes();
   ASSERT_EQ(types.size(), 10u);  // every IDL struct but SampleHeader

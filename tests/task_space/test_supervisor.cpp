@@ -371,16 +371,17 @@ TEST(Supervisor, RejectedTrajectoryHoldsWithTheFeasibilityMessage) {
   EXPECT_EQ(bench.out.state, SupervisorState::kIdle);
 }
 
-TEST(Supervisor, MalformedCsvIsRejectedWithItsLineNumberedMessage) {
+TEST(Supervisor, StartRejectedBeforeATrajectoryExistedHoldsWithItsMessage) {
   Bench bench;
   bench.Tick();
-  const std::string path = std::string(HEXA_TASK_SPACE_CSV_DIR) + "/nan_value.csv";
-  const StartRequest request = bench.sup().PrepareCsvStart(path);
+  // What the service passes on when a CSV file does not parse (config/csv_trajectory.hpp).
+  const std::string message = "traj.csv:3: column 5 (roll_rad): \"nan\" is not finite";
+  const StartRequest request = Supervisor::RejectedStart(message);
   ASSERT_FALSE(request.feasibility.feasible);
-  EXPECT_EQ(request.feasibility.message, path + ":3: column 5 (roll_rad): \"nan\" is not finite");
   bench.Tick(OperatorCommandKind::kStart, &request);
   EXPECT_EQ(bench.out.state, SupervisorState::kHold);
   EXPECT_EQ(bench.out.fault, FaultReason::kTrajectoryRejected);
+  EXPECT_EQ(std::string(bench.out.fault_detail.data()), message);
 }
 
 TEST(Supervisor, TrajectoryNotStartingAtTheRestPoseIsRejected) {

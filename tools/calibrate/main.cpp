@@ -60,6 +60,7 @@ int main(int argc, char** argv) {
   cli.AddOption("truth-seed", "N",
                 "simulated rig: compare every parameter with the plant's truth for this seed");
   cli.AddOption("truth-profile", "name", "disturbance profile of the simulated rig", "realistic");
+  cli.AllowPositional("RECORDING.mcap", 1);
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
   const auto min_still = cli.GetDouble("min-still", 0.01, 1e4);

@@ -41,10 +41,30 @@ void Parser::AddRepeatable(const std::string& name, const std::string& value_nam
   specs_[name] = spec;
 }
 
+void Parser::AllowPositional(const std::string& usage, std::size_t max_count) {
+  positional_usage_ = usage;
+  max_positional_ = max_count;
+}
+
 bool Parser::Parse(int argc, const char* const* argv) {
   for (int i = 1; i < argc; ++i) {
     std::string arg = argv[i];
-    if (arg.rfind("--", 0) != 0) {
+    if (arg == "-h") arg = "--help";
+    if (arg.size() >= 2 && arg[0] == '-' && arg[1] != '-') {
+      // "-trajectory x" would otherwise be a positional word and silently ignored.
+      std::string name = arg.substr(1);
+      name = name.substr(0, name.find('='));
+      error_ = "unknown option '" + arg + "'";
+      if (specs_.count(name)) error_ += " (options take two dashes: --" + name + ")";
+      return false;
+    }
+    if (arg.rfind("--", 0) != 0 || arg == "--") {
+      if (positional_.size() >= max_positional_) {
+        error_ = "unexpected argument '" + arg + "'";
+        if (max_positional_ == 0) error_ += " (this program takes no positional arguments)";
+        else error_ += " (expected " + positional_usage_ + ")";
+        return false;
+      }
       positional_.push_back(arg);
       continue;
     }
@@ -90,7 +110,9 @@ bool Parser::Parse(int argc, const char* const* argv) {
 
 std::string Parser::Help() const {
   std::ostringstream os;
-  os << "Usage: " << program_ << " [options]\n" << summary_ << "\n\nOptions:\n";
+  os << "Usage: " << program_ << " [options]"
+     << (positional_usage_.empty() ? "" : " " + positional_usage_) << "\n"
+     << summary_ << "\n\nOptions:\n";
   for (const auto& name : order_) {
     const Spec& s = specs_.at(name);
     std::string left = "  --" + name + (s.is_flag ? "" : " <" + s.value_name + ">");

@@ -34,7 +34,9 @@ struct Args {
   bool Has(const std::string& name) const { return options.count(name) > 0; }
   std::string Get(const std::string& name, const std::string& fallback) const;
   std::vector<std::string> GetAll(const std::string& name) const;  // repeated and/or comma lists
-  double GetDouble(const std::string& name, double fallback) const;
+  // A finite number; `allow_infinity` also takes +inf for options that give it a meaning
+  // ("play --deadline-s inf": no deadline). NaN and -inf never.
+  double GetDouble(const std::string& name, double fallback, bool allow_infinity = false) const;
   long long GetInt(const std::string& name, long long fallback) const;
 };
 

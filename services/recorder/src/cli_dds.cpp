@@ -856,7 +856,7 @@ int RunPlay(const std::vector<std::string>& argv) {
   }
   const TopicFilter filter{a.GetAll("topics"), a.GetAll("exclude")};
   comm::QosParams params;
-  if (a.Has("deadline-s")) params.deadline_period_s = a.GetDouble("deadline-s", 0.0);
+  if (a.Has("deadline-s")) params.deadline_period_s = a.GetDouble("deadline-s", 0.0, /*allow_infinity=*/true);
   params.Validate();
 
   // First pass: the file is valid, which channels it has, its time span.

@@ -1,4 +1,5 @@
 // File subcommands of hexa_recorder: info, export, recover, diff (no DDS involved).
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
@@ -26,13 +27,16 @@ std::vector<std::string> Args::GetAll(const std::string& name) const {
   return out;
 }
 
-double Args::GetDouble(const std::string& name, double fallback) const {
+double Args::GetDouble(const std::string& name, double fallback, bool allow_infinity) const {
   if (!Has(name)) return fallback;
   const std::string v = Get(name, "");
   char* end = nullptr;
   const double d = std::strtod(v.c_str(), &end);
-  if (v.empty() || end == nullptr || *end != '\0')
-    throw UsageError("--" + name + " expects a number, got '" + v + "'");
+  const bool value_ok = std::isfinite(d) || (allow_infinity && std::isinf(d) && d > 0.0);
+  if (v.empty() || end == nullptr || *end != '\0' || !value_ok)
+    throw UsageError("--" + name + (allow_infinity ? " expects a number or inf, got '"
+                                                    : " expects a finite number, got '") +
+                     v + "'");
   return d;
 }
 
@@ -70,6 +74,14 @@ Args ParseArgs(const std::vector<std::string>& argv, const std::set<std::string>
     if (s == "--help" || s == "-h") {
       a.help = true;
       continue;
+    }
+    if (s.size() >= 2 && s[0] == '-' && s[1] != '-') {
+      // A single-dash option would otherwise be taken for a file name.
+      const std::string name = s.substr(1, s.find('=') == std::string::npos ? std::string::npos
+                                                                             : s.find('=') - 1);
+      const bool known = value_options.count(name) > 0 || flag_options.count(name) > 0;
+      throw UsageError("unknown option '" + s + "'" +
+                       (known ? " (options take two dashes: --" + name + ")" : std::string()));
     }
     if (s.rfind("--", 0) != 0 || s == "--") {
       a.positional.push_back(s);
@@ -140,6 +152,7 @@ int RunExport(const std::vector<std::string>& argv) {
   if (!a.Has("out-dir")) throw UsageError("--out-dir DIR is required");
   TopicFilter f{a.GetAll("topics"), a.GetAll("exclude")};
   const ExportResult r = ExportCsv(a.positional[0], a.Get("out-dir", ""), f);
+  for (const auto& w : r.warnings) std::fprintf(stderr, "hexa_recorder export: warning: %s\n", w.c_str());
   for (const auto& [path, rows] : r.files)
     std::printf("%s: %llu rows\n", path.c_str(), static_cast<unsigned long long>(rows));
   if (r.files.empty()) std::printf("no messages matched; no file written\n");
@@ -153,7 +166,9 @@ int RunRecover(const std::vector<std::string>& argv) {
                 "[--compression none|zstd]\n"
                 "Reads every intact chunk of a recording that lacks its summary and footer (e.g.\n"
                 "the recorder was killed) or has corrupt chunks, and writes a complete MCAP file\n"
-                "with summary, indexes and footer. Sequence numbers and times are kept.\n"
+                "with summary, indexes and footer. Sequence numbers and times are kept. String\n"
+                "fields that are not valid UTF-8 are repaired (U+FFFD). Exit status 2, and no\n"
+                "output, when no intact message was found.\n"
                 "Chunks of the output are zstd-compressed unless --compression none.\n"))
     return kExitOk;
   NeedPositionals(a, 1, "exactly one input file");
@@ -164,13 +179,29 @@ int RunRecover(const std::vector<std::string>& argv) {
   config.compression = ParseCompressionOption(a);
   const RecoverResult r = Recover(a.positional[0], out, config);
   for (const auto& p : r.problems) std::printf("problem: %s\n", p.c_str());
+  const char* status = r.input_readable ? "was complete"
+                       : r.input_complete ? "was complete in structure but not readable as it was"
+                                          : "was incomplete";
+  if (r.messages == 0) {
+    // Nothing to keep: an output without messages would only look like a recovery.
+    std::remove(out.c_str());
+    std::fprintf(stderr,
+                 "hexa_recorder recover: nothing recovered: no intact message in '%s' (input %s, "
+                 "%llu chunks read, %llu corrupt chunks, %llu bytes dropped at the end); no "
+                 "output written\n",
+                 a.positional[0].c_str(), status, static_cast<unsigned long long>(r.chunks_read),
+                 static_cast<unsigned long long>(r.bad_chunks),
+                 static_cast<unsigned long long>(r.bytes_dropped));
+    return kExitError;
+  }
   std::printf("input %s; recovered %llu messages from %llu chunks (%llu corrupt chunks skipped, "
-              "%llu bytes dropped at the end) into %s\n",
-              r.input_complete ? "was complete" : "was incomplete",
-              static_cast<unsigned long long>(r.messages),
+              "%llu bytes dropped at the end, %llu messages repaired, %llu undecodable) into %s\n",
+              status, static_cast<unsigned long long>(r.messages),
               static_cast<unsigned long long>(r.chunks_read),
               static_cast<unsigned long long>(r.bad_chunks),
-              static_cast<unsigned long long>(r.bytes_dropped), out.c_str());
+              static_cast<unsigned long long>(r.bytes_dropped),
+              static_cast<unsigned long long>(r.repaired_messages),
+              static_cast<unsigned long long>(r.undecodable_messages), out.c_str());
   return kExitOk;
 }
 

@@ -38,6 +38,7 @@ int RunReport(const std::vector<std::string>& argv) {
     if (eq == std::string::npos) throw UsageError("--meta wants key=value, got '" + kv + "'");
     report.meta[kv.substr(0, eq)] = kv.substr(eq + 1);
   }
+  for (const auto& w : report.warnings) std::fprintf(stderr, "hexa_recorder report: warning: %s\n", w.c_str());
   WriteSessionReport(report, out);
   std::printf("report: %s/report.md, report.json, pose.csv, legs.csv\n", out.c_str());
   if (a.Has("no-plots")) return kExitOk;

@@ -6,6 +6,8 @@
 #include <limits>
 #include <string>
 
+#include "hexa/services/text.hpp"
+
 namespace hexa::recorder {
 namespace {
 
@@ -34,10 +36,13 @@ bool OptionalArrayFromProto(const google::protobuf::RepeatedField<V>& in, V (&ou
   return ArrayFromProto(in, out);
 }
 
-// IDL bounded strings are NUL-terminated char arrays of bound + 1.
+// IDL bounded strings are NUL-terminated char arrays of bound + 1. Any process on the domain
+// may have written them: a proto3 string must be valid UTF-8 or the recorded message cannot be
+// parsed again, so the text is sanitised here (docs/robustness.md). Clean text is unchanged.
 template <size_t N>
 std::string StringToProto(const char (&in)[N]) {
-  return std::string(in, strnlen(in, N));
+  const std::string_view raw(in, strnlen(in, N));
+  return text::Sanitize(raw, N - 1);
 }
 
 template <size_t N>

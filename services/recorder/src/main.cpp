@@ -2,9 +2,12 @@
 // compares, repairs and replays recordings. Thin shell over hexa_recording (docs/recorder.md).
 #include <cstdio>
 #include <cstdlib>
+#include <algorithm>
 #include <cstring>
 #include <string>
 #include <vector>
+
+#include <google/protobuf/stubs/logging.h>
 
 #include "cli.hpp"
 #include "hexa/recorder/mcap.hpp"
@@ -24,10 +27,22 @@ constexpr const char* kUsage =
     "  annotate add the Foxglove 3-D scene to a recording made without it\n"
     "\n"
     "exit status: 0 success, 1 diff found differences, 2 error (message on stderr)\n";
+// libprotobuf logs each string field that is not UTF-8 while parsing; the reader repairs such
+// messages and reports them once per channel (recording.hpp), so those lines are dropped here.
+// Everything else libprotobuf logs still goes to stderr.
+void ProtobufLog(google::protobuf::LogLevel level, const char* file, int line,
+                 const std::string& message) {
+  if (message.find("contains invalid UTF-8 data when parsing") != std::string::npos) return;
+  static const char* const kLevel[] = {"INFO", "WARNING", "ERROR", "FATAL"};
+  std::fprintf(stderr, "[libprotobuf %s %s:%d] %s\n", kLevel[std::min<int>(level, 3)], file, line,
+               message.c_str());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   namespace cli = hexa::recorder::cli;
+  google::protobuf::SetLogHandler(&ProtobufLog);
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0 ||
       std::strcmp(argv[1], "help") == 0) {
     std::fputs(kUsage, argc < 2 ? stderr : stdout);

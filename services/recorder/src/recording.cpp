@@ -2,18 +2,24 @@
 
 #include <fnmatch.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <google/protobuf/descriptor.pb.h>
 #include <google/protobuf/descriptor_database.h>
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cinttypes>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <set>
 #include <sstream>
+
+#include "hexa/services/text.hpp"
 
 namespace hexa::recorder {
 namespace gp = google::protobuf;
@@ -56,6 +62,100 @@ void RecordingWriter::Write(uint16_t channel_id, uint64_t log_time_ns, uint64_t 
 // ================================================================ decoding
 
 namespace {
+namespace io = gp::io;
+
+// Copies one message's wire bytes from `in` to `out`, repairing the UTF-8 of every string
+// field of `type` and of its nested messages. False on malformed wire data (or groups, which
+// proto3 schemas do not have). `changed` is set when a string was rewritten.
+bool RewriteStrings(io::CodedInputStream& in, const gp::Descriptor* type, std::string& out,
+                    bool& changed, int depth) {
+  if (depth > 64) return false;
+  io::StringOutputStream sink(&out);
+  io::CodedOutputStream os(&sink);
+  while (true) {
+    const uint32_t tag = in.ReadTag();
+    if (tag == 0) return in.ConsumedEntireMessage() || in.BytesUntilLimit() == 0;
+    const uint32_t number = tag >> 3;
+    const gp::FieldDescriptor* field = type != nullptr ? type->FindFieldByNumber(static_cast<int>(number)) : nullptr;
+    switch (tag & 7) {
+      case 0: {  // varint
+        uint64_t v = 0;
+        if (!in.ReadVarint64(&v)) return false;
+        os.WriteTag(tag);
+        os.WriteVarint64(v);
+        break;
+      }
+      case 1: {  // 64-bit
+        uint64_t v = 0;
+        if (!in.ReadLittleEndian64(&v)) return false;
+        os.WriteTag(tag);
+        os.WriteLittleEndian64(v);
+        break;
+      }
+      case 5: {  // 32-bit
+        uint32_t v = 0;
+        if (!in.ReadLittleEndian32(&v)) return false;
+        os.WriteTag(tag);
+        os.WriteLittleEndian32(v);
+        break;
+      }
+      case 2: {  // length-delimited
+        uint32_t length = 0;
+        if (!in.ReadVarint32(&length) || static_cast<int>(length) < 0 ||
+            static_cast<int>(length) > in.BytesUntilLimit()) {
+          return false;
+        }
+        std::string bytes;
+        if (field != nullptr && field->type() == gp::FieldDescriptor::TYPE_MESSAGE) {
+          const io::CodedInputStream::Limit limit = in.PushLimit(static_cast<int>(length));
+          bool ok = RewriteStrings(in, field->message_type(), bytes, changed, depth + 1);
+          ok = ok && in.BytesUntilLimit() == 0;
+          in.PopLimit(limit);
+          if (!ok) return false;
+        } else {
+          if (!in.ReadString(&bytes, static_cast<int>(length))) return false;
+          if (field != nullptr && field->type() == gp::FieldDescriptor::TYPE_STRING &&
+              !text::IsValidUtf8(bytes)) {
+            bytes = text::RepairUtf8(bytes);
+            changed = true;
+          }
+        }
+        os.WriteTag(tag);
+        os.WriteVarint32(static_cast<uint32_t>(bytes.size()));
+        os.WriteString(bytes);
+        break;
+      }
+      default:
+        return false;
+    }
+  }
+}
+
+}  // namespace
+
+ParseOutcome ParseRepairingUtf8(std::string_view data, gp::Message& message,
+                                std::string* repaired_bytes) {
+  if (data.size() > static_cast<size_t>(INT32_MAX)) return ParseOutcome::kFailed;
+  if (message.ParseFromArray(data.data(), static_cast<int>(data.size()))) return ParseOutcome::kOk;
+  std::string rewritten;
+  bool changed = false;
+  {
+    io::CodedInputStream in(reinterpret_cast<const uint8_t*>(data.data()),
+                            static_cast<int>(data.size()));
+    if (!RewriteStrings(in, message.GetDescriptor(), rewritten, changed, 0) || !changed) {
+      message.Clear();
+      return ParseOutcome::kFailed;
+    }
+  }
+  if (!message.ParseFromString(rewritten)) {
+    message.Clear();
+    return ParseOutcome::kFailed;
+  }
+  if (repaired_bytes != nullptr) *repaired_bytes = std::move(rewritten);
+  return ParseOutcome::kRepaired;
+}
+
+namespace {
 class CollectErrors : public gp::DescriptorPool::ErrorCollector {
  public:
   void AddError(const std::string& filename, const std::string& element_name,
@@ -66,12 +166,6 @@ class CollectErrors : public gp::DescriptorPool::ErrorCollector {
   std::string text;
 };
 
-// Owns the database behind a pool (the pool must not outlive it).
-struct PoolWithDb : gp::DescriptorPool {
-  PoolWithDb(std::unique_ptr<gp::SimpleDescriptorDatabase> db, ErrorCollector* errors)
-      : gp::DescriptorPool(db.get(), errors), database(std::move(db)) {}
-  std::unique_ptr<gp::SimpleDescriptorDatabase> database;
-};
 }  // namespace
 
 ProtoDecoder::ProtoDecoder() : factory_(std::make_unique<gp::DynamicMessageFactory>()) {}
@@ -83,7 +177,14 @@ ProtoDecoder::~ProtoDecoder() {
 }
 
 void ProtoDecoder::AddSchema(const McapSchema& schema) {
-  const std::string what = "schema " + std::to_string(schema.id) + " '" + schema.name + "'";
+  const std::string what = "schema " + std::to_string(schema.id) + " '" + text::Excerpt(schema.name) + "'";
+  if (auto it = schemas_.find(schema.id); it != schemas_.end()) {
+    const McapSchema& had = it->second.record;
+    if (had.name == schema.name && had.encoding == schema.encoding && had.data == schema.data) return;
+    // Replacing it would leave the channels decoded with it pointing into a deleted pool.
+    throw McapError(what + ": schema id " + std::to_string(schema.id) +
+                    " is defined again with different content (MCAP requires repeats to be identical)");
+  }
   if (schema.encoding != kProtobufEncoding)
     throw McapError(what + ": unknown schema encoding '" + schema.encoding +
                     "' (this tool decodes only \"protobuf\")");
@@ -95,21 +196,31 @@ void ProtoDecoder::AddSchema(const McapSchema& schema) {
     if (!db->Add(file))
       throw McapError(what + ": FileDescriptorSet holds a conflicting file '" + file.name() + "'");
   }
-  CollectErrors errors;
-  auto pool = std::make_unique<PoolWithDb>(std::move(db), &errors);
-  const gp::Descriptor* type = pool->FindMessageTypeByName(schema.name);
-  if (type == nullptr)
-    throw McapError(what + ": unknown schema: no message named '" + schema.name +
-                    "' in its FileDescriptorSet" +
-                    (errors.text.empty() ? std::string() : " (" + errors.text + ")"));
   SchemaEntry entry;
+  auto errors = std::make_unique<CollectErrors>();
+  entry.pool = std::make_unique<gp::DescriptorPool>(db.get(), errors.get());
+  entry.database = std::move(db);
+  const gp::Descriptor* type = entry.pool->FindMessageTypeByName(schema.name);
+  if (type == nullptr)
+    throw McapError(what + ": unknown schema: no message named '" + text::Excerpt(schema.name) +
+                    "' in its FileDescriptorSet" +
+                    (errors->text.empty() ? std::string() : " (" + text::Sanitize(errors->text, 1024) + ")"));
+  entry.errors = std::move(errors);
   entry.type = type;
-  entry.pool = std::move(pool);
+  entry.record = schema;
   schemas_[schema.id] = std::move(entry);
 }
 
 void ProtoDecoder::AddChannel(const McapChannel& channel) {
-  const std::string what = "channel " + std::to_string(channel.id) + " '" + channel.topic + "'";
+  const std::string what = "channel " + std::to_string(channel.id) + " '" + text::Excerpt(channel.topic) + "'";
+  if (auto it = channel_records_.find(channel.id); it != channel_records_.end()) {
+    const McapChannel& had = it->second;
+    if (had.schema_id == channel.schema_id && had.topic == channel.topic &&
+        had.message_encoding == channel.message_encoding && had.metadata == channel.metadata)
+      return;
+    throw McapError(what + ": channel id " + std::to_string(channel.id) +
+                    " is defined again with different content (MCAP requires repeats to be identical)");
+  }
   if (channel.message_encoding != kProtobufEncoding)
     throw McapError(what + ": unknown message encoding '" + channel.message_encoding +
                     "' (this tool decodes only \"protobuf\")");
@@ -117,6 +228,7 @@ void ProtoDecoder::AddChannel(const McapChannel& channel) {
   if (it == schemas_.end())
     throw McapError(what + ": unknown schema id " + std::to_string(channel.schema_id));
   channel_messages_[channel.id].reset(factory_->GetPrototype(it->second.type)->New());
+  channel_records_[channel.id] = channel;
   if (channel_topics_.size() <= channel.id) channel_topics_.resize(channel.id + 1u);
   channel_topics_[channel.id] = channel.topic;
 }
@@ -126,12 +238,34 @@ const gp::Message& ProtoDecoder::Decode(const McapMessageView& m) {
   if (it == channel_messages_.end())
     throw McapError("message on undecodable channel " + std::to_string(m.channel_id));
   gp::Message& msg = *it->second;
-  if (!msg.ParseFromArray(m.data.data(), static_cast<int>(m.data.size())))
+  const ParseOutcome outcome = ParseRepairingUtf8(m.data, msg);
+  if (outcome == ParseOutcome::kFailed)
     throw McapError("message " + std::to_string(m.sequence) + " on channel '" +
-                    channel_topics_[m.channel_id] + "' (log time " +
+                    text::Excerpt(channel_topics_[m.channel_id]) + "' (log time " +
                     std::to_string(m.log_time_ns) + ") does not parse as " +
                     msg.GetDescriptor()->full_name());
+  if (outcome == ParseOutcome::kRepaired) {
+    Utf8Repairs& r = repairs_[m.channel_id];
+    if (r.messages++ == 0) r.first_sequence = m.sequence;
+  }
   return msg;
+}
+
+std::vector<std::string> ProtoDecoder::RepairProblems() const {
+  std::vector<std::string> out;
+  for (const auto& [channel, r] : repairs_) {
+    out.push_back("channel '" + text::Excerpt(channel_topics_[channel]) + "': " +
+                  std::to_string(r.messages) +
+                  " message(s) with invalid UTF-8 in string fields (first: sequence " +
+                  std::to_string(r.first_sequence) +
+                  "), repaired on read (invalid bytes read as U+FFFD)");
+  }
+  return out;
+}
+
+const gp::Message* ProtoDecoder::Prototype(uint16_t channel_id) const {
+  auto it = channel_messages_.find(channel_id);
+  return it == channel_messages_.end() ? nullptr : it->second.get();
 }
 
 const gp::Descriptor* ProtoDecoder::descriptor(uint16_t channel_id) const {
@@ -153,6 +287,8 @@ McapScanResult ReadRecording(const std::string& path, const DecodedMessageFn& fn
   };
   try {
     McapScanResult r = reader.Scan(v, options);
+    for (const auto& [channel, repairs] : decoder.repairs()) r.repaired_messages += repairs.messages;
+    for (auto& p : decoder.RepairProblems()) r.problems.push_back(std::move(p));
     if (catalog != nullptr) {
       catalog->schemas = reader.schemas();
       catalog->channels = reader.channels();
@@ -631,28 +767,47 @@ ExportResult ExportCsv(const std::string& path, const std::string& out_dir,
     throw McapError("cannot create output directory '" + out_dir + "': " + std::strerror(errno));
   struct Sink {
     std::ofstream file;
-    std::string path;
+    std::string path;       // final name
+    std::string temp_path;  // written here, renamed to `path` once the whole export succeeded
     std::vector<Column> columns;
     uint64_t rows = 0;
   };
   std::map<uint16_t, Sink> sinks;
+  // All or nothing: CSVs are written under temporary names and renamed only after the whole
+  // recording was read and every file closed without error; on any error the temporary files
+  // are removed, so an export that fails leaves no partial CSV behind (and no older CSV of the
+  // same name is touched).
+  struct RemoveTemps {
+    std::map<uint16_t, Sink>& sinks;
+    bool armed = true;
+    ~RemoveTemps() {
+      if (!armed) return;
+      for (auto& [id, s] : sinks) {
+        s.file.close();
+        std::remove(s.temp_path.c_str());
+      }
+    }
+  } guard{sinks};
   std::string row;
-  ReadRecording(path, [&](const McapChannel& ch, const McapMessageView& m, const gp::Message& msg) {
+  const McapScanResult scan = ReadRecording(path, [&](const McapChannel& ch, const McapMessageView& m, const gp::Message& msg) {
     if (!filter.Matches(ch.topic)) return;
     auto it = sinks.find(ch.id);
     if (it == sinks.end()) {
       std::string name = ch.topic;
       std::replace_if(name.begin(), name.end(), [](char c) { return !std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-'; }, '_');
       name.erase(0, name.find_first_not_of('_'));
+      if (name.size() > 100) name.resize(100);  // a file name, not the whole topic string
       Sink s;
       s.path = out_dir + "/" + (name.empty() ? "channel" + std::to_string(ch.id) : name) + ".csv";
-      s.file.open(s.path, std::ios::out | std::ios::trunc);
-      if (!s.file) throw McapError("cannot write '" + s.path + "': " + std::strerror(errno));
-      BuildColumns(msg, {}, "", s.columns);
-      s.file << "log_time_ns,publish_time_ns,sequence";
-      for (const auto& c : s.columns) s.file << ',' << c.name;
-      s.file << '\n';
+      s.temp_path = s.path + ".partial." + std::to_string(::getpid());
       it = sinks.emplace(ch.id, std::move(s)).first;
+      Sink& n = it->second;
+      n.file.open(n.temp_path, std::ios::out | std::ios::trunc);
+      if (!n.file) throw McapError("cannot write '" + n.temp_path + "': " + std::strerror(errno));
+      BuildColumns(msg, {}, "", n.columns);
+      n.file << "log_time_ns,publish_time_ns,sequence";
+      for (const auto& c : n.columns) n.file << ',' << c.name;
+      n.file << '\n';
     }
     Sink& s = it->second;
     row = std::to_string(m.log_time_ns) + ',' + std::to_string(m.publish_time_ns) + ',' +
@@ -663,14 +818,21 @@ ExportResult ExportCsv(const std::string& path, const std::string& out_dir,
     }
     row += '\n';
     s.file << row;
+    if (!s.file) throw McapError("writing '" + s.temp_path + "' failed: " + std::strerror(errno));
     ++s.rows;
   });
   ExportResult result;
   for (auto& [id, s] : sinks) {
     s.file.close();
-    if (!s.file) throw McapError("writing '" + s.path + "' failed");
+    if (!s.file) throw McapError("writing '" + s.temp_path + "' failed");
+  }
+  for (auto& [id, s] : sinks) {
+    if (std::rename(s.temp_path.c_str(), s.path.c_str()) != 0)
+      throw McapError("cannot rename '" + s.temp_path + "' to '" + s.path + "': " + std::strerror(errno));
     result.files.emplace_back(s.path, s.rows);
   }
+  guard.armed = false;
+  result.warnings = scan.problems;
   return result;
 }
 
@@ -684,31 +846,75 @@ RecoverResult Recover(const std::string& in_path, const std::string& out_path,
   out_config.sync = McapSyncMode::kNone;  // one sync at Close() is enough for a rewrite
   McapWriter writer(out_config);
   writer.Open(out_path);
+  RecoverResult result;
   std::map<uint16_t, uint16_t> schema_map, channel_map;
+  // Every message is also decoded with its channel's schema (protobuf channels): a file whose
+  // structure is intact is not "complete" when messages in it cannot be read. Strings that are
+  // not valid UTF-8 are repaired in the output (ParseRepairingUtf8); messages that do not parse
+  // even then are copied unchanged and counted.
+  ProtoDecoder decoder;
+  std::set<uint16_t> decodable_schemas, decodable_channels;
+  std::map<uint16_t, std::unique_ptr<gp::Message>> messages;
+  std::map<uint16_t, std::string> topics;
+  std::string repaired;
   McapVisitor v;
   v.on_schema = [&](const McapSchema& s) {
     if (!schema_map.count(s.id)) schema_map[s.id] = writer.AddSchema(s.name, s.encoding, s.data);
+    try {
+      decoder.AddSchema(s);
+      decodable_schemas.insert(s.id);
+    } catch (const McapError& e) {
+      result.problems.push_back(std::string("messages of schema ") + std::to_string(s.id) +
+                                " are copied without decoding: " + e.what());
+    }
   };
   v.on_channel = [&](const McapChannel& c) {
     if (channel_map.count(c.id)) return;
     const uint16_t schema = c.schema_id == 0 ? 0 : schema_map.at(c.schema_id);
     channel_map[c.id] = writer.AddChannel(schema, c.topic, c.message_encoding, c.metadata);
+    topics[c.id] = c.topic;
+    if (decodable_schemas.count(c.schema_id) && c.message_encoding == kProtobufEncoding) {
+      decoder.AddChannel(c);
+      decodable_channels.insert(c.id);
+    }
   };
+  std::map<uint16_t, uint64_t> undecodable;
   v.on_message = [&](const McapMessageView& m) {
+    std::string_view data = m.data;
+    if (decodable_channels.count(m.channel_id)) {
+      auto& msg = messages[m.channel_id];
+      if (!msg) msg.reset(decoder.Prototype(m.channel_id)->New());
+      const ParseOutcome outcome = ParseRepairingUtf8(m.data, *msg, &repaired);
+      if (outcome == ParseOutcome::kRepaired) {
+        data = repaired;
+        ++result.repaired_messages;
+      } else if (outcome == ParseOutcome::kFailed) {
+        ++undecodable[m.channel_id];
+        ++result.undecodable_messages;
+      }
+    }
     writer.WriteWithSequence(channel_map.at(m.channel_id), m.sequence, m.log_time_ns,
-                             m.publish_time_ns, m.data);
+                             m.publish_time_ns, data);
   };
   McapScanOptions options;
   options.tolerant = true;
   const McapScanResult r = reader.Scan(v, options);
   writer.Close();
-  RecoverResult result;
   result.input_complete = r.complete;
   result.messages = r.messages;
   result.chunks_read = r.chunks;
   result.bad_chunks = r.bad_chunks;
-  result.problems = r.problems;
+  for (const auto& p : r.problems) result.problems.push_back(p);
   result.bytes_dropped = r.complete ? 0 : r.file_size - r.valid_data_end;
+  result.input_readable = r.complete && result.repaired_messages == 0 && result.undecodable_messages == 0;
+  if (result.repaired_messages > 0)
+    result.problems.push_back(std::to_string(result.repaired_messages) +
+                              " message(s) with invalid UTF-8 in string fields: repaired in the "
+                              "output (invalid bytes written as U+FFFD)");
+  for (const auto& [channel, n] : undecodable)
+    result.problems.push_back("channel '" + text::Excerpt(topics[channel]) + "': " +
+                              std::to_string(n) +
+                              " message(s) do not parse as their schema: copied unchanged");
   return result;
 }
 

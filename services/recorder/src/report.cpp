@@ -11,6 +11,7 @@
 
 #include "hexa/core/pose.hpp"
 #include "hexa/recorder/recording.hpp"
+#include "hexa/services/text.hpp"
 #include "recording.pb.h"
 
 namespace hexa::recorder {
@@ -19,10 +20,12 @@ namespace {
 constexpr double kTickS = 0.001;
 constexpr double kRadToDeg = 57.29577951308232;
 
+// Invalid UTF-8 in a string field is repaired as ReadRecording does (it has already counted
+// the message in the scan's problems).
 template <typename T>
 T Parse(const McapMessageView& view, const std::string& topic) {
   T msg;
-  if (!msg.ParseFromArray(view.data.data(), static_cast<int>(view.data.size())))
+  if (ParseRepairingUtf8(view.data, msg) == ParseOutcome::kFailed)
     throw std::runtime_error("cannot parse a message of " + topic);
   return msg;
 }
@@ -138,6 +141,7 @@ SessionReport ComputeSessionReport(const std::string& path) {
         }
       });
   r.complete_file = scan.complete;
+  r.warnings = scan.problems;
   if (first_log <= last_log) r.wall_time_s = static_cast<double>(last_log - first_log) * 1e-9;
 
   // Task space over the TRACKING window, at the supervisor ticks.
@@ -257,7 +261,8 @@ std::string Json(double v) {
   return buf;
 }
 
-std::string JsonString(const std::string& s) {
+std::string JsonString(const std::string& raw) {
+  const std::string s = text::RepairUtf8(raw);  // JSON text is UTF-8 (RFC 8259)
   std::string out = "\"";
   for (char c : s) {
     if (c == '"' || c == '\\') out += '\\';
@@ -347,6 +352,8 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
       << ", \"max\": " << Json(r.latency_s.max) << "},\n  \"wall_time_s\": " << Json(r.wall_time_s)
       << ",\n  \"sim_time_s\": " << Json(r.sim_time_s) << ",\n  \"faults\": [";
     for (std::size_t i = 0; i < r.faults.size(); ++i) j << (i ? ", " : "") << JsonString(r.faults[i]);
+    j << "],\n  \"recording_warnings\": [";
+    for (std::size_t i = 0; i < r.warnings.size(); ++i) j << (i ? ", " : "") << JsonString(r.warnings[i]);
     j << "]\n}\n";
   }
   {
@@ -357,7 +364,9 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
     m << "- recording: `" << r.recording << "`" << (r.complete_file ? "" : " (INCOMPLETE FILE)")
       << "\n- simulated time " << Json(r.sim_time_s) << " s, wall time " << Json(r.wall_time_s)
       << " s\n- final supervisor state: " << r.final_supervisor_state
-      << "\n- tracking window: " << r.pose_samples_tracking << " pose samples (5 ms)\n\n";
+      << "\n- tracking window: " << r.pose_samples_tracking << " pose samples (5 ms)\n";
+    for (const auto& w : r.warnings) m << "- recording warning: " << w << "\n";
+    m << "\n";
     m << "## Task-space RMSE over the tracking window (paper Table 9 / 10 layout)\n\n";
     m << "| | X cm | Y cm | Z cm | rot X deg | rot Y deg | rot Z deg |\n|---|---|---|---|---|---|---|\n";
     auto row = [&](const char* name, const std::array<double, 6>& a, bool rel) {

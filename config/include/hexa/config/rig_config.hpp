@@ -19,6 +19,7 @@
 #include "hexa/core/control_params.hpp"
 #include "hexa/core/controller_model.hpp"
 #include "hexa/core/leg_controller.hpp"
+#include "hexa/core/physical_limits.hpp"
 #include "hexa/core/rig.hpp"
 
 namespace hexa::config {
@@ -82,13 +83,17 @@ struct ConfigIssue {
   std::string message;  // what is wrong
   std::string value;    // offending value as text ("" for syntax errors)
   std::string limit;    // the rule it broke, e.g. "> 0", "< 0.00031416 (cylinder.cap_area_m2)"
+  bool physical_limit = false;  // a limit derived from physics (DerivePhysicalLimits)
   // "<file>:<line>:<column>: error: <field>: <message>: value <value>, limit <limit>"
   std::string ToString() const;
 };
 
 struct ConfigResult {
   bool ok = false;
-  SystemConfig config;               // filled only when ok
+  // Filled when ok, and when the file parsed and translated but broke value rules
+  // (`translated`): --explain shows the physical limits of such a config.
+  SystemConfig config;
+  bool translated = false;
   std::string error;                 // every issue, one per line ("" when ok)
   std::vector<ConfigIssue> issues;   // the same, structured
 };
@@ -114,6 +119,11 @@ std::string DefaultRigFile();
 // Checks the values of a config (also one built in code). Field paths are those of the
 // rig file; lines are left 0. Used by the loader after translation. Never throws.
 std::vector<ConfigIssue> ValidateSystemConfig(const SystemConfig& config);
+
+// The limits derived from physics for this config (plant and controller, physical_limits.hpp),
+// each with value, limit and reason: what `hexa_check_config --explain` prints. Meaningful for
+// a config whose structs are valid (ValidateSystemConfig reports them only then).
+std::vector<hexa::PhysicalLimit> DerivePhysicalLimits(const SystemConfig& config);
 
 // Picks a disturbance profile: `name` empty -> config.default_profile. An unknown name is
 // an error that lists the profiles the file defines.

@@ -43,6 +43,9 @@ struct LegModelParams {
   bool chambers_vented = false;
   // false: no friction force at all (energy-conservation tests only).
   bool friction_enabled = true;
+  // true: the valve never passes air, the chambers are closed volumes (energy-conservation
+  // tests only; a valve with zero area is not a valid rig: valve.max_orifice_area_m2 > 0).
+  bool chambers_sealed = false;
   // kLugre: the plant's dynamic friction (default). kStatic: eq 3 itself, F = g(v) sgn(v) +
   // B v with sgn(0) = 0 (no stiction, cannot hold a load at rest): the instantaneous
   // Coulomb + viscous friction that Appendix B's free-fall model (eq 66) assumes.
@@ -97,6 +100,10 @@ class LegModel {
   // `horizon_s` with the spool moving towards `spool_target_m`: R T gamma_in |dm/dP| / V at
   // the smallest chamber volume reachable at speed |v|. The plant picks its RK4 substep so
   // that this rate times the step stays inside RK4's stability interval (docs/plant.md).
+  // Decay rate (1/s) of the LuGre bristle deflection at piston speed v: sigma0 |v| / g(v)
+  // (friction.hpp); 0 without LuGre friction. Stiff at high speed with stiff bristles: the
+  // plant's step control keeps it inside the integrator's stability interval too.
+  double BristleRate1S(double velocity_m_s) const;
   double PressureStiffnessBound1S(const LegPneumaticState& state, double position_m,
                                   double velocity_m_s, double spool_target_m,
                                   double horizon_s) const;

@@ -52,6 +52,7 @@ struct PlatformPlantConfig {
   bool friction_enabled = true;  // false only for energy-conservation tests
   // External pose instrument for kinematic calibration (issue 14); off by default.
   TrackerParams tracker;
+  bool chambers_sealed = false;  // true only for energy-conservation tests (valves never open)
 
   void Validate() const;  // throws std::invalid_argument naming field, value and limit
 };

@@ -21,6 +21,7 @@
 #include <string>
 
 #include "hexa/core/control_params.hpp"
+#include "hexa/core/csv_trajectory.hpp"
 #include "hexa/core/feasibility.hpp"
 #include "hexa/core/outer_loop.hpp"
 #include "hexa/core/platform_dynamics.hpp"
@@ -136,9 +137,12 @@ class Supervisor {
   StartRequest PrepareStart(Trajectory trajectory) const;
   StartRequest PreparePaperStart(PaperMotion motion, int periods = 0,
                                  double amplitude_scale = 1.0) const;
-  // A malformed CSV yields a rejected request whose message is the parser's
-  // ("<file>:<line>: ..."); the CSV trajectory returns to home at its end.
-  StartRequest PrepareCsvStart(const std::string& csv_path) const;
+  // A user trajectory of rows (read from a CSV file by config/): blends in from the rest pose
+  // and returns to home at its end.
+  StartRequest PrepareRowsStart(std::shared_ptr<const CsvMotion> rows) const;
+  // A request rejected before a trajectory existed (e.g. a CSV file that does not parse):
+  // started with kStart it puts the supervisor in HOLD with `message` as the fault detail.
+  static StartRequest RejectedStart(std::string message);
 
  private:
   void EnterHold(FaultReason reason, int leg, const char* detail, SupervisorOutput& output);

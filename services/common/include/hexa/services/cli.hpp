@@ -2,6 +2,7 @@
 // text, defaults and validation; errors name the option, the value and what was expected.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -24,6 +25,9 @@ class Parser {
   // An option that may be given several times; GetAll returns every value in order.
   void AddRepeatable(const std::string& name, const std::string& value_name,
                      const std::string& help);
+  // Positional arguments (words without a leading '-'): none are accepted unless declared here,
+  // so that a stray word or a single-dash option ("-trajectory x") is an error, never ignored.
+  void AllowPositional(const std::string& usage, std::size_t max_count);
 
   // Returns false on error (message in error()) or when --help was asked (help_requested()).
   bool Parse(int argc, const char* const* argv);
@@ -59,6 +63,8 @@ class Parser {
   std::map<std::string, std::string> values_;
   std::map<std::string, std::vector<std::string>> all_values_;  // repeatable options
   std::vector<std::string> positional_;
+  std::string positional_usage_;
+  std::size_t max_positional_ = 0;
   bool help_requested_ = false;
   std::string error_;
 };

@@ -1,5 +1,6 @@
 // spdlog set-up shared by every process: one named logger, to the terminal and optionally
-// to a file, with a pattern that names the process.
+// to a file, with a pattern that names the process. Every message is made valid UTF-8 and
+// bounded to text::kMaxLogLineBytes before it is written (hexa/services/text.hpp).
 #pragma once
 
 #include <memory>

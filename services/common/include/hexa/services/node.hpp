@@ -16,6 +16,7 @@
 #include "hexa/comm/comm.hpp"
 #include "hexa/config/rig_config.hpp"
 #include "hexa/services/cli.hpp"
+#include "hexa/services/text.hpp"
 
 namespace hexa::node {
 
@@ -135,12 +136,11 @@ class CycleTimeWindow {
 // CLOCK_MONOTONIC in ns, for measuring compute time (never to decide what to compute).
 std::int64_t MonotonicNow_ns();
 
-// Copies a C string into a bounded char array of the wire types, always NUL-terminated.
+// Copies free text into a bounded char array of the wire types: valid UTF-8, no control
+// characters, cut at a character boundary with text::kCutMarker, always NUL-terminated.
 template <std::size_t N>
 void CopyBounded(char (&dst)[N], const char* src) {
-  std::size_t i = 0;
-  for (; src != nullptr && src[i] != '\0' && i + 1 < N; ++i) dst[i] = src[i];
-  dst[i] = '\0';
+  text::SanitizeInto(src == nullptr ? std::string_view() : std::string_view(src), dst);
 }
 
 }  // namespace hexa::node

@@ -189,6 +189,7 @@ struct McapScanResult {
   std::map<std::string, uint64_t> chunk_compression;  // "none" / "zstd" -> chunks read
   uint64_t chunk_records_bytes = 0;  // records of the chunks read, uncompressed
   uint64_t chunk_stored_bytes = 0;   // the same as stored in the file
+  uint64_t repaired_messages = 0;  // set by ReadRecording (recording.hpp): invalid UTF-8 repaired
   McapStatistics summary_statistics;  // valid when has_summary
 };
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <google/protobuf/descriptor.h>
+#include <google/protobuf/descriptor_database.h>
 #include <google/protobuf/dynamic_message.h>
 #include <google/protobuf/message.h>
 
@@ -47,6 +48,22 @@ class RecordingWriter {
   std::string buffer_;
 };
 
+// Parses protobuf bytes as `message`. Recordings written before the recorder sanitised its
+// strings may hold string fields that are not valid UTF-8, which a proto3 parser rejects; such
+// a message is repaired on read: the wire bytes are rewritten with every invalid byte of every
+// string field (at any nesting depth) replaced by U+FFFD, and parsed again. Returns kRepaired
+// then (the caller reports it), kFailed when the bytes do not parse even after the repair.
+// `repaired_bytes`, when given, receives the rewritten wire bytes on kRepaired.
+enum class ParseOutcome { kOk, kRepaired, kFailed };
+ParseOutcome ParseRepairingUtf8(std::string_view data, google::protobuf::Message& message,
+                                std::string* repaired_bytes = nullptr);
+
+// Messages repaired on read, per channel (see ParseRepairingUtf8).
+struct Utf8Repairs {
+  uint64_t messages = 0;
+  uint32_t first_sequence = 0;
+};
+
 // Decodes messages with the schemas embedded in the file (never the compiled-in types), so any
 // protobuf MCAP file can be inspected and files written by older builds still decode.
 class ProtoDecoder {
@@ -54,23 +71,40 @@ class ProtoDecoder {
   ProtoDecoder();
   ~ProtoDecoder();
   // Throw McapError naming the schema/channel: encoding not "protobuf", FileDescriptorSet that
-  // does not parse or build, message name absent from it, channel without a known schema.
+  // does not parse or build, message name absent from it, channel without a known schema, an
+  // id defined again with different content (the MCAP spec requires repeats to be identical;
+  // identical repeats are ignored).
   void AddSchema(const McapSchema& schema);
   void AddChannel(const McapChannel& channel);
   // The returned message is reused by the next Decode of the same channel. Throws McapError
   // when the bytes do not parse as the channel's type.
+  // Strings that are not valid UTF-8 are repaired (ParseRepairingUtf8) and counted in repairs().
   const google::protobuf::Message& Decode(const McapMessageView& message);
   const google::protobuf::Descriptor* descriptor(uint16_t channel_id) const;
+  // The channel's message type (a prototype to New() from); nullptr for an unknown channel.
+  const google::protobuf::Message* Prototype(uint16_t channel_id) const;
+  const std::map<uint16_t, Utf8Repairs>& repairs() const { return repairs_; }
+  // "channel 'T': N message(s) with invalid UTF-8 in string fields (first: sequence S),
+  // repaired on read (invalid bytes read as U+FFFD)", one line per channel.
+  std::vector<std::string> RepairProblems() const;
 
  private:
   struct SchemaEntry {
+    // Destroyed in reverse order: the pool before the database and the error collector it
+    // points to. (DescriptorPool has no virtual destructor: the pieces are owned here, not by
+    // a pool subclass - that leaked every schema's database, found by fuzz_mcap_reader.)
+    std::unique_ptr<google::protobuf::DescriptorDatabase> database;
+    std::unique_ptr<google::protobuf::DescriptorPool::ErrorCollector> errors;
     std::unique_ptr<google::protobuf::DescriptorPool> pool;
     const google::protobuf::Descriptor* type = nullptr;
+    McapSchema record;  // to recognise a repeated Schema record (the same id again)
   };
   std::map<uint16_t, SchemaEntry> schemas_;
   std::map<uint16_t, std::unique_ptr<google::protobuf::Message>> channel_messages_;
+  std::map<uint16_t, McapChannel> channel_records_;
   std::unique_ptr<google::protobuf::DynamicMessageFactory> factory_;
   std::vector<std::string> channel_topics_;
+  std::map<uint16_t, Utf8Repairs> repairs_;
 };
 
 using DecodedMessageFn = std::function<void(const McapChannel&, const McapMessageView&,
@@ -80,7 +114,9 @@ struct RecordingCatalog {
   std::map<uint16_t, McapChannel> channels;
 };
 // Scans the file and calls `fn` for each message, decoded. Strict by default. `catalog`, when
-// given, receives every schema and channel found.
+// given, receives every schema and channel found. Messages repaired on read (invalid UTF-8)
+// are not an error: each channel with repairs adds a line to the result's `problems` and
+// `repaired_messages` counts them.
 McapScanResult ReadRecording(const std::string& path, const DecodedMessageFn& fn,
                              const McapScanOptions& options = {},
                              RecordingCatalog* catalog = nullptr);
@@ -190,14 +226,19 @@ struct TopicFilter {
 
 struct ExportResult {
   std::vector<std::pair<std::string, uint64_t>> files;  // path, rows
+  std::vector<std::string> warnings;                    // repaired on read (invalid UTF-8)
 };
 // One CSV per topic: log_time_ns, publish_time_ns, sequence, then every field flattened
-// (nested as a.b, repeated as name[i]).
+// (nested as a.b, repeated as name[i]). All or nothing: on an error (unreadable recording,
+// write failure) no CSV is left behind; files appear under their names only on success.
 ExportResult ExportCsv(const std::string& path, const std::string& out_dir,
                        const TopicFilter& filter);
 
 struct RecoverResult {
-  bool input_complete = false;
+  bool input_complete = false;   // structure: data end, summary and footer valid
+  bool input_readable = false;   // complete and every message decodes as its schema unchanged
+  uint64_t repaired_messages = 0;     // invalid UTF-8 in string fields, repaired in the output
+  uint64_t undecodable_messages = 0;  // do not parse as their schema even after the repair
   uint64_t messages = 0;
   uint64_t chunks_read = 0;
   uint64_t bad_chunks = 0;

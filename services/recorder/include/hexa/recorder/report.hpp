@@ -44,6 +44,7 @@ struct SessionReport {
   std::map<std::string, std::uint64_t> messages;         // per topic
   std::map<std::string, std::uint64_t> missing;          // per periodic topic, from ticks
   std::vector<std::string> faults;                       // FaultEvent lines
+  std::vector<std::string> warnings;  // what the reader repaired (invalid UTF-8), per channel
   double wall_time_s = 0.0;   // first to last log time
   double sim_time_s = 0.0;    // last ground-truth tick
   std::string final_supervisor_state;
