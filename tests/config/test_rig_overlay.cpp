@@ -164,7 +164,8 @@ struct Defect {
 TEST(RigOverlay, DefectsNameFileLineFieldValueAndLimit) {
   const std::vector<Defect> defects = {
       {"negative coulomb", "leg {\n leg_id: 2\n friction { extend { coulomb_n: -3 } } }\n", 5,
-       "leg[leg_id=2].friction.extend.coulomb_n", "must not be negative"},
+       // The rig file's rule for the parameter (core param_checks, one rule per parameter).
+       "leg[leg_id=2].friction.extend.coulomb_n", "must be positive"},
       {"static below coulomb", "leg { leg_id: 1\n friction { retract {\n static_n: 10 } } }\n", 5,
        "leg[leg_id=1].friction.retract.static_n", "at least the Coulomb friction"},
       {"polytropic above 2", "leg { leg_id: 6\n polytropic { extend { volume: 2.5 } } }\n", 4,
