@@ -26,12 +26,18 @@ std::string Fmt(double v) {
 
 // What each role may publish and subscribe (the access-control table): only the
 // plant / I/O node publishes sensors, IMU and ground truth; only leg N's identities publish
-// ValveCommand, and only in partition "leg<N>"; only the supervisor publishes setpoints and
-// pose reports; only the operator publishes OperatorCommand; the recorder subscribes to
-// everything and publishes nothing but its own NodeStatus (the plant waits for it).
+// ValveCommand, and only in partition LegPartition(N); only the supervisor publishes
+// setpoints and pose reports; only the operator publishes OperatorCommand; the recorder
+// subscribes to everything and publishes nothing but its own NodeStatus (the plant waits for
+// it). Partitions follow the loop's routing (comm/partition.hpp): the plant and the
+// supervisor write LegSensors / LegSetpoint in the default partition (supervisor, recorder)
+// and in each leg's partition; leg N reads them in its own partition only, so a leg identity
+// cannot even subscribe to another leg's sensors or setpoints.
 struct TopicRule {
   std::string_view topic;
-  std::string partition;  // empty: the default partition only
+  // Empty: the default partition only (no <partitions> element). "" in the list: the
+  // default partition next to others (an empty <partition/>).
+  std::vector<std::string> partitions;
 };
 struct RolePermissions {
   std::vector<TopicRule> publish, subscribe;
@@ -39,32 +45,33 @@ struct RolePermissions {
 
 RolePermissions PermissionsOf(Role role, int leg) {
   using namespace hexa::comm;
-  const TopicRule status{kNodeStatusTopic, ""}, faults{kFaultEventTopic, ""};
-  // Readers of ValveCommand subscribe to every leg partition and the default one.
-  const TopicRule valve_any{kValveCommandTopic, "*"};
+  const TopicRule status{kNodeStatusTopic, {}}, faults{kFaultEventTopic, {}};
+  const std::string any_leg = "hexa.leg*";  // LegPartition(1..6)
+  const TopicRule valve_any{kValveCommandTopic, {"", any_leg}};  // per-leg readers, the recorder
   RolePermissions p;
   switch (role) {
     case deployment::PLANT:
-      p.publish = {{kLegSensorsTopic, ""}, {kImuSampleTopic, ""}, {kGroundTruthTopic, ""}, status, faults};
-      p.subscribe = {valve_any, {kLegSetpointTopic, ""}, status};
+      p.publish = {{kLegSensorsTopic, {"", any_leg}}, {kImuSampleTopic, {}}, {kGroundTruthTopic, {}},
+                   status, faults};
+      p.subscribe = {valve_any, {kLegSetpointTopic, {}}, status};
       break;
     case deployment::LEG:
-      p.publish = {{kValveCommandTopic, LegPartition(leg)}, status};
-      p.subscribe = {{kLegSensorsTopic, ""}, {kLegSetpointTopic, ""}};
+      p.publish = {{kValveCommandTopic, {LegPartition(leg)}}, status};
+      p.subscribe = {{kLegSensorsTopic, {LegPartition(leg)}}, {kLegSetpointTopic, {LegPartition(leg)}}};
       break;
     case deployment::SUPERVISOR:
-      p.publish = {{kLegSetpointTopic, ""}, {kPoseReportTopic, ""}, status, faults};
-      p.subscribe = {{kLegSensorsTopic, ""}, {kImuSampleTopic, ""}, {kOperatorCommandTopic, ""},
+      p.publish = {{kLegSetpointTopic, {"", any_leg}}, {kPoseReportTopic, {}}, status, faults};
+      p.subscribe = {{kLegSensorsTopic, {}}, {kImuSampleTopic, {}}, {kOperatorCommandTopic, {}},
                      faults, valve_any};
       break;
     case deployment::RECORDER:
       p.publish = {status};
-      p.subscribe = {{kLegSensorsTopic, ""}, valve_any, {kImuSampleTopic, ""},
-                     {kLegSetpointTopic, ""}, {kPoseReportTopic, ""}, {kGroundTruthTopic, ""},
-                     {kOperatorCommandTopic, ""}, status, faults};
+      p.subscribe = {{kLegSensorsTopic, {}}, valve_any, {kImuSampleTopic, {}},
+                     {kLegSetpointTopic, {}}, {kPoseReportTopic, {}}, {kGroundTruthTopic, {}},
+                     {kOperatorCommandTopic, {}}, status, faults};
       break;
     case deployment::OPERATOR:
-      p.publish = {{kOperatorCommandTopic, ""}};
+      p.publish = {{kOperatorCommandTopic, {}}};
       break;
     default:
       break;
@@ -81,16 +88,18 @@ std::string IsoTime(std::time_t t) {
 }
 
 std::string RulesXml(const std::vector<TopicRule>& rules, const char* kind, const char* indent) {
-  // Group by partition so that each <publish>/<subscribe> block has one partition set.
-  std::map<std::string, std::vector<std::string_view>> by_partition;
-  for (const auto& r : rules) by_partition[r.partition].push_back(r.topic);
+  // Group by partition set so that each <publish>/<subscribe> block has one.
+  std::map<std::vector<std::string>, std::vector<std::string_view>> by_partitions;
+  for (const auto& r : rules) by_partitions[r.partitions].push_back(r.topic);
   std::ostringstream os;
-  for (const auto& [partition, topics] : by_partition) {
+  for (const auto& [partitions, topics] : by_partitions) {
     os << indent << "<" << kind << ">\n" << indent << "  <topics>\n";
     for (auto t : topics) os << indent << "    <topic>" << t << "</topic>\n";
     os << indent << "  </topics>\n";
-    if (!partition.empty()) {
-      os << indent << "  <partitions><partition>" << partition << "</partition></partitions>\n";
+    if (!partitions.empty()) {
+      os << indent << "  <partitions>";
+      for (const auto& part : partitions) os << "<partition>" << part << "</partition>";
+      os << "</partitions>\n";
     }
     os << indent << "</" << kind << ">\n";
   }

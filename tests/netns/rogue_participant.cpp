@@ -89,11 +89,11 @@ int main(int argc, char** argv) {
     try {
       v.writer = std::make_unique<comm::Writer<hexa_msg_ValveCommand>>(
           *participant, valve_topic, q, std::vector<std::string>{comm::LegPartition(v.partition_leg)});
-      std::printf("rogue: ValveCommand writer in partition leg%d for leg %d: created\n",
-                  v.partition_leg, v.key_leg);
+      std::printf("rogue: ValveCommand writer in partition %s for leg %d: created\n",
+                  comm::LegPartition(v.partition_leg).c_str(), v.key_leg);
     } catch (const std::exception& e) {
-      std::printf("rogue: ValveCommand writer in partition leg%d for leg %d: REFUSED (%s)\n",
-                  v.partition_leg, v.key_leg, e.what());
+      std::printf("rogue: ValveCommand writer in partition %s for leg %d: REFUSED (%s)\n",
+                  comm::LegPartition(v.partition_leg).c_str(), v.key_leg, e.what());
     }
   }
   std::unique_ptr<comm::Topic<hexa_msg_LegSensors>> sensors_topic;
@@ -145,9 +145,9 @@ int main(int argc, char** argv) {
   }
   for (const auto& v : valves) {
     if (!v.writer) continue;
-    std::printf("rogue: ValveCommand partition leg%d key leg %d: matched %u readers, wrote %llu "
+    std::printf("rogue: ValveCommand partition %s key leg %d: matched %u readers, wrote %llu "
                 "samples of %.7g V\n",
-                v.partition_leg, v.key_leg, v.writer->Snapshot().publication_matched_current,
+                comm::LegPartition(v.partition_leg).c_str(), v.key_leg, v.writer->Snapshot().publication_matched_current,
                 static_cast<unsigned long long>(v.written), *value);
   }
   if (sensors)
