@@ -4,6 +4,7 @@
 //   lockstep        secured lockstep session: speed, RMSE, round trip, loss, bit-identity
 //   lockstep-plain  the same without DDS Security (cost of security, same run)
 //   realtime        secured real-time session: RMSE, round trip, loss, faults
+//   realtime-plain  the same without DDS Security
 //   loss            real time with nftables `numgen random` drops on the input of legs-a
 //                   (sensors and setpoints of legs 1-3), for each --loss percentage
 //   recorder-loss   real time with drops on the recorder host's input: the recorder's loss
@@ -61,6 +62,7 @@ struct Row {
   std::uint64_t missing = 0;
   std::size_t faults = 0;
   long long dropped = -1;  // nftables counter
+  double cpu_s = 0;        // CPU time of all control processes and the recorder
   std::string note;
   std::string load;
 };
@@ -107,12 +109,14 @@ void FromRecording(LabSession& s, Row& row) {
 
 // Runs until the supervisor exits; `during` is called every 0.5 s with the seconds since the
 // plant reported READY (negative before).
-Row RunSession(const std::string& scenario, const LabSessionOptions& o,
+Row RunSession(const std::string& scenario, LabSessionOptions o,
                const std::function<void(LabSession&, double)>& during = {},
                std::chrono::seconds timeout = 600s) {
   Row row;
   row.scenario = scenario;
   row.load = LoadAverage();
+  static int run = 0;
+  o.work_dir += "-" + std::to_string(run++);  // every run keeps its logs
   std::string err;
   auto s = LabSession::Create(o, err);
   if (!s) {
@@ -136,13 +140,28 @@ Row RunSession(const std::string& scenario, const LabSessionOptions& o,
                                : std::chrono::duration<double>(std::chrono::steady_clock::now() - ready).count();
       during(*s, since);
     }
+    // CPU time so far of every unit (read while they run: an exited one is gone).
+    double cpu = 0;
+    for (const auto& name : s->units().Names()) {
+      const double c = s->units().CpuSeconds(name);
+      if (c > 0) cpu += c;
+    }
+    if (cpu > row.cpu_s) row.cpu_s = cpu;
     if (ev.kind == ProcessGroup::Event::kChildExited) {
       if (ev.exit.name == "hexa-supervisor") {
         row.completed = ev.exit.signal == 0 && ev.exit.exit_code == 0;
         if (!row.completed) row.note += " supervisor: " + ev.exit.Describe() + ";";
         break;
       }
-      if (ev.exit.name.rfind("hexa-", 0) == 0) row.note += " " + ev.exit.Describe() + ";";
+      if (ev.exit.name.rfind("hexa-", 0) == 0) {
+        row.note += " " + ev.exit.Describe() + ";";
+        // A control process died: the session cannot complete; give the supervisor a moment
+        // to notice (it holds), then stop.
+        if (ev.exit.exit_code != 0 || ev.exit.signal != 0) {
+          s->Wait(3000ms);
+          break;
+        }
+      }
     }
   }
   row.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() -
@@ -150,6 +169,7 @@ Row RunSession(const std::string& scenario, const LabSessionOptions& o,
                    .count();
   s->StopAll();
   FromRecording(*s, row);
+  row.note += " logs " + o.work_dir + ";";
   const std::string plant = Slurp(s->units().LogOf("hexa-plant"));
   std::smatch m;
   if (std::regex_search(plant, m, std::regex("command faults ([0-9]+)"))) row.note += " plant command faults " + m[1].str() + ";";
@@ -157,8 +177,9 @@ Row RunSession(const std::string& scenario, const LabSessionOptions& o,
 }
 
 void Print(const Row& r) {
-  std::printf("| %-22s | %-3s | %6.1f | %5.2f | %5.2f %5.2f %5.2f | %7.0f | %7.0f | %6llu | %3zu | %7lld | %s | %s\n",
+  std::printf("| %-22s | %-3s | %6.1f | %5.2f | %5.2f | %5.2f %5.2f %5.2f | %7.0f | %7.0f | %6llu | %3zu | %7lld | %s | %s\n",
               r.scenario.c_str(), r.completed ? "yes" : "NO", r.wall_s, r.wall_s > 0 ? r.sim_s / r.wall_s : 0.0,
+              r.sim_s > 0 ? r.cpu_s / r.sim_s : 0.0,
               r.rmse_mm[0], r.rmse_mm[1], r.rmse_mm[2], r.rtt_median_us, r.rtt_p99_us,
               static_cast<unsigned long long>(r.missing), r.faults, r.dropped, r.load.c_str(),
               r.note.c_str());
@@ -228,42 +249,42 @@ void Partition(const LabSessionOptions& base, double partition_ms, const std::st
   };
   std::vector<Fault> faults;
   std::vector<std::pair<std::uint64_t, int>> states;  // tick, state (changes only)
-  std::map<std::uint32_t, std::vector<std::uint64_t>> answered;  // leg -> answered ticks
   hexa::recorder::ReadRecording(mcap, [&](const hexa::recorder::McapChannel& ch,
                                           const hexa::recorder::McapMessageView&,
                                           const google::protobuf::Message& msg) {
+    // The decoded messages are dynamic (built from the recording's schema): re-parse them
+    // into the generated types.
     if (ch.topic == "hexa_FaultEvent") {
-      const auto& f = dynamic_cast<const rec::FaultEvent&>(msg);
+      rec::FaultEvent f;
+      f.ParseFromString(msg.SerializeAsString());
       faults.push_back({f.tick(), f.leg_id(), f.source_node(), rec::FaultReason_Name(f.reason())});
     } else if (ch.topic == "hexa_PoseReport") {
-      const auto& p = dynamic_cast<const rec::PoseReport&>(msg);
+      rec::PoseReport p;
+      p.ParseFromString(msg.SerializeAsString());
       if (states.empty() || states.back().second != static_cast<int>(p.state()))
         states.emplace_back(p.header().tick(), static_cast<int>(p.state()));
-    } else if (ch.topic == "hexa_ValveCommand") {
-      const auto& c = dynamic_cast<const rec::ValveCommand&>(msg);
-      if (c.leg_id() <= 3) answered[c.leg_id()].push_back(c.header().tick());
     }
   });
-  std::printf("partition of legs-a for %.0f ms (load %s): %lld packets dropped by the cut\n", partition_ms,
-              load.c_str(), dropped);
-  const Fault* first = nullptr;
-  for (const auto& f : faults)
-    if (f.source == "plant" && f.leg >= 1 && f.leg <= 3 && (first == nullptr || f.tick < first->tick)) first = &f;
-  if (first != nullptr) {
-    // The last command of that leg the recorder has before the fault: the cut came after it.
-    std::uint64_t last = 0;
-    for (auto t : answered[first->leg])
-      if (t < first->tick) last = std::max(last, t);
-    std::printf("  plant fault: leg %u %s at tick %llu; that leg's last recorded command before it answered "
-                "tick %llu: detected %llu ticks (ms) after the last command (tolerance --stale-ticks %d)\n",
-                first->leg, first->reason.c_str(), static_cast<unsigned long long>(first->tick),
-                static_cast<unsigned long long>(last), static_cast<unsigned long long>(first->tick - last),
-                o.stale_ticks > 0 ? o.stale_ticks : 15);
+  std::printf("partition of legs-a for %.0f ms (%s, load %s): %lld packets dropped by the cut\n", partition_ms,
+              o.secure ? "secured" : "plain", load.c_str(), dropped);
+  // Detection: the plant's first stale-command fault of a leg on the cut host, and the tick
+  // its last command answered (from the plant's log: the recording on another host also got
+  // retransmissions after the heal, so it cannot say what reached the plant when).
+  const std::string plant_log = Slurp(s->units().LogOf("hexa-plant"));
+  std::smatch m;
+  if (std::regex_search(plant_log, m, std::regex("leg ([123]) tick ([0-9]+): valve command stale \\([^,]*, answers tick ([0-9]+)\\)"))) {
+    const long long at = std::stoll(m[2]), answered = std::stoll(m[3]);
+    std::printf("  plant: leg %s stale at tick %lld, its newest command answered tick %lld: detected %lld ticks "
+                "(ms) after the last command that arrived (tolerance --stale-ticks %d: a command older than "
+                "that is stale)\n",
+                m[1].str().c_str(), at, answered, at - answered, o.stale_ticks > 0 ? o.stale_ticks : 15);
   } else {
-    std::printf("  no plant fault for legs 1-3 in the recording\n");
+    std::printf("  no stale-command fault of legs 1-3 in the plant's log\n");
   }
+  if (std::regex_search(plant_log, m, std::regex("leg ([123]) tick ([0-9]+): valve command valid again")))
+    std::printf("  plant: leg %s valid again at tick %s\n", m[1].str().c_str(), m[2].str().c_str());
   static const char* kNames[] = {"IDLE", "BLENDING", "TRACKING", "STOPPING", "HOLD"};
-  std::printf("  supervisor states (tick: state):");
+  std::printf("  supervisor states (tick: state; a HOLD after the last IDLE comes from stopping the processes):");
   for (const auto& [t, st] : states) std::printf(" %llu:%s", static_cast<unsigned long long>(t), kNames[st]);
   std::printf("\n  faults recorded: %zu (first few:", faults.size());
   for (std::size_t i = 0; i < std::min<std::size_t>(faults.size(), 6); ++i)
@@ -277,17 +298,20 @@ void Partition(const LabSessionOptions& base, double partition_ms, const std::st
 int main(int argc, char** argv) {
   hexa::cli::Parser cli("hexa_multihost_bench",
                         "Networked deployment figures: five hosts in network namespaces (root).");
-  cli.AddOption("scenarios", "list", "comma list: lockstep lockstep-plain realtime loss recorder-loss partition",
+  cli.AddOption("scenarios", "list", "comma list: lockstep lockstep-plain realtime realtime-plain loss recorder-loss partition",
                 "lockstep,lockstep-plain,realtime,loss,recorder-loss,partition");
   cli.AddOption("runs", "N", "runs of each session scenario", "1");
   cli.AddOption("loss", "list", "loss percentages of the loss scenarios", "1,5");
   cli.AddOption("partition-ms", "ms", "length of the partition", "300");
   cli.AddOption("build", "dir", "build directory", HEXA_BUILD_DIR);
+  cli.AddOption("stale-ticks", "N", "real time: the plant's stale-command tolerance (0 = default 15)", "0");
+  cli.AddFlag("faults-plain", "run the loss / recorder-loss / partition scenarios without DDS Security");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
   const auto runs = cli.GetInt("runs", 1, 100);
   const auto partition_ms = cli.GetDouble("partition-ms", 1, 100000);
-  if (!runs || !partition_ms) {
+  const auto stale = cli.GetInt("stale-ticks", 0, 1000);
+  if (!runs || !partition_ms || !stale) {
     std::fprintf(stderr, "error: %s\n", cli.error().c_str());
     return 2;
   }
@@ -304,13 +328,15 @@ int main(int argc, char** argv) {
     for (std::string x; std::getline(ss, x, ',');) losses.push_back(std::stoi(x));
   }
   const int domain = 60 + getpid() % 40;
-  const LabSessionOptions base = BaseOptions(build, HEXA_SOURCE_DIR, "b", domain);
+  LabSessionOptions base = BaseOptions(build, HEXA_SOURCE_DIR, "b", domain);
+  base.stale_ticks = static_cast<int>(*stale);
   const std::vector<std::string> auto_args{"--trajectory", "z", "--periods", "1", "--autostart", "--exit-when-done"};
 
   std::printf("five hosts in network namespaces, z trajectory (1 period, 13 s simulated), DDS Security on "
-              "unless '-plain'; machine shared (load average per row)\n\n");
-  std::printf("| scenario | done | wall s | sim/wall | RMSE x y z mm | rtt med us | rtt p99 us | missing | faults | dropped pkts | load | notes\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+              "unless '-plain'; real-time stale tolerance %d ticks; machine shared (load average per row)\n\n",
+              base.stale_ticks > 0 ? base.stale_ticks : 15);
+  std::printf("| scenario | done | wall s | sim/wall | CPU s per sim s | RMSE x y z mm | rtt med us | rtt p99 us | missing | faults | dropped pkts | load | notes\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (long long k = 0; k < *runs; ++k) {
     if (want("lockstep")) {
       auto o = base;
@@ -330,21 +356,31 @@ int main(int argc, char** argv) {
       o.watchdog_s = 0;
       Print(RunSession("realtime secured", o));
     }
+    if (want("realtime-plain")) {
+      auto o = base;
+      o.realtime = true;
+      o.secure = false;
+      o.supervisor_args = auto_args;
+      o.watchdog_s = 0;
+      Print(RunSession("realtime plain", o));
+    }
     for (int p : losses) {
       for (const char* host : {"legs-a", "recorder"}) {
         const bool rec_link = std::string(host) == "recorder";
         if (!want(rec_link ? "recorder-loss" : "loss")) continue;
         auto o = base;
         o.realtime = true;
+        o.secure = !cli.Flag("faults-plain");
         o.supervisor_args = auto_args;
-        bool applied = false;
+        bool applied = false, failed = false;
         long long dropped = -1;
-        Row row = RunSession(std::string("realtime ") + std::to_string(p) + "% loss " + host, o,
+        Row row = RunSession(std::string(o.secure ? "rt secured " : "rt plain ") + std::to_string(p) + "% loss " + host, o,
                              [&](LabSession& s, double since_ready) {
                                std::string err;
-                               if (!applied && since_ready >= 0) {
+                               if (!applied && !failed && since_ready >= 0) {
                                  applied = s.lab().SetInputLoss(host, p, err);
-                                 if (!applied) std::fprintf(stderr, "%s\n", err.c_str());
+                                 failed = !applied;
+                                 if (failed) std::fprintf(stderr, "%s\n", err.c_str());
                                }
                                if (applied) dropped = std::max(dropped, s.lab().DroppedInput(host));
                              });
@@ -353,6 +389,10 @@ int main(int argc, char** argv) {
       }
     }
   }
-  if (want("partition")) Partition(base, *partition_ms, build + "/services/task_space/hexa_operator");
+  if (want("partition")) {
+    LabSessionOptions o = base;
+    o.secure = !cli.Flag("faults-plain");
+    Partition(o, *partition_ms, build + "/services/task_space/hexa_operator");
+  }
   return 0;
 }

@@ -197,7 +197,10 @@ def main():
     done = {k: sum(r is not None for r in v) for k, v in rows.items()}
     print(f"\nsessions completed: plain {done[False]}/{a.runs}, secure {done[True]}/{a.runs}; "
           f"medians over the completed runs; load at end {' '.join(load())}; the machine was shared")
-    shutil.rmtree(work, ignore_errors=True)
+    if all(r is not None for v in rows.values() for r in v):
+        shutil.rmtree(work, ignore_errors=True)
+    else:
+        print(f"logs of the failed sessions kept in {work}")
 
 
 if __name__ == "__main__":

@@ -148,7 +148,8 @@ int DefaultPriority(Role role) {
     case deployment::PLANT: return 80;        // the clock master (hexa_plant_sim uses 80)
     case deployment::LEG: return 70;          // hexa_leg_ctrl
     case deployment::SUPERVISOR: return 75;   // hexa_task_space
-    default: return 0;                        // recorder: normal scheduling
+    case deployment::RECORDER: return 50;     // below the loop; starved, it loses samples
+    default: return 0;
   }
 }
 
@@ -297,10 +298,15 @@ std::vector<std::string> CommandLine(const Deployment& d, const ProcessPlan& pla
   const std::string domain = std::to_string(d.domain_id());
   const std::string startup = Fmt(d.timing().startup_timeout_s());
   std::vector<std::string> argv;
+  // Real time: the SCHED_FIFO priority the unit gives (CPUSchedulingPriority=), also asked
+  // for by the process itself (it would otherwise use its own default).
+  const int prio = p.rt_priority() != 0 ? static_cast<int>(p.rt_priority()) : DefaultPriority(p.role());
+  const bool realtime = d.mode() == deployment::REALTIME;
   auto common = [&] {
     argv.insert(argv.end(), {"--domain", domain, "--mode", ToString(d.mode()), "--rig",
                              d.rig_file(), "--dds-config", dds_config, "--lockstep-timeout",
                              Fmt(d.timing().lockstep_timeout_s())});
+    if (realtime) argv.insert(argv.end(), {"--rt-priority", std::to_string(prio)});
   };
   switch (p.role()) {
     case deployment::PLANT:
@@ -331,6 +337,7 @@ std::vector<std::string> CommandLine(const Deployment& d, const ProcessPlan& pla
                         " record --output " + d.record_dir() +
                         "/session-$(date -u +%Y%m%d-%H%M%S).mcap --domain " + domain +
                         " --dds-config " + dds_config;
+      if (realtime) cmd += " --rt-priority " + std::to_string(prio);
       for (const auto& a : p.arg()) cmd += " " + a;
       return {"/bin/sh", "-c", cmd};
     }

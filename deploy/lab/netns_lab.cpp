@@ -109,20 +109,23 @@ std::vector<std::string> NetnsLab::InHost(const std::string& host,
 
 bool NetnsLab::SetInputLoss(const std::string& host, int percent, std::string& error) {
   const LabHost& h = this->host(host);
+  const std::string nft = Ip() + " netns exec " + h.ns + " " + Nft();
   std::string out;
-  RunShell(Ip() + " netns exec " + h.ns + " " + Nft() + " delete table inet hexa_lab", &out);  // absent is fine
+  RunShell(nft + " delete table inet hexa_lab", &out);  // absent is fine
   if (percent <= 0) return true;
   if (percent > 100) {
     error = "loss percent must be 0..100";
     return false;
   }
-  const std::string rules =
-      "table inet hexa_lab { chain input { type filter hook input priority 0; policy accept; "
-      "iifname \"" + h.veth + "\" numgen random mod 100 < " + std::to_string(percent) +
-      " counter drop comment \"loss\" } }";
-  if (!RunShell(Ip() + " netns exec " + h.ns + " " + Nft() + " '" + rules + "'", &out)) {
-    error = "nft (input loss on " + h.ns + ") failed: " + out;
-    return false;
+  for (const std::string& cmd :
+       {nft + " add table inet hexa_lab",
+        nft + " add chain inet hexa_lab input '{ type filter hook input priority 0; policy accept; }'",
+        nft + " add rule inet hexa_lab input iifname '\"" + h.veth + "\"' numgen random mod 100 '<' " +
+            std::to_string(percent) + " counter drop comment '\"loss\"'"}) {
+    if (!RunShell(cmd, &out)) {
+      error = "nft (input loss on " + h.ns + ") failed: " + cmd + ": " + out;
+      return false;
+    }
   }
   return true;
 }
@@ -137,14 +140,20 @@ long long NetnsLab::DroppedInput(const std::string& host) const {
 
 bool NetnsLab::Partition(const std::string& host, std::string& error) {
   const LabHost& h = this->host(host);
+  const std::string nft = Ip() + " netns exec " + switch_ns_ + " " + Nft();
+  const std::string table = "hexa_lab_" + h.port;
   std::string out;
-  const std::string rules =
-      "table bridge hexa_lab_" + h.port + " { chain forward { type filter hook forward priority 0; "
-      "policy accept; iifname \"" + h.port + "\" counter drop comment \"partition_in\"; oifname \"" +
-      h.port + "\" counter drop comment \"partition_out\" } }";
-  if (!RunShell(Ip() + " netns exec " + switch_ns_ + " " + Nft() + " '" + rules + "'", &out)) {
-    error = "nft (partition of " + h.name + ") failed: " + out;
-    return false;
+  for (const std::string& cmd :
+       {nft + " add table bridge " + table,
+        nft + " add chain bridge " + table + " forward '{ type filter hook forward priority 0; policy accept; }'",
+        nft + " add rule bridge " + table + " forward iifname '\"" + h.port +
+            "\"' counter drop comment '\"partition_in\"'",
+        nft + " add rule bridge " + table + " forward oifname '\"" + h.port +
+            "\"' counter drop comment '\"partition_out\"'"}) {
+    if (!RunShell(cmd, &out)) {
+      error = "nft (partition of " + h.name + ") failed: " + cmd + ": " + out;
+      return false;
+    }
   }
   return true;
 }

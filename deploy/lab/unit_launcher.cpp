@@ -9,6 +9,8 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 namespace hexa::deploy {
 namespace {
@@ -108,7 +110,9 @@ bool UnitLauncher::Start(const std::string& host, const std::string& unit_name,
   s.argv = lab_.InHost(host, unit.exec_start);
   s.env = env;
   s.log_path = LogOf(name);
-  if (group_.Start(s, error) < 0) return false;
+  const pid_t pid = group_.Start(s, error);
+  if (pid < 0) return false;
+  pids_[name] = pid;
   units_[name] = std::move(unit);
   return true;
 }
@@ -146,6 +150,26 @@ void UnitLauncher::Poll() {
       }
     }
   }
+}
+
+double UnitLauncher::CpuSeconds(const std::string& name) const {
+  const auto it = pids_.find(name);
+  if (it == pids_.end()) return -1;
+  std::ifstream in("/proc/" + std::to_string(it->second) + "/stat");
+  std::string text;
+  if (!std::getline(in, text)) return -1;
+  // Fields after the command name (which may contain blanks) in parentheses: utime is the
+  // 14th field, stime the 15th (proc(5)).
+  const auto close = text.rfind(')');
+  if (close == std::string::npos) return -1;
+  std::istringstream rest(text.substr(close + 2));
+  std::string field;
+  unsigned long long utime = 0, stime = 0;
+  for (int i = 3; i <= 15 && rest >> field; ++i) {
+    if (i == 14) utime = std::stoull(field);
+    if (i == 15) stime = std::stoull(field);
+  }
+  return static_cast<double>(utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
 }
 
 const NotifySeen& UnitLauncher::Seen(const std::string& name) const {

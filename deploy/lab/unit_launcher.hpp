@@ -47,6 +47,9 @@ class UnitLauncher {
   const NotifySeen& Seen(const std::string& name) const;
   std::vector<std::string> Names() const;
   std::string LogOf(const std::string& name) const { return work_ + "/" + name + ".log"; }
+  // CPU time (user + system, all threads) a running unit's process has used so far, from
+  // /proc/<pid>/stat; -1 when it no longer runs.
+  double CpuSeconds(const std::string& name) const;
   const UnitFile& Unit(const std::string& name) const { return units_.at(name); }
 
  private:
@@ -60,6 +63,7 @@ class UnitLauncher {
   std::map<std::string, Socket> sockets_;
   std::map<std::string, NotifySeen> seen_;
   std::map<std::string, UnitFile> units_;
+  std::map<std::string, pid_t> pids_;
 };
 
 }  // namespace hexa::deploy

@@ -194,6 +194,8 @@ TEST_F(Generated, UnitsAreNotifyWithWatchdogRestartAndRealtimeResources) {
   EXPECT_TRUE(has(u.exec_start, {"--leg", "4"}));
   EXPECT_TRUE(has(u.exec_start, {"--mode", "realtime"}));
   EXPECT_TRUE(has(u.exec_start, {"--valve-readers", "2"}));
+  EXPECT_TRUE(has(u.exec_start, {"--rt-priority", "70"}));
+  EXPECT_EQ(u.Get("Service.CPUSchedulingPriority"), "70");
   ASSERT_EQ(u.exec_start_pre.size(), 1u);
   EXPECT_TRUE(has(u.exec_start_pre[0], {"verify-security"}));
   EXPECT_NE(std::find(u.environment.begin(), u.environment.end(),
@@ -203,7 +205,7 @@ TEST_F(Generated, UnitsAreNotifyWithWatchdogRestartAndRealtimeResources) {
   EXPECT_TRUE(has(u.exec_start, {"--standby"}));
   ASSERT_TRUE(ParseUnitFile(Host("recorder", "lib/systemd/system/hexa-recorder.service"), u, err)) << err;
   EXPECT_EQ(u.Get("Service.Restart"), "always");
-  EXPECT_EQ(u.Get("Service.CPUSchedulingPolicy"), "");
+  EXPECT_EQ(u.Get("Service.CPUSchedulingPriority"), "50");
   ASSERT_EQ(u.exec_start.size(), 3u);
   EXPECT_EQ(u.exec_start[0], "/bin/sh");
   EXPECT_NE(u.exec_start[2].find("$(date -u +%Y%m%d-%H%M%S)"), std::string::npos) << u.exec_start[2];
