@@ -147,7 +147,7 @@ void Validate(const Deployment& d, Checker& c) {
   std::vector<Dds> dds;
   // Per role / leg: where it runs.
   std::map<int, std::vector<std::string>> primaries, standbys;
-  std::vector<std::string> plants, supervisors, recorders, operators;
+  std::vector<std::string> plants, supervisors, recorders, operators, bridges;
   for (int h = 0; h < d.host_size(); ++h) {
     const Host& host = d.host(h);
     const std::string where = HostWhere(host, h);
@@ -205,7 +205,7 @@ void Validate(const Deployment& d, Checker& c) {
       const int line = L.OfHostField(h, "process", p);
       const std::string pw = where + " process[" + std::to_string(p) + "]";
       if (pr.role() == deployment::ROLE_UNSPECIFIED) {
-        c.Error(line, pw, "role is not set (PLANT SUPERVISOR LEG RECORDER OPERATOR)");
+        c.Error(line, pw, "role is not set (PLANT SUPERVISOR LEG RECORDER OPERATOR BRIDGE)");
         continue;
       }
       if (pr.role() == deployment::LEG) {
@@ -226,6 +226,7 @@ void Validate(const Deployment& d, Checker& c) {
       if (pr.role() == deployment::SUPERVISOR) supervisors.push_back(host.name());
       if (pr.role() == deployment::RECORDER) recorders.push_back(host.name());
       if (pr.role() == deployment::OPERATOR) operators.push_back(host.name());
+      if (pr.role() == deployment::BRIDGE) bridges.push_back(host.name());
       if (pr.rt_priority() > 99)
         c.Error(line, pw, "rt_priority " + std::to_string(pr.rt_priority()) + " (limit 1..99)");
       if (pr.has_cpu() && (pr.cpu() < 0 || pr.cpu() > 1023))
@@ -261,7 +262,8 @@ void Validate(const Deployment& d, Checker& c) {
   }
   for (const auto& [role, hosts, need] :
        {std::tuple{"PLANT", &plants, true}, std::tuple{"SUPERVISOR", &supervisors, true},
-        std::tuple{"RECORDER", &recorders, false}, std::tuple{"OPERATOR", &operators, false}}) {
+        std::tuple{"RECORDER", &recorders, false}, std::tuple{"OPERATOR", &operators, false},
+        std::tuple{"BRIDGE", &bridges, false}}) {
     if (need && hosts->empty()) c.Error(0, "processes", std::string("no ") + role + " process on any host");
     if (hosts->size() > 1)
       c.Error(0, "processes", std::string("more than one ") + role + " process (hosts " +
@@ -364,6 +366,7 @@ std::string NodeName(const Process& p) {
       return "leg" + std::to_string(p.leg()) + (p.standby() ? "_standby" : "");
     case deployment::RECORDER: return "recorder";
     case deployment::OPERATOR: return "operator";
+    case deployment::BRIDGE: return "bridge";
     default: return "unknown";
   }
 }
@@ -382,7 +385,8 @@ std::vector<ProcessPlan> PlanProcesses(const Deployment& d) {
       for (char& ch : unit)
         if (ch == '_') ch = '-';
       plan.unit = "hexa-" + unit + ".service";
-      plan.has_unit = plan.process.role() != deployment::OPERATOR;
+      plan.has_unit = plan.process.role() != deployment::OPERATOR &&
+                      plan.process.role() != deployment::BRIDGE;
       plans.push_back(std::move(plan));
     }
   }
@@ -422,6 +426,7 @@ const char* ToString(Role role) {
     case deployment::LEG: return "LEG";
     case deployment::RECORDER: return "RECORDER";
     case deployment::OPERATOR: return "OPERATOR";
+    case deployment::BRIDGE: return "BRIDGE";
     default: return "ROLE_UNSPECIFIED";
   }
 }

@@ -73,6 +73,11 @@ RolePermissions PermissionsOf(Role role, int leg) {
     case deployment::OPERATOR:
       p.publish = {{kOperatorCommandTopic, {}}};
       break;
+    case deployment::BRIDGE:  // Foxglove viewer: reads everything, writes nothing
+      p.subscribe = {{kLegSensorsTopic, {}}, valve_any, {kImuSampleTopic, {}},
+                     {kLegSetpointTopic, {}}, {kPoseReportTopic, {}}, {kGroundTruthTopic, {}},
+                     {kOperatorCommandTopic, {}}, status, faults};
+      break;
     default:
       break;
   }

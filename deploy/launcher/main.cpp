@@ -303,6 +303,7 @@ int main(int argc, char** argv) {
   if (o.standby)
     for (int leg = 1; leg <= 6; ++leg) identities.push_back("leg" + std::to_string(leg) + "_standby");
   if (o.recorder) identities.push_back("recorder");
+  if (o.bridge) identities.push_back("bridge");
   if (o.secure) {
     // Every process gets its own identity through HEXA_IDENTITY (set per child below); a bad
     // file stops the session here with the file named, before any process starts.
@@ -364,6 +365,7 @@ int main(int argc, char** argv) {
               "--profile", o.profile, "--seed", std::to_string(o.seed), "--log-file",
               o.out_dir + "/bridge.log"};
     b.env = env;
+    b.env["HEXA_IDENTITY"] = "bridge";  // --secure: reads every topic, publishes nothing
     b.log_path = o.out_dir + "/bridge.console.log";
     specs.push_back(b);
     log->info("bridge: Foxglove WebSocket on ws://{}:{}", o.bridge_listen, o.bridge_port);

@@ -38,6 +38,8 @@ std::optional<std::string> MakeSecureSession(const std::string& out_dir, int dom
       p->set_role(deployment::SUPERVISOR);
     } else if (id == "recorder") {
       p->set_role(deployment::RECORDER);
+    } else if (id == "bridge") {
+      p->set_role(deployment::BRIDGE);
     } else if (id.size() >= 4 && id.rfind("leg", 0) == 0 && id[3] >= '1' && id[3] <= '6' &&
                (id.size() == 4 || id.substr(4) == "_standby")) {
       p->set_role(deployment::LEG);

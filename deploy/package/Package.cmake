@@ -7,6 +7,9 @@ set(HEXA_PKG_DOC "share/doc/hexataar-control")
 install(TARGETS hexa_plant_sim hexa_leg_ctrl hexa_task_space hexa_operator hexa_recorder
                 hexa_session hexa_deploy hexa_check_config
         RUNTIME DESTINATION bin)
+if(TARGET hexa_bridge)
+  install(TARGETS hexa_bridge RUNTIME DESTINATION bin)
+endif()
 install(FILES deploy/cyclonedds-loopback.xml deploy/cyclonedds-network.example.xml
         DESTINATION share/hexa)
 install(PROGRAMS deploy/make_security.sh DESTINATION share/hexa)
@@ -55,10 +58,14 @@ if(HEXA_HELP2MAN)
       "hexa_recorder|record, replay, inspect and report HexaTaar sessions"
       "hexa_session|run a complete closed-loop HexaTaar session"
       "hexa_deploy|deployment descriptions to per-host configuration"
-      "hexa_check_config|validate a HexaTaar rig file")
+      "hexa_check_config|validate a HexaTaar rig file"
+      "hexa_bridge|serve a HexaTaar session to Foxglove over WebSocket")
     string(REPLACE "|" ";" parts "${entry}")
     list(GET parts 0 prog)
     list(GET parts 1 what)
+    if(NOT TARGET ${prog})
+      continue()
+    endif()
     set(page "${CMAKE_BINARY_DIR}/package/man/${prog}.1")
     add_custom_command(OUTPUT "${page}.gz"
       COMMAND "${CMAKE_COMMAND}" -E make_directory "${CMAKE_BINARY_DIR}/package/man"

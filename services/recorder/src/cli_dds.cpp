@@ -123,9 +123,7 @@ class TopicRecorder final : public TopicRecorderBase {
   // Security): the recorder subscribes to every leg partition and the default one.
   static std::vector<std::string> Partitions() {
     if constexpr (comm::TopicTraits<T>::kKind != comm::TopicKind::kValveCommand) return {};
-    std::vector<std::string> all{""};
-    for (const auto& leg : comm::AllLegPartitions()) all.push_back(leg);
-    return all;
+    return comm::EveryLegPartitionAndDefault();
   }
   TopicRecorder(const comm::Participant& p, RecordingWriter& w, const comm::QosParams& params)
       : topic_(p),

@@ -19,6 +19,15 @@
 
 namespace hexa::comm {
 
+// What a reader that wants every leg's ValveCommand subscribes to: the default partition
+// (tools and tests writing several legs from one writer) and every leg's partition (the leg
+// controllers). The recorder and the Foxglove bridge read ValveCommand this way.
+inline std::vector<std::string> EveryLegPartitionAndDefault() {
+  std::vector<std::string> all{""};
+  for (const auto& leg : AllLegPartitions()) all.push_back(leg);
+  return all;
+}
+
 template <WireType T>
   requires LegKeyed<T>
 class LegReaders {
