@@ -63,7 +63,8 @@ PERMISSIONS = """<?xml version="1.0" encoding="UTF-8"?>
 
 CONFIG = """<CycloneDDS xmlns="https://cdds.io/config"><Domain id="any"><General>
 <Interfaces><NetworkInterface name="lo" multicast="true"/></Interfaces>
-<AllowMulticast>spdp</AllowMulticast></General>{security}</Domain></CycloneDDS>
+<AllowMulticast>spdp</AllowMulticast></General>
+<Internal><HeartbeatInterval minsched="10 ms">10 ms</HeartbeatInterval></Internal>{security}</Domain></CycloneDDS>
 """
 
 SECURITY = """<Security>

@@ -25,7 +25,7 @@ std::string Fmt(double v) {
 }
 
 // What each role may publish and subscribe (the access-control table): only the
-// plant / I/O node publishes sensors, IMU and ground truth; only leg N's identities publish
+// plant / I/O node publishes sensors, IMU, ground truth and the tracker's poses; only leg N's identities publish
 // ValveCommand, and only in partition LegPartition(N); only the supervisor publishes
 // setpoints and pose reports; only the operator publishes OperatorCommand; the recorder
 // subscribes to everything and publishes nothing but its own NodeStatus (the plant waits for
@@ -51,8 +51,10 @@ RolePermissions PermissionsOf(Role role, int leg) {
   RolePermissions p;
   switch (role) {
     case deployment::PLANT:
+      // TrackerPose: the external pose instrument of a calibration session (--tracker); the
+      // plant creates its writer in every session.
       p.publish = {{kLegSensorsTopic, {"", any_leg}}, {kImuSampleTopic, {}}, {kGroundTruthTopic, {}},
-                   status, faults};
+                   {kTrackerPoseTopic, {}}, status, faults};
       p.subscribe = {valve_any, {kLegSetpointTopic, {}}, status};
       break;
     case deployment::LEG:
@@ -68,7 +70,7 @@ RolePermissions PermissionsOf(Role role, int leg) {
       p.publish = {status};
       p.subscribe = {{kLegSensorsTopic, {}}, valve_any, {kImuSampleTopic, {}},
                      {kLegSetpointTopic, {}}, {kPoseReportTopic, {}}, {kGroundTruthTopic, {}},
-                     {kOperatorCommandTopic, {}}, status, faults};
+                     {kTrackerPoseTopic, {}}, {kOperatorCommandTopic, {}}, status, faults};
       break;
     case deployment::OPERATOR:
       p.publish = {{kOperatorCommandTopic, {}}};
@@ -76,7 +78,7 @@ RolePermissions PermissionsOf(Role role, int leg) {
     case deployment::BRIDGE:  // Foxglove viewer: reads everything, writes nothing
       p.subscribe = {{kLegSensorsTopic, {}}, valve_any, {kImuSampleTopic, {}},
                      {kLegSetpointTopic, {}}, {kPoseReportTopic, {}}, {kGroundTruthTopic, {}},
-                     {kOperatorCommandTopic, {}}, status, faults};
+                     {kTrackerPoseTopic, {}}, {kOperatorCommandTopic, {}}, status, faults};
       break;
     default:
       break;
@@ -191,7 +193,13 @@ std::string CycloneXml(const Deployment& d, const Host& host, const HostPaths& p
   for (const auto& h : d.host()) peers.insert(AddressOf(DdsInterface(h).address()));
   for (const auto& p : peers) os << "        <Peer address=\"" << p << "\"/>\n";
   os << "      </Peers>\n"
-     << "    </Discovery>\n";
+     << "    </Discovery>\n"
+     // As deploy/cyclonedds-loopback.xml: reliable writers ask for acknowledgements every
+     // 10 ms instead of Cyclone's 100 ms; the lockstep plant's sync with the recorder waits
+     // for them (at 100 ms lockstep with a recorder ran at 0.5x real time, docs/performance.md).
+     << "    <Internal>\n"
+     << "      <HeartbeatInterval minsched=\"10 ms\">10 ms</HeartbeatInterval>\n"
+     << "    </Internal>\n";
   if (!d.security().audit_dir().empty()) {
     os << "    <Tracing>\n"
        << "      <Category>discovery</Category>\n"

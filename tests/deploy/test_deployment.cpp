@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <regex>
 #include <sstream>
 #include <string>
 
@@ -137,6 +138,38 @@ TEST_F(Generated, CycloneConfigPinsTheInterfaceListsEveryPeerAndIsSecured) {
   EXPECT_EQ(rec.find("name=\"eth0\""), std::string::npos);
 }
 
+// Every generated Cyclone configuration, secured or not, carries the heartbeat setting of the
+// repository's own DDS configurations (the lockstep plant's recorder sync waits for
+// acknowledgements; at Cyclone's default 100 ms lockstep with a recorder ran at 0.5x real time).
+TEST_F(Generated, EveryCycloneConfigHasTheLoopbackConfigsHeartbeat) {
+  const std::string loopback = Slurp(HEXA_LOOPBACK_CONFIG);
+  const std::regex element("<HeartbeatInterval[^>]*>[^<]*</HeartbeatInterval>");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(loopback, m, element)) << HEXA_LOOPBACK_CONFIG;
+  const std::string expected = m.str();
+  EXPECT_NE(expected.find("10 ms"), std::string::npos) << expected;
+  auto check_tree = [&](const std::string& hosts_dir) {
+    int configs = 0;
+    for (const auto& host : fs::directory_iterator(hosts_dir)) {
+      const std::string xml = Slurp(host.path().string() + "/etc/hexa/cyclonedds.xml");
+      ++configs;
+      EXPECT_NE(xml.find(expected), std::string::npos) << host.path() << " lacks " << expected;
+      const auto internal = xml.find("<Internal>");
+      EXPECT_TRUE(internal != std::string::npos && xml.find(expected) > internal &&
+                  xml.find(expected) < xml.find("</Internal>"))
+          << host.path() << ": the element must be inside <Internal>";
+    }
+    return configs;
+  };
+  EXPECT_EQ(check_tree(dir_ + "/out/hosts"), 5);  // secured: every host keeps it
+  auto plain = loaded_.deployment;
+  plain.mutable_security()->set_enabled(false);
+  const auto r = Generate(plain, "# unsecured copy\n", dir_ + "/plain", GenerateOptions{});
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_EQ(check_tree(dir_ + "/plain/hosts"), 5);
+  EXPECT_EQ(Slurp(dir_ + "/plain/hosts/legs-a/etc/hexa/cyclonedds.xml").find("<Security>"), std::string::npos);
+}
+
 TEST_F(Generated, PermissionsFollowTheIssuesAccessTable) {
   const std::string src = dir_ + "/out/security-src/permissions/";
   const std::string leg3 = Slurp(src + "leg3.xml");
@@ -154,7 +187,7 @@ TEST_F(Generated, PermissionsFollowTheIssuesAccessTable) {
   EXPECT_EQ(publish_block(Slurp(src + "leg4_standby.xml")).find("leg3"), std::string::npos);
   EXPECT_NE(publish_block(Slurp(src + "leg4_standby.xml")).find("<partition>hexa.leg4</partition>"), std::string::npos);
   const std::string plant = publish_block(Slurp(src + "plant.xml"));
-  for (const char* t : {"hexa_LegSensors", "hexa_ImuSample", "hexa_GroundTruth"})
+  for (const char* t : {"hexa_LegSensors", "hexa_ImuSample", "hexa_GroundTruth", "hexa_TrackerPose"})
     EXPECT_NE(plant.find(t), std::string::npos) << t;
   EXPECT_EQ(plant.find("hexa_ValveCommand"), std::string::npos);
   const std::string sup = publish_block(Slurp(src + "supervisor.xml"));
@@ -168,7 +201,8 @@ TEST_F(Generated, PermissionsFollowTheIssuesAccessTable) {
   const std::string rec = Slurp(src + "recorder.xml");
   EXPECT_EQ(publish_block(rec).find("hexa_LegSensors"), std::string::npos);
   EXPECT_NE(publish_block(rec).find("hexa_NodeStatus"), std::string::npos);
-  for (const char* t : {"hexa_LegSensors", "hexa_ValveCommand", "hexa_GroundTruth", "hexa_PoseReport"})
+  for (const char* t : {"hexa_LegSensors", "hexa_ValveCommand", "hexa_GroundTruth", "hexa_PoseReport",
+                        "hexa_TrackerPose"})
     EXPECT_NE(rec.find(t), std::string::npos) << t;
   const std::string gov = Slurp(dir_ + "/out/security-src/governance.xml");
   for (const char* s : {"<allow_unauthenticated_participants>false", "<discovery_protection_kind>ENCRYPT",
