@@ -17,6 +17,13 @@ packages=(
   libzstd-dev                                           # zstd MCAP chunks (recorder)
   libwebsocketpp-dev libasio-dev nlohmann-json3-dev     # hexa_bridge (Foxglove WebSocket)
   clang-14 libclang-rt-14-dev   # tests/fuzz: libFuzzer, ASan, UBSan runtimes
+  # Networked deployments (docs/deployment.md): sd_notify for the systemd units, OpenSSL for
+  # the DDS Security files (openssl CLI in deploy/make_security.sh, libssl in hexa_deploy
+  # verify-security), systemd-analyze to verify generated units, nftables for network faults
+  # in the multi-host tests, tcpdump for the wire-encryption test, and the Debian package
+  # tools (lintian; help2man for the manual pages; debootstrap for the install test in a
+  # chroot). Cyclone's security plugins come with libddsc0debian (cyclonedds-dev's dependency).
+  libsystemd-dev systemd openssl libssl-dev nftables tcpdump lintian debootstrap dpkg-dev help2man
 )
 # Node.js + npm (test clients only: the MCAP project's JS library reads recordings, Foxglove's
 # schemas and WebSocket client check the scene and hexa_bridge; tests/foxglove): machines

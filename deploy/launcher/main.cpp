@@ -23,6 +23,7 @@
 #include "hexa/services/logging.hpp"
 #include "hexa/services/scheduling.hpp"
 #include "process_group.hpp"
+#include "secure_session.hpp"
 
 namespace fs = std::filesystem;
 using hexa::deploy::ChildSpec;
@@ -51,7 +52,7 @@ struct Options {
   std::string trajectory, controller, profile, mode, out_dir, rig, dds_config;
   long long seed = 1, domain = 0, periods = 0, stale_ticks = 15;
   bool recorder = true, standby = false, outer_loop = true, rt_sched = true, bridge = false,
-       feedforward = true, tracker = false;
+       feedforward = true, tracker = false, secure = false;
   std::string cpus_control, cpus_recorder;
   std::string bridge_listen, bridge_port, bridge_queue_kb;
   int fault_leg = 0;
@@ -151,6 +152,9 @@ int main(int argc, char** argv) {
   cli.AddOption("bridge-port", "n", "TCP port of hexa_bridge (0 = any free port, see bridge.log)",
                 "8765");
   cli.AddOption("bridge-queue-kb", "n", "hexa_bridge --client-queue-kb", "4096");
+  cli.AddFlag("secure", "DDS Security for the whole session: a project CA, one identity per "
+                        "process, signed governance and permissions, encryption on the wire "
+                        "(files in <out>/security; docs/deployment.md)");
   cli.AddOption("fault", "leg:kind:time_s",
                 "inject a fault into one primary leg controller, e.g. 3:crash:2.0 "
                 "(kinds: crash hang slow garbage silence)");
@@ -170,6 +174,12 @@ int main(int argc, char** argv) {
   o.dds_config = fs::absolute(cli.Get("dds-config")).string();
   o.recorder = !cli.Flag("no-recorder");
   o.standby = cli.Flag("standby");
+  o.secure = cli.Flag("secure");
+  if (o.secure && cli.Get("dds-config") != HEXA_DEFAULT_CYCLONE_CONFIG) {
+    std::fprintf(stderr, "error: --secure makes its own DDS configuration (loopback, secured); "
+                 "it cannot be combined with --dds-config\n");
+    return 2;
+  }
   o.outer_loop = !cli.Flag("no-outer-loop");
   o.rt_sched = !cli.Flag("no-rt-sched");
   {
@@ -283,9 +293,35 @@ int main(int argc, char** argv) {
     overlay_args.insert(overlay_args.end(), {"--rig-overlay", overlay});
   }
 
-  const std::string bin = HEXA_BINARY_DIR;
-  const std::map<std::string, std::string> env{
-      {"CYCLONEDDS_URI", "file://" + o.dds_config}};
+  // Build tree: each binary in its own directory; installed (Debian package): all in bin/.
+  auto executable = [](const std::string& build_relative) {
+#ifdef HEXA_INSTALLED_BIN_DIR
+    return std::string(HEXA_INSTALLED_BIN_DIR) + build_relative.substr(build_relative.rfind('/'));
+#else
+    return std::string(HEXA_BINARY_DIR) + build_relative;
+#endif
+  };
+  std::map<std::string, std::string> env{{"CYCLONEDDS_URI", "file://" + o.dds_config}};
+  std::vector<std::string> identities{"plant", "supervisor", "leg1", "leg2", "leg3", "leg4", "leg5", "leg6"};
+  if (o.standby)
+    for (int leg = 1; leg <= 6; ++leg) identities.push_back("leg" + std::to_string(leg) + "_standby");
+  if (o.recorder) identities.push_back("recorder");
+  if (o.bridge) identities.push_back("bridge");
+  if (o.secure) {
+    // Every process gets its own identity through HEXA_IDENTITY (set per child below); a bad
+    // file stops the session here with the file named, before any process starts.
+    std::string error;
+    const auto secured = hexa::deploy::MakeSecureSession(o.out_dir, static_cast<int>(o.domain),
+                                                         identities, HEXA_MAKE_SECURITY_SCRIPT, error);
+    if (!secured) {
+      log->error("--secure: {}", error);
+      return 1;
+    }
+    o.dds_config = *secured;
+    env["CYCLONEDDS_URI"] = "file://" + o.dds_config;
+    log->info("DDS Security on: {} identities signed by {}/security/ca, configuration {}",
+              identities.size(), o.out_dir, o.dds_config);
+  }
   std::vector<std::string> common{"--rig", o.rig, "--domain", std::to_string(o.domain),
                                   "--mode", o.mode};
   if (!o.cpus_control.empty()) common.insert(common.end(), {"--cpus", o.cpus_control});
@@ -294,12 +330,13 @@ int main(int argc, char** argv) {
                   std::vector<std::string> args) {
     ChildSpec s;
     s.name = name;
-    s.argv = {bin + exe};
+    s.argv = {executable(exe)};
     s.argv.insert(s.argv.end(), args.begin(), args.end());
     s.argv.insert(s.argv.end(), common.begin(), common.end());
     s.argv.push_back("--log-file");
     s.argv.push_back(o.out_dir + "/" + name + ".log");
     s.env = env;
+    s.env["HEXA_IDENTITY"] = name;  // the process's DDS Security identity (--secure)
     s.log_path = o.out_dir + "/" + name + ".console.log";
     return s;
   };
@@ -310,7 +347,7 @@ int main(int argc, char** argv) {
     ChildSpec r;
     r.name = "recorder";
     // --rig/--profile/--seed: the 3-D scene draws the simulated plant's true joints.
-    r.argv = {bin + "/services/recorder/hexa_recorder", "record", "--output", mcap, "--domain",
+    r.argv = {executable("/services/recorder/hexa_recorder"), "record", "--output", mcap, "--domain",
               std::to_string(o.domain), "--rig", o.rig, "--profile", o.profile, "--seed",
               std::to_string(o.seed)};
     if (!o.cpus_recorder.empty()) r.argv.insert(r.argv.end(), {"--cpus", o.cpus_recorder});
@@ -318,18 +355,20 @@ int main(int argc, char** argv) {
     // beside SCHED_FIFO peers is starved and loses samples.
     if (o.mode == "realtime" && o.rt_sched) r.argv.insert(r.argv.end(), {"--rt-priority", "50"});
     r.env = env;
+    r.env["HEXA_IDENTITY"] = "recorder";
     r.log_path = o.out_dir + "/recorder.console.log";
     specs.push_back(r);
   }
   if (o.bridge) {
     ChildSpec b;
     b.name = "bridge";
-    b.argv = {bin + "/services/bridge/hexa_bridge", "--domain", std::to_string(o.domain),
+    b.argv = {executable("/services/bridge/hexa_bridge"), "--domain", std::to_string(o.domain),
               "--listen", o.bridge_listen, "--port", o.bridge_port, "--client-queue-kb",
               o.bridge_queue_kb, "--rig", o.rig,
               "--profile", o.profile, "--seed", std::to_string(o.seed), "--log-file",
               o.out_dir + "/bridge.log"};
     b.env = env;
+    b.env["HEXA_IDENTITY"] = "bridge";  // --secure: reads every topic, publishes nothing
     b.log_path = o.out_dir + "/bridge.console.log";
     specs.push_back(b);
     log->info("bridge: Foxglove WebSocket on ws://{}:{}", o.bridge_listen, o.bridge_port);
@@ -487,7 +526,7 @@ int main(int argc, char** argv) {
     const std::string recovered = o.out_dir + "/session.recovered.mcap";
     ChildSpec rc;
     rc.name = "recover";
-    rc.argv = {bin + "/services/recorder/hexa_recorder", "recover", mcap, "--output", recovered};
+    rc.argv = {executable("/services/recorder/hexa_recorder"), "recover", mcap, "--output", recovered};
     rc.env = env;
     rc.log_path = o.out_dir + "/recover.console.log";
     const auto e = run_tool(rc);
@@ -504,12 +543,13 @@ int main(int argc, char** argv) {
   if (o.recorder && std::filesystem::exists(recording)) {
     ChildSpec r;
     r.name = "report";
-    r.argv = {bin + "/services/recorder/hexa_recorder", "report", recording, "--out", o.out_dir,
+    r.argv = {executable("/services/recorder/hexa_recorder"), "report", recording, "--out", o.out_dir,
               "--meta", "trajectory=" + o.trajectory, "--meta", "controller=" + o.controller,
               "--meta", "profile=" + o.profile, "--meta", "mode=" + o.mode,
               "--meta", "seed=" + std::to_string(o.seed),
               "--meta", std::string("outer_loop=") + (o.outer_loop ? "on" : "off"),
               "--meta", std::string("feedforward=") + (o.feedforward ? "on" : "off"),
+              "--meta", std::string("dds_security=") + (o.secure ? "on" : "off"),
               "--meta", std::string("completed=") + (completed ? "yes" : "NO")};
     if (!o.rig_overlays.empty()) {
       std::string list;

@@ -89,6 +89,13 @@ class Source final : public SourceBase {
       dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 32);
       dds_qset_durability(qos.get(), DDS_DURABILITY_VOLATILE);
     }
+    if (kind == comm::TopicKind::kValveCommand) {
+      // The leg controllers write in their leg's partition (docs/deployment.md, DDS Security).
+      const auto partitions = comm::EveryLegPartitionAndDefault();
+      std::vector<const char*> names;
+      for (const auto& n : partitions) names.push_back(n.c_str());
+      dds_qset_partition(qos.get(), static_cast<uint32_t>(names.size()), names.data());
+    }
     reader_ = comm::CheckDds(dds_create_reader(p.get(), topic_.get(), qos.get(), nullptr),
                              "cannot create reader on " + std::string(comm::TopicName(kind)));
     condition_ = comm::CheckDds(

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "hexa/core/lockstep_simulation.hpp"
+#include "hexa/services/service_manager.hpp"
 
 namespace hexa::leg_ctrl {
 namespace {
@@ -85,7 +86,9 @@ LegNode::LegNode(const LegNodeOptions& options, const config::SystemConfig& conf
       setpoint_reader_(participant_, setpoint_topic_, comm::EndpointRole::kControlReader,
                        ControlReaderQos(options, comm::TopicKind::kLegSetpoint), kSetpointRing,
                        {comm::LegPartition(options.leg)}),
-      valve_writer_(participant_, valve_topic_, ValveQos(options)),
+      // Leg N's partition: DDS Security grants it to leg N's identities only (docs/deployment.md).
+      valve_writer_(participant_, valve_topic_, ValveQos(options),
+                    {comm::LegPartition(options.leg)}),
       status_(participant_, name_),
       waitset_(participant_) {
   waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
@@ -329,6 +332,7 @@ int LegNode::Run() {
     return shutdown_.requested() ? 0 : 3;
   }
   PublishStatus(hexa_msg_NODE_RUNNING, options_.standby ? "standby" : "primary");
+  node::service_manager::Ready(options_.standby ? "standby" : "primary");
   log_->info("{} running: leg {}, {}, {}", name_, options_.leg,
              options_.controller == LegControllerKind::kPi ? "PI" : "BS-SMC",
              options_.standby ? "hot standby (ownership strength 10)" : "primary (strength 20)");
@@ -347,6 +351,12 @@ int LegNode::Run() {
     if (n < 0) {
       log_->error("waitset failed: {}", dds_strretcode(n));
       return 1;
+    }
+    if (node::service_manager::WatchdogDue()) {
+      // systemd's watchdog, fed only when the control lock is free: a cycle stuck in a
+      // callback holds it, and systemd then restarts the process.
+      std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+      if (lock.owns_lock()) node::service_manager::Watchdog();
     }
     if (!realtime || shutdown_.requested()) continue;
     if (node::MonotonicNow_ns() - last_write_ns_.load(std::memory_order_relaxed) < idle_ns) continue;
@@ -367,6 +377,7 @@ int LegNode::Run() {
              resent_, queue_overflows_, ticks_missed_, valve_writer_.Snapshot().write_errors_total,
              cycle_times_.Median() * 1e6, cycle_times_.Max() * 1e6);
   PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
+  node::service_manager::Stopping("stopped");
   return 0;
 }
 

@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "hexa/services/service_manager.hpp"
+
 namespace hexa::plant_sim {
 namespace {
 
@@ -119,8 +121,8 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
       tracker_topic_(participant_),
       tracker_writer_(participant_, tracker_topic_,
                       node::QosFor(options.common, comm::TopicKind::kTrackerPose)),
-      valve_reader_(participant_, valve_topic_, comm::EndpointRole::kControlReader,
-                    node::QosFor(options.common, comm::TopicKind::kValveCommand), 64),
+      valve_readers_(participant_, valve_topic_, comm::EndpointRole::kControlReader,
+                     node::QosFor(options.common, comm::TopicKind::kValveCommand), 64),
       status_(participant_, "plant"),
       faults_(participant_, "plant"),
       peers_(participant_),
@@ -146,7 +148,7 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
 }
 
 void PlantNode::PublishStatus(hexa_msg_NodeState state, const char* detail) {
-  const auto valve = valve_reader_.Snapshot();
+  const auto valve = valve_readers_.Snapshot();
   status_.Publish(state, tick_, static_cast<double>(tick_) * kTickS,
                   valve.requested_deadline_missed_total + overruns_,
                   valve.liveliness_changed_events, cycle_times_.total(), cycle_times_.Median(),
@@ -177,7 +179,7 @@ bool PlantNode::WaitForPeers() {
     peers_.Poll();
     const auto missing = peers_.NotRunning(expected);
     const auto sensors = sensor_readers_matched();
-    const auto valves = valve_reader_.Snapshot().subscription_matched_current;
+    const auto valves = valve_readers_.Snapshot().subscription_matched_current;
     // The IMU too: a reader matched on its side may not be matched on this side yet, and a
     // volatile IMU(0) sent before would never reach it (the supervisor would wait for it).
     const auto imu = imu_writer_.Snapshot().publication_matched_current;
@@ -315,17 +317,36 @@ void PlantNode::ReaskSupervisor() {
 }
 
 void PlantNode::TakeCommands(bool feed_barrier) {
-  while (valve_reader_.Take() > 0) {
-    for (std::size_t k = 0; k < valve_reader_.count(); ++k) {
-      if (!valve_reader_.info(k).valid_data) continue;
-      const auto& c = valve_reader_.sample(k);
-      if (c.leg_id < 1 || c.leg_id > kNumLegs) continue;
-      LatestCommand& latest = latest_[c.leg_id - 1];
-      if (latest.received && c.header.tick < latest.answered_tick) continue;  // older
-      latest = LatestCommand{true, c.header.tick, c.valve_v};
-      if (feed_barrier) barrier_.Answer(c.leg_id, c.header.tick);
+  for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
+    auto& reader = valve_readers_.leg(leg);
+    while (reader.Take() > 0) {
+      for (std::size_t k = 0; k < reader.count(); ++k) {
+        if (!reader.info(k).valid_data) continue;
+        const auto& c = reader.sample(k);
+        if (c.leg_id != leg) {  // a writer of leg `leg`'s partition wrote another leg's key
+          RejectCommand(leg, c, reader.info(k));
+          continue;
+        }
+        LatestCommand& latest = latest_[c.leg_id - 1];
+        if (latest.received && c.header.tick < latest.answered_tick) continue;  // older
+        latest = LatestCommand{true, c.header.tick, c.valve_v};
+        if (feed_barrier) barrier_.Answer(c.leg_id, c.header.tick);
+      }
     }
   }
+}
+
+void PlantNode::RejectCommand(int reader_leg, const hexa_msg_ValveCommand& c,
+                              const dds_sample_info_t& info) {
+  // Leg N's partition is granted to leg N's identities only (DDS Security): a sample for
+  // another leg from there is an attempt to command that leg. Refused, counted, and logged
+  // at the first one and every 1000th (the writer's GUID lookup allocates: not per sample).
+  const std::uint64_t n = ++rejected_per_leg_[static_cast<std::size_t>(reader_leg - 1)];
+  if (n != 1 && n % 1000 != 0) return;
+  log_->warn("REJECTED valve command for leg {} (tick {}, {:.6g} V) from a writer in partition "
+             "{} [{}]: only leg {}'s identities may write there; {} rejected so far",
+             static_cast<int>(c.leg_id), c.header.tick, c.valve_v, comm::LegPartition(reader_leg),
+             valve_readers_.leg(reader_leg).DescribeWriter(info.publication_handle), reader_leg, n);
 }
 
 bool PlantNode::ApplyAndStep(std::uint64_t stale_tolerance) {
@@ -472,7 +493,7 @@ int PlantNode::RunLockstep(std::uint64_t last_tick) {
     last_tick_ = last_tick;
     running_ = true;
     // The callback first, then tick 0: an answer can never arrive unseen.
-    valve_reader_.OnDataAvailable(&PlantNode::OnValveData, this);
+    valve_readers_.OnDataAvailable(&PlantNode::OnValveData, this);
     StartTick(node::MonotonicNow_ns());
     AdvanceIfComplete();
   }
@@ -521,6 +542,9 @@ int PlantNode::RunLockstep(std::uint64_t last_tick) {
     }
     {
       std::lock_guard<std::mutex> lock(mutex_);
+      // systemd's watchdog: this thread holds the loop's lock, so the receive thread is not
+      // stuck in a tick (a stuck tick keeps the lock and the pings stop).
+      node::service_manager::Watchdog();
       if (exit_code_ >= 0) break;
       const int64_t now = node::MonotonicNow_ns();
       switch (barrier_.Check(now)) {
@@ -563,7 +587,7 @@ int PlantNode::RunLockstep(std::uint64_t last_tick) {
     running_ = false;
   }
   // No callback runs after this (it touches members destroyed before the reader).
-  valve_reader_.OnDataAvailable(nullptr, nullptr);
+  valve_readers_.OnDataAvailable(nullptr, nullptr);
   return exit_code_ >= 0 ? exit_code_ : 0;
 }
 
@@ -574,6 +598,7 @@ int PlantNode::RunRealtime(std::uint64_t last_tick) {
   // held for form (uncontended) so that the helpers' contract is the same in both modes.
   std::lock_guard<std::mutex> lock(mutex_);
   while (!shutdown_.requested() && tick_ < last_tick) {
+    node::service_manager::Watchdog();
     PublishTick();
     next.tv_nsec += 1'000'000;
     if (next.tv_nsec >= 1'000'000'000) {
@@ -634,7 +659,7 @@ void PlantNode::WriteSummary(int exit_code) const {
     log_->error("cannot write the summary to {}", options_.summary_path);
     return;
   }
-  const auto valve = valve_reader_.Snapshot();
+  const auto valve = valve_readers_.Snapshot();
   std::fprintf(f, "{\n  \"mode\": \"%s\",\n  \"exit_code\": %d,\n  \"ticks\": %llu,\n"
                "  \"sim_time_s\": %.6f,\n  \"valve_deadline_misses\": %u,\n"
                "  \"loop_overruns\": %u,\n  \"lockstep_resends\": %llu,\n"
@@ -672,6 +697,7 @@ int PlantNode::Run() {
     return shutdown_.requested() ? 0 : 3;
   }
   PublishStatus(hexa_msg_NODE_RUNNING, realtime ? "real time" : "lockstep");
+  node::service_manager::Ready(realtime ? "ticking in real time" : "ticking in lockstep");
   log_->info("ticking in {} mode, profile '{}', seed {}", realtime ? "real-time" : "lockstep",
              options_.profile, options_.seed);
   const uint64_t last_tick = options_.duration_s > 0
@@ -683,18 +709,21 @@ int PlantNode::Run() {
   loop_ended_ns_ = node::MonotonicNow_ns();
   uint32_t faults = 0;
   for (auto f : faults_per_leg_) faults += f;
-  const auto valve = valve_reader_.Snapshot();
+  const auto valve = valve_readers_.Snapshot();
+  std::uint64_t rejected = 0;
+  for (auto r : rejected_per_leg_) rejected += r;
   log_->info("stopped at tick {} (t = {:.3f} s): valve deadline misses {}, loop overruns {}, "
              "command faults {}, lockstep resends {} (in {} re-asks, {} to the supervisor), "
              "failed writes {}, recorder syncs {} (the loop stood still for {} of them, "
-             "{:.3f} s), schedule slips {} ({:.1f} ms)",
+             "{:.3f} s), schedule slips {} ({:.1f} ms), rejected commands {}",
              tick_, static_cast<double>(tick_) * kTickS, valve.requested_deadline_missed_total,
              overruns_, faults, resent_samples_, barrier_.reasks_total(), supervisor_reasks_,
              sensors_writer_.write_errors_total(), recorder_syncs_, recorder_sync_blocks_,
-             recorder_sync_wait_s_, slips_, static_cast<double>(slipped_ns_) * 1e-6);
+             recorder_sync_wait_s_, slips_, static_cast<double>(slipped_ns_) * 1e-6, rejected);
   LogCommandAges();
   WriteSummary(rc);
   if (rc != 4) PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
+  node::service_manager::Stopping("stopped");
   return rc;
 }
 

@@ -110,6 +110,8 @@ class PlantNode {
   void PublishTick(int only_leg = 0);
   void ReaskSupervisor();  // lockstep: re-publishes the supervisor's inputs of s(n)
   void TakeCommands(bool feed_barrier);
+  // A sample of another leg's key from leg `reader_leg`'s partition: refused, counted, logged.
+  void RejectCommand(int reader_leg, const hexa_msg_ValveCommand& c, const dds_sample_info_t& info);
   // Command hygiene and one plant step; false when the plant state became non-finite.
   bool ApplyAndStep(std::uint64_t stale_tolerance);
   void EndTick();
@@ -139,7 +141,8 @@ class PlantNode {
   comm::Writer<hexa_msg_GroundTruth> truth_writer_;
   comm::Topic<hexa_msg_TrackerPose> tracker_topic_;
   comm::Writer<hexa_msg_TrackerPose> tracker_writer_;
-  comm::Reader<hexa_msg_ValveCommand> valve_reader_;
+  // One reader per leg partition: leg N's commands only from leg N's writers (comm/leg_readers.hpp).
+  comm::LegReaders<hexa_msg_ValveCommand> valve_readers_;
   node::StatusPublisher status_;
   node::FaultPublisher faults_;
   node::PeerTracker peers_;
@@ -182,6 +185,7 @@ class PlantNode {
   bool supervisor_inputs_valid_ = false;
   std::uint64_t supervisor_reasks_ = 0;
   bool supervisor_inputs_lost_ = false;  // --lose-supervisor-inputs done
+  LegArray<std::uint64_t> rejected_per_leg_{};  // samples of another leg's key, per partition
 };
 
 }  // namespace hexa::plant_sim

@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "hexa/config/csv_trajectory.hpp"
+#include "hexa/services/service_manager.hpp"
 
 namespace hexa::task_space {
 namespace {
@@ -398,6 +399,7 @@ int SupervisorNode::Run() {
     return shutdown_.requested() ? 0 : 3;
   }
   PublishStatus(hexa_msg_NODE_RUNNING, "idle");
+  node::service_manager::Ready("idle");
   autostart_pending_ = options_.autostart;
   log_->info("supervisor running ({}, outer loop {}, feed-forward {}, estimator {})",
              realtime ? "real time" : "lockstep", options_.outer_loop ? "on" : "off",
@@ -418,6 +420,7 @@ int SupervisorNode::Run() {
     const dds_return_t n = waitset_.Wait(wait);
     if (n < 0) return 1;
     std::lock_guard<std::mutex> lock(mutex_);
+    node::service_manager::Watchdog();  // the control lock is ours: the cycle is not stuck
     if (exit_code_ >= 0) break;
     TakeOperatorCommands();
     TakeFaults();
@@ -432,6 +435,7 @@ int SupervisorNode::Run() {
   imu_reader_.OnDataAvailable(nullptr, nullptr);
   std::lock_guard<std::mutex> lock(mutex_);
   PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
+  node::service_manager::Stopping("stopped");
   log_->info("supervisor stopped after {} cycles (state {}), compute median {:.1f} us max {:.1f} us, "
              "failed writes {}, setpoints re-published {} times (lockstep re-asks)",
              cycles_, ToString(output_.state), cycle_times_.Median() * 1e6,

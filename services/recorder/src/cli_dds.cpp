@@ -30,6 +30,7 @@
 #include "hexa/recorder/recording.hpp"
 #include "hexa/recorder/scene.hpp"
 #include "hexa/services/scheduling.hpp"
+#include "hexa/services/service_manager.hpp"
 
 namespace hexa::recorder::cli {
 namespace {
@@ -118,8 +119,15 @@ template <typename T, typename P>
 class TopicRecorder final : public TopicRecorderBase {
  public:
   static constexpr std::size_t kCapacity = 256;
+  // The leg controllers write ValveCommand in their leg's partition (docs/deployment.md, DDS
+  // Security): the recorder subscribes to every leg partition and the default one.
+  static std::vector<std::string> Partitions() {
+    if constexpr (comm::TopicTraits<T>::kKind != comm::TopicKind::kValveCommand) return {};
+    return comm::EveryLegPartitionAndDefault();
+  }
   TopicRecorder(const comm::Participant& p, RecordingWriter& w, const comm::QosParams& params)
-      : topic_(p), reader_(p, topic_, comm::EndpointRole::kRecorderReader, params, kCapacity) {
+      : topic_(p),
+        reader_(p, topic_, comm::EndpointRole::kRecorderReader, params, kCapacity, Partitions()) {
     const comm::TopicKind kind = comm::TopicTraits<T>::kKind;
     name = std::string(comm::TopicName(kind));
     const std::optional<double> period = comm::NominalPeriod_s(kind);
@@ -311,6 +319,7 @@ int RunRecord(const std::vector<std::string>& argv) {
   std::snprintf(status.detail, sizeof status.detail, "recording %zu topics", topics.size());
   status.state = hexa_msg_NODE_RUNNING;
   status_writer.WriteNow(status);
+  node::service_manager::Ready(status.detail);
   if (!quiet)
     std::fprintf(stderr, "record: domain %d, %zu topics -> %s\n",
                  static_cast<int>(participant.domain_id()), topics.size(), out.c_str());
@@ -322,6 +331,7 @@ int RunRecord(const std::vector<std::string>& argv) {
   const int64_t batch_ns = static_cast<int64_t>(batch_ms * 1e6);
   int64_t next_flush_ns = start_ns + flush_ns;
   while (!shutdown.requested()) {
+    node::service_manager::Watchdog();
     const int64_t now = comm::RealtimeNow_ns();
     if (now >= end_ns) break;
     // Wake on data, on shutdown, or when the open chunk is due to be flushed.
@@ -348,6 +358,7 @@ int RunRecord(const std::vector<std::string>& argv) {
   for (auto& t : topics) t->Drain(writer);  // what arrived before the stop
   status.state = hexa_msg_NODE_STOPPING;
   status_writer.WriteNow(status);
+  node::service_manager::Stopping("recording closed");
   writer.Close();
 
   const double elapsed_s = static_cast<double>(comm::RealtimeNow_ns() - start_ns) * 1e-9;

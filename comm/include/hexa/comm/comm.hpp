@@ -3,6 +3,7 @@
 
 #include "hexa/comm/config.hpp"
 #include "hexa/comm/error.hpp"
+#include "hexa/comm/leg_readers.hpp"
 #include "hexa/comm/participant.hpp"
 #include "hexa/comm/partition.hpp"
 #include "hexa/comm/qos.hpp"

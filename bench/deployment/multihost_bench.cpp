@@ -1,0 +1,398 @@
+// hexa_multihost_bench: the networked deployment's figures (docs/deployment.md, "Measured"):
+// five hosts in network namespaces, every process from its generated unit, DDS Security on
+// (or off for the side-by-side cost), z trajectory. Scenarios:
+//   lockstep        secured lockstep session: speed, RMSE, round trip, loss, bit-identity
+//   lockstep-plain  the same without DDS Security (cost of security, same run)
+//   realtime        secured real-time session: RMSE, round trip, loss, faults
+//   realtime-plain  the same without DDS Security
+//   loss            real time with nftables `numgen random` drops on the input of legs-a
+//                   (sensors and setpoints of legs 1-3), for each --loss percentage
+//   recorder-loss   real time with drops on the recorder host's input: the recorder's loss
+//                   count beside the packets nftables dropped
+//   partition       real time, operator-driven: start, cut legs-a off for --partition-ms,
+//                   heal, reset, start again; detection delay, HOLD, resumption
+// Needs root (network namespaces, nftables). Timing figures depend on the machine's load:
+// the bench prints the load average with each row. Not a test: nothing is asserted.
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "hexa/recorder/recording.hpp"
+#include "hexa/recorder/report.hpp"
+#include "hexa/services/cli.hpp"
+#include "lab_session.hpp"
+#include "recording.pb.h"
+
+namespace {
+
+using namespace hexa::deploy;
+using namespace std::chrono_literals;
+namespace rec = hexa::rec;
+
+std::string LoadAverage() {
+  std::ifstream in("/proc/loadavg");
+  std::string a, b, c;
+  in >> a >> b >> c;
+  return a + " " + b + " " + c;
+}
+
+std::string Slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+struct Row {
+  std::string scenario;
+  bool completed = false;
+  double wall_s = 0, sim_s = 0;
+  std::array<double, 3> rmse_mm{};
+  double rtt_median_us = 0, rtt_p99_us = 0;
+  std::uint64_t missing = 0;
+  std::size_t faults = 0;
+  long long dropped = -1;  // nftables counter
+  double cpu_s = 0;        // CPU time of all control processes and the recorder
+  std::string note;
+  std::string load;
+};
+
+LabSessionOptions BaseOptions(const std::string& build, const std::string& source, const std::string& name,
+                              int domain) {
+  LabSessionOptions o;
+  o.work_dir = "/tmp/hx15b-" + name + "-" + std::to_string(getpid());
+  o.binaries = {{"hexa_plant_sim", build + "/services/plant_sim/hexa_plant_sim"},
+                {"hexa_leg_ctrl", build + "/services/leg_ctrl/hexa_leg_ctrl"},
+                {"hexa_task_space", build + "/services/task_space/hexa_task_space"},
+                {"hexa_recorder", build + "/services/recorder/hexa_recorder"},
+                {"hexa_deploy", build + "/deploy/hexa_deploy"},
+                {"hexa_operator", build + "/services/task_space/hexa_operator"}};
+  o.make_security = source + "/deploy/make_security.sh";
+  o.rig_file = source + "/deploy/rigs/hexataar_r.textproto";
+  o.domain = domain;
+  o.tag = "hx5b";
+  o.subnet = "10.16.0";
+  o.lockstep_timeout_s = 10;
+  o.watchdog_s = 30;
+  return o;
+}
+
+// Fills the report columns of `row` from the session's recording.
+void FromRecording(LabSession& s, Row& row) {
+  const std::string mcap = s.Recording();
+  if (mcap.empty()) {
+    row.note += " no recording;";
+    return;
+  }
+  try {
+    const auto r = hexa::recorder::ComputeSessionReport(mcap);
+    for (int i = 0; i < 3; ++i) row.rmse_mm[static_cast<std::size_t>(i)] = r.rmse_vs_truth[static_cast<std::size_t>(i)] * 1e3;
+    row.rtt_median_us = r.latency_s.median * 1e6;
+    row.rtt_p99_us = r.latency_s.p99 * 1e6;
+    for (const auto& [t, m] : r.missing) row.missing += m;
+    row.faults = r.faults.size();
+    row.sim_s = r.sim_time_s;
+  } catch (const std::exception& e) {
+    row.note += std::string(" report failed: ") + e.what() + ";";
+  }
+}
+
+// Runs until the supervisor exits; `during` is called every 0.5 s with the seconds since the
+// plant reported READY (negative before).
+Row RunSession(const std::string& scenario, LabSessionOptions o,
+               const std::function<void(LabSession&, double)>& during = {},
+               std::chrono::seconds timeout = 600s) {
+  Row row;
+  row.scenario = scenario;
+  row.load = LoadAverage();
+  static int run = 0;
+  o.work_dir += "-" + std::to_string(run++);  // every run keeps its logs
+  std::string err;
+  auto s = LabSession::Create(o, err);
+  if (!s) {
+    row.note = "setup failed: " + err;
+    return row;
+  }
+  if (!s->StartAll(err)) {
+    row.note = "start failed: " + err;
+    return row;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::time_point ready{};
+  while (std::chrono::steady_clock::now() - t0 < timeout) {
+    const auto ev = s->Wait(500ms);
+    s->units().Poll();
+    if (ready == std::chrono::steady_clock::time_point{} && s->units().Seen("hexa-plant").ready)
+      ready = std::chrono::steady_clock::now();
+    if (during) {
+      const double since = ready == std::chrono::steady_clock::time_point{}
+                               ? -1.0
+                               : std::chrono::duration<double>(std::chrono::steady_clock::now() - ready).count();
+      during(*s, since);
+    }
+    // CPU time so far of every unit (read while they run: an exited one is gone).
+    double cpu = 0;
+    for (const auto& name : s->units().Names()) {
+      const double c = s->units().CpuSeconds(name);
+      if (c > 0) cpu += c;
+    }
+    if (cpu > row.cpu_s) row.cpu_s = cpu;
+    if (ev.kind == ProcessGroup::Event::kChildExited) {
+      if (ev.exit.name == "hexa-supervisor") {
+        row.completed = ev.exit.signal == 0 && ev.exit.exit_code == 0;
+        if (!row.completed) row.note += " supervisor: " + ev.exit.Describe() + ";";
+        break;
+      }
+      if (ev.exit.name.rfind("hexa-", 0) == 0) {
+        row.note += " " + ev.exit.Describe() + ";";
+        // A control process died: the session cannot complete; give the supervisor a moment
+        // to notice (it holds), then stop.
+        if (ev.exit.exit_code != 0 || ev.exit.signal != 0) {
+          s->Wait(3000ms);
+          break;
+        }
+      }
+    }
+  }
+  row.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() -
+                                             (ready == std::chrono::steady_clock::time_point{} ? t0 : ready))
+                   .count();
+  s->StopAll();
+  FromRecording(*s, row);
+  row.note += " logs " + o.work_dir + ";";
+  const std::string plant = Slurp(s->units().LogOf("hexa-plant"));
+  std::smatch m;
+  if (std::regex_search(plant, m, std::regex("command faults ([0-9]+)"))) row.note += " plant command faults " + m[1].str() + ";";
+  return row;
+}
+
+void Print(const Row& r) {
+  std::printf("| %-22s | %-3s | %6.1f | %5.2f | %5.2f | %5.2f %5.2f %5.2f | %7.0f | %7.0f | %6llu | %3zu | %7lld | %s | %s\n",
+              r.scenario.c_str(), r.completed ? "yes" : "NO", r.wall_s, r.wall_s > 0 ? r.sim_s / r.wall_s : 0.0,
+              r.sim_s > 0 ? r.cpu_s / r.sim_s : 0.0,
+              r.rmse_mm[0], r.rmse_mm[1], r.rmse_mm[2], r.rtt_median_us, r.rtt_p99_us,
+              static_cast<unsigned long long>(r.missing), r.faults, r.dropped, r.load.c_str(),
+              r.note.c_str());
+  std::fflush(stdout);
+}
+
+// The partition scenario: operator-driven, no --exit-when-done.
+void Partition(const LabSessionOptions& base, double partition_ms, const std::string& operator_bin) {
+  LabSessionOptions o = base;
+  o.realtime = true;
+  o.supervisor_args = {"--trajectory", "z", "--periods", "1"};
+  std::string err;
+  auto s = LabSession::Create(o, err);
+  if (!s) {
+    std::printf("partition: setup failed: %s\n", err.c_str());
+    return;
+  }
+  if (!s->StartAll(err)) {
+    std::printf("partition: start failed: %s\n", err.c_str());
+    return;
+  }
+  const std::string load = LoadAverage();
+  for (int i = 0; i < 600 && !s->units().Seen("hexa-plant").ready; ++i) {
+    s->Wait(200ms);
+    s->units().Poll();
+  }
+  const std::string config = s->DdsConfigOf("io-sup");
+  auto op = [&](const std::string& what) {
+    std::map<std::string, std::string> env{{"HEXA_IDENTITY", "operator"}};
+    const int rc = RunToCompletion(s->group(), "operator-" + what,
+                                   s->lab().InHost("io-sup", {operator_bin, "--domain", std::to_string(o.domain),
+                                                              "--dds-config", config, "--trajectory", "z",
+                                                              "--wait", "20", what}),
+                                   s->work_dir() + "/operator-" + what + ".log", 30s, env);
+    std::printf("partition: operator %s -> exit %d\n", what.c_str(), rc);
+  };
+  auto sleep_for = [&](double seconds) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < end) {
+      s->Wait(100ms);
+      s->units().Poll();
+    }
+  };
+  sleep_for(2.0);  // the pose estimate settles
+  op("start");
+  sleep_for(5.0);  // blending, then tracking
+  const long long before = s->lab().DroppedByPartition("legs-a");
+  (void)before;
+  if (!s->lab().Partition("legs-a", err)) std::printf("partition: %s\n", err.c_str());
+  std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(partition_ms));
+  const long long dropped = s->lab().DroppedByPartition("legs-a");
+  if (!s->lab().Heal("legs-a", err)) std::printf("heal: %s\n", err.c_str());
+  sleep_for(1.5);
+  op("reset");
+  sleep_for(1.0);
+  op("start");
+  sleep_for(16.0);  // blend + one 10 s period + stop
+  s->StopAll();
+
+  // What the recording says: the plant's first fault after the cut, the last command of
+  // legs 1-3 before it, the supervisor's states.
+  const std::string mcap = s->Recording();
+  struct Fault {
+    std::uint64_t tick;
+    std::uint32_t leg;
+    std::string source, reason;
+  };
+  std::vector<Fault> faults;
+  std::vector<std::pair<std::uint64_t, int>> states;  // tick, state (changes only)
+  hexa::recorder::ReadRecording(mcap, [&](const hexa::recorder::McapChannel& ch,
+                                          const hexa::recorder::McapMessageView&,
+                                          const google::protobuf::Message& msg) {
+    // The decoded messages are dynamic (built from the recording's schema): re-parse them
+    // into the generated types.
+    if (ch.topic == "hexa_FaultEvent") {
+      rec::FaultEvent f;
+      f.ParseFromString(msg.SerializeAsString());
+      faults.push_back({f.tick(), f.leg_id(), f.source_node(), rec::FaultReason_Name(f.reason())});
+    } else if (ch.topic == "hexa_PoseReport") {
+      rec::PoseReport p;
+      p.ParseFromString(msg.SerializeAsString());
+      if (states.empty() || states.back().second != static_cast<int>(p.state()))
+        states.emplace_back(p.header().tick(), static_cast<int>(p.state()));
+    }
+  });
+  std::printf("partition of legs-a for %.0f ms (%s, load %s): %lld packets dropped by the cut\n", partition_ms,
+              o.secure ? "secured" : "plain", load.c_str(), dropped);
+  // Detection: the plant's first stale-command fault of a leg on the cut host, and the tick
+  // its last command answered (from the plant's log: the recording on another host also got
+  // retransmissions after the heal, so it cannot say what reached the plant when).
+  const std::string plant_log = Slurp(s->units().LogOf("hexa-plant"));
+  std::smatch m;
+  if (std::regex_search(plant_log, m, std::regex("leg ([123]) tick ([0-9]+): valve command stale \\([^,]*, answers tick ([0-9]+)\\)"))) {
+    const long long at = std::stoll(m[2]), answered = std::stoll(m[3]);
+    std::printf("  plant: leg %s stale at tick %lld, its newest command answered tick %lld: detected %lld ticks "
+                "(ms) after the last command that arrived (tolerance --stale-ticks %d: a command older than "
+                "that is stale)\n",
+                m[1].str().c_str(), at, answered, at - answered, o.stale_ticks > 0 ? o.stale_ticks : 15);
+  } else {
+    std::printf("  no stale-command fault of legs 1-3 in the plant's log\n");
+  }
+  if (std::regex_search(plant_log, m, std::regex("leg ([123]) tick ([0-9]+): valve command valid again")))
+    std::printf("  plant: leg %s valid again at tick %s\n", m[1].str().c_str(), m[2].str().c_str());
+  static const char* kNames[] = {"IDLE", "BLENDING", "TRACKING", "STOPPING", "HOLD"};
+  std::printf("  supervisor states (tick: state; a HOLD after the last IDLE comes from stopping the processes):");
+  for (const auto& [t, st] : states) std::printf(" %llu:%s", static_cast<unsigned long long>(t), kNames[st]);
+  std::printf("\n  faults recorded: %zu (first few:", faults.size());
+  for (std::size_t i = 0; i < std::min<std::size_t>(faults.size(), 6); ++i)
+    std::printf(" [%s leg %u tick %llu %s]", faults[i].source.c_str(), faults[i].leg,
+                static_cast<unsigned long long>(faults[i].tick), faults[i].reason.c_str());
+  std::printf(")\n  logs: %s\n", s->work_dir().c_str());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  hexa::cli::Parser cli("hexa_multihost_bench",
+                        "Networked deployment figures: five hosts in network namespaces (root).");
+  cli.AddOption("scenarios", "list", "comma list: lockstep lockstep-plain realtime realtime-plain loss recorder-loss partition",
+                "lockstep,lockstep-plain,realtime,loss,recorder-loss,partition");
+  cli.AddOption("runs", "N", "runs of each session scenario", "1");
+  cli.AddOption("loss", "list", "loss percentages of the loss scenarios", "1,5");
+  cli.AddOption("partition-ms", "ms", "length of the partition", "300");
+  cli.AddOption("build", "dir", "build directory", HEXA_BUILD_DIR);
+  cli.AddOption("stale-ticks", "N", "real time: the plant's stale-command tolerance (0 = default 15)", "0");
+  cli.AddFlag("faults-plain", "run the loss / recorder-loss / partition scenarios without DDS Security");
+  const bool parsed = cli.Parse(argc, argv);
+  if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
+  const auto runs = cli.GetInt("runs", 1, 100);
+  const auto partition_ms = cli.GetDouble("partition-ms", 1, 100000);
+  const auto stale = cli.GetInt("stale-ticks", 0, 1000);
+  if (!runs || !partition_ms || !stale) {
+    std::fprintf(stderr, "error: %s\n", cli.error().c_str());
+    return 2;
+  }
+  if (geteuid() != 0) {
+    std::fprintf(stderr, "error: needs root (network namespaces, nftables)\n");
+    return 1;
+  }
+  const std::string build = cli.Get("build");
+  const std::string scenarios = "," + cli.Get("scenarios") + ",";
+  auto want = [&](const char* s) { return scenarios.find(std::string(",") + s + ",") != std::string::npos; };
+  std::vector<int> losses;
+  {
+    std::stringstream ss(cli.Get("loss"));
+    for (std::string x; std::getline(ss, x, ',');) losses.push_back(std::stoi(x));
+  }
+  const int domain = 60 + getpid() % 40;
+  LabSessionOptions base = BaseOptions(build, HEXA_SOURCE_DIR, "b", domain);
+  base.stale_ticks = static_cast<int>(*stale);
+  const std::vector<std::string> auto_args{"--trajectory", "z", "--periods", "1", "--autostart", "--exit-when-done"};
+
+  std::printf("five hosts in network namespaces, z trajectory (1 period, 13 s simulated), DDS Security on "
+              "unless '-plain'; real-time stale tolerance %d ticks; machine shared (load average per row)\n\n",
+              base.stale_ticks > 0 ? base.stale_ticks : 15);
+  std::printf("| scenario | done | wall s | sim/wall | CPU s per sim s | RMSE x y z mm | rtt med us | rtt p99 us | missing | faults | dropped pkts | load | notes\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (long long k = 0; k < *runs; ++k) {
+    if (want("lockstep")) {
+      auto o = base;
+      o.supervisor_args = auto_args;
+      Print(RunSession("lockstep secured", o));
+    }
+    if (want("lockstep-plain")) {
+      auto o = base;
+      o.secure = false;
+      o.supervisor_args = auto_args;
+      Print(RunSession("lockstep plain", o));
+    }
+    if (want("realtime")) {
+      auto o = base;
+      o.realtime = true;
+      o.supervisor_args = auto_args;
+      o.watchdog_s = 0;
+      Print(RunSession("realtime secured", o));
+    }
+    if (want("realtime-plain")) {
+      auto o = base;
+      o.realtime = true;
+      o.secure = false;
+      o.supervisor_args = auto_args;
+      o.watchdog_s = 0;
+      Print(RunSession("realtime plain", o));
+    }
+    for (int p : losses) {
+      for (const char* host : {"legs-a", "recorder"}) {
+        const bool rec_link = std::string(host) == "recorder";
+        if (!want(rec_link ? "recorder-loss" : "loss")) continue;
+        auto o = base;
+        o.realtime = true;
+        o.secure = !cli.Flag("faults-plain");
+        o.supervisor_args = auto_args;
+        bool applied = false, failed = false;
+        long long dropped = -1;
+        Row row = RunSession(std::string(o.secure ? "rt secured " : "rt plain ") + std::to_string(p) + "% loss " + host, o,
+                             [&](LabSession& s, double since_ready) {
+                               std::string err;
+                               if (!applied && !failed && since_ready >= 0) {
+                                 applied = s.lab().SetInputLoss(host, p, err);
+                                 failed = !applied;
+                                 if (failed) std::fprintf(stderr, "%s\n", err.c_str());
+                               }
+                               if (applied) dropped = std::max(dropped, s.lab().DroppedInput(host));
+                             });
+        row.dropped = dropped;
+        Print(row);
+      }
+    }
+  }
+  if (want("partition")) {
+    LabSessionOptions o = base;
+    o.secure = !cli.Flag("faults-plain");
+    Partition(o, *partition_ms, build + "/services/task_space/hexa_operator");
+  }
+  return 0;
+}

@@ -1,0 +1,198 @@
+#include "lab_session.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace hexa::deploy {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string Fmt(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+std::string Quoted(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
+}  // namespace
+
+int RunToCompletion(ProcessGroup& group, const std::string& name,
+                    const std::vector<std::string>& argv, const std::string& log,
+                    std::chrono::seconds timeout, const std::map<std::string, std::string>& env) {
+  ChildSpec s;
+  s.name = name;
+  s.argv = argv;
+  s.env = env;
+  s.log_path = log;
+  std::string err;
+  if (group.Start(s, err) < 0) return -1;
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < end) {
+    const auto ev = group.WaitEvent(std::chrono::milliseconds(500));
+    if (ev.kind == ProcessGroup::Event::kChildExited && ev.exit.name == name)
+      return ev.exit.signal != 0 ? 128 + ev.exit.signal : ev.exit.exit_code;
+    if (ev.kind == ProcessGroup::Event::kInterrupted) break;
+  }
+  group.Stop(name, std::chrono::milliseconds(2000));
+  return -1;
+}
+
+std::unique_ptr<LabSession> LabSession::Create(const LabSessionOptions& o, std::string& error) {
+  std::unique_ptr<LabSession> s(new LabSession());
+  s->options_ = o;
+  fs::create_directories(o.work_dir);
+  std::vector<std::string> hosts{"io-sup", "legs-a", "legs-b"};
+  if (o.standbys) hosts.push_back("standby-b");
+  hosts.push_back("recorder");
+  std::vector<std::string> all_hosts = hosts;
+  all_hosts.insert(all_hosts.end(), o.extra_hosts.begin(), o.extra_hosts.end());
+  s->lab_ = NetnsLab::Create(o.tag, all_hosts, o.subnet, error);
+  if (!s->lab_) return nullptr;
+
+  // The binaries, where the deployment says they are.
+  const fs::path bin = fs::path(o.work_dir) / "bin";
+  fs::create_directories(bin);
+  for (const auto& [name, path] : o.binaries) {
+    std::error_code ec;
+    fs::remove(bin / name, ec);
+    fs::create_symlink(path, bin / name, ec);
+    if (ec) {
+      error = "cannot link " + (bin / name).string() + ": " + ec.message();
+      return nullptr;
+    }
+  }
+  fs::create_directories(fs::path(o.work_dir) / "rec");
+  if (o.audit) fs::create_directories(fs::path(o.work_dir) / "audit");
+
+  // The deployment description, in the lab's names and addresses.
+  std::ostringstream d;
+  d << "# Written by the lab session (deploy/lab/lab_session.cpp) for its network namespaces.\n"
+    << "name: \"lab\"\n"
+    << "domain_id: " << o.domain << "\n"
+    << "mode: " << (o.realtime ? "REALTIME" : "LOCKSTEP") << "\n"
+    << "security { enabled: " << (o.secure ? "true" : "false")
+    << (o.audit ? " audit_dir: " + Quoted((fs::path(o.work_dir) / "audit").string()) : std::string())
+    << " }\n"
+    << "bin_dir: " << Quoted(bin.string()) << "\n"
+    << "rig_file: " << Quoted(o.rig_file) << "\n"
+    << "record_dir: " << Quoted((fs::path(o.work_dir) / "rec").string()) << "\n"
+    << "timing {";
+  if (o.watchdog_s > 0) d << " watchdog_s: " << Fmt(o.watchdog_s);
+  if (o.lockstep_timeout_s > 0) d << " lockstep_timeout_s: " << Fmt(o.lockstep_timeout_s);
+  if (o.stale_ticks > 0) d << " stale_ticks: " << o.stale_ticks;
+  d << " startup_timeout_s: " << Fmt(o.startup_timeout_s) << " }\n";
+  auto host_block = [&](const std::string& name, const std::string& processes) {
+    const LabHost& h = s->lab_->host(name);
+    d << "host {\n  name: \"" << name << "\"\n  interface { name: \"" << h.veth
+      << "\" address: \"" << h.address << "\" }\n  dds_interface: \"" << h.veth << "\"\n"
+      << processes << "}\n";
+  };
+  auto args = [](const std::vector<std::string>& a) {
+    std::string out;
+    for (const auto& x : a) out += " arg: " + Quoted(x);
+    return out;
+  };
+  host_block("io-sup", "  process { role: PLANT" + args(o.plant_args) + " }\n  process { role: SUPERVISOR" +
+                           args(o.supervisor_args) + " }\n  process { role: OPERATOR }\n");
+  host_block("legs-a", "  process { role: LEG leg: 1 }\n  process { role: LEG leg: 2 }\n"
+                       "  process { role: LEG leg: 3 }\n");
+  host_block("legs-b", "  process { role: LEG leg: 4 }\n  process { role: LEG leg: 5 }\n"
+                       "  process { role: LEG leg: 6 }\n");
+  if (o.standbys)
+    host_block("standby-b", "  process { role: LEG leg: 4 standby: true }\n"
+                            "  process { role: LEG leg: 5 standby: true }\n"
+                            "  process { role: LEG leg: 6 standby: true }\n");
+  host_block("recorder", "  process { role: RECORDER }\n");
+  s->deployment_text_ = d.str();
+  const std::string file = (fs::path(o.work_dir) / "deployment.textproto").string();
+  std::ofstream(file) << s->deployment_text_;
+
+  s->generated_ = (fs::path(o.work_dir) / "gen").string();
+  fs::remove_all(s->generated_);
+  const auto deploy_bin = o.binaries.find("hexa_deploy");
+  if (deploy_bin == o.binaries.end()) {
+    error = "no hexa_deploy among the binaries";
+    return nullptr;
+  }
+  const std::string work = o.work_dir;
+  if (int rc = RunToCompletion(s->group_, "generate",
+                               {deploy_bin->second, "generate", file, "--out", s->generated_, "--in-place"},
+                               work + "/generate.log", std::chrono::seconds(60));
+      rc != 0) {
+    error = "hexa_deploy generate failed (exit " + std::to_string(rc) + "), see " + work + "/generate.log";
+    return nullptr;
+  }
+  if (o.secure) {
+    if (int rc = RunToCompletion(s->group_, "make_security", {o.make_security, s->generated_},
+                                 work + "/make_security.log", std::chrono::seconds(120));
+        rc != 0) {
+      error = "make_security.sh failed (exit " + std::to_string(rc) + "), see " + work + "/make_security.log";
+      return nullptr;
+    }
+  }
+  s->launcher_ = std::make_unique<UnitLauncher>(s->group_, *s->lab_, s->generated_, work + "/run");
+  return s;
+}
+
+LabSession::~LabSession() {
+  group_.StopAll(std::chrono::milliseconds(3000));
+  launcher_.reset();
+  lab_.reset();  // deletes the namespaces after every process in them has stopped
+}
+
+std::vector<std::pair<std::string, std::vector<std::string>>> LabSession::Plan() const {
+  std::vector<std::pair<std::string, std::vector<std::string>>> plan;
+  for (const char* h : {"recorder", "legs-a", "legs-b", "standby-b", "io-sup"}) {
+    if (std::string(h) == "standby-b" && !options_.standbys) continue;
+    plan.emplace_back(h, launcher_->UnitsOf(h));
+  }
+  return plan;
+}
+
+bool LabSession::StartAll(std::string& error) {
+  // Recorder first and plant last: each process waits for its peers anyway, but this order
+  // starts the clock master when everyone else is already there.
+  for (const auto& [host, units] : Plan()) {
+    std::vector<std::string> ordered = units;
+    std::stable_sort(ordered.begin(), ordered.end(), [](const std::string& a, const std::string& b) {
+      return (a == "hexa-plant.service") < (b == "hexa-plant.service");
+    });
+    for (const auto& unit : ordered) {
+      if (!launcher_->Start(host, unit, error)) return false;
+    }
+  }
+  return true;
+}
+
+std::string LabSession::Recording() const {
+  std::string newest;
+  fs::file_time_type newest_time{};
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(fs::path(options_.work_dir) / "rec", ec)) {
+    if (e.path().extension() != ".mcap") continue;
+    if (newest.empty() || e.last_write_time() > newest_time) {
+      newest = e.path().string();
+      newest_time = e.last_write_time();
+    }
+  }
+  return newest;
+}
+
+std::string LabSession::DdsConfigOf(const std::string& host) const {
+  return (fs::path(generated_) / "hosts" / host / "etc/hexa/cyclonedds.xml").string();
+}
+
+}  // namespace hexa::deploy

@@ -1,0 +1,96 @@
+// A whole networked session on one machine: five hosts in network namespaces (NetnsLab),
+// a deployment description written for them, `hexa_deploy generate --in-place`, the DDS
+// Security files from deploy/make_security.sh, and every process started from its generated
+// unit (UnitLauncher). Used by the multi-host tests (tests/netns) and the deployment
+// benchmark (bench/deployment).
+//
+// Hosts (the layout):  io-sup     plant + supervisor (+ operator identity)
+//                              legs-a     legs 1-3
+//                              legs-b     legs 4-6
+//                              standby-b  hot standbys of legs 4-6 (optional)
+//                              recorder   recorder
+#pragma once
+
+#include <chrono>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "netns_lab.hpp"
+#include "process_group.hpp"
+#include "unit_launcher.hpp"
+
+namespace hexa::deploy {
+
+struct LabSessionOptions {
+  std::string tag = "hx15";        // namespace / interface prefix (keep it to 4 characters)
+  std::string subnet = "10.15.0";  // private /24 inside the lab
+  std::string work_dir;            // short path: notify sockets live here
+  // Binaries: name -> path (hexa_plant_sim hexa_leg_ctrl hexa_task_space hexa_recorder
+  // hexa_deploy hexa_operator); symlinked into <work_dir>/bin, the deployment's bin_dir.
+  std::map<std::string, std::string> binaries;
+  std::string make_security;       // deploy/make_security.sh
+  std::string rig_file;
+  bool secure = true;
+  bool realtime = false;
+  bool standbys = true;
+  int domain = 7;
+  std::vector<std::string> supervisor_args;  // e.g. --trajectory z --periods 1 --autostart --exit-when-done
+  std::vector<std::string> plant_args;       // e.g. --seed 1 --profile realistic
+  double watchdog_s = 0;          // 0: the generator's default
+  double lockstep_timeout_s = 0;
+  int stale_ticks = 0;
+  double startup_timeout_s = 120;
+  bool audit = false;              // security.audit_dir = <work_dir>/audit
+  std::vector<std::string> extra_hosts;  // more lab hosts outside the deployment (e.g. "intruder")
+};
+
+class LabSession {
+ public:
+  // Builds the lab, writes and generates the deployment, makes the security files.
+  static std::unique_ptr<LabSession> Create(const LabSessionOptions& options, std::string& error);
+  ~LabSession();
+
+  // Starts every unit of every host (recorder first, plant last).
+  bool StartAll(std::string& error);
+  // Waits for the supervisor's exit; other exits are returned too (the caller decides).
+  ProcessGroup::Event Wait(std::chrono::milliseconds timeout) { return group_.WaitEvent(timeout); }
+  // Stops the named process (unit name without .service), SIGTERM then SIGKILL.
+  std::optional<ChildExit> Stop(const std::string& name) {
+    return group_.Stop(name, std::chrono::milliseconds(8000));
+  }
+  void StopAll() { group_.StopAll(std::chrono::milliseconds(8000)); }
+
+  // The newest recording in the record directory ("" if none).
+  std::string Recording() const;
+  NetnsLab& lab() { return *lab_; }
+  UnitLauncher& units() { return *launcher_; }
+  ProcessGroup& group() { return group_; }
+  const std::string& generated_dir() const { return generated_; }
+  const std::string& work_dir() const { return options_.work_dir; }
+  // The generated Cyclone configuration of a host (in place).
+  std::string DdsConfigOf(const std::string& host) const;
+  // Every host of the deployment with its units.
+  std::vector<std::pair<std::string, std::vector<std::string>>> Plan() const;
+
+  // The deployment text the session generated from.
+  const std::string& deployment_text() const { return deployment_text_; }
+
+ private:
+  LabSession() = default;
+  LabSessionOptions options_;
+  ProcessGroup group_;
+  std::unique_ptr<NetnsLab> lab_;
+  std::unique_ptr<UnitLauncher> launcher_;
+  std::string generated_, deployment_text_;
+};
+
+// Runs a command to completion (stdout+stderr to `log`), returns its exit code (-1 on
+// failure to start, 128+signal when killed).
+int RunToCompletion(ProcessGroup& group, const std::string& name, const std::vector<std::string>& argv,
+                    const std::string& log, std::chrono::seconds timeout,
+                    const std::map<std::string, std::string>& env = {});
+
+}  // namespace hexa::deploy
