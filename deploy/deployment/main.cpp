@@ -50,6 +50,7 @@ void PrintPlan(const hexa::deployment::Deployment& d) {
 
 int Check(int argc, char** argv) {
   hexa::cli::Parser cli("hexa_deploy check", "Validates a deployment description: hexa_deploy check FILE");
+  cli.AllowPositional("FILE", 1);
   if (int rc = hexa::cli::HandleParseResult(cli, cli.Parse(argc, argv)); rc >= 0) return rc;
   if (cli.positional().size() != 1) {
     std::fprintf(stderr, "error: expected exactly one deployment file\n(see --help)\n");
@@ -69,6 +70,7 @@ int GenerateCommand(int argc, char** argv) {
   cli.AddOption("out", "dir", "output directory (hosts/<host>/..., security-src/)");
   cli.AddFlag("in-place", "paths inside the files point into DIR/hosts/<host>/ (tests, trials in "
                           "network namespaces) instead of the on-host config_dir");
+  cli.AllowPositional("FILE", 1);
   if (int rc = hexa::cli::HandleParseResult(cli, cli.Parse(argc, argv)); rc >= 0) return rc;
   if (cli.positional().size() != 1 || !cli.Has("out")) {
     std::fprintf(stderr, "error: expected a deployment file and --out DIR\n(see --help)\n");
