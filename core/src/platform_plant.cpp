@@ -109,6 +109,7 @@ PlatformPlant::PlatformPlant(const PlatformPlantConfig& config)
   leg.lugre_damping_fade_velocity_m_s = config_.lugre_damping_fade_velocity_m_s;
   leg.friction_enabled = config_.friction_enabled;
   leg.chambers_sealed = config_.chambers_sealed;
+  leg.friction_model = config_.friction_model;
   leg_model_ = LegModel(leg);
 
   // The plant's true geometry; the controllers keep the nominal one.

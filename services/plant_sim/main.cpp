@@ -2,6 +2,11 @@
 #include <cstdio>
 #include <exception>
 
+#include <google/protobuf/text_format.h>
+
+#include <fstream>
+
+#include "hexa/recorder/plant_truth.hpp"
 #include "hexa/services/logging.hpp"
 #include "plant_node.hpp"
 
@@ -34,6 +39,9 @@ int main(int argc, char** argv) {
                 "multiple of 5; its six leg samples in the all-legs partition and its IMU "
                 "sample) as if lost on the wire; the re-ask must recover them (-1 = none)",
                 "-1");
+  cli.AddOption("truth-out", "file",
+                "write the plant's true parameters (hexa.rec.PlantTruth, text format) to this "
+                "file at start-up, for evaluation (docs/identification.md)");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
 
@@ -87,6 +95,18 @@ int main(int argc, char** argv) {
     // Before the participant exists: Cyclone's threads inherit the policy (PLATFORM_NOTES).
     hexa::node::ApplyScheduling(o.common, 80, *log);
     hexa::plant_sim::PlantNode node(o, *config, log);
+    if (cli.Has("truth-out")) {
+      std::string text;
+      google::protobuf::TextFormat::PrintToString(
+          hexa::recorder::MakePlantTruth(node.plant(), config->rig_name, o.profile), &text);
+      std::ofstream out(cli.Get("truth-out"));
+      out << text;
+      if (!out) {
+        log->error("cannot write --truth-out {}", cli.Get("truth-out"));
+        return 1;
+      }
+      log->info("true plant parameters written to {} (evaluation only)", cli.Get("truth-out"));
+    }
     return node.Run();
   } catch (const std::exception& e) {
     log->error("{}", e.what());

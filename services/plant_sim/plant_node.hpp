@@ -96,6 +96,7 @@ class PlantNode {
   // Runs until shutdown (exit 0), a peer timeout (3), a non-finite state (4), or the
   // configured duration (0).
   int Run();
+  const PlatformPlant& plant() const { return plant_; }  // e.g. for its true parameters
 
  private:
   bool WaitForPeers();

@@ -2,12 +2,15 @@
 // protocol as the DDS system, no processes) and prints the per-axis RMSE in the layout of
 // the paper's Tables 9 and 10. For batch studies and tuning; the DDS session
 // (hexa_session) is the system itself.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "calibration_fit.hpp"
+#include "experiment.hpp"
 #include "hexa/config/rig_config.hpp"
 #include "hexa/core/calibration.hpp"
 #include "hexa/core/lockstep_simulation.hpp"
@@ -105,7 +108,7 @@ int main(int argc, char** argv) {
                         "prints RMSE per axis (Tables 9 / 10 layout).");
   cli.AddOption("trajectory", "name|all", "x y z roll pitch yaw combined, or all", "all");
   cli.AddChoice("controller", {"bssmc", "pi"}, "leg controller", "bssmc");
-  cli.AddChoice("profile", {"realistic", "ideal"}, "disturbance profile", "realistic");
+  cli.AddOption("profile", "name", "disturbance profile of the rig file (realistic, ideal, ...)", "realistic");
   cli.AddOption("seed", "N", "plant seed", "1");
   cli.AddOption("periods", "N", "periods (0 = default)", "0");
   cli.AddOption("rig", "file", "rig file", HEXA_DEFAULT_RIG_FILE);
@@ -118,6 +121,14 @@ int main(int argc, char** argv) {
   cli.AddFlag("calibrate",
               "first run the kinematic calibration procedure (tracker on, Ceres fit) and use the "
               "fitted calibration in the controllers");
+  cli.AddChoice("experiment", {"none", "identify"},
+                "identify: the identification experiment (as hexa_session --experiment identify) "
+                "recorded to --record, instead of trajectories", "none");
+  cli.AddOption("legs", "list", "--experiment identify: legs to excite (1-6, 1,3, ...)", "1-6");
+  cli.AddOption("excite-duration", "s", "--experiment identify: excitation per leg", "30");
+  cli.AddOption("record", "file.mcap", "--experiment identify: the recording to write");
+  cli.AddChoice("friction-model", {"lugre", "static"},
+                "the plant's friction: LuGre (default) or the static eq 3 (study)", "lugre");
   const bool ok = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, ok); rc >= 0) return rc;
   auto seed = cli.GetInt("seed", 0, 1LL << 62);
@@ -149,6 +160,39 @@ int main(int argc, char** argv) {
   if (cli.Flag("no-outer-loop")) config.supervisor.outer_loop.enabled = false;
   if (cli.Flag("least-squares")) config.supervisor.least_squares_estimator = true;
   if (cli.Flag("no-feedforward")) config.supervisor.feedforward_enabled = false;
+  config.plant_friction_model = cli.Get("friction-model") == "static"
+                                    ? hexa::LegModelParams::FrictionModel::kStatic
+                                    : hexa::LegModelParams::FrictionModel::kLugre;
+  if (cli.Get("experiment") == "identify") {
+    hexa::sim::ExperimentOptions e;
+    const auto duration = cli.GetDouble("excite-duration", 1, 3600);
+    if (!duration || !cli.Has("record")) {
+      std::fprintf(stderr, "error: %s\n", duration ? "--experiment identify needs --record FILE.mcap"
+                                                   : cli.error().c_str());
+      return 2;
+    }
+    e.legs.clear();
+    std::stringstream in(cli.Get("legs"));
+    for (std::string part; std::getline(in, part, ',');) {
+      const auto dash = part.find('-');
+      const int a = std::atoi(part.c_str());
+      const int b = dash == std::string::npos ? a : std::atoi(part.c_str() + dash + 1);
+      for (int l = a; l <= b; ++l) e.legs.push_back(l);
+    }
+    if (e.legs.empty() || *std::min_element(e.legs.begin(), e.legs.end()) < 1 ||
+        *std::max_element(e.legs.begin(), e.legs.end()) > 6) {
+      std::fprintf(stderr, "error: --legs '%s': expected legs 1..6\n", cli.Get("legs").c_str());
+      return 2;
+    }
+    std::sort(e.legs.begin(), e.legs.end());
+    e.legs.erase(std::unique(e.legs.begin(), e.legs.end()), e.legs.end());
+    e.per_leg_s = *duration;
+    e.profile = cli.Get("profile");
+    e.record_path = cli.Get("record");
+    e.rig_path = cli.Get("rig");
+    for (int k = 0; k < argc; ++k) e.command_line += (k ? " " : "") + std::string(argv[k]);
+    return hexa::sim::RunIdentifyExperiment(loaded.config, config, e);
+  }
 
   bool calibrated = false;
   if (cli.Flag("calibrate")) {

@@ -53,6 +53,9 @@ struct PlatformPlantConfig {
   // External pose instrument for kinematic calibration (issue 14); off by default.
   TrackerParams tracker;
   bool chambers_sealed = false;  // true only for energy-conservation tests (valves never open)
+  // The legs' friction: LuGre (default) or the static eq 3 (identification study of what
+  // the LuGre dynamics do to an eq 3 fit, docs/identification.md).
+  LegModelParams::FrictionModel friction_model = LegModelParams::FrictionModel::kLugre;
 
   void Validate() const;  // throws std::invalid_argument naming field, value and limit
 };

@@ -1,0 +1,64 @@
+// hexa_identify's results: per leg and direction the nominal, GA and least-squares
+// parameters with their objective, wall time and curvature; the overlay built from them; the
+// Table 8 style markdown, a JSON file for the docs generator, and CSV data for the plots.
+#pragma once
+
+#include <array>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hexa/config/rig_config.hpp"
+#include "hexa/core/genetic_algorithm.hpp"
+#include "hexa/core/pneumatic_identification.hpp"
+#include "identification.pb.h"
+
+namespace hexa::identify {
+
+struct StrokeReport {
+  int leg = 1;
+  Stroke stroke = Stroke::kExtend;
+  std::size_t samples = 0;
+  StrokeParams nominal;
+  double nominal_objective = 0.0;
+  std::optional<StrokeParams> lsq, ga;
+  double lsq_objective = 0.0, ga_objective = 0.0;          // Z of eq 13
+  double lsq_fit_objective = 0.0, ga_fit_objective = 0.0;  // what the fits minimise
+  double lsq_wall_s = 0.0, ga_wall_s = 0.0;
+  int lsq_iterations = 0, ga_iterations = 0;
+  bool lsq_converged = false;
+  std::uint64_t ga_evaluations = 0;
+  std::vector<double> ga_history;
+  CurvatureReport lsq_curvature, ga_curvature;
+};
+
+struct Report {
+  std::string recording, rig_file, method, overlay_path, overlay_error;
+  bool overlay_refused = false;
+  IdentificationConfig config;
+  GaParams ga_params;
+  int threads = 2;
+  double flat_threshold = 1e-3;
+  StrokeSearchSpace search_space;
+  double pressure_noise_pa = 0.0;  // compensated in the pressure channels
+  double payload_scale = 1.0;
+  bool payload_estimated = false;
+  std::map<int, double> payload_per_leg;
+  std::optional<rec::PlantTruth> truth;
+  std::vector<StrokeReport> strokes;
+};
+
+// The true Table 8 parameters of a leg and direction from the evaluation channel.
+std::optional<StrokeParams> TrueStroke(const rec::PlantTruth& truth, int leg, Stroke stroke);
+
+// Overlay with the identifiable parameters of the GA (from_ga) or least-squares fit.
+config::RigOverlay MakeOverlay(const Report& report, const config::SystemConfig& cfg, bool from_ga);
+// Overlay with the plant's true friction and polytropic coefficients (closed-loop reference).
+config::RigOverlay MakeTruthOverlay(const rec::PlantTruth& truth, const config::SystemConfig& cfg);
+
+// identification.md, identification.json, predictions_leg<L>_<dir>.csv, ga_history.csv.
+void WriteReport(const Report& report, const std::map<int, std::array<StrokeDataset, 2>>& data,
+                 const std::string& out_dir);
+
+}  // namespace hexa::identify
