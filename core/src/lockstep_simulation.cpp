@@ -26,6 +26,7 @@ LockstepSimulation::LockstepSimulation(const LockstepConfig& config) : config_(c
   plant_config.seed = config_.seed;
   plant_config.tracker = config_.tracker;
   plant_config.friction_model = config_.plant_friction_model;
+  plant_config.free_fall = config_.plant_free_fall;
   plant_ = std::make_unique<PlatformPlant>(plant_config);
   const ControllerModel model = config_.controllers
                                     ? *config_.controllers

@@ -150,11 +150,14 @@ int main(int argc, char** argv) {
   cli.AddRepeatable("rig-overlay", "file",
                     "rig overlay (identified / calibrated values) for the leg controllers and the "
                     "supervisor; the plant keeps the rig file + profile (docs/config.md)");
-  cli.AddChoice("experiment", {"none", "identify"},
+  cli.AddChoice("experiment", {"none", "identify", "free-fall"},
                 "identify: the identification experiment instead of a trajectory: the legs of "
                 "--legs are driven open loop one after the other (steps, pseudo-random levels, "
                 "chirp, position guard) while the others hold; recorded with the plant's truth "
-                "for hexa_identify (docs/identification.md)", "none");
+                "for hexa_identify (docs/identification.md); free-fall: the Appendix B free-fall "
+                "bench (every cylinder hung rod down, chambers vented, a load, released at "
+                "0.5 s) for hexa_identify --free-fall", "none");
+  cli.AddOption("free-fall-load-kg", "kg", "--experiment free-fall: load hung on each rod", "12");
   cli.AddOption("legs", "list", "--experiment identify: legs to excite (1-6, 1,3, ...)", "1-6");
   cli.AddOption("excite-duration", "s", "--experiment identify: excitation per leg", "30");
   cli.AddOption("dds-config", "file", "Cyclone DDS configuration", HEXA_DEFAULT_CYCLONE_CONFIG);
@@ -250,7 +253,9 @@ int main(int argc, char** argv) {
   std::optional<long long> domain = 100 + getpid() % 100;
   if (cli.Has("domain")) domain = cli.GetInt("domain", 0, 230);
   const auto excite_duration = cli.GetDouble("excite-duration", 1, 3600);
-  if (!seed || !periods || !timeout || !domain || !stale_ticks || !excite_duration) {
+  const auto free_fall_load = cli.GetDouble("free-fall-load-kg", 0, 1000);
+  if (!seed || !periods || !timeout || !domain || !stale_ticks || !excite_duration ||
+      !free_fall_load) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
@@ -267,8 +272,11 @@ int main(int argc, char** argv) {
     return 2;
   }
   const bool identify = o.experiment == "identify";
-  if (identify && (o.standby || cli.Has("fault"))) {
-    std::fprintf(stderr, "error: --experiment identify runs without --standby and --fault\n");
+  const bool free_fall = o.experiment == "free-fall";
+  const bool experiment = identify || free_fall;
+  constexpr double kFreeFallReleaseS = 0.5, kFreeFallAfterS = 1.0;
+  if (experiment && (o.standby || cli.Has("fault"))) {
+    std::fprintf(stderr, "error: --experiment runs without --standby and --fault\n");
     return 2;
   }
   static const std::vector<std::string> kNamed{"x",   "y",        "z",          "roll",
@@ -463,10 +471,12 @@ int main(int argc, char** argv) {
   std::vector<std::string> sup_args{"--trajectory", o.trajectory, "--autostart",
                                     "--exit-when-done", "--periods", std::to_string(o.periods)};
   // Identification: the supervisor only holds home (no trajectory); its outer loop would
-  // fight the excited leg, which moves the platform. The calibration procedure holds the
+  // fight the excited leg, which moves the platform. The free-fall bench has no platform, but
+  // lockstep legs answer a tick only with its setpoint: the supervisor runs (holding, outer
+  // loop off); the vented bench ignores the valves. The calibration procedure holds the
   // platform still at each pose: the outer loop would integrate estimation noise there (idle
   // wander, docs/task_space.md), so it is off.
-  if (identify) sup_args = {"--no-outer-loop"};
+  if (experiment) sup_args = {"--no-outer-loop"};
   else if (!o.outer_loop || o.trajectory == "calibration") sup_args.push_back("--no-outer-loop");
   if (!o.feedforward) sup_args.push_back("--no-feedforward");
   sup_args.insert(sup_args.end(), overlay_args.begin(), overlay_args.end());
@@ -483,6 +493,14 @@ int main(int argc, char** argv) {
   if (identify) {
     plant_args.insert(plant_args.end(), {"--duration", std::to_string(plan.total_duration_s),
                                          "--truth-out", truth_path});
+  }
+  if (free_fall) {
+    plant_args.insert(plant_args.end(),
+                      {"--bench", "free-fall", "--bench-load-kg", std::to_string(*free_fall_load),
+                       "--bench-release-s", std::to_string(kFreeFallReleaseS), "--duration",
+                       std::to_string(kFreeFallReleaseS + kFreeFallAfterS), "--truth-out", truth_path});
+    log->info("free-fall experiment: every cylinder hung rod down, chambers vented, {} kg load, "
+              "released at {} s (Appendix B)", *free_fall_load, kFreeFallReleaseS);
   }
   specs.push_back(spec("plant", "/services/plant_sim/hexa_plant_sim", plant_args));
 
@@ -511,9 +529,8 @@ int main(int argc, char** argv) {
     } else if (ev.kind == ProcessGroup::Event::kChildExited) {
       const auto& e = ev.exit;
       exits.push_back(e);
-      if (identify && e.name == "plant" && e.signal == 0 && e.exit_code == 0) {
-        log->info("plant reached the end of the experiment ({} s simulated) after {:.1f} s wall",
-                  plan.total_duration_s, elapsed_s);
+      if (experiment && e.name == "plant" && e.signal == 0 && e.exit_code == 0) {
+        log->info("plant reached the end of the experiment after {:.1f} s wall", elapsed_s);
         completed = true;
       } else if (e.name == "supervisor" && e.signal == 0 && e.exit_code == 0) {
         log->info("supervisor finished the trajectory after {:.1f} s wall", elapsed_s);
@@ -617,19 +634,23 @@ int main(int argc, char** argv) {
   }
   // Identification: the recording gets the session description and, for evaluation only,
   // the plant's true parameters as channels of their own; hexa_identify reads it.
-  if (identify && o.recorder && std::filesystem::exists(recording)) {
+  if (experiment && o.recorder && std::filesystem::exists(recording)) {
     hexa::rec::SessionInfo info;
     const auto rig = hexa::config::LoadSystemConfig(o.rig);
     info.set_rig_name(rig.ok ? rig.config.rig_name : "");
     info.set_rig_file(o.rig);
-    info.set_experiment("identify");
+    info.set_experiment(o.experiment);
+    if (free_fall) {
+      info.set_free_fall_load_kg(*free_fall_load);
+      info.set_free_fall_release_s(kFreeFallReleaseS);
+    }
     info.set_profile(o.profile);
     info.set_seed(static_cast<std::uint64_t>(o.seed));
     std::string command;
     for (int k = 0; k < argc; ++k) command += (k ? " " : "") + std::string(argv[k]);
     info.set_command(command);
     info.set_excitation_per_leg_s(o.excite_duration_s);
-    for (int leg : o.excite_legs) {
+    for (int leg : identify ? o.excite_legs : std::vector<int>{}) {
       info.add_excited_legs(static_cast<std::uint32_t>(leg));
       info.add_excitation_start_s(plan.legs[static_cast<std::size_t>(leg - 1)].start_s);
     }
@@ -649,12 +670,11 @@ int main(int argc, char** argv) {
       clean = false;
     } else {
       log->info("recording {} ready for hexa_identify (session info and plant truth attached)", recording);
-      std::printf("\nidentification recording: %s\nnext: %s/tools/hexa_identify %s --out %s/identified\n",
-                  recording.c_str(), bin.c_str(), recording.c_str(), o.out_dir.c_str());
+      std::printf("\n%s recording: %s\n", o.experiment.c_str(), recording.c_str());
     }
   }
-  // (Not for the identification experiment: it tracks no trajectory.)
-  if (!identify && o.recorder && std::filesystem::exists(recording)) {
+  // (Not for the identification experiments: they track no trajectory.)
+  if (!experiment && o.recorder && std::filesystem::exists(recording)) {
     ChildSpec r;
     r.name = "report";
     r.argv = {executable("/services/recorder/hexa_recorder"), "report", recording, "--out", o.out_dir,

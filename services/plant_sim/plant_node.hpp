@@ -55,6 +55,7 @@ struct PlantNodeOptions {
   std::uint64_t recorder_sync_window_ticks = 1200;
   std::string summary_path;        // write the run's figures here as JSON at exit ("" = no)
   bool tracker = false;            // publish the external pose instrument (calibration, issue 14)
+  FreeFallBenchParams free_fall;   // --bench free-fall: the Appendix B bench, not the platform
 };
 
 // Age of the command the plant applied at a tick, in ticks (tick - answered tick; 0 = the

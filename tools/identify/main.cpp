@@ -165,7 +165,13 @@ int main(int argc, char** argv) {
   cli.AddOption("truth-overlay", "file",
                 "also write an overlay holding the plant's TRUE parameters (from the recording's "
                 "evaluation channel) to this file, for the closed-loop comparison");
+  cli.AddOption("free-fall", "file.mcap",
+                "also evaluate a free-fall recording (hexa_session / hexa_sim --experiment "
+                "free-fall) by Appendix B (eq 67, 72)");
   cli.AddFlag("no-plots", "do not run the plot script");
+  cli.AddFlag("no-gravity-load",
+              "do not write the gravity loads of the estimated payload (BS-SMC gravity_load_n) "
+              "into the overlays");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
   if (cli.positional().size() != 1 || !cli.Has("out")) {
@@ -462,6 +468,50 @@ int main(int argc, char** argv) {
     }
   }
 
+  if (cli.Has("free-fall")) {
+    try {
+      const IdentificationRecording ff = ReadIdentificationRecording(cli.Get("free-fall"));
+      if (!ff.session || ff.session->experiment() != "free-fall") {
+        throw IdentificationInputError(cli.Get("free-fall") + ": not a free-fall recording (hexa_SessionInfo "
+                                       "experiment 'free-fall' with the load and release time is missing)");
+      }
+      if (ff.session->rig_name() != cfg.rig_name) {
+        throw IdentificationInputError(cli.Get("free-fall") + ": recorded on rig '" + ff.session->rig_name() +
+                                       "', the rig file describes '" + cfg.rig_name + "'");
+      }
+      const double mass = ff.session->free_fall_load_kg() + cfg.rig.cylinder.moving_mass_kg;
+      const auto release = static_cast<std::size_t>(std::llround(ff.session->free_fall_release_s() / kTickS));
+      report.free_fall_recording = cli.Get("free-fall");
+      report.free_fall_mass_kg = mass;
+      const double bottom = cfg.rig.cylinder.mid_stroke_length_m + 0.5 * cfg.rig.cylinder.stroke_m - 0.005;
+      for (int leg : legs) {
+        const LegSeries& s = ff.legs[static_cast<std::size_t>(leg - 1)];
+        if (release >= s.size() || !std::isfinite(s.length_m[release])) {
+          throw IdentificationInputError(cli.Get("free-fall") + ": leg " + std::to_string(leg) +
+                                         " has no sample at the release tick");
+        }
+        std::vector<double> t, x;
+        for (std::size_t k = release; k < s.size() && std::isfinite(s.length_m[k]) && s.length_m[k] < bottom; ++k) {
+          t.push_back(static_cast<double>(k - release) * kTickS);
+          x.push_back(s.length_m[k] - s.length_m[release]);
+        }
+        FreeFallLeg f;
+        f.leg = leg;
+        f.samples = t.size();
+        f.fall_m = x.empty() ? 0.0 : x.back();
+        f.duration_s = t.empty() ? 0.0 : t.back();
+        f.fit = FitFreeFall(t.data(), x.data(), t.size(), mass, cfg.rig.platform.gravity_m_s2);
+        std::printf("leg %d free fall: %zu samples, %.3f m in %.3f s: F_c %.2f N, B %.2f N s/m (rms residual %.3f mm)\n",
+                    leg, f.samples, f.fall_m, f.duration_s, f.fit.coulomb_n, f.fit.viscous_n_s_m,
+                    1e3 * f.fit.rms_residual_m);
+        report.free_fall.push_back(f);
+      }
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      return 1;
+    }
+  }
+
   std::error_code ec;
   fs::create_directories(out_dir, ec);
   if (ec) {
@@ -471,7 +521,8 @@ int main(int argc, char** argv) {
 
   // The overlay: identifiable parameters of the chosen fit, validated before it is written.
   const bool from_ga = cli.Get("overlay-from") == "ga";
-  config::RigOverlay overlay = MakeOverlay(report, cfg, from_ga);
+  const bool gravity = !cli.Flag("no-gravity-load");
+  config::RigOverlay overlay = MakeOverlay(report, cfg, from_ga, gravity);
   overlay.provenance.source_recording = fs::absolute(recording_path).string();
   overlay.provenance.date = UtcNow();
   overlay.provenance.tool = "hexa_identify";
@@ -496,7 +547,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "error: --truth-overlay: the recording has no hexa_PlantTruth channel\n");
       return 1;
     }
-    config::RigOverlay truth = MakeTruthOverlay(*rec.truth, cfg);
+    config::RigOverlay truth = MakeTruthOverlay(*rec.truth, cfg, gravity);
     const std::string text = config::ToTextFormat(truth);
     const auto tp = config::ParseRigOverlay(text, cli.Get("truth-overlay"));
     const auto tc = tp.ok ? config::ApplyRigOverlay(cfg, tp.overlay, text) : config::ConfigResult{};

@@ -5,6 +5,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "hexa/core/kinematics.hpp"
+#include "hexa/core/platform_inverse_dynamics.hpp"
+
 namespace hexa::identify {
 namespace {
 
@@ -96,13 +99,30 @@ void SetStroke(config::LegOverride& o, Stroke stroke, const StrokeParams& p,
 
 }  // namespace
 
-config::RigOverlay MakeOverlay(const Report& report, const config::SystemConfig& cfg, bool from_ga) {
+LegArray<double> HomeGravityLoadN(const config::SystemConfig& cfg, double payload_scale) {
+  Pose home;
+  home.p_BP_B_m = cfg.rig.geometry.home_position_m;
+  LegArray<double> length{}, zero{};
+  InverseKinematics(cfg.rig.geometry, home, length);
+  PlatformInverseDynamics dynamics(cfg.rig);
+  PlatformDynamicsTerms t;
+  LegArray<double> load{};
+  if (dynamics.Decompose(length, zero, t) != KinStatus::kOk) return load;
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    load[i] = t.fixed_rest[static_cast<int>(i)] + payload_scale * t.scaled_rest[static_cast<int>(i)];
+  }
+  return load;
+}
+
+config::RigOverlay MakeOverlay(const Report& report, const config::SystemConfig& cfg, bool from_ga,
+                               bool with_gravity_load) {
   config::RigOverlay o;
   o.rig_name = cfg.rig_name;
   std::ostringstream method;
   method << (from_ga ? "genetic algorithm (Table 7" : "least squares (Ceres")
          << ") on the eq 8 residuals, NRMSE of eq 13; payload scale "
          << Fmt(report.payload_scale, 5) << (report.payload_estimated ? " (estimated)" : " (given)")
+         << (with_gravity_load ? ", gravity loads from it" : "")
          << "; parameters with a flat objective not written";
   o.provenance.method = method.str();
   for (const StrokeReport& s : report.strokes) {
@@ -111,10 +131,15 @@ config::RigOverlay MakeOverlay(const Report& report, const config::SystemConfig&
     const CurvatureReport& c = from_ga ? s.ga_curvature : s.lsq_curvature;
     SetStroke(o.leg[static_cast<std::size_t>(s.leg - 1)], s.stroke, *params, c.identifiable);
   }
+  if (with_gravity_load) {
+    const LegArray<double> g = HomeGravityLoadN(cfg, report.payload_scale);
+    for (const StrokeReport& s : report.strokes) o.leg[static_cast<std::size_t>(s.leg - 1)].gravity_load_n = g[static_cast<std::size_t>(s.leg - 1)];
+  }
   return o;
 }
 
-config::RigOverlay MakeTruthOverlay(const rec::PlantTruth& truth, const config::SystemConfig& cfg) {
+config::RigOverlay MakeTruthOverlay(const rec::PlantTruth& truth, const config::SystemConfig& cfg,
+                                    bool with_gravity_load) {
   config::RigOverlay o;
   o.rig_name = cfg.rig_name;
   o.provenance.method = "the simulated plant's true parameters (profile '" + truth.profile() +
@@ -127,6 +152,10 @@ config::RigOverlay MakeTruthOverlay(const rec::PlantTruth& truth, const config::
     for (Stroke s : {Stroke::kExtend, Stroke::kRetract}) {
       if (const auto p = TrueStroke(truth, leg, s)) SetStroke(o.leg[static_cast<std::size_t>(leg - 1)], s, *p, all);
     }
+  }
+  if (with_gravity_load) {
+    const LegArray<double> g = HomeGravityLoadN(cfg, truth.payload_scale());
+    for (std::size_t i = 0; i < kNumLegs; ++i) o.leg[i].gravity_load_n = g[i];
   }
   return o;
 }
@@ -257,6 +286,27 @@ void WriteReport(const Report& r, const std::map<int, std::array<StrokeDataset, 
     }
     md << "\n";
   }
+  if (!r.free_fall_recording.empty()) {
+    md << "\n## Free fall (Appendix B, eq 67 and 72) from " << r.free_fall_recording << "\n\n"
+       << "Falling mass " << Fmt(r.free_fall_mass_kg, 4)
+       << " kg (load + piston), both chambers vented, x(t) = A (t + tau exp(-t/tau) - tau) fitted from the "
+          "release; F_c = W (1 - A / (g tau)), B = (W - F_c) / A. The falling rod extends: compare with "
+          "the extend stroke. Eq 66 has no Stribeck term: its F_c is an effective level between F_s and "
+          "F_c.\n\n";
+    md << "| leg | samples | fall m | F_c free fall N | F_c truth (up) N | err % | F_s truth (up) N | B free fall N s/m | "
+          "B truth (up) N s/m | err % | rms residual mm |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+    for (const FreeFallLeg& f : r.free_fall) {
+      const std::optional<StrokeParams> t = r.truth ? TrueStroke(*r.truth, f.leg, Stroke::kExtend) : std::nullopt;
+      const StrokeParams truth = t.value_or(StrokeParams{});
+      md << "| " << f.leg << " | " << f.samples << " | " << Fmt(f.fall_m, 3) << " | "
+         << (f.fit.ok ? Fmt(f.fit.coulomb_n, 5) : "fit failed") << " | " << (t ? Fmt(truth.coulomb_n, 5) : "-")
+         << " | " << (t && f.fit.ok ? Pct(ErrorPct(f.fit.coulomb_n, truth.coulomb_n)) : "-") << " | "
+         << (t ? Fmt(truth.static_n, 5) : "-") << " | " << (f.fit.ok ? Fmt(f.fit.viscous_n_s_m, 5) : "-") << " | "
+         << (t ? Fmt(truth.viscous_n_s_m, 5) : "-") << " | "
+         << (t && f.fit.ok ? Pct(ErrorPct(f.fit.viscous_n_s_m, truth.viscous_n_s_m)) : "-") << " | "
+         << Fmt(1e3 * f.fit.rms_residual_m, 3) << " |\n";
+    }
+  }
   md << "\nOverlay: " << (r.overlay_refused ? "REFUSED (nothing written): " + r.overlay_error : r.overlay_path) << "\n";
 
   // ---- JSON ------------------------------------------------------------------------------
@@ -295,7 +345,15 @@ void WriteReport(const Report& r, const std::map<int, std::array<StrokeDataset, 
     }
     js << "}" << (k + 1 < r.strokes.size() ? "," : "") << "\n";
   }
-  js << "  ]\n}\n";
+  js << "  ],\n  \"free_fall\": [";
+  for (std::size_t k = 0; k < r.free_fall.size(); ++k) {
+    const FreeFallLeg& f = r.free_fall[k];
+    js << (k ? ", " : "") << "{\"leg\": " << f.leg << ", \"ok\": " << (f.fit.ok ? "true" : "false")
+       << ", \"coulomb_n\": " << JsonNumber(f.fit.coulomb_n) << ", \"viscous_n_s_m\": "
+       << JsonNumber(f.fit.viscous_n_s_m) << ", \"rms_residual_m\": " << JsonNumber(f.fit.rms_residual_m)
+       << ", \"samples\": " << f.samples << "}";
+  }
+  js << "]\n}\n";
 
   // ---- CSV for the plots ----------------------------------------------------------------------
   std::ofstream hist(out_dir + "/ga_history.csv");

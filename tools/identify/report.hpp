@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "hexa/config/rig_config.hpp"
+#include "hexa/core/free_fall.hpp"
 #include "hexa/core/genetic_algorithm.hpp"
 #include "hexa/core/pneumatic_identification.hpp"
 #include "identification.pb.h"
@@ -33,6 +34,15 @@ struct StrokeReport {
   CurvatureReport lsq_curvature, ga_curvature;
 };
 
+// Appendix B free fall of one leg (eq 67, 72), from a free-fall recording.
+struct FreeFallLeg {
+  int leg = 1;
+  FreeFallFit fit;
+  std::size_t samples = 0;
+  double fall_m = 0.0;
+  double duration_s = 0.0;
+};
+
 struct Report {
   std::string recording, rig_file, method, overlay_path, overlay_error;
   bool overlay_refused = false;
@@ -47,15 +57,26 @@ struct Report {
   std::map<int, double> payload_per_leg;
   std::optional<rec::PlantTruth> truth;
   std::vector<StrokeReport> strokes;
+  std::string free_fall_recording;  // empty: no free-fall experiment given
+  double free_fall_mass_kg = 0.0;
+  std::vector<FreeFallLeg> free_fall;
 };
 
 // The true Table 8 parameters of a leg and direction from the evaluation channel.
 std::optional<StrokeParams> TrueStroke(const rec::PlantTruth& truth, int leg, Stroke stroke);
 
-// Overlay with the identifiable parameters of the GA (from_ga) or least-squares fit.
-config::RigOverlay MakeOverlay(const Report& report, const config::SystemConfig& cfg, bool from_ga);
-// Overlay with the plant's true friction and polytropic coefficients (closed-loop reference).
-config::RigOverlay MakeTruthOverlay(const rec::PlantTruth& truth, const config::SystemConfig& cfg);
+// The static force along each leg at the home pose (platform at rest) for a payload scale:
+// the BS-SMC's gravity load (leg_controller.bssmc.gravity_load_n) with the rig file's
+// geometry and masses, the platform's scaled.
+LegArray<double> HomeGravityLoadN(const config::SystemConfig& cfg, double payload_scale);
+// Overlay with the identifiable parameters of the GA (from_ga) or least-squares fit, and
+// the gravity load of the estimated payload when `with_gravity_load`.
+config::RigOverlay MakeOverlay(const Report& report, const config::SystemConfig& cfg, bool from_ga,
+                               bool with_gravity_load);
+// Overlay with the plant's true friction and polytropic coefficients and the gravity load of
+// its true payload (closed-loop reference).
+config::RigOverlay MakeTruthOverlay(const rec::PlantTruth& truth, const config::SystemConfig& cfg,
+                                    bool with_gravity_load);
 
 // identification.md, identification.json, predictions_leg<L>_<dir>.csv, ga_history.csv.
 void WriteReport(const Report& report, const std::map<int, std::array<StrokeDataset, 2>>& data,

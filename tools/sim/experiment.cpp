@@ -9,16 +9,13 @@
 #include "recording.pb.h"
 
 namespace hexa::sim {
+namespace {
 
-int RunIdentifyExperiment(const config::SystemConfig& config, LockstepConfig lockstep,
-                          const ExperimentOptions& o) {
-  const ExcitationPlan plan =
-      PlanIdentificationExperiment(o.legs, o.per_leg_s, lockstep.seed);
-  lockstep.controller = LegControllerKind::kExcitation;
-  lockstep.excitation = plan.legs;
-  lockstep.supervisor.outer_loop.enabled = false;  // the excited leg moves the platform
-  LockstepSimulation sim(lockstep);
-
+// Runs `sim` for `duration_s` and records what the recorder records of a DDS session for
+// identification: every leg's sensor sample and valve command per tick, with the session
+// description and the plant's truth.
+int Record(LockstepSimulation& sim, const config::SystemConfig& config, const ExperimentOptions& o,
+           const rec::SessionInfo& info, double duration_s) {
   recorder::McapWriterConfig wc;
   wc.sync = recorder::McapSyncMode::kFflush;
   recorder::RecordingWriter writer(wc);
@@ -27,18 +24,6 @@ int RunIdentifyExperiment(const config::SystemConfig& config, LockstepConfig loc
                                               {{recorder::kMetaPeriodS, "0.001"}, {"source", "hexa_sim"}});
   const uint16_t valve_ch = writer.AddTopic("hexa_ValveCommand", *rec::ValveCommand::descriptor(),
                                             {{recorder::kMetaPeriodS, "0.001"}, {"source", "hexa_sim"}});
-  rec::SessionInfo info;
-  info.set_rig_name(config.rig_name);
-  info.set_rig_file(o.rig_path);
-  info.set_experiment("identify");
-  info.set_profile(o.profile);
-  info.set_seed(lockstep.seed);
-  info.set_command(o.command_line);
-  info.set_excitation_per_leg_s(o.per_leg_s);
-  for (int leg : o.legs) {
-    info.add_excited_legs(static_cast<std::uint32_t>(leg));
-    info.add_excitation_start_s(plan.legs[static_cast<std::size_t>(leg - 1)].start_s);
-  }
   const rec::PlantTruth truth = recorder::MakePlantTruth(sim.plant(), config.rig_name, o.profile);
   const uint16_t info_ch = writer.AddTopic(recorder::kSessionInfoTopic, *rec::SessionInfo::descriptor(),
                                            {{recorder::kMetaPeriodS, "0"}});
@@ -47,13 +32,12 @@ int RunIdentifyExperiment(const config::SystemConfig& config, LockstepConfig loc
   writer.Write(info_ch, 0, 0, info);
   writer.Write(truth_ch, 0, 0, truth);
 
-  const auto ticks = static_cast<std::uint64_t>(std::llround(plan.total_duration_s / lockstep.tick_s));
+  const double tick_s = sim.config().tick_s;
+  const auto ticks = static_cast<std::uint64_t>(std::llround(duration_s / tick_s));
+  const rec::ControllerKind closed_loop =
+      sim.config().controller == LegControllerKind::kPi ? rec::CONTROLLER_PI : rec::CONTROLLER_BSSMC;
   rec::LegSensors s;
   rec::ValveCommand c;
-  std::printf("identification experiment: legs");
-  for (int leg : o.legs) std::printf(" %d", leg);
-  std::printf(", %.1f s each, %.1f s simulated, profile %s, seed %llu\n", o.per_leg_s,
-              plan.total_duration_s, o.profile.c_str(), static_cast<unsigned long long>(lockstep.seed));
   for (std::uint64_t n = 0; n < ticks; ++n) {
     const PlantStatus status = sim.Tick();
     if (status != PlantStatus::kOk) {
@@ -62,7 +46,7 @@ int RunIdentifyExperiment(const config::SystemConfig& config, LockstepConfig loc
       writer.Close();
       return 1;
     }
-    const double t = static_cast<double>(n) * lockstep.tick_s;
+    const double t = static_cast<double>(n) * tick_s;
     const auto log_ns = static_cast<uint64_t>(n) * 1'000'000ULL;
     const PlatformPlantOutput& before = sim.plant_before_step();
     for (std::size_t i = 0; i < kNumLegs; ++i) {
@@ -81,7 +65,7 @@ int RunIdentifyExperiment(const config::SystemConfig& config, LockstepConfig loc
       c.mutable_header()->set_tick(n);
       c.mutable_header()->set_sim_time_s(t);
       c.set_valve_v(sim.applied_valve_v()[i]);
-      c.set_controller(out.open_loop ? rec::CONTROLLER_NONE : rec::CONTROLLER_BSSMC);
+      c.set_controller(out.open_loop ? rec::CONTROLLER_NONE : closed_loop);
       c.set_status(static_cast<rec::LegCtrlStatus>(static_cast<int>(out.status)));
       c.set_setpoint_tick(out.setpoint_tick);
       c.set_desired_length_m(out.desired_length_m);
@@ -89,14 +73,63 @@ int RunIdentifyExperiment(const config::SystemConfig& config, LockstepConfig loc
       writer.Write(valve_ch, log_ns, log_ns, c);
     }
     if (n % 10000 == 0) {
-      std::printf("\r  t = %6.1f / %.1f s", t, plan.total_duration_s);
+      std::printf("\r  t = %6.1f / %.1f s", t, duration_s);
       std::fflush(stdout);
     }
   }
   writer.Close();
-  std::printf("\r  t = %6.1f / %.1f s: recorded %s\n", plan.total_duration_s, plan.total_duration_s,
-              o.record_path.c_str());
+  std::printf("\r  t = %6.1f / %.1f s: recorded %s\n", duration_s, duration_s, o.record_path.c_str());
   return 0;
+}
+
+rec::SessionInfo Info(const config::SystemConfig& config, const LockstepConfig& lockstep,
+                      const ExperimentOptions& o, const char* experiment) {
+  rec::SessionInfo info;
+  info.set_rig_name(config.rig_name);
+  info.set_rig_file(o.rig_path);
+  info.set_experiment(experiment);
+  info.set_profile(o.profile);
+  info.set_seed(lockstep.seed);
+  info.set_command(o.command_line);
+  return info;
+}
+
+}  // namespace
+
+int RunIdentifyExperiment(const config::SystemConfig& config, LockstepConfig lockstep,
+                          const ExperimentOptions& o) {
+  const ExcitationPlan plan = PlanIdentificationExperiment(o.legs, o.per_leg_s, lockstep.seed);
+  lockstep.controller = LegControllerKind::kExcitation;
+  lockstep.excitation = plan.legs;
+  lockstep.supervisor.outer_loop.enabled = false;  // the excited leg moves the platform
+  LockstepSimulation sim(lockstep);
+  rec::SessionInfo info = Info(config, lockstep, o, "identify");
+  info.set_excitation_per_leg_s(o.per_leg_s);
+  for (int leg : o.legs) {
+    info.add_excited_legs(static_cast<std::uint32_t>(leg));
+    info.add_excitation_start_s(plan.legs[static_cast<std::size_t>(leg - 1)].start_s);
+  }
+  std::printf("identification experiment: legs");
+  for (int leg : o.legs) std::printf(" %d", leg);
+  std::printf(", %.1f s each, %.1f s simulated, profile %s, seed %llu\n", o.per_leg_s,
+              plan.total_duration_s, o.profile.c_str(), static_cast<unsigned long long>(lockstep.seed));
+  return Record(sim, config, o, info, plan.total_duration_s);
+}
+
+int RunFreeFallExperiment(const config::SystemConfig& config, LockstepConfig lockstep,
+                          const ExperimentOptions& o, double load_kg) {
+  constexpr double kReleaseS = 0.5, kAfterS = 1.0;  // as hexa_session --experiment free-fall
+  lockstep.plant_free_fall.enabled = true;
+  lockstep.plant_free_fall.load_kg = load_kg;
+  lockstep.plant_free_fall.release_s = kReleaseS;
+  lockstep.supervisor.outer_loop.enabled = false;
+  LockstepSimulation sim(lockstep);
+  rec::SessionInfo info = Info(config, lockstep, o, "free-fall");
+  info.set_free_fall_load_kg(load_kg);
+  info.set_free_fall_release_s(kReleaseS);
+  std::printf("free-fall experiment: %.2f kg on each rod, released at %.1f s, profile %s, seed %llu\n",
+              load_kg, kReleaseS, o.profile.c_str(), static_cast<unsigned long long>(lockstep.seed));
+  return Record(sim, config, o, info, kReleaseS + kAfterS);
 }
 
 }  // namespace hexa::sim

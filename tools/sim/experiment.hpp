@@ -28,4 +28,9 @@ struct ExperimentOptions {
 int RunIdentifyExperiment(const config::SystemConfig& config, LockstepConfig lockstep,
                           const ExperimentOptions& options);
 
+// hexa_sim --experiment free-fall: the Appendix B free-fall bench (FreeFallBenchParams, released
+// at 0.5 s, recorded for 1.5 s), recorded like the identification experiment.
+int RunFreeFallExperiment(const config::SystemConfig& config, LockstepConfig lockstep,
+                          const ExperimentOptions& options, double load_kg);
+
 }  // namespace hexa::sim

@@ -121,9 +121,11 @@ int main(int argc, char** argv) {
   cli.AddFlag("calibrate",
               "first run the kinematic calibration procedure (tracker on, Ceres fit) and use the "
               "fitted calibration in the controllers");
-  cli.AddChoice("experiment", {"none", "identify"},
-                "identify: the identification experiment (as hexa_session --experiment identify) "
-                "recorded to --record, instead of trajectories", "none");
+  cli.AddOption("json", "file", "also write the results as JSON (RMSE in m and rad)");
+  cli.AddChoice("experiment", {"none", "identify", "free-fall"},
+                "identify / free-fall: the identification or free-fall experiment (as "
+                "hexa_session --experiment) recorded to --record, instead of trajectories", "none");
+  cli.AddOption("free-fall-load-kg", "kg", "--experiment free-fall: load hung on each rod", "12");
   cli.AddOption("legs", "list", "--experiment identify: legs to excite (1-6, 1,3, ...)", "1-6");
   cli.AddOption("excite-duration", "s", "--experiment identify: excitation per leg", "30");
   cli.AddOption("record", "file.mcap", "--experiment identify: the recording to write");
@@ -163,6 +165,19 @@ int main(int argc, char** argv) {
   config.plant_friction_model = cli.Get("friction-model") == "static"
                                     ? hexa::LegModelParams::FrictionModel::kStatic
                                     : hexa::LegModelParams::FrictionModel::kLugre;
+  if (cli.Get("experiment") == "free-fall") {
+    const auto load = cli.GetDouble("free-fall-load-kg", 0, 1000);
+    if (!load || !cli.Has("record")) {
+      std::fprintf(stderr, "error: %s\n", load ? "--experiment free-fall needs --record FILE.mcap" : cli.error().c_str());
+      return 2;
+    }
+    hexa::sim::ExperimentOptions e;
+    e.profile = cli.Get("profile");
+    e.record_path = cli.Get("record");
+    e.rig_path = cli.Get("rig");
+    for (int k = 0; k < argc; ++k) e.command_line += (k ? " " : "") + std::string(argv[k]);
+    return hexa::sim::RunFreeFallExperiment(loaded.config, config, e, *load);
+  }
   if (cli.Get("experiment") == "identify") {
     hexa::sim::ExperimentOptions e;
     const auto duration = cli.GetDouble("excite-duration", 1, 3600);
@@ -234,8 +249,31 @@ int main(int argc, char** argv) {
   std::printf("%-9s %-4s | %8s %8s %8s | %8s %8s %8s | %s\n", "traj", "vs", "X cm", "Y cm",
               "Z cm", "rotX deg", "rotY deg", "rotZ deg", "leg RMSE mm (1..6)");
   int failures = 0;
+  std::string json = "{\"seed\": " + std::to_string(*seed) + ", \"profile\": \"" + cli.Get("profile") +
+                     "\", \"controller\": \"" + cli.Get("controller") + "\", \"overlays\": [";
+  for (std::size_t i = 0; i < loaded.config.overlays.size(); ++i)
+    json += (i ? ", \"" : "\"") + loaded.config.overlays[i].source_path + "\"";
+  json += "], \"trajectories\": {";
+  bool first_json = true;
   for (const auto motion : motions) {
     const auto r = hexa::RunPaperSession(config, motion, static_cast<int>(*periods));
+    {
+      char buf[512];
+      const auto t = r.metrics.vs_truth.Rmse();
+      const auto m = r.metrics.vs_measured.Rmse();
+      std::snprintf(buf, sizeof buf,
+                    "%s\"%s\": {\"completed\": %s, \"rmse_vs_truth\": [%.9g, %.9g, %.9g, %.9g, %.9g, %.9g], "
+                    "\"rmse_vs_measured\": [%.9g, %.9g, %.9g, %.9g, %.9g, %.9g], \"leg_rmse_m\": [",
+                    first_json ? "" : ", ", hexa::ToString(motion), r.completed ? "true" : "false", t[0], t[1],
+                    t[2], t[3], t[4], t[5], m[0], m[1], m[2], m[3], m[4], m[5]);
+      json += buf;
+      for (std::size_t i = 0; i < r.metrics.leg_length.size(); ++i) {
+        std::snprintf(buf, sizeof buf, "%s%.9g", i ? ", " : "", r.metrics.leg_length[i].Rmse());
+        json += buf;
+      }
+      json += "]}";
+      first_json = false;
+    }
     if (!r.completed) {
       ++failures;
       std::printf("%-9s did not complete: state %s, plant %s, %llu ticks\n",
@@ -252,6 +290,15 @@ int main(int argc, char** argv) {
         for (const auto& leg : r.metrics.leg_length) std::printf(" %.3f", 1000 * leg.Rmse());
       std::printf("\n");
     }
+  }
+  json += "}}\n";
+  if (cli.Has("json")) {
+    FILE* f = std::fopen(cli.Get("json").c_str(), "w");
+    if (f == nullptr || std::fputs(json.c_str(), f) < 0) {
+      std::fprintf(stderr, "error: cannot write %s\n", cli.Get("json").c_str());
+      return 1;
+    }
+    std::fclose(f);
   }
   return failures == 0 ? 0 : 1;
 }

@@ -41,6 +41,7 @@ struct LockstepConfig {
   LegArray<ExcitationParams> excitation{};
   // The plant's friction model (PlatformPlantConfig::friction_model).
   LegModelParams::FrictionModel plant_friction_model = LegModelParams::FrictionModel::kLugre;
+  FreeFallBenchParams plant_free_fall;  // enabled: the free-fall bench instead of the platform
   double tick_s = 0.001;
   int supervisor_every_ticks = 5;
   void Validate() const;  // throws std::invalid_argument naming the field and value
