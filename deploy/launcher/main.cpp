@@ -70,24 +70,6 @@ struct Options {
   double excite_duration_s = 30.0;
 };
 
-// "1-6", "1,3,5", "2" -> sorted leg ids 1..6; false on anything else.
-bool ParseLegList(const std::string& text, std::vector<int>& legs) {
-  legs.clear();
-  std::stringstream in(text);
-  for (std::string part; std::getline(in, part, ',');) {
-    const auto dash = part.find('-');
-    char* end = nullptr;
-    const long a = std::strtol(part.c_str(), &end, 10);
-    long b = a;
-    if (dash != std::string::npos) b = std::strtol(part.c_str() + dash + 1, &end, 10);
-    if (end == nullptr || *end != '\0' || a < 1 || b > 6 || b < a) return false;
-    for (long l = a; l <= b; ++l) legs.push_back(static_cast<int>(l));
-  }
-  std::sort(legs.begin(), legs.end());
-  legs.erase(std::unique(legs.begin(), legs.end()), legs.end());
-  return !legs.empty();
-}
-
 // CPU time of every process over its whole life (start-up and discovery included), per
 // simulated second when the plant's summary says how much was simulated: `processes.json`
 // and a table in the log (docs/performance.md).
@@ -266,7 +248,7 @@ int main(int argc, char** argv) {
   o.domain = *domain;
   o.experiment = cli.Get("experiment");
   o.excite_duration_s = *excite_duration;
-  if (!ParseLegList(cli.Get("legs"), o.excite_legs)) {
+  if (!hexa::cli::ParseLegList(cli.Get("legs"), o.excite_legs)) {
     std::fprintf(stderr, "error: --legs '%s': expected legs 1..6 as a list or range (1-6, 1,3)\n",
                  cli.Get("legs").c_str());
     return 2;

@@ -47,27 +47,6 @@ std::string UtcNow() {
   return buf;
 }
 
-bool ParseLegs(const std::string& text, std::vector<int>& legs) {
-  legs.clear();
-  std::stringstream in(text);
-  for (std::string part; std::getline(in, part, ',');) {
-    const auto dash = part.find('-');
-    try {
-      if (dash == std::string::npos) {
-        legs.push_back(std::stoi(part));
-      } else {
-        const int a = std::stoi(part.substr(0, dash)), b = std::stoi(part.substr(dash + 1));
-        for (int l = a; l <= b; ++l) legs.push_back(l);
-      }
-    } catch (const std::exception&) {
-      return false;
-    }
-  }
-  std::sort(legs.begin(), legs.end());
-  legs.erase(std::unique(legs.begin(), legs.end()), legs.end());
-  return !legs.empty() && legs.front() >= 1 && legs.back() <= 6;
-}
-
 // The GA's fitness evaluations of one iteration spread over `threads` threads (each genome's
 // cost is independent of the others, so the result does not depend on the thread count).
 GaBatchCost ParallelCost(const StrokeDataset& data, const StrokeSearchSpace& space, int threads) {
@@ -196,7 +175,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::vector<int> legs;
-  if (!ParseLegs(cli.Get("legs"), legs)) {
+  if (!cli::ParseLegList(cli.Get("legs"), legs)) {
     std::fprintf(stderr, "error: --legs '%s': expected legs 1..6 as a list or range (1-6, 1,3)\n",
                  cli.Get("legs").c_str());
     return 2;
@@ -526,19 +505,14 @@ int main(int argc, char** argv) {
   overlay.provenance.source_recording = fs::absolute(recording_path).string();
   overlay.provenance.date = UtcNow();
   overlay.provenance.tool = "hexa_identify";
-  const std::string overlay_text = config::ToTextFormat(overlay);
   const std::string overlay_path = out_dir + "/" + cli.Get("overlay-name");
-  const auto reparsed = config::ParseRigOverlay(overlay_text, overlay_path);
-  const config::ConfigResult checked =
-      reparsed.ok ? config::ApplyRigOverlay(cfg, reparsed.overlay, overlay_text) : config::ConfigResult{};
   report.overlay_path = overlay_path;
-  report.overlay_refused = !checked.ok;
-  report.overlay_error = reparsed.ok ? checked.error : reparsed.error;
-  if (checked.ok) {
-    std::ofstream(overlay_path) << "# Written by hexa_identify: identified parameters, not edited.\n" << overlay_text;
+  report.overlay_error = WriteValidatedOverlay(overlay, cfg, overlay_path,
+                                               "Written by hexa_identify: identified parameters, not edited.");
+  report.overlay_refused = !report.overlay_error.empty();
+  if (!report.overlay_refused) {
     std::printf("rig overlay written: %s\n", overlay_path.c_str());
   } else {
-    fs::remove(overlay_path, ec);
     std::fprintf(stderr, "REFUSED: the identified values break the rig file's limits; no overlay written:\n%s\n",
                  report.overlay_error.c_str());
   }
@@ -547,15 +521,13 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "error: --truth-overlay: the recording has no hexa_PlantTruth channel\n");
       return 1;
     }
-    config::RigOverlay truth = MakeTruthOverlay(*rec.truth, cfg, gravity);
-    const std::string text = config::ToTextFormat(truth);
-    const auto tp = config::ParseRigOverlay(text, cli.Get("truth-overlay"));
-    const auto tc = tp.ok ? config::ApplyRigOverlay(cfg, tp.overlay, text) : config::ConfigResult{};
-    if (!tc.ok) {
-      std::fprintf(stderr, "error: the truth overlay does not validate:\n%s\n", (tp.ok ? tc.error : tp.error).c_str());
+    const std::string error = WriteValidatedOverlay(MakeTruthOverlay(*rec.truth, cfg, gravity), cfg,
+                                                    cli.Get("truth-overlay"),
+                                                    "The simulated plant's TRUE parameters (evaluation).");
+    if (!error.empty()) {
+      std::fprintf(stderr, "error: the truth overlay does not validate:\n%s\n", error.c_str());
       return 1;
     }
-    std::ofstream(cli.Get("truth-overlay")) << "# The simulated plant's TRUE parameters (evaluation).\n" << text;
     std::printf("truth overlay written: %s\n", cli.Get("truth-overlay").c_str());
   }
 

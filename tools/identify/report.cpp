@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -158,6 +159,27 @@ config::RigOverlay MakeTruthOverlay(const rec::PlantTruth& truth, const config::
     for (std::size_t i = 0; i < kNumLegs; ++i) o.leg[i].gravity_load_n = g[i];
   }
   return o;
+}
+
+std::string WriteValidatedOverlay(const config::RigOverlay& overlay, const config::SystemConfig& cfg,
+                                  const std::string& path, const std::string& header) {
+  const std::string text = config::ToTextFormat(overlay);
+  const config::OverlayResult parsed = config::ParseRigOverlay(text, path);
+  std::string error = parsed.error;
+  if (parsed.ok) {
+    const config::ConfigResult applied = config::ApplyRigOverlay(cfg, parsed.overlay, text);
+    error = applied.ok ? "" : applied.error;
+  }
+  std::error_code ec;
+  if (error.empty()) {
+    std::ofstream out(path);
+    out << "# " << header << "\n" << text;
+    out.close();
+    if (out) return "";
+    error = "cannot write " + path;
+  }
+  std::filesystem::remove(path, ec);
+  return error.empty() ? "refused" : error;
 }
 
 void WriteReport(const Report& r, const std::map<int, std::array<StrokeDataset, 2>>& data,

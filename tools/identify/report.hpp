@@ -78,6 +78,14 @@ config::RigOverlay MakeOverlay(const Report& report, const config::SystemConfig&
 config::RigOverlay MakeTruthOverlay(const rec::PlantTruth& truth, const config::SystemConfig& cfg,
                                     bool with_gravity_load);
 
+// Checks `overlay` as a service loading it next to the rig file would (its text parsed back,
+// then applied to `cfg` with the rig file's value rules) and writes it to `path`, after the
+// comment line `header`, only when it passes. Returns "" when written; otherwise the
+// validator's messages (field, value, limit), and `path` does not exist afterwards: values
+// outside the rig file's limits are refused, never written. Never throws.
+std::string WriteValidatedOverlay(const config::RigOverlay& overlay, const config::SystemConfig& cfg,
+                                  const std::string& path, const std::string& header);
+
 // identification.md, identification.json, predictions_leg<L>_<dir>.csv, ga_history.csv.
 void WriteReport(const Report& report, const std::map<int, std::array<StrokeDataset, 2>>& data,
                  const std::string& out_dir);

@@ -2,10 +2,8 @@
 // protocol as the DDS system, no processes) and prints the per-axis RMSE in the layout of
 // the paper's Tables 9 and 10. For batch studies and tuning; the DDS session
 // (hexa_session) is the system itself.
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -186,21 +184,11 @@ int main(int argc, char** argv) {
                                                    : cli.error().c_str());
       return 2;
     }
-    e.legs.clear();
-    std::stringstream in(cli.Get("legs"));
-    for (std::string part; std::getline(in, part, ',');) {
-      const auto dash = part.find('-');
-      const int a = std::atoi(part.c_str());
-      const int b = dash == std::string::npos ? a : std::atoi(part.c_str() + dash + 1);
-      for (int l = a; l <= b; ++l) e.legs.push_back(l);
-    }
-    if (e.legs.empty() || *std::min_element(e.legs.begin(), e.legs.end()) < 1 ||
-        *std::max_element(e.legs.begin(), e.legs.end()) > 6) {
-      std::fprintf(stderr, "error: --legs '%s': expected legs 1..6\n", cli.Get("legs").c_str());
+    if (!hexa::cli::ParseLegList(cli.Get("legs"), e.legs)) {
+      std::fprintf(stderr, "error: --legs '%s': expected legs 1..6 as a list or range (1-6, 1,3)\n",
+                   cli.Get("legs").c_str());
       return 2;
     }
-    std::sort(e.legs.begin(), e.legs.end());
-    e.legs.erase(std::unique(e.legs.begin(), e.legs.end()), e.legs.end());
     e.per_leg_s = *duration;
     e.profile = cli.Get("profile");
     e.record_path = cli.Get("record");
