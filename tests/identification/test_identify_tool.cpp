@@ -27,13 +27,13 @@ namespace fs = std::filesystem;
 namespace hexa {
 namespace {
 
-struct Run {
+struct ToolRun {
   int exit_code = -1;
   std::string output;  // stdout and stderr
 };
 
-Run Execute(const std::string& command) {
-  Run r;
+ToolRun Execute(const std::string& command) {
+  ToolRun r;
   FILE* p = popen((command + " 2>&1").c_str(), "r");
   if (p == nullptr) return r;
   char buf[4096];
@@ -96,7 +96,7 @@ void WritePotentiometerOnlyRecording(const std::string& path) {
 // excited for 20 s (long.mcap) and for 2 s (short.mcap), profile realistic, seed 1.
 class IdentifyTool : public ::testing::Test {
  protected:
-  static Run Identify(const std::string& args) {
+  static ToolRun Identify(const std::string& args) {
     return Execute(std::string(HEXA_IDENTIFY_BIN) + " --no-plots --method lsq " + args);
   }
   const std::string dir_ = HEXA_IDENTIFY_TEST_DIR;
@@ -105,7 +105,7 @@ class IdentifyTool : public ::testing::Test {
 TEST_F(IdentifyTool, IdentifiedOverlayRoundTripsThroughTheRigValidator) {
   ASSERT_TRUE(fs::exists(dir_ + "/long.mcap")) << "the fixture identification.make_recordings did not run";
   const std::string out = dir_ + "/good";
-  const Run r = Identify(dir_ + "/long.mcap --legs 1 --min-samples 300 --out " + out +
+  const ToolRun r = Identify(dir_ + "/long.mcap --legs 1 --min-samples 300 --out " + out +
                          " --truth-overlay " + dir_ + "/truth.textproto");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string overlay = out + "/identified.textproto";
@@ -132,7 +132,7 @@ TEST_F(IdentifyTool, IdentifiedOverlayRoundTripsThroughTheRigValidator) {
 
 TEST_F(IdentifyTool, ALegThatWasNeverExcitedIsNamed) {
   ASSERT_TRUE(fs::exists(dir_ + "/long.mcap")) << "the fixture identification.make_recordings did not run";
-  const Run r = Identify(dir_ + "/long.mcap --legs 2 --out " + dir_ + "/leg2");
+  const ToolRun r = Identify(dir_ + "/long.mcap --legs 2 --out " + dir_ + "/leg2");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("leg 2: no excitation"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir_ + "/leg2/identified.textproto"));
@@ -140,7 +140,7 @@ TEST_F(IdentifyTool, ALegThatWasNeverExcitedIsNamed) {
 
 TEST_F(IdentifyTool, ATooShortRecordingSaysHowManySamplesItHas) {
   ASSERT_TRUE(fs::exists(dir_ + "/short.mcap")) << "the fixture identification.make_recordings did not run";
-  const Run r = Identify(dir_ + "/short.mcap --legs 1 --out " + dir_ + "/short");
+  const ToolRun r = Identify(dir_ + "/short.mcap --legs 1 --out " + dir_ + "/short");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("too few usable samples"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("too short"), std::string::npos) << r.output;
@@ -150,7 +150,7 @@ TEST_F(IdentifyTool, ATooShortRecordingSaysHowManySamplesItHas) {
 TEST_F(IdentifyTool, ARecordingWithoutPressureChannelsIsRefused) {
   const std::string path = dir_ + "/no_pressure.mcap";
   WritePotentiometerOnlyRecording(path);
-  const Run r = Identify(path + " --legs 1 --out " + dir_ + "/no_pressure");
+  const ToolRun r = Identify(path + " --legs 1 --out " + dir_ + "/no_pressure");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("no chamber / supply pressure fields"), std::string::npos) << r.output;
 }
@@ -164,14 +164,14 @@ TEST_F(IdentifyTool, ARecordingOfAnotherRigIsRefused) {
   text.replace(text.find(from), from.size(), "rig_name: \"HexaTaar-Other\"");
   const std::string rig = dir_ + "/other_rig.textproto";
   std::ofstream(rig) << text;
-  const Run r = Identify(dir_ + "/long.mcap --legs 1 --rig " + rig + " --out " + dir_ + "/other");
+  const ToolRun r = Identify(dir_ + "/long.mcap --legs 1 --rig " + rig + " --out " + dir_ + "/other");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("recorded on rig 'HexaTaar-R'"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("HexaTaar-Other"), std::string::npos) << r.output;
 }
 
 TEST_F(IdentifyTool, AMissingRecordingIsNamed) {
-  const Run r = Identify(dir_ + "/nonexistent.mcap --out " + dir_ + "/none");
+  const ToolRun r = Identify(dir_ + "/nonexistent.mcap --out " + dir_ + "/none");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("nonexistent.mcap"), std::string::npos) << r.output;
 }
