@@ -10,6 +10,17 @@
 namespace hexa {
 namespace {
 
+// No control law ran this tick (hold, open-loop excitation): its outputs read 0.
+void ClearLawOutputs(LegControllerOutput& out) {
+  out.desired_velocity_m_s = 0.0;
+  out.feedforward_force_n = 0.0;
+  out.sliding_surface_m_s = 0.0;
+  out.velocity_m_s = 0.0;
+  out.desired_force_n = 0.0;
+  out.force_error_n = 0.0;
+  out.desired_force_rate_n_s = 0.0;
+}
+
 BsSmcConfig MakeBsSmcConfig(const LegControllerConfig& c) {
   BsSmcConfig b;
   b.params = c.params.bssmc;
@@ -138,13 +149,7 @@ void LegController::Hold(LegControlStatus status, LegControllerOutput& out) {
   out.valve_v = config_.model.valve.null_voltage_v;
   out.status = status;
   out.desired_length_m = last_desired_length_m_;
-  out.desired_velocity_m_s = 0.0;
-  out.feedforward_force_n = 0.0;
-  out.sliding_surface_m_s = 0.0;
-  out.velocity_m_s = 0.0;
-  out.desired_force_n = 0.0;
-  out.force_error_n = 0.0;
-  out.desired_force_rate_n_s = 0.0;
+  ClearLawOutputs(out);
 }
 
 void LegController::Update(const LegControllerInput& raw, LegControllerOutput& out) {
@@ -178,13 +183,7 @@ void LegController::Update(const LegControllerInput& raw, LegControllerOutput& o
     out.open_loop = true;
     out.guarding = excitation_->guarding();
     out.desired_length_m = in.length_m;
-    out.desired_velocity_m_s = 0.0;
-    out.feedforward_force_n = 0.0;
-    out.sliding_surface_m_s = 0.0;
-    out.velocity_m_s = 0.0;
-    out.desired_force_n = 0.0;
-    out.force_error_n = 0.0;
-    out.desired_force_rate_n_s = 0.0;
+    ClearLawOutputs(out);
     return;
   }
   if (!in.has_setpoint) return Hold(LegControlStatus::kHoldNoSetpoint, out);
