@@ -115,6 +115,7 @@ int main(int argc, char** argv) {
                   "direction (Table 8) from an identification recording: the GA of Table 7 and "
                   "least squares (Ceres) on the NRMSE of eq 13; writes a rig overlay, tables and "
                   "plots (docs/identification.md). Usage: hexa_identify RECORDING.mcap --out DIR");
+  cli.AllowPositional("RECORDING.mcap", 1);
   cli.AddOption("out", "dir", "output directory");
   cli.AddOption("rig", "file", "rig file of the recorded rig (the nominal model)", HEXA_DEFAULT_RIG_FILE);
   cli.AddOption("legs", "list", "legs to identify, e.g. 1-6 or 1,3", "1-6");
