@@ -1,6 +1,7 @@
 #include "hexa/core/bssmc_controller.hpp"
 
 #include "hexa/core/param_checks.hpp"
+#include "hexa/core/pneumatics.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -45,23 +46,10 @@ void BsSmcConfig::Validate() const {
   DiffConfig(*this).Validate();
 }
 
-double FlowPerAreaKgSM2(double upstream_pa, double downstream_pa, const AirParams& air) {
-  // Eq 4 and 5, per unit C_f A_v.
-  if (!(upstream_pa > 0.0) || !(downstream_pa < upstream_pa)) return 0.0;
-  const double k = air.heat_ratio;
-  const double r = std::max(downstream_pa, 0.0) / upstream_pa;
-  const double critical = std::pow(2.0 / (k + 1.0), k / (k - 1.0));  // eq 5, 0.528
-  const double scale = upstream_pa / std::sqrt(air.temperature_k);
-  if (r <= critical) {  // choked
-    return scale *
-           std::sqrt(k / air.gas_constant_j_kg_k * std::pow(2.0 / (k + 1.0), (k + 1.0) / (k - 1.0)));
-  }
-  return scale * std::sqrt(k / air.gas_constant_j_kg_k * 2.0 / (k - 1.0)) * std::pow(r, 1.0 / k) *
-         std::sqrt(std::max(0.0, 1.0 - std::pow(r, (k - 1.0) / k)));
-}
-
 BsSmcController::BsSmcController(const BsSmcConfig& config)
     : config_((config.Validate(), config)),
+      orifice_(config.model.air, config.model.valve.discharge_coefficient,
+               kDefaultLaminarPressureRatio),
       velocity_diff_(DiffConfig(config)),
       force_diff_(DiffConfig(config)) {}
 
@@ -154,38 +142,46 @@ void BsSmcController::Update(const BsSmcInput& in, BsSmcOutput& out) {
   const double z_n = p1 * cyl.cap_area_m2 - p2 * cyl.annulus_area_m2 - phi;  // eq 35
   const double force_rate_required = phi_dot - p.backstepping_beta_1_s * z_n;  // eq 38
 
-  // Pressure dynamics (eq 7) with V1 = V0 + A1 (L/2 + x), V2 = V0 + A2 (L/2 - x) (eq 64).
+  // Pressure dynamics (eq 7, 65) and volumes (eq 64): the plant's functions (pneumatics.hpp).
+  // A1 P1' - A2 P2' is affine in the orifice area A_v for a given routing: the flows of eq 4
+  // scale with A_v. `force_rate` evaluates it for flows per unit area (m1, m2) and volume
+  // rates; the motion part (compression / expansion, gamma_k) is the one with zero flow.
   const double half = 0.5 * cyl.stroke_m;
   const double xc = std::clamp(x_m, -half, half);
-  const double v1 = cyl.dead_volume_m3 + cyl.cap_area_m2 * (half + xc);
-  const double v2 = cyl.dead_volume_m3 + cyl.annulus_area_m2 * (half - xc);
+  const double v1 = Chamber1VolumeM3(cyl, xc);
+  const double v2 = Chamber2VolumeM3(cyl, xc);
+  const double dv1 = cyl.cap_area_m2 * v_m_s;
+  const double dv2 = -cyl.annulus_area_m2 * v_m_s;
   const double rt = m.air.gas_constant_j_kg_k * m.air.temperature_k;
+  auto force_rate = [&](const PolytropicParams& g, double m1, double m2, double dvol1, double dvol2) {
+    return cyl.cap_area_m2 * ChamberPressureRatePaS(rt, g, m1, p1, v1, dvol1) -
+           cyl.annulus_area_m2 * ChamberPressureRatePaS(rt, g, m2, p2, v2, dvol2);
+  };
   const PolytropicParams& motion = v_m_s >= 0.0 ? m.polytropic.extend : m.polytropic.retract;
   // Force rate caused by the motion alone (compression / expansion, gamma_k terms).
-  const double motion_rate = -motion.volume * v_m_s *
-                             (cyl.cap_area_m2 * cyl.cap_area_m2 * p1 / v1 +
-                              cyl.annulus_area_m2 * cyl.annulus_area_m2 * p2 / v2);
+  const double motion_rate = force_rate(motion, 0.0, 0.0, dv1, dv2);
   // What the valve flow must contribute (eq 44's numerator, with the outflow kept).
   const double flow_rate_required = force_rate_required - motion_rate;
 
   const double ps = in.supply_pressure_pa;
   const double pa = m.air.atmosphere_pressure_pa;
   const ValveParams& valve = m.valve;
+  // Eq 4 per unit orifice area in the routing's intended direction only (a chamber above
+  // supply would flow back: that gains nothing and is not counted).
+  auto unit_flow = [&](double upstream_pa, double downstream_pa) {
+    return upstream_pa > downstream_pa ? orifice_.ForwardKgS(1.0, upstream_pa, downstream_pa) : 0.0;
+  };
   double spool_m = 0.0;
   if (flow_rate_required >= 0.0) {
     // Extend routing (Table 4): supply -> chamber 1, chamber 2 -> exhaust. Spool > 0.
-    const PolytropicParams& g = m.polytropic.extend;
-    const double gain = valve.discharge_coefficient * rt *
-                        (cyl.cap_area_m2 * g.inflow * FlowPerAreaKgSM2(ps, p1, m.air) / v1 +
-                         cyl.annulus_area_m2 * g.outflow * FlowPerAreaKgSM2(p2, pa, m.air) / v2);
+    const double gain =
+        force_rate(m.polytropic.extend, unit_flow(ps, p1), -unit_flow(p2, pa), 0.0, 0.0);
     const double area = gain > 1e-12 ? flow_rate_required / gain : valve.max_orifice_area_m2;
     spool_m = valve.max_spool_m * SpoolFractionForArea(area / valve.max_orifice_area_m2);  // eq 43
   } else {
     // Retract routing (Table 5): supply -> chamber 2, chamber 1 -> exhaust. Spool < 0.
-    const PolytropicParams& g = m.polytropic.retract;
-    const double gain = valve.discharge_coefficient * rt *
-                        (cyl.cap_area_m2 * g.outflow * FlowPerAreaKgSM2(p1, pa, m.air) / v1 +
-                         cyl.annulus_area_m2 * g.inflow * FlowPerAreaKgSM2(ps, p2, m.air) / v2);
+    const double gain =
+        -force_rate(m.polytropic.retract, -unit_flow(p1, pa), unit_flow(ps, p2), 0.0, 0.0);
     const double area = gain > 1e-12 ? -flow_rate_required / gain : valve.max_orifice_area_m2;
     spool_m = -valve.max_spool_m * SpoolFractionForArea(area / valve.max_orifice_area_m2);
   }

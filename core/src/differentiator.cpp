@@ -16,31 +16,37 @@ void DifferentiatorConfig::Validate() const {
   ThrowIfIssues(issues, "DifferentiatorConfig");
 }
 
+void GaussianDifferentiatorCoefficients(int samples, double sigma, double lag, double period_s,
+                                        double* coefficient) {
+  // Sample k (0 = newest) sits at time -k h. Pair (older a, newer b), a > b:
+  // midpoint -(a + b) / 2, baseline (a - b) h. Eq 41's normalising constant cancels in the
+  // weighted mean, so only the exponential is kept.
+  const int n = samples - 1;
+  for (int k = 0; k <= n; ++k) coefficient[k] = 0.0;
+  double weight_sum = 0.0;
+  for (int a = 1; a <= n; ++a) {
+    for (int b = 0; b < a; ++b) {
+      const double offset = -0.5 * (a + b) + lag;  // midpoint - c, in samples
+      const double w = std::exp(-offset * offset / (2.0 * sigma * sigma));  // eq 41
+      const double inv_dt = 1.0 / ((a - b) * period_s);
+      coefficient[b] += w * inv_dt;  // eq 40: w (x_j - x_i) / (t_j - t_i), x_j the newer
+      coefficient[a] -= w * inv_dt;
+      weight_sum += w;
+    }
+  }
+  // weight_sum > 0 always: a Gaussian is positive (it can underflow only for absurd lags,
+  // excluded by the callers' validation).
+  for (int k = 0; k <= n; ++k) coefficient[k] /= weight_sum;
+}
+
 GaussianDifferentiator::GaussianDifferentiator(const DifferentiatorConfig& config) {
   config.Validate();
   window_ = config.params.window;
   period_s_ = config.sample_period_s;
   const double sigma = config.params.sigma;
   const double lag = config.params.centre_lag_samples;
-  // Sample k (0 = newest) sits at time -k h. Pair (older a, newer b), a > b:
-  // midpoint -(a + b) / 2, baseline (a - b) h. Eq 41's normalising constant cancels in the
-  // weighted mean, so only the exponential is kept.
   for (int n = 1; n < window_; ++n) {  // n + 1 samples held
-    double weight_sum = 0.0;
-    std::array<double, kMaxWindow> c{};
-    for (int a = 1; a <= n; ++a) {
-      for (int b = 0; b < a; ++b) {
-        const double offset = -0.5 * (a + b) + lag;  // midpoint - c, in samples
-        const double w = std::exp(-offset * offset / (2.0 * sigma * sigma));  // eq 41
-        const double inv_dt = 1.0 / ((a - b) * period_s_);
-        c[b] += w * inv_dt;  // eq 40: w (x_j - x_i) / (t_j - t_i), x_j the newer
-        c[a] -= w * inv_dt;
-        weight_sum += w;
-      }
-    }
-    // weight_sum > 0 always: a Gaussian is positive (it can underflow only for absurd lags,
-    // excluded by Validate).
-    for (int k = 0; k <= n; ++k) coeff_[n][k] = c[k] / weight_sum;
+    GaussianDifferentiatorCoefficients(n + 1, sigma, lag, period_s_, coeff_[n].data());
   }
   Reset();
 }

@@ -10,6 +10,17 @@
 namespace hexa {
 namespace {
 
+// No control law ran this tick (hold, open-loop excitation): its outputs read 0.
+void ClearLawOutputs(LegControllerOutput& out) {
+  out.desired_velocity_m_s = 0.0;
+  out.feedforward_force_n = 0.0;
+  out.sliding_surface_m_s = 0.0;
+  out.velocity_m_s = 0.0;
+  out.desired_force_n = 0.0;
+  out.force_error_n = 0.0;
+  out.desired_force_rate_n_s = 0.0;
+}
+
 BsSmcConfig MakeBsSmcConfig(const LegControllerConfig& c) {
   BsSmcConfig b;
   b.params = c.params.bssmc;
@@ -84,6 +95,7 @@ void LegControllerConfig::Validate() const {
   ThrowIfIssues(issues, "LegControllerConfig");
   MakeBsSmcConfig(*this).Validate();
   MakePiConfig(*this).Validate();
+  if (kind == LegControllerKind::kExcitation) excitation.Validate(model.valve, model.cylinder);
 }
 
 LegController::LegController(const LegControllerConfig& config)
@@ -93,6 +105,9 @@ LegController::LegController(const LegControllerConfig& config)
       last_desired_length_m_(config.model.cylinder.mid_stroke_length_m) {
   potentiometer_calibrated_ =
       config_.potentiometer.offset_m != 0.0 || config_.potentiometer.gain != 1.0;
+  if (config_.kind == LegControllerKind::kExcitation) {
+    excitation_.emplace(config_.excitation, config_.model.valve, config_.model.cylinder);
+  }
 }
 
 void LegController::Interpolate(const LegControllerInput& in, double& length_m, double& velocity_m_s,
@@ -134,13 +149,7 @@ void LegController::Hold(LegControlStatus status, LegControllerOutput& out) {
   out.valve_v = config_.model.valve.null_voltage_v;
   out.status = status;
   out.desired_length_m = last_desired_length_m_;
-  out.desired_velocity_m_s = 0.0;
-  out.feedforward_force_n = 0.0;
-  out.sliding_surface_m_s = 0.0;
-  out.velocity_m_s = 0.0;
-  out.desired_force_n = 0.0;
-  out.force_error_n = 0.0;
-  out.desired_force_rate_n_s = 0.0;
+  ClearLawOutputs(out);
 }
 
 void LegController::Update(const LegControllerInput& raw, LegControllerOutput& out) {
@@ -158,7 +167,25 @@ void LegController::Update(const LegControllerInput& raw, LegControllerOutput& o
   const LegControllerInput& in = *input;
   out.tick = in.tick;
   out.setpoint_tick = in.setpoint_tick;
+  out.open_loop = false;
+  out.guarding = false;
   if (!SensorsValid(in)) return Hold(LegControlStatus::kHoldBadInput, out);
+  if (excitation_ && config_.excitation.Active(in.time_s)) {
+    // Identification: open-loop excitation with its position guard (excitation.hpp). The
+    // closed-loop law restarts from fresh histories when the window ends.
+    if (active_) {
+      bssmc_.Reset();
+      pi_.Reset();
+      active_ = false;
+    }
+    out.valve_v = excitation_->Update(in.time_s, in.length_m);
+    out.status = LegControlStatus::kOk;
+    out.open_loop = true;
+    out.guarding = excitation_->guarding();
+    out.desired_length_m = in.length_m;
+    ClearLawOutputs(out);
+    return;
+  }
   if (!in.has_setpoint) return Hold(LegControlStatus::kHoldNoSetpoint, out);
   const double age_s = in.time_s - in.setpoint_time_s;
   if (!std::isfinite(in.setpoint_time_s) || !std::isfinite(age_s)) {
@@ -197,7 +224,7 @@ void LegController::Update(const LegControllerInput& raw, LegControllerOutput& o
   out.desired_length_m = ld_m;
   out.desired_velocity_m_s = vd_m_s;
   out.feedforward_force_n = ff_n;
-  if (config_.kind == LegControllerKind::kBsSmc) {
+  if (config_.kind != LegControllerKind::kPi) {  // BS-SMC, also outside an excitation window
     BsSmcInput b;
     b.length_m = in.length_m;
     b.cap_pressure_pa = in.cap_pressure_pa;

@@ -156,12 +156,11 @@ void LegModel::Evaluate(const LegPneumaticState& s, double x, double v,
     // Eq 7 / 65: P_i' = RT/V_i (gamma_i m_in - gamma_o m_out) - gamma_k P_i/V_i dV_i/dt.
     // (dV_i/dt is the true volume rate here; eq 7 writes +gamma_k P2/V2 V2' for chamber 2
     // with V2' meaning A2 x', see docs/plant.md.)
-    const double rt = gas_rt_j_kg_;
-    const auto weighted = [&](double m) { return m >= 0.0 ? gamma_in * m : gamma_out * m; };
+    const PolytropicParams gamma{gamma_in, gamma_out, gamma_vol};
     rate.chamber1_pressure_pa =
-        (rt * weighted(flows.chamber1_kg_s) - gamma_vol * p1 * dvol1) / vol1;
+        ChamberPressureRatePaS(gas_rt_j_kg_, gamma, flows.chamber1_kg_s, p1, vol1, dvol1);
     rate.chamber2_pressure_pa =
-        (rt * weighted(flows.chamber2_kg_s) - gamma_vol * p2 * dvol2) / vol2;
+        ChamberPressureRatePaS(gas_rt_j_kg_, gamma, flows.chamber2_kg_s, p2, vol2, dvol2);
   }
 
   // Eq 1, 2, 50: pneumatic force on the rod.

@@ -25,6 +25,8 @@ LockstepSimulation::LockstepSimulation(const LockstepConfig& config) : config_(c
   plant_config.disturbance = config_.disturbance;
   plant_config.seed = config_.seed;
   plant_config.tracker = config_.tracker;
+  plant_config.friction_model = config_.plant_friction_model;
+  plant_config.free_fall = config_.plant_free_fall;
   plant_ = std::make_unique<PlatformPlant>(plant_config);
   const ControllerModel model = config_.controllers
                                     ? *config_.controllers
@@ -34,8 +36,9 @@ LockstepSimulation::LockstepSimulation(const LockstepConfig& config) : config_(c
   supervisor_ = std::make_unique<Supervisor>(model.SupervisorRig(config_.rig), config_.supervisor,
                                              potentiometer);
   for (std::size_t i = 0; i < kNumLegs; ++i) {
-    legs_[i] = std::make_unique<LegController>(
-        LegControllerConfig::FromModel(model, i, config_.controller));
+    LegControllerConfig leg = LegControllerConfig::FromModel(model, i, config_.controller);
+    leg.excitation = config_.excitation[i];
+    legs_[i] = std::make_unique<LegController>(leg);
   }
   hygiene_ = CommandHygieneParams::FromValve(config_.rig.valve, 0);
   schedule_.supervisor_every_ticks = config_.supervisor_every_ticks;

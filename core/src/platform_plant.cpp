@@ -73,6 +73,15 @@ void PlatformPlantConfig::Validate() const {
   CheckRigParams(c, rig);
   CheckDisturbanceProfile(c, disturbance, "disturbance");
   CheckProfileAgainstRig(c, rig, disturbance, "disturbance");
+  if (free_fall.enabled) {
+    c.NonNegative("free_fall.load_kg", free_fall.load_kg, "free-fall load");
+    c.NonNegative("free_fall.release_s", free_fall.release_s, "release time");
+    if (c.Finite("free_fall.start_margin_m", free_fall.start_margin_m) &&
+        !(free_fall.start_margin_m >= 0.0 && free_fall.start_margin_m < rig.cylinder.stroke_m)) {
+      c.Fail("free_fall.start_margin_m", "the bench starts the rod inside its stroke",
+             FormatParam(free_fall.start_margin_m), "[0, stroke)");
+    }
+  }
   if (issues.empty()) {
     CheckPhysicalLimits(c, DerivePlantLimits(rig, {{"plant", disturbance}}, integrator_step_s,
                                              /*include_mechanical_modes=*/false));
@@ -109,6 +118,7 @@ PlatformPlant::PlatformPlant(const PlatformPlantConfig& config)
   leg.lugre_damping_fade_velocity_m_s = config_.lugre_damping_fade_velocity_m_s;
   leg.friction_enabled = config_.friction_enabled;
   leg.chambers_sealed = config_.chambers_sealed;
+  leg.friction_model = config_.friction_model;
   leg_model_ = LegModel(leg);
 
   // The plant's true geometry; the controllers keep the nominal one.
@@ -118,6 +128,15 @@ PlatformPlant::PlatformPlant(const PlatformPlantConfig& config)
   platform_inertia_P_ = (rig.platform.inertia_diag_kg_m2 * dist.payload_scale).asDiagonal();
   leg_mass_kg_ = rig.cylinder.moving_mass_kg;
   gravity_m_s2_ = rig.platform.gravity_m_s2;
+  if (config_.free_fall.enabled) {
+    SingleLegConfig bench;
+    bench.leg = leg;
+    bench.leg.chambers_vented = true;
+    bench.load_mass_kg = config_.free_fall.load_kg;
+    bench.gravity_m_s2 = gravity_m_s2_;
+    bench.mount = LegMount::kRodDown;
+    bench_.assign(kNumLegs, SingleLegPlant(bench));
+  }
   Reset();
 }
 
@@ -127,7 +146,58 @@ double PlatformPlant::SupplyPressurePa(double time_s) const {
          d.supply_ripple_amplitude_pa * std::sin(2.0 * kPi * d.supply_ripple_frequency_hz * time_s);
 }
 
+void PlatformPlant::ResetBench() {
+  const CylinderParams& cyl = config_.rig.cylinder;
+  const double x0 = -0.5 * cyl.stroke_m + config_.free_fall.start_margin_m;
+  for (SingleLegPlant& leg : bench_) leg.Reset(x0);
+  output_ = PlatformPlantOutput{};
+  output_.truth.applied_valve_v.fill(config_.rig.valve.null_voltage_v);
+  PlatformTrueState& t = output_.truth;
+  t.pose.p_BP_B_m = config_.rig.geometry.home_position_m;
+  t.q_BP = Eigen::Quaterniond::Identity();
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    t.piston_position_m[i] = bench_[i].position_m();
+    t.piston_velocity_m_s[i] = bench_[i].velocity_m_s();
+    t.length_m[i] = cyl.mid_stroke_length_m + bench_[i].position_m();
+    t.legs[i] = bench_[i].state().leg;
+  }
+  t.supply_pressure_pa = config_.rig.air.supply_pressure_pa;
+  t.time_s = time_s_;
+  t.tick = tick_;
+  SampleSensors();
+}
+
+PlantStatus PlatformPlant::StepBench(double dt_s) {
+  if (time_s_ + 0.5 * dt_s >= config_.free_fall.release_s) {
+    for (SingleLegPlant& leg : bench_) {
+      const PlantStatus s = leg.Step(config_.rig.valve.null_voltage_v, dt_s);  // vented: valve idle
+      if (s != PlantStatus::kOk) return output_.status = s;
+    }
+  }
+  time_s_ += dt_s;
+  ++tick_;
+  PlatformTrueState& t = output_.truth;
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    t.piston_position_m[i] = bench_[i].position_m();
+    t.piston_velocity_m_s[i] = bench_[i].velocity_m_s();
+    t.length_m[i] = config_.rig.cylinder.mid_stroke_length_m + bench_[i].position_m();
+    t.legs[i] = bench_[i].state().leg;
+  }
+  t.time_s = time_s_;
+  t.tick = tick_;
+  SampleSensors();
+  return output_.status = PlantStatus::kOk;
+}
+
 void PlatformPlant::Reset() {
+  if (!bench_.empty()) {
+    sensors_.Reset();
+    time_s_ = 0.0;
+    tick_ = 0;
+    min_dissipation_w_ = 0.0;
+    ResetBench();
+    return;
+  }
   sensors_.Reset();
   tracker_.Reset();
   time_s_ = 0.0;
@@ -341,6 +411,7 @@ void PlatformPlant::SampleSensors() {
 
 PlantStatus PlatformPlant::Step(const LegArray<double>& valve_v, double dt_s) {
   if (!std::isfinite(dt_s) || dt_s < 0.0) return output_.status = PlantStatus::kInvalidInput;
+  if (!bench_.empty()) return StepBench(dt_s);
   for (double u : valve_v) {
     if (!std::isfinite(u)) return output_.status = PlantStatus::kInvalidInput;
   }

@@ -19,7 +19,12 @@
 #include <string>
 #include <vector>
 
+#include <google/protobuf/text_format.h>
+
+#include "hexa/config/rig_config.hpp"
+#include "hexa/core/excitation.hpp"
 #include "hexa/services/cli.hpp"
+#include "identification.pb.h"
 #include "hexa/services/logging.hpp"
 #include "hexa/services/scheduling.hpp"
 #include "process_group.hpp"
@@ -60,6 +65,9 @@ struct Options {
   double timeout_s = 0;
   std::vector<std::string> rig_overlays;  // absolute paths, for the legs and the supervisor
   std::vector<std::string> plant_extra_args;  // --plant-arg, passed on as given
+  std::string experiment = "none";        // "identify": docs/identification.md
+  std::vector<int> excite_legs;
+  double excite_duration_s = 30.0;
 };
 
 // CPU time of every process over its whole life (start-up and discovery included), per
@@ -124,6 +132,16 @@ int main(int argc, char** argv) {
   cli.AddRepeatable("rig-overlay", "file",
                     "rig overlay (identified / calibrated values) for the leg controllers and the "
                     "supervisor; the plant keeps the rig file + profile (docs/config.md)");
+  cli.AddChoice("experiment", {"none", "identify", "free-fall"},
+                "identify: the identification experiment instead of a trajectory: the legs of "
+                "--legs are driven open loop one after the other (steps, pseudo-random levels, "
+                "chirp, position guard) while the others hold; recorded with the plant's truth "
+                "for hexa_identify (docs/identification.md); free-fall: the Appendix B free-fall "
+                "bench (every cylinder hung rod down, chambers vented, a load, released at "
+                "0.5 s) for hexa_identify --free-fall", "none");
+  cli.AddOption("free-fall-load-kg", "kg", "--experiment free-fall: load hung on each rod", "12");
+  cli.AddOption("legs", "list", "--experiment identify: legs to excite (1-6, 1,3, ...)", "1-6");
+  cli.AddOption("excite-duration", "s", "--experiment identify: excitation per leg", "30");
   cli.AddOption("dds-config", "file", "Cyclone DDS configuration", HEXA_DEFAULT_CYCLONE_CONFIG);
   cli.AddOption("domain", "id", "DDS domain id (default: derived from the pid, 100-199)");
   cli.AddOption("periods", "N", "trajectory periods to track (0 = the trajectory's default)", "0");
@@ -216,7 +234,10 @@ int main(int argc, char** argv) {
   auto stale_ticks = cli.GetInt("stale-ticks", 1, 1000);
   std::optional<long long> domain = 100 + getpid() % 100;
   if (cli.Has("domain")) domain = cli.GetInt("domain", 0, 230);
-  if (!seed || !periods || !timeout || !domain || !stale_ticks) {
+  const auto excite_duration = cli.GetDouble("excite-duration", 1, 3600);
+  const auto free_fall_load = cli.GetDouble("free-fall-load-kg", 0, 1000);
+  if (!seed || !periods || !timeout || !domain || !stale_ticks || !excite_duration ||
+      !free_fall_load) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
@@ -225,6 +246,21 @@ int main(int argc, char** argv) {
   o.timeout_s = *timeout;
   o.stale_ticks = *stale_ticks;
   o.domain = *domain;
+  o.experiment = cli.Get("experiment");
+  o.excite_duration_s = *excite_duration;
+  if (!hexa::cli::ParseLegList(cli.Get("legs"), o.excite_legs)) {
+    std::fprintf(stderr, "error: --legs '%s': expected legs 1..6 as a list or range (1-6, 1,3)\n",
+                 cli.Get("legs").c_str());
+    return 2;
+  }
+  const bool identify = o.experiment == "identify";
+  const bool free_fall = o.experiment == "free-fall";
+  const bool experiment = identify || free_fall;
+  constexpr double kFreeFallReleaseS = 0.5, kFreeFallAfterS = 1.0;
+  if (experiment && (o.standby || cli.Has("fault"))) {
+    std::fprintf(stderr, "error: --experiment runs without --standby and --fault\n");
+    return 2;
+  }
   static const std::vector<std::string> kNamed{"x",   "y",        "z",          "roll",
                                                 "pitch", "yaw", "combined", "calibration"};
   if (std::find(kNamed.begin(), kNamed.end(), o.trajectory) == kNamed.end()) {
@@ -373,8 +409,25 @@ int main(int argc, char** argv) {
     specs.push_back(b);
     log->info("bridge: Foxglove WebSocket on ws://{}:{}", o.bridge_listen, o.bridge_port);
   }
+  // The identification experiment's schedule (the same plan hexa_sim --experiment uses).
+  const hexa::ExcitationPlan plan =
+      identify ? hexa::PlanIdentificationExperiment(o.excite_legs, o.excite_duration_s,
+                                                    static_cast<std::uint64_t>(o.seed))
+               : hexa::ExcitationPlan{};
+  if (identify) {
+    log->info("identification experiment: legs {} excited one after the other, {} s each, {} s "
+              "simulated; the others hold home (BS-SMC), outer loop off", cli.Get("legs"),
+              o.excite_duration_s, plan.total_duration_s);
+  }
   for (int leg = 1; leg <= 6; ++leg) {
     std::vector<std::string> leg_args{"--leg", std::to_string(leg), "--controller", o.controller};
+    const hexa::ExcitationParams& excitation = plan.legs[static_cast<std::size_t>(leg - 1)];
+    if (identify && excitation.enabled()) {
+      leg_args = {"--leg", std::to_string(leg), "--controller", "excite", "--excite-start",
+                  std::to_string(excitation.start_s), "--excite-duration",
+                  std::to_string(excitation.duration_s), "--excite-seed",
+                  std::to_string(excitation.seed)};
+    }
     leg_args.insert(leg_args.end(), overlay_args.begin(), overlay_args.end());
     // With a recorder, a leg runs only once the recorder has matched its valve commands too:
     // otherwise a recorder that discovers a leg late misses its first ticks.
@@ -399,9 +452,14 @@ int main(int argc, char** argv) {
   }
   std::vector<std::string> sup_args{"--trajectory", o.trajectory, "--autostart",
                                     "--exit-when-done", "--periods", std::to_string(o.periods)};
-  // The calibration procedure holds the platform still at each pose: the outer loop would
-  // integrate estimation noise there (idle wander, docs/task_space.md), so it is off.
-  if (!o.outer_loop || o.trajectory == "calibration") sup_args.push_back("--no-outer-loop");
+  // Identification: the supervisor only holds home (no trajectory); its outer loop would
+  // fight the excited leg, which moves the platform. The free-fall bench has no platform, but
+  // lockstep legs answer a tick only with its setpoint: the supervisor runs (holding, outer
+  // loop off); the vented bench ignores the valves. The calibration procedure holds the
+  // platform still at each pose: the outer loop would integrate estimation noise there (idle
+  // wander, docs/task_space.md), so it is off.
+  if (experiment) sup_args = {"--no-outer-loop"};
+  else if (!o.outer_loop || o.trajectory == "calibration") sup_args.push_back("--no-outer-loop");
   if (!o.feedforward) sup_args.push_back("--no-feedforward");
   sup_args.insert(sup_args.end(), overlay_args.begin(), overlay_args.end());
   if (o.recorder) sup_args.insert(sup_args.end(), {"--pose-readers", "1"});
@@ -413,6 +471,19 @@ int main(int argc, char** argv) {
   if (o.recorder) plant_args.push_back("--expect-recorder");
   if (o.tracker) plant_args.push_back("--tracker");
   plant_args.insert(plant_args.end(), o.plant_extra_args.begin(), o.plant_extra_args.end());
+  const std::string truth_path = o.out_dir + "/plant_truth.textproto";
+  if (identify) {
+    plant_args.insert(plant_args.end(), {"--duration", std::to_string(plan.total_duration_s),
+                                         "--truth-out", truth_path});
+  }
+  if (free_fall) {
+    plant_args.insert(plant_args.end(),
+                      {"--bench", "free-fall", "--bench-load-kg", std::to_string(*free_fall_load),
+                       "--bench-release-s", std::to_string(kFreeFallReleaseS), "--duration",
+                       std::to_string(kFreeFallReleaseS + kFreeFallAfterS), "--truth-out", truth_path});
+    log->info("free-fall experiment: every cylinder hung rod down, chambers vented, {} kg load, "
+              "released at {} s (Appendix B)", *free_fall_load, kFreeFallReleaseS);
+  }
   specs.push_back(spec("plant", "/services/plant_sim/hexa_plant_sim", plant_args));
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -440,7 +511,10 @@ int main(int argc, char** argv) {
     } else if (ev.kind == ProcessGroup::Event::kChildExited) {
       const auto& e = ev.exit;
       exits.push_back(e);
-      if (e.name == "supervisor" && e.signal == 0 && e.exit_code == 0) {
+      if (experiment && e.name == "plant" && e.signal == 0 && e.exit_code == 0) {
+        log->info("plant reached the end of the experiment after {:.1f} s wall", elapsed_s);
+        completed = true;
+      } else if (e.name == "supervisor" && e.signal == 0 && e.exit_code == 0) {
         log->info("supervisor finished the trajectory after {:.1f} s wall", elapsed_s);
         completed = true;
       } else if (o.standby && e.name.rfind("leg", 0) == 0 &&
@@ -540,7 +614,49 @@ int main(int argc, char** argv) {
       clean = false;
     }
   }
-  if (o.recorder && std::filesystem::exists(recording)) {
+  // Identification: the recording gets the session description and, for evaluation only,
+  // the plant's true parameters as channels of their own; hexa_identify reads it.
+  if (experiment && o.recorder && std::filesystem::exists(recording)) {
+    hexa::rec::SessionInfo info;
+    const auto rig = hexa::config::LoadSystemConfig(o.rig);
+    info.set_rig_name(rig.ok ? rig.config.rig_name : "");
+    info.set_rig_file(o.rig);
+    info.set_experiment(o.experiment);
+    if (free_fall) {
+      info.set_free_fall_load_kg(*free_fall_load);
+      info.set_free_fall_release_s(kFreeFallReleaseS);
+    }
+    info.set_profile(o.profile);
+    info.set_seed(static_cast<std::uint64_t>(o.seed));
+    std::string command;
+    for (int k = 0; k < argc; ++k) command += (k ? " " : "") + std::string(argv[k]);
+    info.set_command(command);
+    info.set_excitation_per_leg_s(o.excite_duration_s);
+    for (int leg : identify ? o.excite_legs : std::vector<int>{}) {
+      info.add_excited_legs(static_cast<std::uint32_t>(leg));
+      info.add_excitation_start_s(plan.legs[static_cast<std::size_t>(leg - 1)].start_s);
+    }
+    std::string text;
+    google::protobuf::TextFormat::PrintToString(info, &text);
+    const std::string info_path = o.out_dir + "/session_info.textproto";
+    std::ofstream(info_path) << text;
+    ChildSpec a;
+    a.name = "attach";
+    a.argv = {bin + "/services/recorder/hexa_recorder", "attach", recording, "--session-info", info_path};
+    if (std::filesystem::exists(truth_path)) a.argv.insert(a.argv.end(), {"--plant-truth", truth_path});
+    a.env = env;
+    a.log_path = o.out_dir + "/attach.console.log";
+    const auto attached = run_tool(a);
+    if (!attached || attached->signal != 0 || attached->exit_code != 0) {
+      log->error("could not add the session info / plant truth to {}: {}", recording, TailOf(a.log_path, 5));
+      clean = false;
+    } else {
+      log->info("recording {} ready for hexa_identify (session info and plant truth attached)", recording);
+      std::printf("\n%s recording: %s\n", o.experiment.c_str(), recording.c_str());
+    }
+  }
+  // (Not for the identification experiments: they track no trajectory.)
+  if (!experiment && o.recorder && std::filesystem::exists(recording)) {
     ChildSpec r;
     r.name = "report";
     r.argv = {executable("/services/recorder/hexa_recorder"), "report", recording, "--out", o.out_dir,

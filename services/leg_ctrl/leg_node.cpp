@@ -72,7 +72,11 @@ LegNode::LegNode(const LegNodeOptions& options, const config::SystemConfig& conf
     : options_(options),
       log_(std::move(log)),
       name_("leg" + std::to_string(options.leg) + (options.standby ? "_standby" : "")),
-      controller_(config::MakeLegControllerConfig(config, options.leg, options.controller)),
+      controller_([&] {
+        LegControllerConfig c = config::MakeLegControllerConfig(config, options.leg, options.controller);
+        c.excitation = options.excitation;
+        return c;
+      }()),
       participant_(static_cast<dds_domainid_t>(options.common.domain_id)),
       shutdown_(participant_),
       sensors_topic_(participant_),
@@ -93,8 +97,9 @@ LegNode::LegNode(const LegNodeOptions& options, const config::SystemConfig& conf
       waitset_(participant_) {
   waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
   last_command_.leg_id = static_cast<uint8_t>(options.leg);
-  last_command_.controller =
+  base_controller_ =
       options.controller == LegControllerKind::kPi ? hexa_msg_CONTROLLER_PI : hexa_msg_CONTROLLER_BSSMC;
+  last_command_.controller = base_controller_;
   last_command_.standby = options.standby;
 }
 
@@ -219,6 +224,8 @@ void LegNode::Answer(const hexa_msg_LegSensors& s) {
   c.desired_length_m = output_.desired_length_m;
   c.sliding_surface_m_s = output_.sliding_surface_m_s;
   c.compute_time_s = compute_s;
+  // Open loop (identification excitation): no position controller chose this voltage.
+  c.controller = output_.open_loop ? hexa_msg_CONTROLLER_NONE : base_controller_;
   if (fault_active_ && options_.fault.kind == FaultKind::kGarbage) {
     c.valve_v = (cycles_ % 2 == 0) ? std::numeric_limits<double>::quiet_NaN() : 42.0;
   }
@@ -334,7 +341,9 @@ int LegNode::Run() {
   PublishStatus(hexa_msg_NODE_RUNNING, options_.standby ? "standby" : "primary");
   node::service_manager::Ready(options_.standby ? "standby" : "primary");
   log_->info("{} running: leg {}, {}, {}", name_, options_.leg,
-             options_.controller == LegControllerKind::kPi ? "PI" : "BS-SMC",
+             options_.controller == LegControllerKind::kPi           ? "PI"
+             : options_.controller == LegControllerKind::kExcitation ? "excitation + BS-SMC"
+                                                                     : "BS-SMC",
              options_.standby ? "hot standby (ownership strength 10)" : "primary (strength 20)");
   // From here the control cycle runs on the receive thread (callbacks first, then whatever
   // arrived before them).

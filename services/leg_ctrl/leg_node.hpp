@@ -47,6 +47,7 @@ struct LegNodeOptions {
   node::CommonOptions common;
   int leg = 1;                 // 1..6
   LegControllerKind controller = LegControllerKind::kBsSmc;
+  ExcitationParams excitation;  // kExcitation: the leg's identification window
   bool standby = false;
   FaultInjection fault;
   double startup_timeout_s = 30.0;
@@ -109,6 +110,7 @@ class LegNode {
   std::uint64_t cycles_ = 0;
   std::uint64_t resent_ = 0;
   bool fault_active_ = false;
+  hexa_msg_ControllerKind base_controller_ = hexa_msg_CONTROLLER_BSSMC;
 };
 
 }  // namespace hexa::leg_ctrl

@@ -11,7 +11,12 @@ int main(int argc, char** argv) {
                         "with a valve command (1 kHz).");
   hexa::node::AddCommonOptions(cli);
   cli.AddOption("leg", "1..6", "the leg this process controls");
-  cli.AddChoice("controller", {"bssmc", "pi"}, "control law", "bssmc");
+  cli.AddChoice("controller", {"bssmc", "pi", "excite"},
+                "control law; excite = identification experiment: open-loop valve excitation "
+                "inside --excite-start / --excite-duration, BS-SMC outside", "bssmc");
+  cli.AddOption("excite-start", "s", "excite: simulated time the leg's excitation starts", "1");
+  cli.AddOption("excite-duration", "s", "excite: length of the excitation window", "30");
+  cli.AddOption("excite-seed", "N", "excite: seed of the pseudo-random sequence", "1");
   cli.AddFlag("standby", "hot standby: same law, lower ownership strength");
   cli.AddChoice("fault", {"none", "crash", "hang", "slow", "garbage", "silence"},
                 "fault injection (safety tests)", "none");
@@ -33,14 +38,21 @@ int main(int argc, char** argv) {
   const auto slow = cli.GetDouble("fault-slow", 0, 10);
   const auto startup = cli.GetDouble("startup-timeout", 0.1, 3600);
   const auto valve_readers = cli.GetInt("valve-readers", 1, 16);
+  const auto excite_start = cli.GetDouble("excite-start", 0, 1e7);
+  const auto excite_duration = cli.GetDouble("excite-duration", 0, 1e7);
+  const auto excite_seed = cli.GetInt("excite-seed", 0, 1LL << 62);
   if (!hexa::node::ReadCommonOptions(cli, o.common) || !leg || !at || !slow || !startup ||
-      !valve_readers) {
+      !valve_readers || !excite_start || !excite_duration || !excite_seed) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
   o.leg = static_cast<int>(*leg);
-  o.controller = cli.Get("controller") == "pi" ? hexa::LegControllerKind::kPi
-                                                : hexa::LegControllerKind::kBsSmc;
+  o.controller = cli.Get("controller") == "pi"       ? hexa::LegControllerKind::kPi
+                 : cli.Get("controller") == "excite" ? hexa::LegControllerKind::kExcitation
+                                                      : hexa::LegControllerKind::kBsSmc;
+  o.excitation.start_s = *excite_start;
+  o.excitation.duration_s = o.controller == hexa::LegControllerKind::kExcitation ? *excite_duration : 0.0;
+  o.excitation.seed = static_cast<std::uint64_t>(*excite_seed);
   o.standby = cli.Flag("standby");
   hexa::leg_ctrl::ParseFaultKind(cli.Get("fault"), o.fault.kind);
   o.fault.at_sim_time_s = *at;

@@ -2,6 +2,11 @@
 #include <cstdio>
 #include <exception>
 
+#include <google/protobuf/text_format.h>
+
+#include <fstream>
+
+#include "hexa/recorder/plant_truth.hpp"
 #include "hexa/services/logging.hpp"
 #include "plant_node.hpp"
 
@@ -34,6 +39,15 @@ int main(int argc, char** argv) {
                 "multiple of 5; its six leg samples in the all-legs partition and its IMU "
                 "sample) as if lost on the wire; the re-ask must recover them (-1 = none)",
                 "-1");
+  cli.AddChoice("bench", {"none", "free-fall"},
+                "free-fall: simulate the Appendix B free-fall bench (each leg's cylinder hung rod "
+                "down, chambers vented, a load on the rod, released at --bench-release-s) instead "
+                "of the platform", "none");
+  cli.AddOption("bench-load-kg", "kg", "free-fall bench: load hung on each rod", "12");
+  cli.AddOption("bench-release-s", "s", "free-fall bench: simulated time of the release", "0.5");
+  cli.AddOption("truth-out", "file",
+                "write the plant's true parameters (hexa.rec.PlantTruth, text format) to this "
+                "file at start-up, for evaluation (docs/identification.md)");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
 
@@ -45,8 +59,10 @@ int main(int argc, char** argv) {
   const auto stale = cli.GetInt("stale-ticks", 0, 1000);
   const auto grace = cli.GetInt("startup-grace-ticks", 0, 600000);
   const auto lose = cli.GetInt("lose-supervisor-inputs", -1, 1LL << 40);
+  const auto bench_load = cli.GetDouble("bench-load-kg", 0, 1000);
+  const auto bench_release = cli.GetDouble("bench-release-s", 0, 1e6);
   if (!hexa::node::ReadCommonOptions(cli, o.common) || !seed || !legs || !duration || !startup ||
-      !stale || !grace || !lose) {
+      !stale || !grace || !lose || !bench_load || !bench_release) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
@@ -67,6 +83,9 @@ int main(int argc, char** argv) {
                  "of 5)\n", static_cast<long long>(o.lose_supervisor_inputs_tick));
     return 2;
   }
+  o.free_fall.enabled = cli.Get("bench") == "free-fall";
+  o.free_fall.load_kg = *bench_load;
+  o.free_fall.release_s = *bench_release;
 
   auto log = hexa::logging::Init("plant", o.common.log_file, o.common.log_level);
   try {
@@ -87,6 +106,18 @@ int main(int argc, char** argv) {
     // Before the participant exists: Cyclone's threads inherit the policy (PLATFORM_NOTES).
     hexa::node::ApplyScheduling(o.common, 80, *log);
     hexa::plant_sim::PlantNode node(o, *config, log);
+    if (cli.Has("truth-out")) {
+      std::string text;
+      google::protobuf::TextFormat::PrintToString(
+          hexa::recorder::MakePlantTruth(node.plant(), config->rig_name, o.profile), &text);
+      std::ofstream out(cli.Get("truth-out"));
+      out << text;
+      if (!out) {
+        log->error("cannot write --truth-out {}", cli.Get("truth-out"));
+        return 1;
+      }
+      log->info("true plant parameters written to {} (evaluation only)", cli.Get("truth-out"));
+    }
     return node.Run();
   } catch (const std::exception& e) {
     log->error("{}", e.what());

@@ -35,6 +35,7 @@ PlatformPlantConfig MakePlantConfig(const PlantNodeOptions& o, const config::Sys
   p.disturbance = c.profiles.at(o.profile);
   p.seed = o.seed;
   p.tracker.enabled = o.tracker;
+  p.free_fall = o.free_fall;
   return p;
 }
 

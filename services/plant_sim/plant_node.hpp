@@ -55,6 +55,7 @@ struct PlantNodeOptions {
   std::uint64_t recorder_sync_window_ticks = 1200;
   std::string summary_path;        // write the run's figures here as JSON at exit ("" = no)
   bool tracker = false;            // publish the external pose instrument (calibration, issue 14)
+  FreeFallBenchParams free_fall;   // --bench free-fall: the Appendix B bench, not the platform
 };
 
 // Age of the command the plant applied at a tick, in ticks (tick - answered tick; 0 = the
@@ -96,6 +97,7 @@ class PlantNode {
   // Runs until shutdown (exit 0), a peer timeout (3), a non-finite state (4), or the
   // configured duration (0).
   int Run();
+  const PlatformPlant& plant() const { return plant_; }  // e.g. for its true parameters
 
  private:
   bool WaitForPeers();

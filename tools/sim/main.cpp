@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "calibration_fit.hpp"
+#include "experiment.hpp"
 #include "hexa/config/rig_config.hpp"
 #include "hexa/core/calibration.hpp"
 #include "hexa/core/lockstep_simulation.hpp"
@@ -105,7 +106,7 @@ int main(int argc, char** argv) {
                         "prints RMSE per axis (Tables 9 / 10 layout).");
   cli.AddOption("trajectory", "name|all", "x y z roll pitch yaw combined, or all", "all");
   cli.AddChoice("controller", {"bssmc", "pi"}, "leg controller", "bssmc");
-  cli.AddChoice("profile", {"realistic", "ideal"}, "disturbance profile", "realistic");
+  cli.AddOption("profile", "name", "disturbance profile of the rig file (realistic, ideal, ...)", "realistic");
   cli.AddOption("seed", "N", "plant seed", "1");
   cli.AddOption("periods", "N", "periods (0 = default)", "0");
   cli.AddOption("rig", "file", "rig file", HEXA_DEFAULT_RIG_FILE);
@@ -118,6 +119,16 @@ int main(int argc, char** argv) {
   cli.AddFlag("calibrate",
               "first run the kinematic calibration procedure (tracker on, Ceres fit) and use the "
               "fitted calibration in the controllers");
+  cli.AddOption("json", "file", "also write the results as JSON (RMSE in m and rad)");
+  cli.AddChoice("experiment", {"none", "identify", "free-fall"},
+                "identify / free-fall: the identification or free-fall experiment (as "
+                "hexa_session --experiment) recorded to --record, instead of trajectories", "none");
+  cli.AddOption("free-fall-load-kg", "kg", "--experiment free-fall: load hung on each rod", "12");
+  cli.AddOption("legs", "list", "--experiment identify: legs to excite (1-6, 1,3, ...)", "1-6");
+  cli.AddOption("excite-duration", "s", "--experiment identify: excitation per leg", "30");
+  cli.AddOption("record", "file.mcap", "--experiment identify: the recording to write");
+  cli.AddChoice("friction-model", {"lugre", "static"},
+                "the plant's friction: LuGre (default) or the static eq 3 (study)", "lugre");
   const bool ok = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, ok); rc >= 0) return rc;
   auto seed = cli.GetInt("seed", 0, 1LL << 62);
@@ -149,6 +160,42 @@ int main(int argc, char** argv) {
   if (cli.Flag("no-outer-loop")) config.supervisor.outer_loop.enabled = false;
   if (cli.Flag("least-squares")) config.supervisor.least_squares_estimator = true;
   if (cli.Flag("no-feedforward")) config.supervisor.feedforward_enabled = false;
+  config.plant_friction_model = cli.Get("friction-model") == "static"
+                                    ? hexa::LegModelParams::FrictionModel::kStatic
+                                    : hexa::LegModelParams::FrictionModel::kLugre;
+  if (cli.Get("experiment") == "free-fall") {
+    const auto load = cli.GetDouble("free-fall-load-kg", 0, 1000);
+    if (!load || !cli.Has("record")) {
+      std::fprintf(stderr, "error: %s\n", load ? "--experiment free-fall needs --record FILE.mcap" : cli.error().c_str());
+      return 2;
+    }
+    hexa::sim::ExperimentOptions e;
+    e.profile = cli.Get("profile");
+    e.record_path = cli.Get("record");
+    e.rig_path = cli.Get("rig");
+    for (int k = 0; k < argc; ++k) e.command_line += (k ? " " : "") + std::string(argv[k]);
+    return hexa::sim::RunFreeFallExperiment(loaded.config, config, e, *load);
+  }
+  if (cli.Get("experiment") == "identify") {
+    hexa::sim::ExperimentOptions e;
+    const auto duration = cli.GetDouble("excite-duration", 1, 3600);
+    if (!duration || !cli.Has("record")) {
+      std::fprintf(stderr, "error: %s\n", duration ? "--experiment identify needs --record FILE.mcap"
+                                                   : cli.error().c_str());
+      return 2;
+    }
+    if (!hexa::cli::ParseLegList(cli.Get("legs"), e.legs)) {
+      std::fprintf(stderr, "error: --legs '%s': expected legs 1..6 as a list or range (1-6, 1,3)\n",
+                   cli.Get("legs").c_str());
+      return 2;
+    }
+    e.per_leg_s = *duration;
+    e.profile = cli.Get("profile");
+    e.record_path = cli.Get("record");
+    e.rig_path = cli.Get("rig");
+    for (int k = 0; k < argc; ++k) e.command_line += (k ? " " : "") + std::string(argv[k]);
+    return hexa::sim::RunIdentifyExperiment(loaded.config, config, e);
+  }
 
   bool calibrated = false;
   if (cli.Flag("calibrate")) {
@@ -190,8 +237,31 @@ int main(int argc, char** argv) {
   std::printf("%-9s %-4s | %8s %8s %8s | %8s %8s %8s | %s\n", "traj", "vs", "X cm", "Y cm",
               "Z cm", "rotX deg", "rotY deg", "rotZ deg", "leg RMSE mm (1..6)");
   int failures = 0;
+  std::string json = "{\"seed\": " + std::to_string(*seed) + ", \"profile\": \"" + cli.Get("profile") +
+                     "\", \"controller\": \"" + cli.Get("controller") + "\", \"overlays\": [";
+  for (std::size_t i = 0; i < loaded.config.overlays.size(); ++i)
+    json += (i ? ", \"" : "\"") + loaded.config.overlays[i].source_path + "\"";
+  json += "], \"trajectories\": {";
+  bool first_json = true;
   for (const auto motion : motions) {
     const auto r = hexa::RunPaperSession(config, motion, static_cast<int>(*periods));
+    {
+      char buf[512];
+      const auto t = r.metrics.vs_truth.Rmse();
+      const auto m = r.metrics.vs_measured.Rmse();
+      std::snprintf(buf, sizeof buf,
+                    "%s\"%s\": {\"completed\": %s, \"rmse_vs_truth\": [%.9g, %.9g, %.9g, %.9g, %.9g, %.9g], "
+                    "\"rmse_vs_measured\": [%.9g, %.9g, %.9g, %.9g, %.9g, %.9g], \"leg_rmse_m\": [",
+                    first_json ? "" : ", ", hexa::ToString(motion), r.completed ? "true" : "false", t[0], t[1],
+                    t[2], t[3], t[4], t[5], m[0], m[1], m[2], m[3], m[4], m[5]);
+      json += buf;
+      for (std::size_t i = 0; i < r.metrics.leg_length.size(); ++i) {
+        std::snprintf(buf, sizeof buf, "%s%.9g", i ? ", " : "", r.metrics.leg_length[i].Rmse());
+        json += buf;
+      }
+      json += "]}";
+      first_json = false;
+    }
     if (!r.completed) {
       ++failures;
       std::printf("%-9s did not complete: state %s, plant %s, %llu ticks\n",
@@ -208,6 +278,15 @@ int main(int argc, char** argv) {
         for (const auto& leg : r.metrics.leg_length) std::printf(" %.3f", 1000 * leg.Rmse());
       std::printf("\n");
     }
+  }
+  json += "}}\n";
+  if (cli.Has("json")) {
+    FILE* f = std::fopen(cli.Get("json").c_str(), "w");
+    if (f == nullptr || std::fputs(json.c_str(), f) < 0) {
+      std::fprintf(stderr, "error: cannot write %s\n", cli.Get("json").c_str());
+      return 1;
+    }
+    std::fclose(f);
   }
   return failures == 0 ? 0 : 1;
 }

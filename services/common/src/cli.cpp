@@ -199,4 +199,26 @@ int HandleParseResult(const Parser& parser, bool ok) {
   return -1;
 }
 
+bool ParseLegList(const std::string& text, std::vector<int>& legs) {
+  legs.clear();
+  std::stringstream in(text);
+  for (std::string part; std::getline(in, part, ',');) {
+    const auto dash = part.find('-');
+    char* end = nullptr;
+    const long a = std::strtol(part.c_str(), &end, 10);
+    long b = a;
+    if (dash != std::string::npos && end == part.c_str() + dash) {
+      b = std::strtol(part.c_str() + dash + 1, &end, 10);
+    }
+    if (part.empty() || end == nullptr || *end != '\0' || a < 1 || b > 6 || b < a) {
+      legs.clear();
+      return false;
+    }
+    for (long l = a; l <= b; ++l) legs.push_back(static_cast<int>(l));
+  }
+  std::sort(legs.begin(), legs.end());
+  legs.erase(std::unique(legs.begin(), legs.end()), legs.end());
+  return !legs.empty();
+}
+
 }  // namespace hexa::cli

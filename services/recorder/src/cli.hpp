@@ -63,5 +63,6 @@ int RunAnnotate(const std::vector<std::string>& argv);
 // their help text (cli_scene.cpp).
 extern const char* kSceneOptionsHelp;
 SceneOptions SceneOptionsFromArgs(const Args& a);
+int RunAttach(const std::vector<std::string>& argv);
 
 }  // namespace hexa::recorder::cli

@@ -25,6 +25,7 @@ constexpr const char* kUsage =
     "  recover  rewrite a truncated recording (e.g. after kill -9) as a complete MCAP file\n"
     "  report   session report (RMSE tables, latency, deadline misses, plots) from a recording\n"
     "  annotate add the Foxglove 3-D scene to a recording made without it\n"
+    "  attach   add the session description / plant truth channels to a recording\n"
     "\n"
     "exit status: 0 success, 1 diff found differences, 2 error (message on stderr)\n";
 // libprotobuf logs each string field that is not UTF-8 while parsing; the reader repairs such
@@ -59,6 +60,7 @@ int main(int argc, char** argv) {
     if (command == "play") return cli::RunPlay(rest);
     if (command == "report") return cli::RunReport(rest);
     if (command == "annotate") return cli::RunAnnotate(rest);
+    if (command == "attach") return cli::RunAttach(rest);
     std::fprintf(stderr, "hexa_recorder: unknown command '%s'\n\n%s", command.c_str(), kUsage);
     return cli::kExitError;
   } catch (const cli::UsageError& e) {

@@ -18,6 +18,7 @@
 
 #include "hexa/core/control_params.hpp"
 #include "hexa/core/differentiator.hpp"
+#include "hexa/core/pneumatics.hpp"
 #include "hexa/core/rig.hpp"
 
 namespace hexa {
@@ -91,14 +92,11 @@ class BsSmcController {
 
  private:
   BsSmcConfig config_;
+  OrificeFlowModel orifice_;  // eq 4, 5 with the plant's laminar band (pneumatics.hpp)
   GaussianDifferentiator velocity_diff_;
   GaussianDifferentiator force_diff_;
   double filtered_spool_m_ = 0.0;  // state of the spool command filter
   double integral_force_n_ = 0.0;  // k_i * integral(S dt), clamped
 };
-
-// Orifice mass-flow function of eq 4 per unit area and discharge coefficient:
-// mdot = C_f A_v FlowPerArea(Pu, Pd). Zero when Pd >= Pu. [kg/(s m^2)]
-double FlowPerAreaKgSM2(double upstream_pa, double downstream_pa, const AirParams& air);
 
 }  // namespace hexa

@@ -25,6 +25,14 @@ struct DifferentiatorConfig {
   void Validate() const;
 };
 
+// Coefficients of eq 40/41 (normalised) for a window of `samples` uniformly spaced samples:
+// estimate = sum_k coefficient[k] * x[newest - k], k = 0 .. samples-1 (k = 0 the newest),
+// with the Gaussian centred `centre_lag_samples` before the newest sample. Writes `samples`
+// values to `coefficient` (1/s). The one implementation of the weights, used by the causal
+// controller filter below and by the offline (centred) filter of the identification.
+void GaussianDifferentiatorCoefficients(int samples, double sigma_samples, double centre_lag_samples,
+                                        double period_s, double* coefficient);
+
 class GaussianDifferentiator {
  public:
   static constexpr int kMaxWindow = 32;

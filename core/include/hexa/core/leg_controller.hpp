@@ -8,16 +8,20 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 
 #include "hexa/core/bssmc_controller.hpp"
 #include "hexa/core/control_params.hpp"
 #include "hexa/core/controller_model.hpp"
+#include "hexa/core/excitation.hpp"
 #include "hexa/core/pi_controller.hpp"
 #include "hexa/core/rig.hpp"
 
 namespace hexa {
 
-enum class LegControllerKind : std::uint8_t { kBsSmc, kPi };
+// kExcitation: identification experiment (excitation.hpp): open-loop valve excitation inside
+// the leg's window, BS-SMC on the setpoints outside it.
+enum class LegControllerKind : std::uint8_t { kBsSmc, kPi, kExcitation };
 
 // Matches idl LegCtrlStatus.
 enum class LegControlStatus : std::uint8_t {
@@ -48,6 +52,8 @@ struct LegControllerConfig {
   // Carried to the controller for the kinematic calibration (docs/config.md, "Rig
   // overlays"); identity by default.
   PotentiometerCalibrationParams potentiometer;
+  // kExcitation only: the leg's excitation window and sequence.
+  ExcitationParams excitation;
 
   static LegControllerConfig FromRig(const RigParams& rig, const LegControllerParams& params,
                                      LegControllerKind kind);
@@ -95,6 +101,10 @@ struct LegControllerOutput {
   // Diagnostics of the BS-SMC (0 for the PI baseline): z (eq 35) and the phi_dot used (eq 38).
   double force_error_n = 0.0;
   double desired_force_rate_n_s = 0.0;
+  // The valve was driven open loop this tick (kExcitation inside its window); the position
+  // guard of the excitation was in control when `guarding`.
+  bool open_loop = false;
+  bool guarding = false;
 };
 
 class LegController {
@@ -117,6 +127,7 @@ class LegController {
   LegControllerConfig config_;
   BsSmcController bssmc_;
   PiController pi_;
+  std::optional<ExcitationGenerator> excitation_;  // kExcitation only
   bool active_ = false;  // the control law ran last tick (histories valid)
   bool potentiometer_calibrated_ = false;  // config_.potentiometer is not the identity
   double last_desired_length_m_ = 0.0;

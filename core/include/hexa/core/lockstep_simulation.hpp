@@ -37,6 +37,11 @@ struct LockstepConfig {
   // as the services build it: config::MakeControllerModel). Unset: every leg uses `rig` and
   // `leg_controller`. The plant always simulates `rig` + `disturbance`.
   std::optional<ControllerModel> controllers;
+  // controller == kExcitation (identification experiment): each leg's excitation window.
+  LegArray<ExcitationParams> excitation{};
+  // The plant's friction model (PlatformPlantConfig::friction_model).
+  LegModelParams::FrictionModel plant_friction_model = LegModelParams::FrictionModel::kLugre;
+  FreeFallBenchParams plant_free_fall;  // enabled: the free-fall bench instead of the platform
   double tick_s = 0.001;
   int supervisor_every_ticks = 5;
   void Validate() const;  // throws std::invalid_argument naming the field and value

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -25,6 +26,18 @@ DisturbanceProfile MakeIdealDisturbanceProfile();
 // supply ripple +-0.2 bar at 0.5 Hz, joints off by up to 2 mm, potentiometer offset up to
 // 1 mm and gain error up to 0.5 %, sensor noise.
 DisturbanceProfile MakeRealisticDisturbanceProfile();
+
+// The free-fall bench of Appendix B (Fig. 6) in place of the platform: every leg's cylinder
+// hangs rod down from the bench with both chambers vented and `load_kg` hung on its rod, held
+// at the top of its stroke until `release_s`, then falls (SingleLegPlant, the plant's leg
+// model with the profile's friction). The sensors read the six falling legs like the
+// platform's; the valves do nothing (vented). docs/identification.md, "Free fall".
+struct FreeFallBenchParams {
+  bool enabled = false;
+  double load_kg = 12.0;     // the paper's 1.410 kg cannot fall against its friction (docs)
+  double release_s = 0.5;
+  double start_margin_m = 0.005;  // held this far from the upper end of the stroke
+};
 
 // Explicit integrator of the plant ODE (docs/plant.md, "Integrator").
 enum class PlantIntegrator {
@@ -53,6 +66,10 @@ struct PlatformPlantConfig {
   // External pose instrument for kinematic calibration (issue 14); off by default.
   TrackerParams tracker;
   bool chambers_sealed = false;  // true only for energy-conservation tests (valves never open)
+  // The legs' friction: LuGre (default) or the static eq 3 (identification study of what
+  // the LuGre dynamics do to an eq 3 fit, docs/identification.md).
+  LegModelParams::FrictionModel friction_model = LegModelParams::FrictionModel::kLugre;
+  FreeFallBenchParams free_fall;  // enabled: the bench instead of the platform
 
   void Validate() const;  // throws std::invalid_argument naming field, value and limit
 };
@@ -133,6 +150,8 @@ class PlatformPlant {
 
  private:
   void Derivative(const StateVector& x, double time_s, StateVector& dxdt, bool record);
+  PlantStatus StepBench(double dt_s);
+  void ResetBench();
   double SupplyPressurePa(double time_s) const;
   int SubstepCount(double dt_s) const;  // substeps for the next tick (step control)
   void FillTruth();
@@ -158,6 +177,7 @@ class PlatformPlant {
   double min_dissipation_w_ = 0.0;
   int last_substep_count_ = 0;
   PlatformPlantOutput output_;
+  std::vector<SingleLegPlant> bench_;  // free-fall bench legs (FreeFallBenchParams)
 };
 
 }  // namespace hexa

@@ -1,7 +1,12 @@
 // Pneumatics of one leg: valve spool (eq 42), orifice area (eq 6, 43), mass flow through
 // the orifice, choked and unchoked (eq 4, 5), supply/exhaust routing per spool sign
-// (Tables 4, 5) and chamber volumes (eq 64). Pure functions, no allocation, no throw.
-// docs/plant.md derives every formula and lists the deviations from the paper.
+// (Tables 4, 5), chamber volumes (eq 64) and the chamber pressure dynamics (eq 7, 65). Pure
+// functions, no allocation, no throw. docs/plant.md derives every formula and lists the
+// deviations from the paper.
+//
+// The ONE implementation of these equations: the plant (LegModel), the BS-SMC's valve
+// inversion (eq 44) and the identification's model (eq 8 residuals, hexa_identify) all call
+// these functions, so that an identified parameter means the same thing in all three.
 #pragma once
 
 #include <algorithm>
@@ -120,6 +125,10 @@ class OrificeFlowModel {
   double laminar_slope_ = 0.0;
 };
 
+// The discharge coefficient C_f and the laminar band of the plant's default: the controller
+// and the identification build their OrificeFlowModel with the same band.
+inline constexpr double kDefaultLaminarPressureRatio = 0.995;
+
 // Mass flows of one valve into the two chambers (> 0 = into the chamber), routed by the
 // spool sign (Tables 4, 5):
 //   spool > 0 (extend, Table 4):  supply -> chamber 1,   chamber 2 -> atmosphere
@@ -143,6 +152,19 @@ inline ChamberMassFlows ValveMassFlows(const OrificeFlowModel& orifice, double a
     flows.chamber1_kg_s = -orifice.SignedKgS(area_m2, chamber1_pa, atmosphere_pa);
   }
   return flows;
+}
+
+// Eq 7 / 65 (Appendix A eq 59 / 62, Table 8 coefficients) for one chamber:
+//   dP/dt = (R T w(m) - gamma_k P dV/dt) / V,   w(m) = gamma_i m if m >= 0 (into the chamber)
+//                                                      gamma_o m otherwise (out of it)
+// with dV/dt the true volume rate (A1 x' for chamber 1, -A2 x' for chamber 2; the paper's
+// "+ gamma_k P2/V2 V2'" means the magnitude, docs/plant.md). Affine in each coefficient.
+inline double ChamberPressureRatePaS(double gas_rt_j_kg, const PolytropicParams& gamma,
+                                     double mass_flow_kg_s, double pressure_pa,
+                                     double volume_m3, double volume_rate_m3_s) {
+  const double w = mass_flow_kg_s >= 0.0 ? gamma.inflow * mass_flow_kg_s
+                                         : gamma.outflow * mass_flow_kg_s;
+  return (gas_rt_j_kg * w - gamma.volume * pressure_pa * volume_rate_m3_s) / volume_m3;
 }
 
 }  // namespace hexa

@@ -73,4 +73,8 @@ class Parser {
 // Returns -1 when the program should continue.
 int HandleParseResult(const Parser& parser, bool ok);
 
+// A list of leg ids as given on a command line: "1-6", "1,3,5", "2", "1-2,5" -> sorted,
+// unique ids 1..6. False (legs empty) on anything else.
+bool ParseLegList(const std::string& text, std::vector<int>& legs);
+
 }  // namespace hexa::cli

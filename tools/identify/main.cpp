@@ -1,0 +1,543 @@
+// hexa_identify: identifies the pneumatic model of each leg from an identification recording
+// (hexa_session --experiment identify, or hexa_sim --experiment identify): the paper's GA with
+// Table 7's settings and a least-squares fit (Ceres) on the same eq 13 objective, per leg and
+// stroke direction. Writes a rig overlay (validated like a rig file; refused, never written,
+// when a value breaks the rig file's limits), Table 8 style tables (identified, truth when the
+// recording carries it, error %), and data for the plots of measured against model-predicted
+// x'', dP1/dt, dP2/dt. docs/identification.md.
+#include <google/protobuf/text_format.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "hexa/config/rig_config.hpp"
+#include "hexa/core/free_fall.hpp"
+#include "hexa/core/genetic_algorithm.hpp"
+#include "hexa/core/offline_differentiator.hpp"
+#include "hexa/core/platform_inverse_dynamics.hpp"
+#include "hexa/core/pneumatic_identification.hpp"
+#include "hexa/services/cli.hpp"
+#include "lsq.hpp"
+#include "recording_input.hpp"
+#include "report.hpp"
+
+namespace fs = std::filesystem;
+using namespace hexa;
+using namespace hexa::identify;
+
+namespace {
+
+constexpr double kTickS = 0.001;
+
+std::string UtcNow() {
+  const std::time_t t = std::time(nullptr);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+  return buf;
+}
+
+// The GA's fitness evaluations of one iteration spread over `threads` threads (each genome's
+// cost is independent of the others, so the result does not depend on the thread count).
+GaBatchCost ParallelCost(const StrokeDataset& data, const StrokeSearchSpace& space, int threads) {
+  return [&data, &space, threads](const std::vector<Genome>& genomes, std::vector<double>& costs) {
+    auto work = [&](int t) {
+      for (std::size_t i = static_cast<std::size_t>(t); i < genomes.size(); i += static_cast<std::size_t>(threads))
+        costs[i] = data.NrmseForSearch(space.Decode(genomes[i]));  // = FitObjective, tabulated
+    };
+    if (threads <= 1) return work(0);
+    std::vector<std::thread> pool;
+    for (int t = 1; t < threads; ++t) pool.emplace_back(work, t);
+    work(0);
+    for (auto& th : pool) th.join();
+  };
+}
+
+// Checks that the recording is of this rig: its own rig name (hexa_SessionInfo) when it has
+// one, and in every case the measurements against the rig file's stroke and supply.
+void CheckRig(const IdentificationRecording& rec, const config::SystemConfig& cfg, const std::vector<int>& legs) {
+  if (rec.session && !rec.session->rig_name().empty() && rec.session->rig_name() != cfg.rig_name) {
+    throw IdentificationInputError(rec.path + ": recorded on rig '" + rec.session->rig_name() +
+                                   "' (hexa_SessionInfo), but the rig file " + cfg.source_path +
+                                   " describes '" + cfg.rig_name + "': identify with that rig's file");
+  }
+  const CylinderParams& cyl = cfg.rig.cylinder;
+  const double lo = cyl.mid_stroke_length_m - 0.5 * cyl.stroke_m - 0.02;
+  const double hi = cyl.mid_stroke_length_m + 0.5 * cyl.stroke_m + 0.02;
+  for (int leg : legs) {
+    const LegSeries& s = rec.legs[static_cast<std::size_t>(leg - 1)];
+    double outside = 0.0, supply_sum = 0.0;
+    std::size_t supply_n = 0, out_n = 0;
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      const double l = s.length_m[k];
+      if (std::isfinite(l) && (l < lo || l > hi)) {
+        ++out_n;
+        outside = l;
+      }
+      if (std::isfinite(s.supply_pressure_pa[k])) {
+        supply_sum += s.supply_pressure_pa[k];
+        ++supply_n;
+      }
+    }
+    if (out_n > 0) {
+      std::ostringstream m;
+      m << rec.path << ": leg " << leg << " length " << outside << " m (" << out_n
+        << " samples) is outside the stroke of rig '" << cfg.rig_name << "' [" << lo << ", " << hi
+        << "] m: the recording is of a different rig (or the wrong --rig file)";
+      throw IdentificationInputError(m.str());
+    }
+    const double supply = supply_n > 0 ? supply_sum / static_cast<double>(supply_n) : 0.0;
+    if (supply_n == 0 || std::abs(supply - cfg.rig.air.supply_pressure_pa) > 0.15 * cfg.rig.air.supply_pressure_pa) {
+      std::ostringstream m;
+      m << rec.path << ": leg " << leg << " mean supply pressure " << supply << " Pa differs by more than 15 % "
+        << "from rig '" << cfg.rig_name << "' (" << cfg.rig.air.supply_pressure_pa
+        << " Pa): the recording is of a different rig or has no supply pressure";
+      throw IdentificationInputError(m.str());
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  cli::Parser cli("hexa_identify",
+                  "Identifies v_s, B, F_s, F_c, gamma_o, gamma_i, gamma_k per leg and stroke "
+                  "direction (Table 8) from an identification recording: the GA of Table 7 and "
+                  "least squares (Ceres) on the NRMSE of eq 13; writes a rig overlay, tables and "
+                  "plots (docs/identification.md). Usage: hexa_identify RECORDING.mcap --out DIR");
+  cli.AllowPositional("RECORDING.mcap", 1);
+  cli.AddOption("out", "dir", "output directory");
+  cli.AddOption("rig", "file", "rig file of the recorded rig (the nominal model)", HEXA_DEFAULT_RIG_FILE);
+  cli.AddOption("legs", "list", "legs to identify, e.g. 1-6 or 1,3", "1-6");
+  cli.AddChoice("method", {"both", "ga", "lsq"}, "fits to run", "both");
+  cli.AddChoice("overlay-from", {"lsq", "ga"}, "which fit the rig overlay holds", "lsq");
+  cli.AddOption("max-iterations", "N", "GA iterations (Table 7: MaxIt = 1000)", "1000");
+  cli.AddOption("population", "N", "GA population (Table 7: nPop = 100)", "100");
+  cli.AddOption("seed", "N", "GA seed", "1");
+  cli.AddOption("threads", "N", "threads for the GA's fitness evaluations", "2");
+  cli.AddOption("diff-window", "N", "Gaussian differentiator window (eq 40, odd, samples)", "41");
+  cli.AddOption("diff-sigma", "samples", "Gaussian differentiator sigma (eq 41, samples)", "6");
+  cli.AddOption("min-speed", "m/s", "samples slower than this are left out", "0.05");
+  cli.AddOption("min-samples", "N", "fewest usable samples per leg and direction", "1000");
+  cli.AddOption("pressure-noise", "Pa|auto",
+                "pressure sensor noise (sigma) compensated in the pressure channels; auto = "
+                "estimated from the recording, 0 = no compensation", "auto");
+  cli.AddOption("pressure-smoothing", "samples",
+                "Gaussian smoothing (sigma) of the pressures entering the flow regressors", "0");
+  cli.AddOption("direction-margin", "samples", "extra same-direction samples each side of a sample", "0");
+  cli.AddOption("min-flow-dp", "Pa", "pressure channels: leave out samples near an open path's equal pressures", "5000");
+  cli.AddOption("payload-scale", "s", "fix the platform payload scale instead of estimating it");
+  cli.AddOption("flat-threshold", "fraction|auto",
+                "a parameter whose 10 % change (others re-fitted) raises its channels' Z^2 by "
+                "less than this fraction is reported as not identifiable; auto = 1 / n_eff "
+                "(the objective's noise level, docs/identification.md)", "auto");
+  cli.AddOption("overlay-name", "file", "name of the overlay written into --out", "identified.textproto");
+  cli.AddOption("truth-overlay", "file",
+                "also write an overlay holding the plant's TRUE parameters (from the recording's "
+                "evaluation channel) to this file, for the closed-loop comparison");
+  cli.AddOption("free-fall", "file.mcap",
+                "also evaluate a free-fall recording (hexa_session / hexa_sim --experiment "
+                "free-fall) by Appendix B (eq 67, 72)");
+  cli.AddFlag("no-plots", "do not run the plot script");
+  cli.AddFlag("no-gravity-load",
+              "do not write the gravity loads of the estimated payload (BS-SMC gravity_load_n) "
+              "into the overlays");
+  const bool parsed = cli.Parse(argc, argv);
+  if (int rc = cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
+  if (cli.positional().size() != 1 || !cli.Has("out")) {
+    std::fprintf(stderr, "error: expected one RECORDING.mcap and --out DIR\n(see --help)\n");
+    return 2;
+  }
+  const auto max_it = cli.GetInt("max-iterations", 0, 100000);
+  const auto population = cli.GetInt("population", 2, 100000);
+  const auto seed = cli.GetInt("seed", 0, 1LL << 62);
+  const auto threads = cli.GetInt("threads", 1, 64);
+  const auto window = cli.GetInt("diff-window", 3, 1001);
+  const auto sigma = cli.GetDouble("diff-sigma", 0.05, 1000);
+  const auto min_speed = cli.GetDouble("min-speed", 0, 10);
+  const auto min_samples = cli.GetInt("min-samples", 1, 100000000);
+  const bool flat_auto = cli.Get("flat-threshold") == "auto";
+  const auto flat = flat_auto ? std::optional<double>(0.0) : cli.GetDouble("flat-threshold", 0, 1);
+  const auto p_smooth = cli.GetDouble("pressure-smoothing", 0, 50);
+  const auto margin = cli.GetInt("direction-margin", 0, 1000);
+  const auto min_flow_dp = cli.GetDouble("min-flow-dp", 0, 1e6);
+  if (!max_it || !population || !seed || !threads || !window || !sigma || !min_speed || !min_samples || !flat || !p_smooth || !margin || !min_flow_dp) {
+    std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
+    return 2;
+  }
+  std::vector<int> legs;
+  if (!cli::ParseLegList(cli.Get("legs"), legs)) {
+    std::fprintf(stderr, "error: --legs '%s': expected legs 1..6 as a list or range (1-6, 1,3)\n",
+                 cli.Get("legs").c_str());
+    return 2;
+  }
+  const std::string recording_path = cli.positional()[0];
+  const std::string out_dir = cli.Get("out");
+  const std::string method = cli.Get("method");
+  const bool run_ga = method != "lsq", run_lsq = method != "ga";
+  if ((cli.Get("overlay-from") == "ga" && !run_ga) || (cli.Get("overlay-from") == "lsq" && !run_lsq)) {
+    std::fprintf(stderr, "error: --overlay-from %s needs that fit (--method)\n", cli.Get("overlay-from").c_str());
+    return 2;
+  }
+
+  const auto loaded = config::LoadSystemConfig(cli.Get("rig"));
+  if (!loaded.ok) {
+    std::fprintf(stderr, "%s\n", loaded.error.c_str());
+    return 1;
+  }
+  const config::SystemConfig& cfg = loaded.config;
+
+  IdentificationConfig ic;
+  ic.differentiator.window = static_cast<int>(*window);
+  ic.differentiator.sigma = *sigma;
+  ic.min_speed_m_s = *min_speed;
+  ic.pressure_smoothing_samples = *p_smooth;
+  ic.direction_margin_samples = static_cast<int>(*margin);
+  ic.min_flow_pressure_difference_pa = *min_flow_dp;
+  ic.period_s = kTickS;
+  try {
+    ic.Validate();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  }
+
+  IdentificationRecording rec;
+  try {
+    std::printf("reading %s ...\n", recording_path.c_str());
+    rec = ReadIdentificationRecording(recording_path);
+    for (int leg : legs) {
+      const auto i = static_cast<std::size_t>(leg - 1);
+      if (rec.sensor_samples[i] == 0) {
+        throw IdentificationInputError(recording_path + ": leg " + std::to_string(leg) +
+                                       " has no sensor samples (hexa_LegSensors)");
+      }
+      if (rec.command_samples[i] == 0) {
+        throw IdentificationInputError(recording_path + ": leg " + std::to_string(leg) +
+                                       " has no valve commands (hexa_ValveCommand)");
+      }
+    }
+    CheckRig(rec, cfg, legs);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+  std::printf("%zu ticks (%.1f s), file %s; session info: %s; plant truth: %s\n", rec.ticks,
+              static_cast<double>(rec.ticks) * kTickS, rec.complete_file ? "complete" : "INCOMPLETE",
+              rec.session ? rec.session->rig_name().c_str() : "none",
+              rec.truth ? "present (evaluation only)" : "none");
+
+  // The pressure sensors' noise, for the compensation of the pressure channels.
+  double pressure_noise = 0.0;
+  if (cli.Get("pressure-noise") == "auto") {
+    std::vector<double> sigmas;
+    for (int leg : legs) {
+      const LegSeries& s = rec.legs[static_cast<std::size_t>(leg - 1)];
+      sigmas.push_back(EstimateWhiteNoiseSigma(s.cap_pressure_pa, s.excited));
+      sigmas.push_back(EstimateWhiteNoiseSigma(s.rod_pressure_pa, s.excited));
+    }
+    std::sort(sigmas.begin(), sigmas.end());
+    pressure_noise = sigmas[sigmas.size() / 2];
+    std::printf("pressure noise estimated from the recording: %.0f Pa (median over the legs' chambers)\n",
+                pressure_noise);
+  } else {
+    const auto given = cli.GetDouble("pressure-noise", 0, 1e6);
+    if (!given) {
+      std::fprintf(stderr, "error: %s\n", cli.error().c_str());
+      return 2;
+    }
+    pressure_noise = *given;
+  }
+  ic.pressure_noise_sigma_pa = ic.pressure_smoothing_samples > 0.0 ? 0.0 : pressure_noise;
+
+  // Differentiate every leg (eq 40/41, offline), then the platform's inverse dynamics.
+  const OfflineGaussianDifferentiator diff(ic.differentiator, kTickS);
+  LegArray<std::vector<double>> velocity, accel;
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    diff.Derivative(rec.legs[i].length_m, velocity[i]);
+    diff.Derivative(velocity[i], accel[i]);
+  }
+  // The force each leg must exert (platform inverse dynamics with the rig file's geometry
+  // and masses): the terms that multiply the accelerations use D[D[l]] (= S[S[l'']]); the
+  // rest (weights, velocity products) is evaluated tick by tick with the narrow derivative
+  // and smoothed twice, as x'' is (docs/identification.md).
+  const OfflineGaussianDifferentiator narrow(ic.regressor_differentiator, kTickS);
+  LegArray<std::vector<double>> v_narrow;
+  for (std::size_t i = 0; i < kNumLegs; ++i) narrow.Derivative(rec.legs[i].length_m, v_narrow[i]);
+  LegArray<LoadSeries> load;
+  LegArray<std::vector<double>> rest_fixed, rest_scaled;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    LoadSeries& l = load[i];
+    for (auto* v : {&l.force_fixed_n, &l.force_scaled_n, &l.mass_fixed_kg, &l.mass_scaled_kg}) v->assign(rec.ticks, nan);
+    rest_fixed[i].assign(rec.ticks, nan);
+    rest_scaled[i].assign(rec.ticks, nan);
+  }
+  {
+    PlatformInverseDynamics dynamics(cfg.rig);
+    std::size_t failed = 0;
+    for (std::size_t k = 0; k < rec.ticks; ++k) {
+      LegArray<double> l{}, v{};
+      bool ok = true;
+      for (std::size_t i = 0; i < kNumLegs; ++i) {
+        l[i] = rec.legs[i].length_m[k];
+        v[i] = v_narrow[i][k];
+        ok = ok && std::isfinite(l[i]) && std::isfinite(v[i]);
+      }
+      if (!ok) continue;
+      PlatformDynamicsTerms t;
+      if (dynamics.Decompose(l, v, t) != KinStatus::kOk) {
+        ++failed;
+        continue;
+      }
+      Vector6d ldd;
+      for (std::size_t i = 0; i < kNumLegs; ++i) ldd[static_cast<int>(i)] = accel[i][k];
+      const Vector6d inertial = t.inertia_scaled * ldd;  // NaN where D[D[l]] is
+      for (std::size_t i = 0; i < kNumLegs; ++i) {
+        const int ii = static_cast<int>(i);
+        rest_fixed[i][k] = t.fixed_rest[ii];
+        rest_scaled[i][k] = t.scaled_rest[ii];
+        load[i].force_fixed_n[k] = t.leg_mass_kg * accel[i][k];
+        load[i].force_scaled_n[k] = inertial[ii];
+        load[i].mass_fixed_kg[k] = t.leg_mass_kg;
+        load[i].mass_scaled_kg[k] = t.inertia_scaled(ii, ii);
+      }
+    }
+    if (failed > 0) std::printf("platform forward kinematics failed at %zu ticks (left out)\n", failed);
+    std::vector<double> once, twice;
+    for (std::size_t i = 0; i < kNumLegs; ++i) {
+      diff.Smooth(rest_fixed[i], once);
+      diff.Smooth(once, twice);
+      for (std::size_t k = 0; k < rec.ticks; ++k) load[i].force_fixed_n[k] += twice[k];
+      diff.Smooth(rest_scaled[i], once);
+      diff.Smooth(once, twice);
+      for (std::size_t k = 0; k < rec.ticks; ++k) load[i].force_scaled_n[k] += twice[k];
+    }
+  }
+
+  // Datasets per leg and direction.
+  const ControllerModel nominal = ControllerModel::FromRig(cfg.rig, cfg.leg_controller);
+  std::map<int, std::array<StrokeDataset, 2>> data;
+  for (int leg : legs) {
+    const auto i = static_cast<std::size_t>(leg - 1);
+    std::array<StrokeDataset, 2> d;
+    const DatasetReport report = BuildStrokeDatasets(nominal.legs[i].model, rec.legs[i], velocity[i],
+                                                     accel[i], load[i], ic,
+                                                     static_cast<std::size_t>(*min_samples), d);
+    if (!report.ok) {
+      std::fprintf(stderr, "error: %s: leg %d: %s\n", recording_path.c_str(), leg, report.error.c_str());
+      return 1;
+    }
+    std::printf("leg %d: %zu excited ticks; samples extend %zu (|v| up to %.2f m/s), retract %zu (up to %.2f m/s)\n",
+                leg, report.excited_ticks, report.samples[0], report.max_speed_m_s[0], report.samples[1],
+                report.max_speed_m_s[1]);
+    data[leg] = std::move(d);
+  }
+
+  // Payload scale: per leg from both directions' acceleration channel, median over the legs.
+  Report report;
+  report.recording = recording_path;
+  report.rig_file = cfg.source_path;
+  report.config = ic;
+  report.truth = rec.truth;
+  report.method = method;
+  report.ga_params.max_iterations = static_cast<int>(*max_it);
+  report.ga_params.population = static_cast<int>(*population);
+  report.ga_params.seed = static_cast<std::uint64_t>(*seed);
+  report.threads = static_cast<int>(*threads);
+  report.pressure_noise_pa = ic.pressure_noise_sigma_pa;
+  report.flat_threshold = *flat;
+  if (cli.Has("payload-scale")) {
+    const auto s = cli.GetDouble("payload-scale", 0.05, 20);
+    if (!s) {
+      std::fprintf(stderr, "error: %s\n", cli.error().c_str());
+      return 2;
+    }
+    report.payload_scale = *s;
+    report.payload_estimated = false;
+  } else {
+    std::vector<double> per_leg;
+    for (int leg : legs) {
+      const auto& d = data[leg];
+      const PayloadResult p = FitPayloadScale(d[0], d[1], cfg.rig.friction.extend, cfg.rig.friction.retract);
+      report.payload_per_leg[leg] = p.payload_scale;
+      per_leg.push_back(p.payload_scale);
+      std::printf("leg %d: payload scale %.4f (acceleration channel, both directions)\n", leg, p.payload_scale);
+    }
+    std::sort(per_leg.begin(), per_leg.end());
+    const std::size_t m = per_leg.size();
+    report.payload_scale = m % 2 == 1 ? per_leg[m / 2] : 0.5 * (per_leg[m / 2 - 1] + per_leg[m / 2]);
+    report.payload_estimated = true;
+  }
+  std::printf("payload scale used: %.4f%s\n", report.payload_scale,
+              report.payload_estimated ? " (median over the legs)" : " (--payload-scale)");
+
+  const StrokeSearchSpace space = StrokeSearchSpace::Default();
+  report.search_space = space;
+  for (int leg : legs) {
+    for (int dir = 0; dir < 2; ++dir) {
+      StrokeDataset& d = data[leg][static_cast<std::size_t>(dir)];
+      d.Bind(report.payload_scale);
+      const Stroke stroke = static_cast<Stroke>(dir);
+      const StrokeParams start = StrokeParams::From(
+          dir == 0 ? cfg.rig.friction.extend : cfg.rig.friction.retract,
+          dir == 0 ? cfg.rig.polytropic.extend : cfg.rig.polytropic.retract);
+      StrokeReport sr;
+      sr.leg = leg;
+      sr.stroke = stroke;
+      sr.samples = d.samples.size();
+      sr.nominal = start;
+      sr.nominal_objective = d.Nrmse(start);
+      if (run_lsq) {
+        const LsqResult lsq = FitStrokeLeastSquares(d, start);
+        sr.lsq = lsq.params;
+        sr.lsq_objective = lsq.objective;
+        sr.lsq_fit_objective = d.FitObjective(lsq.params);
+        sr.lsq_wall_s = lsq.wall_s;
+        sr.lsq_iterations = lsq.iterations;
+        sr.lsq_converged = lsq.converged;
+        sr.lsq_curvature = AnalyseCurvature(d, lsq.params, *flat);
+        std::printf("leg %d %-7s LSQ: Z %.5f (nominal %.5f), %d iterations, %.3f s, %s\n", leg,
+                    ToString(stroke), lsq.objective, sr.nominal_objective, lsq.iterations, lsq.wall_s,
+                    lsq.converged ? "converged" : "NOT converged");
+      }
+      if (run_ga) {
+        // The Stribeck term tabulated over the GA's v_s range (the exact Z is recomputed
+        // at the GA's result below).
+        d.PrepareSearch(space.lower[0], space.upper[0]);
+        GaParams gp = report.ga_params;
+        gp.seed = report.ga_params.seed + static_cast<std::uint64_t>(10 * leg + dir);
+        const auto t0 = std::chrono::steady_clock::now();
+        auto last_print = t0;
+        const GaResult ga = RunGeneticAlgorithm(
+            gp, ParallelCost(d, space, report.threads), [&](const GaProgress& p) {
+              const auto now = std::chrono::steady_clock::now();
+              if (p.iteration == gp.max_iterations || now - last_print > std::chrono::seconds(2)) {
+                last_print = now;
+                std::printf("\rleg %d %-7s GA: iteration %4d/%d, best Z %.5f, mean %.5f, %llu evaluations, %.1f s   ",
+                            leg, ToString(stroke), p.iteration, gp.max_iterations, p.best_cost, p.mean_cost,
+                            static_cast<unsigned long long>(p.evaluations),
+                            std::chrono::duration<double>(now - t0).count());
+                std::fflush(stdout);
+              }
+              return true;
+            });
+        sr.ga = space.Decode(ga.best);
+        sr.ga_objective = d.Nrmse(*sr.ga);
+        sr.ga_fit_objective = d.FitObjective(*sr.ga);
+        sr.ga_wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        sr.ga_evaluations = ga.evaluations;
+        sr.ga_iterations = ga.iterations;
+        sr.ga_history = ga.best_cost_history;
+        sr.ga_curvature = AnalyseCurvature(d, *sr.ga, *flat);
+        std::printf("\nleg %d %-7s GA: Z %.5f after %d iterations, %llu evaluations, %.1f s on %d threads\n",
+                    leg, ToString(stroke), sr.ga_objective, ga.iterations,
+                    static_cast<unsigned long long>(ga.evaluations), sr.ga_wall_s, report.threads);
+      }
+      report.strokes.push_back(sr);
+    }
+  }
+
+  if (cli.Has("free-fall")) {
+    try {
+      const IdentificationRecording ff = ReadIdentificationRecording(cli.Get("free-fall"));
+      if (!ff.session || ff.session->experiment() != "free-fall") {
+        throw IdentificationInputError(cli.Get("free-fall") + ": not a free-fall recording (hexa_SessionInfo "
+                                       "experiment 'free-fall' with the load and release time is missing)");
+      }
+      if (ff.session->rig_name() != cfg.rig_name) {
+        throw IdentificationInputError(cli.Get("free-fall") + ": recorded on rig '" + ff.session->rig_name() +
+                                       "', the rig file describes '" + cfg.rig_name + "'");
+      }
+      const double mass = ff.session->free_fall_load_kg() + cfg.rig.cylinder.moving_mass_kg;
+      const auto release = static_cast<std::size_t>(std::llround(ff.session->free_fall_release_s() / kTickS));
+      report.free_fall_recording = cli.Get("free-fall");
+      report.free_fall_mass_kg = mass;
+      const double bottom = cfg.rig.cylinder.mid_stroke_length_m + 0.5 * cfg.rig.cylinder.stroke_m - 0.005;
+      for (int leg : legs) {
+        const LegSeries& s = ff.legs[static_cast<std::size_t>(leg - 1)];
+        if (release >= s.size() || !std::isfinite(s.length_m[release])) {
+          throw IdentificationInputError(cli.Get("free-fall") + ": leg " + std::to_string(leg) +
+                                         " has no sample at the release tick");
+        }
+        std::vector<double> t, x;
+        for (std::size_t k = release; k < s.size() && std::isfinite(s.length_m[k]) && s.length_m[k] < bottom; ++k) {
+          t.push_back(static_cast<double>(k - release) * kTickS);
+          x.push_back(s.length_m[k] - s.length_m[release]);
+        }
+        FreeFallLeg f;
+        f.leg = leg;
+        f.samples = t.size();
+        f.fall_m = x.empty() ? 0.0 : x.back();
+        f.duration_s = t.empty() ? 0.0 : t.back();
+        f.fit = FitFreeFall(t.data(), x.data(), t.size(), mass, cfg.rig.platform.gravity_m_s2);
+        std::printf("leg %d free fall: %zu samples, %.3f m in %.3f s: F_c %.2f N, B %.2f N s/m (rms residual %.3f mm)\n",
+                    leg, f.samples, f.fall_m, f.duration_s, f.fit.coulomb_n, f.fit.viscous_n_s_m,
+                    1e3 * f.fit.rms_residual_m);
+        report.free_fall.push_back(f);
+      }
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      return 1;
+    }
+  }
+
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (ec) {
+    std::fprintf(stderr, "error: cannot create %s: %s\n", out_dir.c_str(), ec.message().c_str());
+    return 1;
+  }
+
+  // The overlay: identifiable parameters of the chosen fit, validated before it is written.
+  const bool from_ga = cli.Get("overlay-from") == "ga";
+  const bool gravity = !cli.Flag("no-gravity-load");
+  config::RigOverlay overlay = MakeOverlay(report, cfg, from_ga, gravity);
+  overlay.provenance.source_recording = fs::absolute(recording_path).string();
+  overlay.provenance.date = UtcNow();
+  overlay.provenance.tool = "hexa_identify";
+  const std::string overlay_path = out_dir + "/" + cli.Get("overlay-name");
+  report.overlay_path = overlay_path;
+  report.overlay_error = WriteValidatedOverlay(overlay, cfg, overlay_path,
+                                               "Written by hexa_identify: identified parameters, not edited.");
+  report.overlay_refused = !report.overlay_error.empty();
+  if (!report.overlay_refused) {
+    std::printf("rig overlay written: %s\n", overlay_path.c_str());
+  } else {
+    std::fprintf(stderr, "REFUSED: the identified values break the rig file's limits; no overlay written:\n%s\n",
+                 report.overlay_error.c_str());
+  }
+  if (cli.Has("truth-overlay")) {
+    if (!rec.truth) {
+      std::fprintf(stderr, "error: --truth-overlay: the recording has no hexa_PlantTruth channel\n");
+      return 1;
+    }
+    const std::string error = WriteValidatedOverlay(MakeTruthOverlay(*rec.truth, cfg, gravity), cfg,
+                                                    cli.Get("truth-overlay"),
+                                                    "The simulated plant's TRUE parameters (evaluation).");
+    if (!error.empty()) {
+      std::fprintf(stderr, "error: the truth overlay does not validate:\n%s\n", error.c_str());
+      return 1;
+    }
+    std::printf("truth overlay written: %s\n", cli.Get("truth-overlay").c_str());
+  }
+
+  WriteReport(report, data, out_dir);
+  std::printf("tables: %s/identification.md, data: %s/identification.json\n", out_dir.c_str(), out_dir.c_str());
+  if (!cli.Flag("no-plots")) {
+    const std::string cmd = "/usr/bin/python3 " + std::string(HEXA_SOURCE_DIR) +
+                            "/deploy/plot_identification.py " + out_dir;
+    if (std::system(cmd.c_str()) != 0) std::fprintf(stderr, "warning: the plot script failed (%s)\n", cmd.c_str());
+  }
+  return report.overlay_refused ? 3 : 0;
+}
