@@ -642,7 +642,7 @@ int main(int argc, char** argv) {
     std::ofstream(info_path) << text;
     ChildSpec a;
     a.name = "attach";
-    a.argv = {bin + "/services/recorder/hexa_recorder", "attach", recording, "--session-info", info_path};
+    a.argv = {executable("/services/recorder/hexa_recorder"), "attach", recording, "--session-info", info_path};
     if (std::filesystem::exists(truth_path)) a.argv.insert(a.argv.end(), {"--plant-truth", truth_path});
     a.env = env;
     a.log_path = o.out_dir + "/attach.console.log";

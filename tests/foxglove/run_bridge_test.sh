@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# ctest driver of foxglove.bridge_live: a session with `hexa_session --bridge` (own domain, the
+# ctest driver of foxglove.bridge_live: a session with `hexa_session --bridge` (40 periods: the
+# lockstep loop runs at ~3x real time, and the stuck client must outlive a 5 s stats period; own domain, the
 # bridge on a free port, 256 KiB per-client queue), a client that never reads (stuck_client.py)
 # subscribed to every channel for the whole session, and Foxglove's own client library
 # (js/check_bridge.mjs): decode 1000 LegSensors and the scene, unsubscribe, bad clients closed.
@@ -14,7 +15,7 @@ pids=()
 cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; wait 2>/dev/null || true; }
 trap cleanup EXIT
 
-"$build/deploy/hexa_session" --trajectory combined --periods 10 --seed 3 --domain "$domain" \
+"$build/deploy/hexa_session" --trajectory combined --periods 40 --seed 3 --domain "$domain" \
     --out "$out" --bridge --bridge-port 0 --bridge-queue-kb 256 > "$out/hexa_session.out" 2>&1 &
 session=$!; pids+=("$session")
 port=""
