@@ -93,7 +93,7 @@ def main():
              "processes, supervisor and recorder over loopback DDS, `hexa_session`), computed "
              "from its recording by `hexa_recorder report` over the supervisor's tracking "
              "window, against ground truth. The simulated rig is the reference rig HexaTaar-R "
-             "of DESIGN.md under the `realistic` profile (sensor noise, friction x1.2, "
+             "of docs/design.md under the `realistic` profile (sensor noise, friction x1.2, "
              "polytropic x1.1, payload +20 %, supply ripple, kinematic calibration errors the "
              "controllers do not know). The paper's figures are experimental, on the real "
              "HexaTaar, whose geometry and masses are not published: the comparison is "

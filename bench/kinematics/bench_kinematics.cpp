@@ -1,5 +1,5 @@
 // Per-call cost of the kinematics (eq 46-48) and the forward-kinematics solvers on the
-// reference rig. Poses are drawn once (fixed seed) from the workspace of DESIGN.md and
+// reference rig. Poses are drawn once (fixed seed) from the workspace of docs/design.md and
 // cycled through, so branch predictors and caches see realistic variety.
 #include <cmath>
 #include <cstdint>

@@ -15,7 +15,7 @@ Eigen::Vector3d OnCircle(double radius_m, double azimuth_deg) {
 }  // namespace
 
 RigParams MakeReferenceRig() {
-  // DESIGN.md, "Reference rig: HexaTaar-R". Base joints on a 0.35 m circle, pairs at
+  // docs/design.md, "Reference rig: HexaTaar-R". Base joints on a 0.35 m circle, pairs at
   // 0/120/240 deg +-10 deg; platform joints on a 0.25 m circle, pairs at 60/180/300 deg
   // +-10 deg; leg i connects base azimuth -> platform azimuth as listed below.
   constexpr std::array<double, kNumLegs> kBaseAzimuthDeg{-10, 10, 110, 130, 230, 250};

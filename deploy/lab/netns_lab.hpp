@@ -8,7 +8,7 @@
 //
 // Faults with nftables, only inside the lab's own namespaces:
 //   - input loss on one host: `numgen random mod 100 < P` drop on that host's input
-//     (dropping on output has no effect: Cyclone retries the send, PLATFORM_NOTES.md);
+//     (dropping on output has no effect: Cyclone retries the send, docs/platform_notes.md);
 //   - a partition of one host: its bridge port drops everything in both directions
 //     (nftables bridge family in the switch namespace), healed by deleting the rule.
 #pragma once

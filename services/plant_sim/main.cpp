@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
   cli.AddFlag("tracker", "publish the external pose instrument hexa_TrackerPose (laser tracker, "
                          "100 Hz, for kinematic calibration; never read by a controller)");
   // 15 ms: this VM shows scheduling stalls of several ms even under SCHED_FIFO
-  // (PLATFORM_NOTES.md), and a hot-standby hand-over takes the 10 ms liveliness lease + 0.5 ms;
+  // (docs/platform_notes.md), and a hot-standby hand-over takes the 10 ms liveliness lease + 0.5 ms;
   // a late command is still used within it, beyond it the valve closes.
   cli.AddOption("summary", "file", "write the run's figures (ticks, command ages per leg, ...) "
                 "as JSON here at exit");

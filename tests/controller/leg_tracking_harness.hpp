@@ -24,7 +24,7 @@ struct TrackingScenario {
   double blend_s = 2.0;
   double metric_start_s = 3.0; // RMSE window (after the blend)
   double duration_s = 23.0;    // two full periods of 0.1 Hz inside the window
-  // `realistic` conditions for one leg (DESIGN.md): the plant differs from the controller.
+  // `realistic` conditions for one leg (docs/design.md): the plant differs from the controller.
   bool sensor_noise = true;
   double friction_scale = 1.2;
   double polytropic_scale = 1.1;

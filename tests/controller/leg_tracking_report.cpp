@@ -66,7 +66,7 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (std::strcmp(mode, "fast") == 0) {
-    // Robustness check at the combined trajectory's leg motion (DESIGN.md: +-107 mm, 1 Hz).
+    // Robustness check at the combined trajectory's leg motion (docs/design.md: +-107 mm, 1 Hz).
     sc.seed = 7;
     TrackingScenario fast = sc;
     fast.frequency_hz = 1.0;

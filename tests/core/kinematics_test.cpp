@@ -1,5 +1,5 @@
 // Kinematics of the reference rig (eq 46-48): known values, round trips and fixed-seed
-// randomized properties over the workspace of DESIGN.md (x, y +-8 cm, z 0.45 +-8 cm,
+// randomized properties over the workspace of docs/design.md (x, y +-8 cm, z 0.45 +-8 cm,
 // rotations +-15 deg, every leg inside its stroke).
 #include <cmath>
 #include <cstdint>
@@ -93,7 +93,7 @@ TEST(Kinematics, HomePoseGivesDesignLegLengthAndInclination) {
   LegArray<Eigen::Vector3d> unit_B;
   InverseKinematics(rig.geometry, HomePose(rig), length_m, &unit_B);
   for (std::size_t i = 0; i < kNumLegs; ++i) {
-    // DESIGN.md quotes 0.5034 m (4 digits) and "about 27 deg from vertical".
+    // docs/design.md quotes 0.5034 m (4 digits) and "about 27 deg from vertical".
     EXPECT_NEAR(length_m[i], 0.5034, 5e-5) << "leg " << i;
     EXPECT_NEAR(length_m[i], rig.cylinder.mid_stroke_length_m, 5e-5) << "leg " << i;
     EXPECT_NEAR(unit_B[i].norm(), 1.0, 1e-15);
@@ -114,7 +114,7 @@ TEST(Kinematics, PureVerticalMotionChangesEveryLegByTheSameAmount) {
   InverseKinematics(rig.geometry, up, up_m);
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     EXPECT_NEAR(up_m[i] - home_m[i], up_m[0] - home_m[0], 1e-14);
-    // DESIGN.md: the pure z trajectory (+-8 cm) moves the legs by about 73 mm.
+    // docs/design.md: the pure z trajectory (+-8 cm) moves the legs by about 73 mm.
     EXPECT_NEAR(up_m[i] - home_m[i], 0.073, 0.001);
   }
 }

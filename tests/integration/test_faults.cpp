@@ -1,4 +1,4 @@
-// Safety at system level (DESIGN.md "Safety"): faults injected into leg-controller
+// Safety at system level (docs/design.md "Safety"): faults injected into leg-controller
 // processes are detected, the plant closes the valve, the supervisor holds; a hot standby
 // takes over without the platform noticing.
 #include <cmath>

@@ -46,7 +46,7 @@ TEST(PlatformPlant, HomeEquilibriumBalancesGravityAndLegsAreMidStroke) {
   PlatformPlant plant(Config(false));
   const auto& t = plant.truth();
   for (std::size_t i = 0; i < kNumLegs; ++i) {
-    EXPECT_NEAR(t.length_m[i], 0.5034, 2e-4);  // DESIGN.md: every leg 0.5034 m at home
+    EXPECT_NEAR(t.length_m[i], 0.5034, 2e-4);  // docs/design.md: every leg 0.5034 m at home
     EXPECT_NEAR(t.piston_velocity_m_s[i], 0.0, 1e-15);
     // Legs push (compressive load) and chamber 1 is between ambient and supply.
     EXPECT_GT(plant.output().leg_forces[i].pneumatic_n, 0.0);

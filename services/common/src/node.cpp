@@ -82,7 +82,7 @@ comm::QosParams QosFor(const CommonOptions& o, comm::TopicKind kind) {
                                              : o.realtime_deadline_5ms_topics_s;
     }
     // MANUAL_BY_TOPIC catches a hung control thread. 10 ms lease: 3 ms gave false drops on
-    // this VM, 5-10 ms none (PLATFORM_NOTES.md); a hot standby takes over after about the
+    // this VM, 5-10 ms none (docs/platform_notes.md); a hot standby takes over after about the
     // lease + 0.5 ms, inside the plant's 15-tick command tolerance, so the platform does not
     // notice the hand-over.
     q.valve_liveliness = comm::LivelinessKind::kManualByTopic;

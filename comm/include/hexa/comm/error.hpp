@@ -1,7 +1,7 @@
 // Error reporting of the comm layer. Setup (participant, topic, reader, writer creation,
 // configuration) throws DdsError with a message naming the entity, the domain and Cyclone's
 // return code; the 1 ms cycle (write, take, read, wait) never throws and returns the
-// dds_return_t instead (STYLE.md rule 5).
+// dds_return_t instead (docs/style.md rule 5).
 #pragma once
 
 #include <dds/dds.h>

@@ -3,7 +3,7 @@
 // table and the reasoning per topic). Writers and readers of a topic take their QoS from
 // MakeQos(kind, role, params) so that what a writer offers and what a reader requests are
 // compatible by construction (e.g. a reader requesting a deadline only matches a writer that
-// offers one at least as short; PLATFORM_NOTES.md).
+// offers one at least as short; docs/platform_notes.md).
 #pragma once
 
 #include <dds/dds.h>
@@ -42,7 +42,7 @@ inline constexpr std::string_view kTrackerPoseTopic = "hexa_TrackerPose";
 
 std::string_view TopicName(TopicKind kind);
 
-// Nominal period of a periodic topic (DESIGN.md "Topics and QoS"); nullopt for event topics.
+// Nominal period of a periodic topic (docs/design.md "Topics and QoS"); nullopt for event topics.
 std::optional<double> NominalPeriod_s(TopicKind kind);
 
 // Who uses the QoS. Readers differ by purpose: a control reader wants the newest sample with
@@ -55,14 +55,14 @@ enum class EndpointRole : uint8_t {
 
 enum class LivelinessKind : uint8_t { kAutomatic, kManualByTopic };
 
-// Ownership strengths of the hot-standby scheme (DESIGN.md "Safety").
+// Ownership strengths of the hot-standby scheme (docs/design.md "Safety").
 inline constexpr int32_t kPrimaryOwnershipStrength = 20;
 inline constexpr int32_t kStandbyOwnershipStrength = 10;
 
 struct QosParams {
   // Deadline period of the topic. nullopt: the topic's nominal period (1 ms or 5 ms), used
   // in real time. Lockstep runs and tests on this VM (ms-level scheduling jitter,
-  // PLATFORM_NOTES.md) pass a longer one; +infinity disables the deadline. Writers and
+  // docs/platform_notes.md) pass a longer one; +infinity disables the deadline. Writers and
   // readers of one topic must use the same value (the reader's must be >= the writer's).
   std::optional<double> deadline_period_s;
   // ValveCommand only: how the writer shows it is alive, and the lease. MANUAL_BY_TOPIC also

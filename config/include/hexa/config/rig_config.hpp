@@ -1,6 +1,6 @@
 // Rig file (protobuf text format, schema proto/rig.proto) -> validated core parameters.
 //
-// The loader is an edge of the system (STYLE.md rule 5): bad user input gives a message
+// The loader is an edge of the system (docs/style.md rule 5): bad user input gives a message
 // naming the file, the line, the field path, the value and the limit, e.g.
 //   hexataar_r.textproto:41:3: error: cylinder.annulus_area_m2: annulus area must be
 //   smaller than the cap area: value 0.00035, limit < 0.00031416 (cylinder.cap_area_m2)

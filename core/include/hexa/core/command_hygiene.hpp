@@ -1,4 +1,4 @@
-// Valve command hygiene (DESIGN.md "Safety"): what the plant (or a hardware I/O node) does
+// Valve command hygiene (docs/design.md "Safety"): what the plant (or a hardware I/O node) does
 // with each leg's latest command before applying it. A command that is missing, stale, not
 // finite or outside the valve's range is replaced by the null voltage (valve closed) and
 // reported. Pure, no clock: ticks are arguments.
@@ -26,7 +26,7 @@ struct CommandHygieneParams {
   double null_voltage_v = 5.0;
   // A command answering tick m is still usable at tick n when n - m <= this many ticks.
   // Lockstep: 0 (every tick is answered). Real time: a few ticks of tolerance because this
-  // VM's scheduling jitter exceeds 1 ms (PLATFORM_NOTES.md).
+  // VM's scheduling jitter exceeds 1 ms (docs/platform_notes.md).
   std::uint64_t stale_tolerance_ticks = 0;
   // Before a leg's first command: how long (ticks from the start) it may take to come before
   // it is missing. Real time: the first answers of a starting loop are slow (page faults,

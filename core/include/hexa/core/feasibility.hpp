@@ -1,4 +1,4 @@
-// Feasibility of a trajectory on a rig, checked before motion (DESIGN.md, "Safety").
+// Feasibility of a trajectory on a rig, checked before motion (docs/design.md, "Safety").
 //
 // The whole trajectory is sampled (1 ms by default); at every sample each leg's length
 // (eq 46), speed and acceleration (exact derivatives of eq 46 along the trajectory's twist

@@ -48,7 +48,7 @@ class ParamChecker {
   std::vector<ParamIssue>& out_;
 };
 
-// The plant's tick (DESIGN.md "Time"): periods must be whole multiples of it.
+// The plant's tick (docs/design.md "Time"): periods must be whole multiples of it.
 inline constexpr double kPlantTick_s = 0.001;
 
 // One function per struct; each checks only its own fields. `path` is the struct's path in

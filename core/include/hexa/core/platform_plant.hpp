@@ -1,4 +1,4 @@
-// The simulated 6-DoF rig (DESIGN.md "Plant model"): rigid platform (Newton-Euler,
+// The simulated 6-DoF rig (docs/design.md "Plant model"): rigid platform (Newton-Euler,
 // quaternion orientation) driven by six pneumatic legs (LegModel, the same code path as
 // SingleLegPlant) acting along the legs, gravity, leg moving mass lumped into the platform
 // dynamics through the Jacobian (eq 48), sensors (SensorModel) and a DisturbanceProfile
@@ -22,7 +22,7 @@ namespace hexa {
 
 // `ideal`: the plant equals the controllers' model, perfect sensors.
 DisturbanceProfile MakeIdealDisturbanceProfile();
-// `realistic` (the default, DESIGN.md): friction x1.2, polytropic x1.1, payload +20 %,
+// `realistic` (the default, docs/design.md): friction x1.2, polytropic x1.1, payload +20 %,
 // supply ripple +-0.2 bar at 0.5 Hz, joints off by up to 2 mm, potentiometer offset up to
 // 1 mm and gain error up to 0.5 %, sensor noise.
 DisturbanceProfile MakeRealisticDisturbanceProfile();

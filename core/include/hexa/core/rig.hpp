@@ -1,6 +1,6 @@
 // Rig parameters: the constant Model of the platform, shared by the plant, the leg
 // controllers and the supervisor. Plain data, SI units in every name, defaults are the
-// reference rig HexaTaar-R of ../shared/DESIGN.md. The rig file (protobuf text format,
+// reference rig HexaTaar-R of docs/design.md. The rig file (protobuf text format,
 // config/) is translated into these structs and validated there; the core trusts them.
 //
 // Frames: B = base frame (z up, origin at the base joint plane centre), P = platform frame
@@ -110,7 +110,7 @@ struct SensorNoiseParams {
   double imu_period_s = 0.005;               // 200 Hz
 };
 
-// A disturbance profile (DESIGN.md, "Trajectories and figures of merit"): what the plant
+// A disturbance profile (docs/design.md, "Trajectories and figures of merit"): what the plant
 // does differently from the controllers' model. `ideal` is all zeros / ones.
 struct DisturbanceProfile {
   bool sensor_noise = true;
@@ -145,7 +145,7 @@ struct RigParams {
   SensorNoiseParams sensors;
 };
 
-// The reference rig HexaTaar-R of DESIGN.md, computed from its joint layout.
+// The reference rig HexaTaar-R of docs/design.md, computed from its joint layout.
 RigParams MakeReferenceRig();
 
 }  // namespace hexa

@@ -1,4 +1,4 @@
-// Sensors of the simulated rig (DESIGN.md "Plant model", rig.hpp SensorNoiseParams):
+// Sensors of the simulated rig (docs/design.md "Plant model", rig.hpp SensorNoiseParams):
 // potentiometer leg length (noise, 12-bit quantisation over the stroke, per-seed offset
 // and gain error), chamber and supply pressures (noise), IMU orientation at 200 Hz (noise
 // plus a bias random walk). Randomness only from an explicit seed (std::mt19937_64).

@@ -1,4 +1,4 @@
-// Task-space supervisor (DESIGN.md "Safety", paper Sec. 4.1): a pure state machine run every
+// Task-space supervisor (docs/design.md "Safety", paper Sec. 4.1): a pure state machine run every
 // 5 ms with the measured leg lengths and IMU orientation. It owns the trajectory, the pose
 // estimator (eq 47 / six-leg least squares), the Jacobian outer loop (eq 48) and the safety
 // logic, and produces the six leg setpoints. No clock, no DDS: time is SupervisorInput.time_s.

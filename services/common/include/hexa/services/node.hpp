@@ -34,7 +34,7 @@ struct CommonOptions {
   std::string log_level = "info";
   double lockstep_timeout_s = 10.0;       // a peer silent this long in lockstep is a fault
   // Deadline period of the 1 ms topics in real time: the nominal rate is 1 ms, but this
-  // VM's scheduling jitter (PLATFORM_NOTES.md) makes a bare 1 ms deadline fire spuriously;
+  // VM's scheduling jitter (docs/platform_notes.md) makes a bare 1 ms deadline fire spuriously;
   // the deadline still states the rate and every miss is counted and reported.
   double realtime_deadline_1ms_topics_s = 0.001;
   double realtime_deadline_5ms_topics_s = 0.005;

@@ -17,7 +17,7 @@
 namespace hexa::recorder {
 
 // Every malformed-file or I/O problem is reported with this exception; the message names the
-// file offset and what was expected (bad user input -> exception, STYLE.md rule 5).
+// file offset and what was expected (bad user input -> exception, docs/style.md rule 5).
 class McapError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
