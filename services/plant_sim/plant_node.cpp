@@ -138,7 +138,8 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
       std::min({comm::WriterHistoryDepth(comm::TopicKind::kLegSensors),
                 comm::WriterHistoryDepth(comm::TopicKind::kGroundTruth),
                 comm::WriterHistoryDepth(comm::TopicKind::kValveCommand),
-                5 * comm::WriterHistoryDepth(comm::TopicKind::kLegSetpoint)}));
+                schedule_.supervisor_every_ticks *
+                    comm::WriterHistoryDepth(comm::TopicKind::kLegSetpoint)}));
   if (2 * (options_.recorder_sync_window_ticks + options_.recorder_sync_ticks) > depth)
     throw std::invalid_argument("recorder_sync_window_ticks " +
                                 std::to_string(options_.recorder_sync_window_ticks) +

@@ -380,10 +380,11 @@ void SupervisorNode::RunCycle() {
       if (repeated_imu && m == last_run_tick_) RepublishSetpoints();
       return;
     }
+    LegArray<const hexa_msg_LegSensors*> at_m{};
     for (std::size_t i = 0; i < kNumLegs; ++i)
-      if (RingSample(i, m) == nullptr) return;
+      if ((at_m[i] = RingSample(i, m)) == nullptr) return;
     for (std::size_t i = 0; i < kNumLegs; ++i) {
-      sensors_[i] = *RingSample(i, m);
+      sensors_[i] = *at_m[i];
       sensors_seen_[i] = true;
     }
     RunTick(m, imu_.header.sim_time_s);
