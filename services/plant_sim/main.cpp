@@ -17,6 +17,8 @@ int main(int argc, char** argv) {
   cli.AddFlag("supervisor", "the supervisor must be running before the first tick (lockstep: the "
               "legs then wait for its setpoints, docs/architecture.md)");
   cli.AddFlag("expect-recorder", "wait for the recorder before the first tick");
+  cli.AddFlag("expect-standbys", "wait for a hot standby per leg before the first tick (a "
+              "standby that misses ticks no longer computes its primary's commands)");
   cli.AddOption("duration", "s", "stop after this simulated time (0 = until stopped)", "0");
   cli.AddOption("startup-timeout", "s", "peers must be ready within this", "30");
   cli.AddFlag("tracker", "publish the external pose instrument hexa_TrackerPose (laser tracker, "
@@ -34,6 +36,17 @@ int main(int argc, char** argv) {
                 "multiple of 5; its six leg samples in the all-legs partition and its IMU "
                 "sample) as if lost on the wire; the re-ask must recover them (-1 = none)",
                 "-1");
+  cli.AddOption("answer-timeout", "s",
+                "lockstep: a leg whose writer is alive but has not answered a tick this long is "
+                "dead (no longer awaited, valve at null); 0 = 10 liveliness leases (2 s)", "0");
+  cli.AddOption("compute-budget", "s",
+                "leg controllers' compute time per cycle (ValveCommand.compute_time_s) beyond "
+                "which a cycle overruns", "0.0005");
+  cli.AddOption("compute-overrun-cycles", "N",
+                "consecutive overrunning cycles of a leg that make a FAULT_COMPUTE_OVERRUN", "20");
+  cli.AddOption("fault", "kind:leg:time_s[,...]",
+                "inject rig faults (docs/faults.md): pot-stuck, pot-drift, pressure-dead (leg "
+                "1..6), imu-dropout, supply-loss (leg 0); e.g. pot-stuck:3:1.5");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
 
@@ -45,16 +58,30 @@ int main(int argc, char** argv) {
   const auto stale = cli.GetInt("stale-ticks", 0, 1000);
   const auto grace = cli.GetInt("startup-grace-ticks", 0, 600000);
   const auto lose = cli.GetInt("lose-supervisor-inputs", -1, 1LL << 40);
+  const auto answer_timeout = cli.GetDouble("answer-timeout", 0, 3600);
+  const auto budget = cli.GetDouble("compute-budget", 1e-6, 10);
+  const auto overrun = cli.GetInt("compute-overrun-cycles", 1, 1000000);
   if (!hexa::node::ReadCommonOptions(cli, o.common) || !seed || !legs || !duration || !startup ||
-      !stale || !grace || !lose) {
+      !stale || !grace || !lose || !answer_timeout || !budget || !overrun) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
+  }
+  o.answer_timeout_s = *answer_timeout;
+  o.compute_budget.budget_s = *budget;
+  o.compute_budget.overrun_limit = static_cast<std::uint64_t>(*overrun);
+  if (cli.Has("fault")) {
+    const std::string error = hexa::ParsePlantFaultList(cli.Get("fault"), o.plant_faults.faults);
+    if (!error.empty()) {
+      std::fprintf(stderr, "error: --fault %s\n(see --help)\n", error.c_str());
+      return 2;
+    }
   }
   o.profile = cli.Get("profile");
   o.seed = static_cast<std::uint64_t>(*seed);
   o.expected_legs = static_cast<int>(*legs);
   o.expect_supervisor = cli.Flag("supervisor");
   o.expect_recorder = cli.Flag("expect-recorder");
+  o.expect_standbys = cli.Flag("expect-standbys");
   o.duration_s = *duration;
   o.startup_timeout_s = *startup;
   o.realtime_stale_ticks = static_cast<std::uint64_t>(*stale);

@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 
 #include "hexa/core/leg_model.hpp"
+#include "hexa/core/plant_faults.hpp"
 #include "hexa/core/pose.hpp"
 #include "hexa/core/rig.hpp"
 #include "hexa/core/sensor_model.hpp"
@@ -53,6 +54,8 @@ struct PlatformPlantConfig {
   // External pose instrument for kinematic calibration (issue 14); off by default.
   TrackerParams tracker;
   bool chambers_sealed = false;  // true only for energy-conservation tests (valves never open)
+  // Injected rig faults (sensors, supply; plant_faults.hpp). None by default.
+  PlantFaultParams faults;
 
   void Validate() const;  // throws std::invalid_argument naming field, value and limit
 };
@@ -137,6 +140,7 @@ class PlatformPlant {
   int SubstepCount(double dt_s) const;  // substeps for the next tick (step control)
   void FillTruth();
   void SampleSensors();
+  void ApplySensorFaults();
 
   PlatformPlantConfig config_;
   GeometryParams true_geometry_;
@@ -158,6 +162,8 @@ class PlatformPlant {
   double min_dissipation_w_ = 0.0;
   int last_substep_count_ = 0;
   PlatformPlantOutput output_;
+  LegArray<double> stuck_length_m_{};  // pot-stuck: the reading held
+  LegArray<bool> stuck_latched_{};
 };
 
 }  // namespace hexa
