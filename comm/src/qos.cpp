@@ -76,6 +76,15 @@ void QosParams::Validate() const {
     throw std::invalid_argument("QosParams.control_reader_depth = " +
                                 std::to_string(control_reader_depth) + ": must be in [1, 1000]");
   }
+  if (!(setpoint_liveliness_lease_s > 0.0)) {
+    throw std::invalid_argument("QosParams.setpoint_liveliness_lease_s = " +
+                                std::to_string(setpoint_liveliness_lease_s) +
+                                " s: must be > 0 (or +infinity for none)");
+  }
+  if (user_data.size() > 256) {
+    throw std::invalid_argument("QosParams.user_data is " + std::to_string(user_data.size()) +
+                                " bytes: at most 256");
+  }
   if (ownership_strength < 0) {
     throw std::invalid_argument("QosParams.ownership_strength = " +
                                 std::to_string(ownership_strength) + ": must be >= 0");
@@ -170,6 +179,21 @@ Qos MakeQos(TopicKind kind, EndpointRole role, const QosParams& params) {
   // same period.
   if (IsPeriodic(kind) && !recorder) {
     dds_qset_deadline(q, DeadlinePeriod_ns(kind, params));
+  }
+
+  if (writer && !params.user_data.empty()) {
+    dds_qset_userdata(q, params.user_data.data(), params.user_data.size());
+  }
+  // Liveliness of the supervisor's setpoints: a leg controller that waits for a setpoint
+  // (lockstep) stops waiting when the writer's process is gone. Offered by the writer only:
+  // readers keep the default (infinite) request, so that they match any writer (a replay
+  // tool's too) and still see the liveliness changes of a writer that offers a lease.
+  if (kind == TopicKind::kLegSetpoint && writer) {
+    dds_qset_liveliness(q, DDS_LIVELINESS_AUTOMATIC,
+                        SecondsToDuration(params.setpoint_liveliness_lease_s));
+    // A lost writer's instances become NOT_ALIVE_NO_WRITERS, not DISPOSED: only a supervisor
+    // that ends the session disposes its setpoints (explicitly), and the legs tell the two apart.
+    dds_qset_writer_data_lifecycle(q, false);
   }
 
   // Liveliness, ownership and instance lifecycle of the hot-standby valve command.

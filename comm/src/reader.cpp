@@ -22,4 +22,19 @@ int32_t MatchedWriterStrength(dds_entity_t reader, dds_instance_handle_t publica
   return strength;
 }
 
+std::optional<std::string> MatchedWriterUserData(dds_entity_t reader,
+                                                 dds_instance_handle_t publication) {
+  dds_builtintopic_endpoint_t* ep = dds_get_matched_publication_data(reader, publication);
+  if (ep == nullptr) return std::nullopt;
+  std::string text;
+  void* value = nullptr;
+  size_t size = 0;
+  if (ep->qos != nullptr && dds_qget_userdata(ep->qos, &value, &size) && value != nullptr) {
+    text.assign(static_cast<const char*>(value), size);
+    dds_free(value);
+  }
+  dds_builtintopic_free_endpoint(ep);
+  return text;
+}
+
 }  // namespace hexa::comm

@@ -281,6 +281,8 @@ SystemConfig Translate(const pb::RigFile& f) {
   c.supervisor.least_squares_estimator = sv.least_squares_estimator();
   c.supervisor.estimator_outlier_threshold_m = sv.estimator_outlier_threshold_m();
   c.supervisor.feedforward_enabled = sv.feedforward_enabled();
+  c.supervisor.length_consistency_limit_m = sv.length_consistency_limit_m();
+  c.supervisor.length_consistency_ticks = sv.length_consistency_ticks();
   c.supervisor.outer_loop.enabled = sv.outer_loop().enabled();
   c.supervisor.outer_loop.gain = sv.outer_loop().gain();
   c.supervisor.outer_loop.max_correction_m = sv.outer_loop().max_correction_m();
@@ -549,6 +551,8 @@ std::string ToTextFormat(const SystemConfig& c) {
   sv->set_least_squares_estimator(c.supervisor.least_squares_estimator);
   sv->set_estimator_outlier_threshold_m(c.supervisor.estimator_outlier_threshold_m);
   sv->set_feedforward_enabled(c.supervisor.feedforward_enabled);
+  sv->set_length_consistency_limit_m(c.supervisor.length_consistency_limit_m);
+  sv->set_length_consistency_ticks(c.supervisor.length_consistency_ticks);
   sv->mutable_outer_loop()->set_enabled(c.supervisor.outer_loop.enabled);
   sv->mutable_outer_loop()->set_gain(c.supervisor.outer_loop.gain);
   sv->mutable_outer_loop()->set_max_correction_m(c.supervisor.outer_loop.max_correction_m);

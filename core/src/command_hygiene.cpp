@@ -73,4 +73,28 @@ CommandEpisode::Event CommandEpisode::Update(CommandCheck check) {
   return Event::kEnded;
 }
 
+ComputeBudgetMonitor::Event ComputeBudgetMonitor::Update(double compute_s,
+                                                         const ComputeBudgetParams& params) {
+  ++cycles_;
+  if (compute_s > max_s_) max_s_ = compute_s;
+  // Not finite counts as over budget: a controller reporting nonsense is not within it.
+  if (!(compute_s <= params.budget_s)) {
+    ++over_budget_;
+    ok_run_ = 0;
+    run_max_s_ = over_run_ == 0 ? compute_s : (compute_s > run_max_s_ ? compute_s : run_max_s_);
+    ++over_run_;
+    if (!active_ && over_run_ >= params.overrun_limit) {
+      active_ = true;
+      return Event::kStarted;
+    }
+    return Event::kNone;
+  }
+  over_run_ = 0;
+  if (active_ && ++ok_run_ >= params.clear_after_ok) {
+    active_ = false;
+    return Event::kEnded;
+  }
+  return Event::kNone;
+}
+
 }  // namespace hexa

@@ -21,6 +21,12 @@ void ClearLawOutputs(LegControllerOutput& out) {
   out.desired_force_rate_n_s = 0.0;
 }
 
+// Supply below half the nominal gauge pressure: the flow model (eq 4, 5) no longer describes
+// the valve (docs/faults.md).
+double MinSupplyPressure_pa(const AirParams& air) {
+  return air.atmosphere_pressure_pa + 0.5 * (air.supply_pressure_pa - air.atmosphere_pressure_pa);
+}
+
 BsSmcConfig MakeBsSmcConfig(const LegControllerConfig& c) {
   BsSmcConfig b;
   b.params = c.params.bssmc;
@@ -60,6 +66,7 @@ LegControllerConfig LegControllerConfig::FromRig(const RigParams& rig, const Leg
   c.kind = kind;
   c.params = params;
   c.model = NominalLegModel::FromRig(rig);
+  c.min_supply_pressure_pa = MinSupplyPressure_pa(c.model.air);
   return c;
 }
 
@@ -71,7 +78,22 @@ LegControllerConfig LegControllerConfig::FromModel(const ControllerModel& model,
   c.params = leg.params;
   c.model = leg.model;
   c.potentiometer = leg.potentiometer;
+  c.min_supply_pressure_pa = MinSupplyPressure_pa(c.model.air);
   return c;
+}
+
+const char* ToString(LegInputFault fault) {
+  switch (fault) {
+    case LegInputFault::kNone: return "none";
+    case LegInputFault::kTime: return "time";
+    case LegInputFault::kLength: return "length";
+    case LegInputFault::kCapPressure: return "cap pressure";
+    case LegInputFault::kRodPressure: return "rod pressure";
+    case LegInputFault::kSupplyPressure: return "supply pressure";
+    case LegInputFault::kSupplyLow: return "supply pressure low";
+    case LegInputFault::kSetpoint: return "setpoint";
+  }
+  return "unknown";
 }
 
 void LegControllerConfig::Validate() const {
@@ -84,6 +106,11 @@ void LegControllerConfig::Validate() const {
   if (c.Finite("max_pressure_pa", max_pressure_pa) && !(max_pressure_pa > min_pressure_pa)) {
     c.Fail("max_pressure_pa", "plausible pressure range is empty", FormatParam(max_pressure_pa),
            "> min_pressure_pa (" + FormatParam(min_pressure_pa) + ")");
+  }
+  if (c.Finite("min_supply_pressure_pa", min_supply_pressure_pa) &&
+      !(min_supply_pressure_pa >= 0.0 && min_supply_pressure_pa < max_pressure_pa)) {
+    c.Fail("min_supply_pressure_pa", "the lowest usable supply must lie below the plausible pressures",
+           FormatParam(min_supply_pressure_pa), "[0, max_pressure_pa (" + FormatParam(max_pressure_pa) + "))");
   }
   c.Positive("max_setpoint_speed_m_s", max_setpoint_speed_m_s, "speed");
   c.Positive("max_setpoint_acceleration_m_s2", max_setpoint_acceleration_m_s2, "acceleration");
@@ -132,15 +159,25 @@ bool LegController::LengthPlausible(double length_m) const {
   return std::isfinite(length_m) && std::abs(length_m - c.mid_stroke_length_m) <= half;
 }
 
-bool LegController::SensorsValid(const LegControllerInput& in) const {
+LegInputFault LegController::CheckSensors(const LegControllerInput& in, double& value) const {
   auto pressure_ok = [&](double p) {
     return std::isfinite(p) && p >= config_.min_pressure_pa && p <= config_.max_pressure_pa;
   };
-  return std::isfinite(in.time_s) && LengthPlausible(in.length_m) && pressure_ok(in.cap_pressure_pa) &&
-         pressure_ok(in.rod_pressure_pa) && pressure_ok(in.supply_pressure_pa);
+  if (!std::isfinite(in.time_s)) return value = in.time_s, LegInputFault::kTime;
+  if (!LengthPlausible(in.length_m)) return value = in.length_m, LegInputFault::kLength;
+  if (!pressure_ok(in.cap_pressure_pa)) return value = in.cap_pressure_pa, LegInputFault::kCapPressure;
+  if (!pressure_ok(in.rod_pressure_pa)) return value = in.rod_pressure_pa, LegInputFault::kRodPressure;
+  if (!pressure_ok(in.supply_pressure_pa))
+    return value = in.supply_pressure_pa, LegInputFault::kSupplyPressure;
+  if (in.supply_pressure_pa < config_.min_supply_pressure_pa)
+    return value = in.supply_pressure_pa, LegInputFault::kSupplyLow;
+  return LegInputFault::kNone;
 }
 
-void LegController::Hold(LegControlStatus status, LegControllerOutput& out) {
+void LegController::Hold(LegControlStatus status, LegControllerOutput& out, LegInputFault fault,
+                         double value) {
+  out.input_fault = fault;
+  out.input_fault_value = value;
   if (active_) {  // histories would be stale when control resumes
     bssmc_.Reset();
     pi_.Reset();
@@ -169,7 +206,9 @@ void LegController::Update(const LegControllerInput& raw, LegControllerOutput& o
   out.setpoint_tick = in.setpoint_tick;
   out.open_loop = false;
   out.guarding = false;
-  if (!SensorsValid(in)) return Hold(LegControlStatus::kHoldBadInput, out);
+  double bad_value = 0.0;
+  if (const LegInputFault f = CheckSensors(in, bad_value); f != LegInputFault::kNone)
+    return Hold(LegControlStatus::kHoldBadInput, out, f, bad_value);
   if (excitation_ && config_.excitation.Active(in.time_s)) {
     // Identification: open-loop excitation with its position guard (excitation.hpp). The
     // closed-loop law restarts from fresh histories when the window ends.
@@ -189,17 +228,20 @@ void LegController::Update(const LegControllerInput& raw, LegControllerOutput& o
   if (!in.has_setpoint) return Hold(LegControlStatus::kHoldNoSetpoint, out);
   const double age_s = in.time_s - in.setpoint_time_s;
   if (!std::isfinite(in.setpoint_time_s) || !std::isfinite(age_s)) {
-    return Hold(LegControlStatus::kHoldBadInput, out);
+    return Hold(LegControlStatus::kHoldBadInput, out, LegInputFault::kSetpoint, in.setpoint_time_s);
   }
-  if (age_s > config_.params.setpoint_timeout_s) return Hold(LegControlStatus::kHoldStaleSetpoint, out);
+  if (age_s > config_.params.setpoint_timeout_s)
+    return Hold(LegControlStatus::kHoldStaleSetpoint, out, LegInputFault::kNone, age_s);
   // A setpoint stamped more than half a period in the future is inconsistent.
-  if (age_s < -0.5 * config_.period_s) return Hold(LegControlStatus::kHoldBadInput, out);
+  if (age_s < -0.5 * config_.period_s)
+    return Hold(LegControlStatus::kHoldBadInput, out, LegInputFault::kSetpoint, age_s);
   if (!std::isfinite(in.setpoint_velocity_m_s) || !std::isfinite(in.setpoint_acceleration_m_s2) ||
       !std::isfinite(in.correction_m) ||
       std::abs(in.setpoint_velocity_m_s) > config_.max_setpoint_speed_m_s ||
       std::abs(in.setpoint_acceleration_m_s2) > config_.max_setpoint_acceleration_m_s2 ||
       std::abs(in.correction_m) > config_.max_correction_m) {
-    return Hold(LegControlStatus::kHoldBadInput, out);
+    return Hold(LegControlStatus::kHoldBadInput, out, LegInputFault::kSetpoint,
+                in.setpoint_velocity_m_s);
   }
   if (in.feedforward_valid &&
       (!std::isfinite(in.feedforward_force_n) || !std::isfinite(in.feedforward_force_rate_n_s) ||
@@ -216,9 +258,12 @@ void LegController::Update(const LegControllerInput& raw, LegControllerOutput& o
   }
   double ld_m = 0.0, vd_m_s = 0.0, ad_m_s2 = 0.0;
   Interpolate(in, ld_m, vd_m_s, ad_m_s2);
-  if (!LengthPlausible(ld_m) || !std::isfinite(vd_m_s)) return Hold(LegControlStatus::kHoldBadInput, out);
+  if (!LengthPlausible(ld_m) || !std::isfinite(vd_m_s))
+    return Hold(LegControlStatus::kHoldBadInput, out, LegInputFault::kSetpoint, ld_m);
 
   active_ = true;
+  out.input_fault = LegInputFault::kNone;
+  out.input_fault_value = 0.0;
   last_desired_length_m_ = ld_m;
   out.status = in.hold ? LegControlStatus::kHoldSupervisor : LegControlStatus::kOk;
   out.desired_length_m = ld_m;
@@ -266,6 +311,7 @@ void LegController::Update(const LegControllerInput& raw, LegControllerOutput& o
   if (!std::isfinite(out.valve_v)) {
     out.valve_v = v.null_voltage_v;
     out.status = LegControlStatus::kHoldBadInput;
+    out.input_fault = LegInputFault::kSetpoint;
     bssmc_.Reset();
     pi_.Reset();
     active_ = false;

@@ -42,6 +42,30 @@ bool LockstepBarrier::Answer(int leg_id, std::uint64_t answered_tick) {
   return complete();
 }
 
+bool LockstepBarrier::Release(LegMask legs) {
+  missing_ = static_cast<LegMask>(missing_ & ~legs);
+  return complete();
+}
+
+const char* ToString(SilentLegVerdict verdict) {
+  switch (verdict) {
+    case SilentLegVerdict::kWait: return "wait";
+    case SilentLegVerdict::kLivelinessLost: return "liveliness lost";
+    case SilentLegVerdict::kWriterGone: return "writer gone";
+    case SilentLegVerdict::kNoAnswer: return "no answer from a live writer";
+  }
+  return "?";
+}
+
+SilentLegVerdict JudgeSilentLeg(const LegWriterCounts& writers, std::int64_t silent_ns,
+                                const SilentLegParams& params) {
+  if (writers.alive > 0) {
+    return silent_ns >= params.answer_timeout_ns ? SilentLegVerdict::kNoAnswer
+                                                 : SilentLegVerdict::kWait;
+  }
+  return writers.not_alive > 0 ? SilentLegVerdict::kLivelinessLost : SilentLegVerdict::kWriterGone;
+}
+
 LockstepBarrier::Action LockstepBarrier::Check(std::int64_t now_ns) {
   if (complete()) return Action::kWait;
   if (now_ns - began_ns_ >= params_.timeout_ns) return Action::kTimeout;

@@ -361,6 +361,10 @@ void CheckSupervisorParams(ParamChecker& c, const SupervisorParams& s, const std
            FormatParam(s.workspace_max_rotation_rad), "(0, 3.1415926535897931]");
   }
   c.Positive(p + "estimator_outlier_threshold_m", s.estimator_outlier_threshold_m, "outlier threshold");
+  c.Positive(p + "length_consistency_limit_m", s.length_consistency_limit_m,
+             "length-consistency limit (docs/faults.md)");
+  c.IntInClosed(p + "length_consistency_ticks", s.length_consistency_ticks, 1, 200,
+                "length-consistency persistence (supervisor ticks)");
   CheckOuterLoopParams(c, s.outer_loop, p + "outer_loop");
 }
 

@@ -53,6 +53,7 @@ DisturbanceProfile MakeIdealDisturbanceProfile() {
 DisturbanceProfile MakeRealisticDisturbanceProfile() { return DisturbanceProfile{}; }
 
 void PlatformPlantConfig::Validate() const {
+  faults.Validate();  // the injected rig faults (plant_faults.hpp)
   // The rig and the profile with the rules the rig file is checked with, and the physical
   // limits without which the plant's state would not stay finite: ideal-gas supply, legs able
   // to hold the platform, spool lag and pressure ODE against this integrator step
@@ -142,8 +143,48 @@ PlatformPlant::PlatformPlant(const PlatformPlantConfig& config)
 
 double PlatformPlant::SupplyPressurePa(double time_s) const {
   const DisturbanceProfile& d = config_.disturbance;
-  return config_.rig.air.supply_pressure_pa +
+  const double supply = config_.rig.air.supply_pressure_pa +
          d.supply_ripple_amplitude_pa * std::sin(2.0 * kPi * d.supply_ripple_frequency_hz * time_s);
+  for (const PlantFault& f : config_.faults.faults) {
+    if (f.kind != PlantFaultKind::kSupplyLoss || time_s < f.at_time_s) continue;
+    // The supply line empties to the atmosphere (first order, docs/faults.md).
+    const double pa = config_.rig.air.atmosphere_pressure_pa;
+    return pa + (supply - pa) * std::exp(-(time_s - f.at_time_s) / config_.faults.supply_loss_time_constant_s);
+  }
+  return supply;
+}
+
+void PlatformPlant::ApplySensorFaults() {
+  output_.imu.dropped_out = false;
+  for (const PlantFault& f : config_.faults.faults) {
+    if (time_s_ < f.at_time_s) continue;
+    if (f.kind == PlantFaultKind::kImuDropout) {
+      output_.imu.dropped_out = true;
+      output_.imu.fresh = false;
+      continue;
+    }
+    if (!PlantFaultHasLeg(f.kind)) continue;
+    const std::size_t i = static_cast<std::size_t>(f.leg - 1);
+    LegSensorReading& r = output_.legs[i];
+    switch (f.kind) {
+      case PlantFaultKind::kPotStuck:
+        if (!stuck_latched_[i]) {
+          stuck_latched_[i] = true;
+          stuck_length_m_[i] = r.length_m;
+        }
+        r.length_m = stuck_length_m_[i];
+        break;
+      case PlantFaultKind::kPotDrift:
+        r.length_m += config_.faults.pot_drift_m_s * (time_s_ - f.at_time_s);
+        break;
+      case PlantFaultKind::kPressureDead:
+        r.chamber1_pressure_pa = 0.0;
+        break;
+      case PlantFaultKind::kImuDropout:
+      case PlantFaultKind::kSupplyLoss:
+        break;
+    }
+  }
 }
 
 void PlatformPlant::ResetBench() {
@@ -200,6 +241,7 @@ void PlatformPlant::Reset() {
   }
   sensors_.Reset();
   tracker_.Reset();
+  stuck_latched_.fill(false);
   time_s_ = 0.0;
   tick_ = 0;
   min_dissipation_w_ = std::numeric_limits<double>::infinity();
@@ -407,6 +449,7 @@ void PlatformPlant::SampleSensors() {
   st.angular_rate_B_rad_s = output_.truth.twist_B.tail<3>();
   sensors_.Sample(st, time_s_, output_.legs, output_.imu);
   tracker_.Sample(output_.truth.pose.p_BP_B_m, output_.truth.q_BP, time_s_, output_.tracker);
+  if (!config_.faults.faults.empty()) ApplySensorFaults();
 }
 
 PlantStatus PlatformPlant::Step(const LegArray<double>& valve_v, double dt_s) {

@@ -3,6 +3,7 @@
 
 #include "hexa/core/param_checks.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -46,6 +47,10 @@ const char* ToString(FaultReason reason) {
     case FaultReason::kTrajectoryRejected: return "FAULT_TRAJECTORY_REJECTED";
     case FaultReason::kHostOverload: return "FAULT_HOST_OVERLOAD";
     case FaultReason::kComputeOverrun: return "FAULT_COMPUTE_OVERRUN";
+    case FaultReason::kWriterGone: return "FAULT_WRITER_GONE";
+    case FaultReason::kSupplyPressureLow: return "FAULT_SUPPLY_PRESSURE_LOW";
+    case FaultReason::kSensorInconsistent: return "FAULT_SENSOR_INCONSISTENT";
+    case FaultReason::kImuLost: return "FAULT_IMU_LOST";
   }
   return "?";
 }
@@ -313,6 +318,15 @@ FaultReason Supervisor::CheckFaults(const SupervisorInput& input,
       return FaultReason::kSensorInvalid;
     }
   }
+  if (inconsistent_leg_ >= 0 && inconsistent_ticks_ >= params_.length_consistency_ticks) {
+    leg = inconsistent_leg_ + 1;
+    std::snprintf(detail.data(), detail.size(),
+                  "leg %d: measured length disagrees with the other five legs and the IMU by "
+                  "%.1f mm (limit %.1f mm, %d ticks): length sensor stuck or drifting",
+                  leg, inconsistent_residual_m_ * 1e3, params_.length_consistency_limit_m * 1e3,
+                  inconsistent_ticks_);
+    return FaultReason::kSensorInconsistent;
+  }
   if (estimate.status != KinStatus::kOk) {
     leg = 0;
     std::snprintf(detail.data(), detail.size(), "pose estimate failed: %s (IMU or lengths)",
@@ -397,6 +411,7 @@ void Supervisor::Update(const SupervisorInput& input, SupervisorOutput& output) 
   }
 
   // 5. Safety checks (HOLD latches until reset).
+  if (initialized_) UpdateConsistency(input);
   if (state_ != SupervisorState::kHold && initialized_) {
     int leg = 0;
     std::array<char, 160> detail{};
@@ -443,6 +458,38 @@ void Supervisor::Update(const SupervisorInput& input, SupervisorOutput& output) 
   output.fault = fault_;
   output.fault_leg = fault_leg_;
   output.fault_detail = fault_detail_;
+}
+
+void Supervisor::UpdateConsistency(const SupervisorInput& input) {
+  // Six lengths and the IMU orientation over-determine the position (3 unknowns): a leg whose
+  // reading disagrees with the other five shows as the outlier of the least-squares fit.
+  const auto& q = input.orientation_wxyz;
+  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  GqfkLsqResult fit;
+  KinStatus status = KinStatus::kInvalidInput;
+  if (std::isfinite(norm) && std::abs(norm - 1.0) < 0.01) {
+    const Eigen::Matrix3d R_BP =
+        Eigen::Quaterniond(q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm).toRotationMatrix();
+    // The lengths as the estimator sees them (potentiometer calibration applied).
+    status = GqfkLeastSquares(rig_.geometry, R_BP, sensed_length_m_,
+                              params_.length_consistency_limit_m, fit);
+  }
+  if (status == KinStatus::kInvalidInput || status == KinStatus::kDegenerate) {
+    inconsistent_leg_ = -1;  // other checks name invalid inputs
+    inconsistent_ticks_ = 0;
+    return;
+  }
+  double worst = 0.0;
+  for (std::size_t i = 0; i < kNumLegs; ++i) worst = std::max(worst, std::abs(fit.residual_m[i]));
+  max_consistency_residual_m_ = std::max(max_consistency_residual_m_, worst);
+  if (fit.excluded_leg < 0) {
+    inconsistent_leg_ = -1;
+    inconsistent_ticks_ = 0;
+    return;
+  }
+  inconsistent_ticks_ = fit.excluded_leg == inconsistent_leg_ ? inconsistent_ticks_ + 1 : 1;
+  inconsistent_leg_ = fit.excluded_leg;
+  inconsistent_residual_m_ = std::abs(fit.residual_m[static_cast<std::size_t>(fit.excluded_leg)]);
 }
 
 }  // namespace hexa

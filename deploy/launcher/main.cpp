@@ -23,6 +23,7 @@
 
 #include "hexa/config/rig_config.hpp"
 #include "hexa/core/excitation.hpp"
+#include "hexa/core/plant_faults.hpp"
 #include "hexa/services/cli.hpp"
 #include "identification.pb.h"
 #include "hexa/services/logging.hpp"
@@ -60,8 +61,10 @@ struct Options {
        feedforward = true, tracker = false, secure = false;
   std::string cpus_control, cpus_recorder;
   std::string bridge_listen, bridge_port, bridge_queue_kb;
-  int fault_leg = 0;
+  int fault_leg = 0;           // 1..6; 0 none
+  bool fault_supervisor = false;  // --fault supervisor:crash:T
   std::string fault_kind, fault_at;
+  std::string plant_faults;     // --plant-fault, passed to the plant's --fault
   double timeout_s = 0;
   std::vector<std::string> rig_overlays;  // absolute paths, for the legs and the supervisor
   std::vector<std::string> plant_extra_args;  // --plant-arg, passed on as given
@@ -173,9 +176,19 @@ int main(int argc, char** argv) {
   cli.AddFlag("secure", "DDS Security for the whole session: a project CA, one identity per "
                         "process, signed governance and permissions, encryption on the wire "
                         "(files in <out>/security; docs/deployment.md)");
+  cli.AddOption("rt-lease", "s",
+                "real time: liveliness lease of the leg controllers (a leg silent this long is "
+                "dead; docs/faults.md)", "0.01");
+  cli.AddOption("lockstep-lease", "s",
+                "lockstep: liveliness lease of the leg controllers and the supervisor "
+                "(docs/faults.md)", "0.2");
   cli.AddOption("fault", "leg:kind:time_s",
                 "inject a fault into one primary leg controller, e.g. 3:crash:2.0 "
-                "(kinds: crash hang slow garbage silence)");
+                "(kinds: crash hang slow garbage silence), or supervisor:crash:time_s "
+                "(docs/faults.md)");
+  cli.AddOption("plant-fault", "kind:leg:time_s[,...]",
+                "inject rig faults into the plant: pot-stuck, pot-drift, pressure-dead (leg "
+                "1..6), imu-dropout, supply-loss (leg 0); e.g. pot-stuck:3:1.5 (docs/faults.md)");
   cli.AddRepeatable("plant-arg", "arg",
                     "one more argument for hexa_plant_sim, e.g. --plant-arg "
                     "--lose-supervisor-inputs --plant-arg 500 (fault injection; see "
@@ -232,12 +245,14 @@ int main(int argc, char** argv) {
   auto periods = cli.GetInt("periods", 0, 1000);
   auto timeout = cli.GetDouble("timeout", 0, 1e6);
   auto stale_ticks = cli.GetInt("stale-ticks", 1, 1000);
+  auto rt_lease = cli.GetDouble("rt-lease", 0.003, 10);
+  auto lockstep_lease = cli.GetDouble("lockstep-lease", 0.01, 60);
   std::optional<long long> domain = 100 + getpid() % 100;
   if (cli.Has("domain")) domain = cli.GetInt("domain", 0, 230);
   const auto excite_duration = cli.GetDouble("excite-duration", 1, 3600);
   const auto free_fall_load = cli.GetDouble("free-fall-load-kg", 0, 1000);
   if (!seed || !periods || !timeout || !domain || !stale_ticks || !excite_duration ||
-      !free_fall_load) {
+      !free_fall_load || !rt_lease || !lockstep_lease) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
@@ -294,16 +309,27 @@ int main(int argc, char** argv) {
     o.fault_at = b == std::string::npos ? "" : f.substr(b + 1);
     char* end = nullptr;
     const double at = o.fault_at.empty() ? -1 : std::strtod(o.fault_at.c_str(), &end);
-    if (leg.size() != 1 || leg[0] < '1' || leg[0] > '6' ||
-        std::find(kKinds.begin(), kKinds.end(), o.fault_kind) == kKinds.end() ||
+    const bool supervisor = leg == "supervisor" && o.fault_kind == "crash";
+    if ((!supervisor && (leg.size() != 1 || leg[0] < '1' || leg[0] > '6' ||
+                         std::find(kKinds.begin(), kKinds.end(), o.fault_kind) == kKinds.end())) ||
         end == nullptr || *end != '\0' || !(at >= 0) || !std::isfinite(at)) {
       std::fprintf(stderr, "error: --fault '%s': expected leg:kind:time_s with leg 1..6, kind "
-                   "one of crash hang slow garbage silence, time_s a finite number >= 0 "
-                   "(e.g. 3:crash:2.0)\n",
+                   "one of crash hang slow garbage silence, or supervisor:crash:time_s; "
+                   "time_s a finite number >= 0 (e.g. 3:crash:2.0)\n",
                    f.c_str());
       return 2;
     }
-    o.fault_leg = leg[0] - '0';
+    if (supervisor) o.fault_supervisor = true;
+    else o.fault_leg = leg[0] - '0';
+  }
+  if (cli.Has("plant-fault")) {
+    std::vector<hexa::PlantFault> faults;
+    const std::string error = hexa::ParsePlantFaultList(cli.Get("plant-fault"), faults);
+    if (!error.empty()) {
+      std::fprintf(stderr, "error: --plant-fault %s\n(see --help)\n", error.c_str());
+      return 2;
+    }
+    o.plant_faults = cli.Get("plant-fault");
   }
   o.out_dir = cli.Has("out") ? cli.Get("out") : "out/session-" + Timestamp();
   std::error_code ec;
@@ -359,7 +385,8 @@ int main(int argc, char** argv) {
               identities.size(), o.out_dir, o.dds_config);
   }
   std::vector<std::string> common{"--rig", o.rig, "--domain", std::to_string(o.domain),
-                                  "--mode", o.mode};
+                                  "--mode", o.mode, "--rt-lease", cli.Get("rt-lease"),
+                                  "--lockstep-lease", cli.Get("lockstep-lease")};
   if (!o.cpus_control.empty()) common.insert(common.end(), {"--cpus", o.cpus_control});
   if (!o.rt_sched) common.push_back("--no-rt-sched");
   auto spec = [&](const std::string& name, const std::string& exe,
@@ -460,6 +487,10 @@ int main(int argc, char** argv) {
   // wander, docs/task_space.md), so it is off.
   if (experiment) sup_args = {"--no-outer-loop"};
   else if (!o.outer_loop || o.trajectory == "calibration") sup_args.push_back("--no-outer-loop");
+  if (o.fault_supervisor) {
+    sup_args.insert(sup_args.end(), {"--fault", "crash", "--fault-at", o.fault_at});
+    log->warn("fault injection: supervisor crash (SIGKILL) at t = {} s", o.fault_at);
+  }
   if (!o.feedforward) sup_args.push_back("--no-feedforward");
   sup_args.insert(sup_args.end(), overlay_args.begin(), overlay_args.end());
   if (o.recorder) sup_args.insert(sup_args.end(), {"--pose-readers", "1"});
@@ -470,6 +501,11 @@ int main(int argc, char** argv) {
                                       std::to_string(o.stale_ticks)};
   if (o.recorder) plant_args.push_back("--expect-recorder");
   if (o.tracker) plant_args.push_back("--tracker");
+  if (o.standby) plant_args.push_back("--expect-standbys");
+  if (!o.plant_faults.empty()) {
+    plant_args.insert(plant_args.end(), {"--fault", o.plant_faults});
+    log->warn("fault injection into the plant: {}", o.plant_faults);
+  }
   plant_args.insert(plant_args.end(), o.plant_extra_args.begin(), o.plant_extra_args.end());
   const std::string truth_path = o.out_dir + "/plant_truth.textproto";
   if (identify) {
@@ -499,12 +535,23 @@ int main(int argc, char** argv) {
 
   bool completed = false;
   bool failed = false;
+  // Exit code when not completed (docs/faults.md): 1 a process failed or the session was
+  // stopped; 3 the supervisor held the platform after a fault; 4 the plant stopped (lockstep
+  // deadlock, non-finite state); 5 the supervisor was lost (the legs hold their valves).
+  int outcome = 1;
+  double supervisor_lost_at_s = -1;  // the supervisor died: watch the legs hold for 2 s
   std::vector<hexa::deploy::ChildExit> exits;  // every child's exit, with its CPU time
   bool recorder_clean = false;  // the recorder exited 0 after closing its file
   while (!completed && !failed) {
-    auto ev = group.WaitEvent(std::chrono::milliseconds(1000));
+    auto ev = group.WaitEvent(std::chrono::milliseconds(supervisor_lost_at_s >= 0 ? 100 : 1000));
     const double elapsed_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (supervisor_lost_at_s >= 0 && elapsed_s > supervisor_lost_at_s + 2.0) {
+      log->error("the supervisor was lost {:.1f} s ago: stopping (exit 5)",
+                 elapsed_s - supervisor_lost_at_s);
+      outcome = 5;
+      failed = true;
+    }
     if (ev.kind == ProcessGroup::Event::kInterrupted) {
       log->warn("interrupted by signal {}: stopping every process", ev.signal);
       failed = true;
@@ -517,6 +564,21 @@ int main(int argc, char** argv) {
       } else if (e.name == "supervisor" && e.signal == 0 && e.exit_code == 0) {
         log->info("supervisor finished the trajectory after {:.1f} s wall", elapsed_s);
         completed = true;
+      } else if (e.name == "supervisor" && e.signal == 0 && e.exit_code == 5) {
+        log->error("the supervisor held the platform after a fault and left (exit 3)");
+        outcome = 3;
+        failed = true;
+      } else if (e.name == "supervisor" && (o.fault_supervisor || e.signal != 0)) {
+        // The legs see its setpoint writer's lease lapse and hold (docs/faults.md): watch
+        // that for 2 s, then stop the session with exit 5.
+        log->warn("{}{}: watching the legs hold for 2 s", e.Describe(),
+                  o.fault_supervisor ? " (injected fault)" : "");
+        supervisor_lost_at_s = elapsed_s;
+      } else if (e.name == "plant" && e.signal == 0 && (e.exit_code == 3 || e.exit_code == 4)) {
+        log->error("{}: the plant stopped (exit 4); its last log lines:\n{}", e.Describe(),
+                   TailOf(o.out_dir + "/plant.console.log", 15));
+        outcome = 4;
+        failed = true;
       } else if (o.standby && e.name.rfind("leg", 0) == 0 &&
                  e.name.find("_standby") == std::string::npos &&
                  group.Running(e.name + "_standby")) {
@@ -676,6 +738,10 @@ int main(int argc, char** argv) {
       r.argv.insert(r.argv.end(), {"--meta", "fault=leg " + std::to_string(o.fault_leg) + " " +
                                                  o.fault_kind + " at " + o.fault_at + " s"});
     if (recording != mcap) r.argv.insert(r.argv.end(), {"--meta", "recording=recovered"});
+    if (o.fault_supervisor)
+      r.argv.insert(r.argv.end(), {"--meta", "fault=supervisor crash at " + o.fault_at + " s"});
+    if (!o.plant_faults.empty())
+      r.argv.insert(r.argv.end(), {"--meta", "plant_fault=" + o.plant_faults});
     r.env = env;
     r.log_path = o.out_dir + "/report.console.log";
     const auto e = run_tool(r);
@@ -694,6 +760,7 @@ int main(int argc, char** argv) {
     log->info("session completed; outputs in {}", o.out_dir);
     return 0;
   }
-  log->error("session did NOT complete; logs in {}", o.out_dir);
-  return 1;
+  if (completed) outcome = 1;  // completed but a process did not stop cleanly
+  log->error("session did NOT complete (exit {}); logs in {}", outcome, o.out_dir);
+  return outcome;
 }

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "hexa/core/lockstep_simulation.hpp"
@@ -19,6 +20,8 @@ comm::QosParams ValveQos(const LegNodeOptions& o) {
   comm::QosParams q = node::QosFor(o.common, comm::TopicKind::kValveCommand);
   q.ownership_strength = o.standby ? comm::kStandbyOwnershipStrength
                                    : comm::kPrimaryOwnershipStrength;
+  // Which leg this writer drives, for the plant's per-leg liveliness (docs/faults.md).
+  q.user_data = "leg=" + std::to_string(o.leg) + " standby=" + (o.standby ? "1" : "0");
   return q;
 }
 
@@ -94,6 +97,7 @@ LegNode::LegNode(const LegNodeOptions& options, const config::SystemConfig& conf
       valve_writer_(participant_, valve_topic_, ValveQos(options),
                     {comm::LegPartition(options.leg)}),
       status_(participant_, name_),
+      faults_(participant_, name_),
       waitset_(participant_) {
   waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
   last_command_.leg_id = static_cast<uint8_t>(options.leg);
@@ -141,7 +145,16 @@ bool LegNode::WaitUntilMatched() {
 void LegNode::TakeSetpoints() {
   while (setpoint_reader_.Take() > 0) {
     for (std::size_t k = 0; k < setpoint_reader_.count(); ++k) {
-      if (!setpoint_reader_.info(k).valid_data) continue;
+      if (!setpoint_reader_.info(k).valid_data) {
+        // The supervisor disposed its setpoint: an orderly end of the session (a crashed
+        // supervisor never disposes; its lease lapses instead).
+        if (setpoint_reader_.info(k).instance_state == DDS_IST_NOT_ALIVE_DISPOSED &&
+            !supervisor_finished_) {
+          supervisor_finished_ = true;
+          log_->info("{}: the supervisor withdrew its setpoints (orderly end)", name_);
+        }
+        continue;
+      }
       const auto& s = setpoint_reader_.sample(k);
       if (s.leg_id != options_.leg) continue;
       IssuedSetpoint issued;
@@ -160,17 +173,75 @@ void LegNode::TakeSetpoints() {
   }
 }
 
+bool LegNode::SupervisorLost() const {
+  // Its writer was alive and is no longer: its lease lapsed or it disappeared (a killed
+  // process: Cyclone drops the proxy of a participant whose AUTOMATIC lease expired), without
+  // having disposed its setpoints first, as a supervisor ending the session does.
+  if (options_.common.mode != node::TimeMode::kLockstep || !supervisor_seen_alive_ ||
+      supervisor_finished_)
+    return false;
+  return setpoint_reader_.Snapshot().liveliness_alive_count == 0;
+}
+
 const IssuedSetpoint* LegNode::SetpointFor(std::uint64_t tick) const {
-  // Lockstep: the protocol's setpoint for this tick (core/lockstep_protocol.hpp). Real time:
-  // the newest setpoint not from the future.
-  if (options_.common.mode == node::TimeMode::kLockstep)
+  // Lockstep: the protocol's setpoint for this tick (core/lockstep_protocol.hpp). Real time,
+  // and lockstep once the supervisor is gone: the newest setpoint not from the future (it
+  // goes stale and the controller holds).
+  if (options_.common.mode == node::TimeMode::kLockstep && !SupervisorLost())
     return setpoints_.ForTick(tick, schedule_.supervisor_every_ticks);
   return setpoints_.NewestNotAfter(tick);
 }
 
 bool LegNode::CanAnswer(std::uint64_t tick) const {
   if (options_.common.mode == node::TimeMode::kRealtime) return true;
-  return setpoints_.CanAnswer(tick, schedule_.supervisor_every_ticks);
+  return setpoints_.CanAnswer(tick, schedule_.supervisor_every_ticks) || SupervisorLost();
+}
+
+void LegNode::ReportControlFault(const hexa_msg_LegSensors& s) {
+  // Held control is a fault once it persists: bad input for 3 ticks (a dead or implausible
+  // sensor, supply pressure low), a stale setpoint for 50 (the supervisor has not answered
+  // for 50 ms beyond the setpoint timeout: gone or stalled). The valve is at null from the
+  // first held tick on (core LegController); this reports it so that the supervisor holds.
+  hexa_msg_FaultReason cause = hexa_msg_FAULT_NONE;
+  std::uint64_t persist_ticks = 0;
+  if (output_.status == LegControlStatus::kHoldBadInput) {
+    cause = output_.input_fault == LegInputFault::kSupplyLow ? hexa_msg_FAULT_SUPPLY_PRESSURE_LOW
+                                                             : hexa_msg_FAULT_SENSOR_INVALID;
+    persist_ticks = 3;
+  } else if (output_.status == LegControlStatus::kHoldStaleSetpoint && !supervisor_finished_) {
+    cause = hexa_msg_FAULT_SETPOINT_STALE;
+    persist_ticks = 50;
+  }
+  if (cause == hexa_msg_FAULT_NONE) {
+    control_fault_ticks_ = 0;
+    if (control_fault_reported_ && ++control_ok_ticks_ >= 100) {
+      log_->info("{} tick {}: control valid again after {}", name_, s.header.tick,
+                 ToString(output_.status));
+      control_fault_reported_ = false;
+      control_fault_ = hexa_msg_FAULT_NONE;
+    }
+    return;
+  }
+  control_ok_ticks_ = 0;
+  if (cause != control_fault_) control_fault_ticks_ = 0;
+  control_fault_ = cause;
+  ++control_fault_ticks_;
+  const bool first = !control_fault_reported_ && control_fault_ticks_ >= persist_ticks;
+  const bool reminder = control_fault_reported_ && control_fault_ticks_ % 100 == 0;
+  if (!first && !reminder) return;
+  char detail[160];
+  if (cause == hexa_msg_FAULT_SETPOINT_STALE) {
+    std::snprintf(detail, sizeof detail, "setpoint of tick %llu is %.3f s old%s: valve held at null",
+                  static_cast<unsigned long long>(output_.setpoint_tick), output_.input_fault_value,
+                  SupervisorLost() ? " (the supervisor's writer is gone)" : "");
+  } else {
+    std::snprintf(detail, sizeof detail, "%s reads %.6g (held %llu ticks): valve held at null",
+                  ToString(output_.input_fault), output_.input_fault_value,
+                  static_cast<unsigned long long>(control_fault_ticks_));
+  }
+  faults_.Publish(static_cast<uint8_t>(options_.leg), s.header.tick, cause, detail);
+  if (first) log_->warn("{} tick {}: {}", name_, s.header.tick, detail);
+  control_fault_reported_ = true;
 }
 
 bool LegNode::InjectFault(double sim_time_s) {
@@ -230,8 +301,11 @@ void LegNode::Answer(const hexa_msg_LegSensors& s) {
     c.valve_v = (cycles_ % 2 == 0) ? std::numeric_limits<double>::quiet_NaN() : 42.0;
   }
   answered_any_ = true;
+  unwritten_answer_ = true;  // until it is published: the liveliness rule (Run)
+  ReportControlFault(s);
   if (fault_active_ && options_.fault.kind == FaultKind::kSilence) return;
   valve_writer_.WriteNow(c);
+  unwritten_answer_ = false;
   last_write_ns_.store(node::MonotonicNow_ns(), std::memory_order_relaxed);
 }
 
@@ -323,12 +397,20 @@ void LegNode::OnData(void* self) {
 }
 
 void LegNode::RunCycle() {
+  if (!supervisor_seen_alive_ && setpoint_reader_.Snapshot().liveliness_alive_count > 0)
+    supervisor_seen_alive_ = true;
   TakeSetpoints();
   if (options_.common.mode == node::TimeMode::kRealtime) {
     TakeSensorsRealtime();
   } else {
     TakeSensorsLockstep();
   }
+}
+
+void LegNode::AssertLivelinessIfIdle(std::int64_t idle_ns) {
+  if (node::MonotonicNow_ns() - last_write_ns_.load(std::memory_order_relaxed) < idle_ns) return;
+  std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+  if (lock.owns_lock() && !unwritten_answer_) valve_writer_.AssertLiveliness();
 }
 
 int LegNode::Run() {
@@ -350,11 +432,15 @@ int LegNode::Run() {
   sensors_reader_.OnDataAvailable(&LegNode::OnData, this);
   setpoint_reader_.OnDataAvailable(&LegNode::OnData, this);
   OnData(this);
-  // Real time: MANUAL_BY_TOPIC liveliness (10 ms lease) is asserted by every write; while no
-  // sensor sample arrives this thread asserts it every 3 ms, but only if it gets the control
-  // lock (a control cycle stuck in a callback holds it: its liveliness then lapses).
-  const dds_duration_t wait = realtime ? DDS_MSECS(3) : DDS_SECS(1);
-  const int64_t idle_ns = 3'000'000;
+  // MANUAL_BY_TOPIC liveliness (lease: 10 ms real time, 0.2 s lockstep; node.cpp QosFor) is
+  // asserted by every write; while the control path is idle this thread asserts it every
+  // quarter lease (real time: 3 ms), but only if it gets the control lock (a control cycle
+  // stuck in a callback holds it) and the cycle published every answer it computed (a silent
+  // cycle did not): otherwise the lease lapses (docs/faults.md).
+  const double lease_s = realtime ? options_.common.realtime_lease_s : options_.common.lockstep_lease_s;
+  const int64_t idle_ns = realtime ? 3'000'000 : static_cast<int64_t>(lease_s * 0.25e9);
+  const dds_duration_t wait = static_cast<dds_duration_t>(idle_ns);
+  bool supervisor_lost_logged = false;
   while (!shutdown_.requested()) {
     const dds_return_t n = waitset_.Wait(wait);
     if (n < 0) {
@@ -367,12 +453,21 @@ int LegNode::Run() {
       std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
       if (lock.owns_lock()) node::service_manager::Watchdog();
     }
-    if (!realtime || shutdown_.requested()) continue;
-    if (node::MonotonicNow_ns() - last_write_ns_.load(std::memory_order_relaxed) < idle_ns) continue;
-    std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
-    if (lock.owns_lock() && !(fault_active_ && options_.fault.kind == FaultKind::kSilence)) {
-      valve_writer_.AssertLiveliness();
+    if (shutdown_.requested()) continue;
+    if (!realtime && SupervisorLost()) {
+      // No setpoint will arrive to trigger the cycle: answer the queued ticks from here.
+      std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+      if (lock.owns_lock()) {
+        if (!supervisor_lost_logged) {
+          supervisor_lost_logged = true;
+          log_->warn("{}: the supervisor's setpoint writer is no longer alive: answering every "
+                     "tick with the newest setpoint held (tick {}), valve at null once stale",
+                     name_, setpoints_.newest() ? setpoints_.newest()->tick : 0);
+        }
+        RunCycle();
+      }
     }
+    AssertLivelinessIfIdle(idle_ns);
   }
   // No callback may run while the counters are read and the node is torn down.
   sensors_reader_.OnDataAvailable(nullptr, nullptr);

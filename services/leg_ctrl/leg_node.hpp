@@ -6,8 +6,11 @@
 // Threads: the control cycle runs on Cyclone's receive thread, in the sensor and setpoint
 // readers' data callbacks (a sample is answered where it is received, with no hand-over to
 // another thread: docs/performance.md). The main thread publishes nothing per tick: it waits
-// for shutdown and, in real time, asserts the writer's liveliness while the control path is
-// idle - only if it can take the control lock, so a hung control cycle lets it lapse.
+// for shutdown and, in both modes, asserts the writer's MANUAL_BY_TOPIC liveliness while the
+// control path is idle - only if it can take the control lock (a hung control cycle holds
+// it) and every answer the cycle computed was published (a silent one did not): a crashed,
+// hung or silent controller lets its lease lapse, and the plant and a hot standby see it
+// (docs/faults.md).
 #pragma once
 
 #include <array>
@@ -76,6 +79,13 @@ class LegNode {
   void Answer(const hexa_msg_LegSensors& sensors);
   bool InjectFault(double sim_time_s);
   void PublishStatus(hexa_msg_NodeState state, const char* detail);
+  // Lockstep: the supervisor's setpoint writer was alive and is no longer (its process is
+  // gone): ticks are answered with the newest setpoint held, which goes stale.
+  bool SupervisorLost() const;
+  // One FaultEvent per episode of held control (bad input, stale setpoint), repeated at the
+  // status rate while it lasts (docs/faults.md).
+  void ReportControlFault(const hexa_msg_LegSensors& sensors);
+  void AssertLivelinessIfIdle(std::int64_t idle_ns);
 
   LegNodeOptions options_;
   std::shared_ptr<spdlog::logger> log_;
@@ -90,6 +100,7 @@ class LegNode {
   comm::Reader<hexa_msg_LegSetpoint> setpoint_reader_;
   comm::Writer<hexa_msg_ValveCommand> valve_writer_;
   node::StatusPublisher status_;
+  node::FaultPublisher faults_;
   comm::WaitSet waitset_;
 
   LockstepSchedule schedule_;
@@ -103,6 +114,14 @@ class LegNode {
   std::uint64_t queue_overflows_ = 0;
   std::uint64_t ticks_missed_ = 0;  // lockstep: ticks that never reached this node
   bool answered_any_ = false;
+  bool unwritten_answer_ = false;    // an answer was computed and not published (yet)
+  bool supervisor_seen_alive_ = false;
+  bool supervisor_finished_ = false;  // it disposed its setpoints: the session is ending
+  // Held-control fault episode (ReportControlFault).
+  hexa_msg_FaultReason control_fault_ = hexa_msg_FAULT_NONE;
+  std::uint64_t control_fault_ticks_ = 0;  // consecutive held ticks of the current cause
+  std::uint64_t control_ok_ticks_ = 0;     // consecutive good ticks (ends the episode)
+  bool control_fault_reported_ = false;
   hexa_msg_ValveCommand last_command_{};
   LegControllerInput input_;
   LegControllerOutput output_;

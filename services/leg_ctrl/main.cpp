@@ -66,7 +66,7 @@ int main(int argc, char** argv) {
     hexa::comm::EnsureDdsConfig(o.common.dds_config);
     auto config = hexa::node::LoadConfig(o.common, *log);
     if (!config) return 1;
-    // Before the participant exists: Cyclone's threads inherit the policy (PLATFORM_NOTES).
+    // Before the participant exists: Cyclone's threads inherit the policy (docs/platform_notes.md).
     hexa::node::ApplyScheduling(o.common, 70, *log);
     hexa::leg_ctrl::LegNode node(o, *config, log);
     return node.Run();

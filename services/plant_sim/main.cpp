@@ -22,6 +22,8 @@ int main(int argc, char** argv) {
   cli.AddFlag("supervisor", "the supervisor must be running before the first tick (lockstep: the "
               "legs then wait for its setpoints, docs/architecture.md)");
   cli.AddFlag("expect-recorder", "wait for the recorder before the first tick");
+  cli.AddFlag("expect-standbys", "wait for a hot standby per leg before the first tick (a "
+              "standby that misses ticks no longer computes its primary's commands)");
   cli.AddOption("duration", "s", "stop after this simulated time (0 = until stopped)", "0");
   cli.AddOption("startup-timeout", "s", "peers must be ready within this", "30");
   cli.AddFlag("tracker", "publish the external pose instrument hexa_TrackerPose (laser tracker, "
@@ -48,6 +50,17 @@ int main(int argc, char** argv) {
   cli.AddOption("truth-out", "file",
                 "write the plant's true parameters (hexa.rec.PlantTruth, text format) to this "
                 "file at start-up, for evaluation (docs/identification.md)");
+  cli.AddOption("answer-timeout", "s",
+                "lockstep: a leg whose writer is alive but has not answered a tick this long is "
+                "dead (no longer awaited, valve at null); 0 = 10 liveliness leases (2 s)", "0");
+  cli.AddOption("compute-budget", "s",
+                "leg controllers' compute time per cycle (ValveCommand.compute_time_s) beyond "
+                "which a cycle overruns", "0.0005");
+  cli.AddOption("compute-overrun-cycles", "N",
+                "consecutive overrunning cycles of a leg that make a FAULT_COMPUTE_OVERRUN", "20");
+  cli.AddOption("fault", "kind:leg:time_s[,...]",
+                "inject rig faults (docs/faults.md): pot-stuck, pot-drift, pressure-dead (leg "
+                "1..6), imu-dropout, supply-loss (leg 0); e.g. pot-stuck:3:1.5");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
 
@@ -61,16 +74,31 @@ int main(int argc, char** argv) {
   const auto lose = cli.GetInt("lose-supervisor-inputs", -1, 1LL << 40);
   const auto bench_load = cli.GetDouble("bench-load-kg", 0, 1000);
   const auto bench_release = cli.GetDouble("bench-release-s", 0, 1e6);
+  const auto answer_timeout = cli.GetDouble("answer-timeout", 0, 3600);
+  const auto budget = cli.GetDouble("compute-budget", 1e-6, 10);
+  const auto overrun = cli.GetInt("compute-overrun-cycles", 1, 1000000);
   if (!hexa::node::ReadCommonOptions(cli, o.common) || !seed || !legs || !duration || !startup ||
-      !stale || !grace || !lose || !bench_load || !bench_release) {
+      !stale || !grace || !lose || !bench_load || !bench_release || !answer_timeout || !budget ||
+      !overrun) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
+  }
+  o.answer_timeout_s = *answer_timeout;
+  o.compute_budget.budget_s = *budget;
+  o.compute_budget.overrun_limit = static_cast<std::uint64_t>(*overrun);
+  if (cli.Has("fault")) {
+    const std::string error = hexa::ParsePlantFaultList(cli.Get("fault"), o.plant_faults.faults);
+    if (!error.empty()) {
+      std::fprintf(stderr, "error: --fault %s\n(see --help)\n", error.c_str());
+      return 2;
+    }
   }
   o.profile = cli.Get("profile");
   o.seed = static_cast<std::uint64_t>(*seed);
   o.expected_legs = static_cast<int>(*legs);
   o.expect_supervisor = cli.Flag("supervisor");
   o.expect_recorder = cli.Flag("expect-recorder");
+  o.expect_standbys = cli.Flag("expect-standbys");
   o.duration_s = *duration;
   o.startup_timeout_s = *startup;
   o.realtime_stale_ticks = static_cast<std::uint64_t>(*stale);
@@ -103,7 +131,7 @@ int main(int argc, char** argv) {
                  o.common.rig_path, names);
       return 1;
     }
-    // Before the participant exists: Cyclone's threads inherit the policy (PLATFORM_NOTES).
+    // Before the participant exists: Cyclone's threads inherit the policy (docs/platform_notes.md).
     hexa::node::ApplyScheduling(o.common, 80, *log);
     hexa::plant_sim::PlantNode node(o, *config, log);
     if (cli.Has("truth-out")) {

@@ -3,6 +3,7 @@
 #include <time.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -36,7 +37,25 @@ PlatformPlantConfig MakePlantConfig(const PlantNodeOptions& o, const config::Sys
   p.seed = o.seed;
   p.tracker.enabled = o.tracker;
   p.free_fall = o.free_fall;
+  p.faults = o.plant_faults;
   return p;
+}
+
+SilentLegParams SilentParams(const PlantNodeOptions& o) {
+  SilentLegParams p;
+  const double timeout_s = o.answer_timeout_s > 0 ? o.answer_timeout_s : 10.0 * o.common.lockstep_lease_s;
+  p.answer_timeout_ns = static_cast<std::int64_t>(timeout_s * 1e9);
+  return p;
+}
+
+hexa_msg_FaultReason WireReason(SilentLegVerdict v) {
+  switch (v) {
+    case SilentLegVerdict::kLivelinessLost: return hexa_msg_FAULT_LIVELINESS_LOST;
+    case SilentLegVerdict::kWriterGone: return hexa_msg_FAULT_WRITER_GONE;
+    case SilentLegVerdict::kNoAnswer: return hexa_msg_FAULT_COMMAND_DEADLINE_MISSED;
+    case SilentLegVerdict::kWait: break;
+  }
+  return hexa_msg_FAULT_NONE;
 }
 
 LockstepBarrierParams BarrierParams(const PlantNodeOptions& o) {
@@ -44,6 +63,17 @@ LockstepBarrierParams BarrierParams(const PlantNodeOptions& o) {
   p.reask_after_ns = static_cast<std::int64_t>(o.resend_after_s * 1e9);
   p.timeout_ns = static_cast<std::int64_t>(o.common.lockstep_timeout_s * 1e9);
   return p;
+}
+
+// "leg=3 standby=1" -> leg 3, standby; false for anything else.
+bool ParseLegUserData(const std::string& text, int& leg, bool& standby) {
+  int l = 0, sb = 0;
+  if (std::sscanf(text.c_str(), "leg=%d standby=%d", &l, &sb) != 2 || l < 1 ||
+      l > static_cast<int>(kNumLegs))
+    return false;
+  leg = l;
+  standby = sb != 0;
+  return true;
 }
 
 std::string LegList(LegMask mask) {
@@ -54,6 +84,70 @@ std::string LegList(LegMask mask) {
 }
 
 }  // namespace
+
+void LegWriterTable::Refresh(const comm::LegReaders<hexa_msg_ValveCommand>& readers) {
+  for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) RefreshOne(readers.leg(leg), leg);
+}
+
+void LegWriterTable::RefreshOne(const comm::Reader<hexa_msg_ValveCommand>& reader, int reader_leg) {
+  PerReader& r = readers_[static_cast<std::size_t>(reader_leg - 1)];
+  r.counters = &reader.status();
+  const auto& slots = r.counters->writers();
+  for (std::size_t k = 0; k < kSlots; ++k) {
+    const dds_instance_handle_t h = slots[k].publication.load(std::memory_order_acquire);
+    if (h == 0) break;  // slots are claimed in order
+    if (r.leg[k] != 0) continue;
+    const std::optional<std::string> user_data = comm::MatchedWriterUserData(reader.get(), h);
+    int leg = 0;
+    bool standby = false;
+    if (!user_data) {
+      // Not (yet) known as a matched publication: discovery may lag the liveliness callback
+      // that claimed the slot, so ask again on later refreshes; a writer still unknown after
+      // 100 of them is gone (it cannot count as alive, and no leg can claim it).
+      if (++r.unresolved[k] >= 100) r.leg[k] = -1;
+    } else if (ParseLegUserData(*user_data, leg, standby) && leg == reader_leg) {
+      r.leg[k] = static_cast<std::int8_t>(leg);
+      r.standby[k] = standby;
+    } else {
+      // A tool's writer (replay), or one that names another leg than its partition's: not
+      // this leg's controller (RejectCommand refuses its samples).
+      r.leg[k] = -1;
+    }
+  }
+}
+
+LegWriterCounts LegWriterTable::Counts(int leg) const {
+  LegWriterCounts c;
+  const PerReader& r = readers_[static_cast<std::size_t>(leg - 1)];
+  if (r.counters == nullptr) return c;
+  const auto& slots = r.counters->writers();
+  for (std::size_t k = 0; k < kSlots; ++k) {
+    if (r.leg[k] != leg) continue;
+    switch (static_cast<comm::WriterLiveliness>(slots[k].state.load(std::memory_order_relaxed))) {
+      case comm::WriterLiveliness::kAlive: ++c.alive; break;
+      case comm::WriterLiveliness::kNotAlive: ++c.not_alive; break;
+      case comm::WriterLiveliness::kGone: ++c.gone; break;
+      case comm::WriterLiveliness::kUnknown: break;
+    }
+  }
+  return c;
+}
+
+std::string LegWriterTable::Describe() const {
+  std::string text;
+  static const char* kState[] = {"unknown", "alive", "not alive", "gone"};
+  for (const PerReader& r : readers_) {
+    if (r.counters == nullptr) continue;
+    const auto& slots = r.counters->writers();
+    for (std::size_t k = 0; k < kSlots; ++k) {
+      if (r.leg[k] <= 0) continue;
+      const int state = slots[k].state.load(std::memory_order_relaxed);
+      text += " leg" + std::to_string(r.leg[k]) + (r.standby[k] ? " standby " : " primary ") +
+              kState[std::clamp(state, 0, 3)] + ";";
+    }
+  }
+  return text;
+}
 
 void CommandAgeHistogram::Add(std::int64_t age_ticks) {
   if (age_ticks < 0) {
@@ -127,7 +221,12 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
       status_(participant_, "plant"),
       faults_(participant_, "plant"),
       peers_(participant_),
+      fault_topic_(participant_),
+      fault_reader_(participant_, fault_topic_, comm::EndpointRole::kControlReader,
+                    node::QosFor(options.common, comm::TopicKind::kFaultEvent), 64),
       waitset_(participant_) {
+  silent_params_ = SilentParams(options);
+  forced_reason_.fill(hexa_msg_FAULT_NONE);
   waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
   waitset_.Attach(wake_.get(), kTokenWake);
   waitset_.Attach(peers_.data_condition(), kTokenPeers);
@@ -159,21 +258,28 @@ void PlantNode::PublishStatus(hexa_msg_NodeState state, const char* detail) {
 
 bool PlantNode::WaitForPeers() {
   std::vector<std::string> expected;
-  for (int leg = 1; leg <= options_.expected_legs; ++leg) expected.push_back("leg" + std::to_string(leg));
+  for (int leg = 1; leg <= options_.expected_legs; ++leg) {
+    expected.push_back("leg" + std::to_string(leg));
+    if (options_.expect_standbys) expected.push_back("leg" + std::to_string(leg) + "_standby");
+  }
   if (options_.expect_supervisor) expected.push_back("supervisor");
   if (options_.expect_recorder) expected.push_back("recorder");
-  // Sensor readers: each leg controller in its leg's partition; the supervisor and the
-  // recorder on the all-legs writer. Valve writers: one per leg controller.
+  // Sensor readers: each leg controller (and its hot standby) in its leg's partition; the
+  // supervisor and the recorder on the all-legs writer. Valve writers: one per leg
+  // controller. A standby must see tick 0 too: lockstep does not wait for it later, and a
+  // standby that missed ticks no longer computes the primary's commands.
+  const uint32_t per_leg = options_.expect_standbys ? 2u : 1u;
   const uint32_t all_legs_readers = (options_.expect_supervisor ? 1u : 0u) +
                                     (options_.expect_recorder ? 1u : 0u);
-  const uint32_t sensor_readers = static_cast<uint32_t>(options_.expected_legs) + all_legs_readers;
+  const uint32_t sensor_readers =
+      static_cast<uint32_t>(options_.expected_legs) * per_leg + all_legs_readers;
   auto sensor_readers_matched = [&] {
     uint32_t n = 0;
     for (int leg = 1; leg <= options_.expected_legs; ++leg)
-      n += std::min<uint32_t>(1, sensors_writer_.leg(leg).Snapshot().publication_matched_current);
+      n += std::min(per_leg, sensors_writer_.leg(leg).Snapshot().publication_matched_current);
     return n + std::min(all_legs_readers, sensors_writer_.all().Snapshot().publication_matched_current);
   };
-  const uint32_t valve_writers = static_cast<uint32_t>(options_.expected_legs);
+  const uint32_t valve_writers = static_cast<uint32_t>(options_.expected_legs) * per_leg;
   PublishStatus(hexa_msg_NODE_STARTING, "waiting for peers");
   const int64_t end = node::MonotonicNow_ns() + static_cast<int64_t>(options_.startup_timeout_s * 1e9);
   int64_t next_log = node::MonotonicNow_ns() + 2'000'000'000;
@@ -187,9 +293,20 @@ bool PlantNode::WaitForPeers() {
     const auto imu = imu_writer_.Snapshot().publication_matched_current;
     const auto truth = truth_writer_.Snapshot().publication_matched_current;
     const uint32_t truth_readers = options_.expect_recorder ? 1u : 0u;
+    // Every awaited leg's writer known and alive (its liveliness decides whether the leg is
+    // dead once ticking: docs/faults.md).
+    writers_.Refresh(valve_readers_);
+    int legs_alive = 0;
+    for (int leg = 1; leg <= options_.expected_legs; ++leg)
+      legs_alive += writers_.Counts(leg).alive >= static_cast<int>(per_leg) ? 1 : 0;
+    // Real time: the control readers are best effort, and a best-effort reader learns a
+    // writer's liveliness from its data only (no heartbeats): before the first command no leg
+    // looks alive. CheckLinksRealtime arms a leg once it has been seen alive.
+    if (options_.common.mode == node::TimeMode::kRealtime) legs_alive = options_.expected_legs;
     if (missing.empty() && sensors >= sensor_readers && valves >= valve_writers &&
-        imu >= all_legs_readers && truth >= truth_readers) {
-      log_->info("all peers ready: {} sensor readers, {} valve writers", sensors, valves);
+        imu >= all_legs_readers && truth >= truth_readers && legs_alive == options_.expected_legs) {
+      log_->info("all peers ready: {} sensor readers, {} valve writers; writers:{}", sensors,
+                 valves, writers_.Describe());
       return true;
     }
     const int64_t now = node::MonotonicNow_ns();
@@ -197,10 +314,11 @@ bool PlantNode::WaitForPeers() {
       std::string names;
       for (const auto& m : missing) names += " " + m;
       log_->error("peers not ready after {} s: not running:{}; sensor readers {}/{}, valve "
-                  "writers {}/{}, IMU readers {}/{}, ground-truth readers {}/{}",
+                  "writers {}/{} (legs with a live writer {}/{}), IMU readers {}/{}, "
+                  "ground-truth readers {}/{}",
                   options_.startup_timeout_s, names.empty() ? " none" : names, sensors,
-                  sensor_readers, valves, valve_writers, imu, all_legs_readers, truth,
-                  truth_readers);
+                  sensor_readers, valves, valve_writers, legs_alive, options_.expected_legs, imu,
+                  all_legs_readers, truth, truth_readers);
       return false;
     }
     if (now > next_log) {
@@ -249,7 +367,20 @@ void PlantNode::PublishTick(int only_leg) {
     if (schedule_.SupervisorDue(tick_)) supervisor_sensors_[i] = s;
   }
   sensors_writer_.Flush();
-  if (schedule_.SupervisorDue(tick_)) {
+  if (schedule_.SupervisorDue(tick_) && out.imu.dropped_out) {
+    // The IMU delivers nothing (plant fault imu-dropout). A hardware I/O node sees its read
+    // of the device time out at the sample's due time and says so, once; in lockstep the
+    // supervisor needs that to run its tick without the sample (docs/faults.md).
+    if (!imu_lost_reported_) {
+      imu_lost_reported_ = true;
+      char detail[160];
+      std::snprintf(detail, sizeof detail, "IMU: no sample at tick %llu (due every %d ticks): "
+                    "the device does not answer", static_cast<unsigned long long>(tick_),
+                    schedule_.supervisor_every_ticks);
+      faults_.Publish(0, tick_, hexa_msg_FAULT_IMU_LOST, detail);
+      log_->error("tick {}: {}", tick_, detail);
+    }
+  } else if (schedule_.SupervisorDue(tick_)) {
     hexa_msg_ImuSample imu{};
     comm::FillHeader(imu.header, tick_, t, now_ns);
     const auto& q = out.imu.q_BP_measured;
@@ -331,6 +462,7 @@ void PlantNode::TakeCommands(bool feed_barrier) {
         }
         LatestCommand& latest = latest_[c.leg_id - 1];
         if (latest.received && c.header.tick < latest.answered_tick) continue;  // older
+        if (!latest.received || c.header.tick > latest.answered_tick) MonitorCompute(c);
         latest = LatestCommand{true, c.header.tick, c.valve_v};
         if (feed_barrier) barrier_.Answer(c.leg_id, c.header.tick);
       }
@@ -351,10 +483,161 @@ void PlantNode::RejectCommand(int reader_leg, const hexa_msg_ValveCommand& c,
              valve_readers_.leg(reader_leg).DescribeWriter(info.publication_handle), reader_leg, n);
 }
 
+void PlantNode::MonitorCompute(const hexa_msg_ValveCommand& c) {
+  const std::size_t i = c.leg_id - 1u;
+  ComputeBudgetMonitor& m = compute_[i];
+  switch (m.Update(c.compute_time_s, options_.compute_budget)) {
+    case ComputeBudgetMonitor::Event::kStarted: {
+      char detail[160];
+      std::snprintf(detail, sizeof detail, "compute time over the %.3f ms budget for %llu cycles "
+                    "in a row (up to %.3f ms, tick %llu): the controller cannot keep 1 kHz",
+                    options_.compute_budget.budget_s * 1e3,
+                    static_cast<unsigned long long>(options_.compute_budget.overrun_limit),
+                    m.run_max_s() * 1e3, static_cast<unsigned long long>(c.header.tick));
+      faults_.Publish(c.leg_id, tick_, hexa_msg_FAULT_COMPUTE_OVERRUN, detail);
+      log_->warn("leg {} tick {}: {}", c.leg_id, tick_, detail);
+      break;
+    }
+    case ComputeBudgetMonitor::Event::kEnded:
+      log_->info("leg {} tick {}: compute time within budget again", c.leg_id, tick_);
+      break;
+    case ComputeBudgetMonitor::Event::kNone: break;
+  }
+}
+
+void PlantNode::MarkLegDead(int leg, hexa_msg_FaultReason reason, const char* detail) {
+  const std::size_t i = static_cast<std::size_t>(leg - 1);
+  link_dead_[i] = true;
+  forced_reason_[i] = reason;
+  faults_.Publish(static_cast<uint8_t>(leg), tick_, reason, detail);
+  log_->error("leg {} tick {}: {}", leg, tick_, detail);
+}
+
+void PlantNode::JudgeSilentLegs(std::int64_t now_ns) {
+  if (barrier_.complete()) return;
+  writers_.Refresh(valve_readers_);
+  const std::int64_t silent_ns = now_ns - barrier_.began_ns();
+  LegMask dead = 0, no_answer = 0;
+  std::array<SilentLegVerdict, kNumLegs> verdict{};
+  for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
+    if (!(barrier_.missing() & LegBit(leg))) continue;
+    verdict[static_cast<std::size_t>(leg - 1)] =
+        JudgeSilentLeg(writers_.Counts(leg), silent_ns, silent_params_);
+    if (verdict[static_cast<std::size_t>(leg - 1)] == SilentLegVerdict::kWait) continue;
+    dead |= LegBit(leg);
+    if (verdict[static_cast<std::size_t>(leg - 1)] == SilentLegVerdict::kNoAnswer) no_answer |= LegBit(leg);
+  }
+  if (dead == 0) return;
+  if (dead == barrier_.awaited() && no_answer == 0 && std::popcount(dead) > 1 &&
+      std::all_of(verdict.begin(), verdict.end(), [](SilentLegVerdict v) {
+        return v == SilentLegVerdict::kWait || v == SilentLegVerdict::kLivelinessLost;
+      })) {
+    // Every awaited leg's lease lapsed together: the host did not run them (a shared
+    // machine's other work on the control CPU), not that many controllers failing at once.
+    // Lockstep has no deadline: it waits for them (the lockstep timeout remains).
+    if (all_lapsed_logged_++ == 0)
+      log_->warn("tick {}: every awaited leg's liveliness lapsed at once: the host did not run "
+                 "them; lockstep waits (logged once, counted)", tick_);
+    return;
+  }
+  if (no_answer != 0 && no_answer == barrier_.awaited()) {
+    // Every awaited leg alive and none answers: not six controller faults. The legs wait for
+    // something they all need (the supervisor's setpoint) or the host does not run them.
+    char detail[160];
+    std::snprintf(detail, sizeof detail, "lockstep: no leg answered tick %llu within %.3f s though "
+                  "all their writers are alive: the supervisor or the host is stalled",
+                  static_cast<unsigned long long>(tick_), static_cast<double>(silent_ns) * 1e-9);
+    faults_.Publish(0, tick_, hexa_msg_FAULT_COMMAND_DEADLINE_MISSED, detail);
+    log_->error("{}", detail);
+    exit_code_ = 3;
+    running_ = false;
+    return;
+  }
+  for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
+    if (!(dead & LegBit(leg))) continue;
+    const SilentLegVerdict v = verdict[static_cast<std::size_t>(leg - 1)];
+    const LegWriterCounts c = writers_.Counts(leg);
+    char detail[160];
+    std::snprintf(detail, sizeof detail, "%s: no answer to tick %llu for %.0f ms (writers: %d "
+                  "alive, %d not alive, %d gone): no longer awaited, valve held at null",
+                  ToString(v), static_cast<unsigned long long>(tick_),
+                  static_cast<double>(silent_ns) * 1e-6, c.alive, c.not_alive, c.gone);
+    MarkLegDead(leg, WireReason(v), detail);
+    gone_reported_[static_cast<std::size_t>(leg - 1)] = v == SilentLegVerdict::kWriterGone;
+  }
+  dropped_ |= dead;
+  barrier_.Release(dead);
+  AdvanceIfComplete();
+}
+
+void PlantNode::CheckLinksRealtime() {
+  // Real time: a leg without a live writer is held at null from this tick (its last commands
+  // come from a controller whose loop no longer runs) and reported once (ApplyAndStep); it is
+  // released after a writer has been alive for 100 ticks in a row (a flickering lease stays
+  // one episode). Every awaited leg dead at once is the host (ApplyAndStep), not six
+  // controllers.
+  for (int leg = 1; leg <= options_.expected_legs; ++leg) {
+    const std::size_t i = static_cast<std::size_t>(leg - 1);
+    const LegWriterCounts c = writers_.Counts(leg);
+    if (c.alive > 0) link_armed_[i] = true;
+    if (!link_armed_[i]) continue;  // no command yet: the start-up grace covers it
+    if (c.alive == 0) {
+      link_alive_run_[i] = 0;
+      if (!link_dead_[i]) {
+        link_dead_[i] = true;
+        forced_reason_[i] = WireReason(JudgeSilentLeg(c, 0, silent_params_));
+      }
+    } else if (link_dead_[i] && ++link_alive_run_[i] >= 100) {
+      link_dead_[i] = false;
+      forced_reason_[i] = interlock_[i] ? hexa_msg_FAULT_SENSOR_INCONSISTENT : hexa_msg_FAULT_NONE;
+      log_->info("leg {} tick {}: a writer has been alive for 100 ticks: valve released", leg, tick_);
+    }
+  }
+}
+
+void PlantNode::ReportGoneWriters() {
+  // A leg declared dead because its lease lapsed is reported again, once, when its writers
+  // are gone too: the process (or its participant) no longer exists - a crash, not a hang.
+  for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
+    const std::size_t i = static_cast<std::size_t>(leg - 1);
+    if (!link_dead_[i] || gone_reported_[i]) continue;
+    const LegWriterCounts c = writers_.Counts(leg);
+    if (c.alive != 0 || c.not_alive != 0) continue;
+    gone_reported_[i] = true;
+    char detail[160];
+    std::snprintf(detail, sizeof detail, "writer gone: the controller's writer (%d) no longer "
+                  "exists: its process ended or its participant's lease expired", c.gone);
+    faults_.Publish(static_cast<uint8_t>(leg), tick_, hexa_msg_FAULT_WRITER_GONE, detail);
+    log_->error("leg {} tick {}: {}", leg, tick_, detail);
+  }
+}
+
+void PlantNode::TakeFaultEvents() {
+  // Polled, never a data callback: this process writes FaultEvents while holding mutex_, and
+  // Cyclone may deliver to a local reader's callback inside that write (self-deadlock).
+  while (fault_reader_.Take() > 0) {
+    for (std::size_t k = 0; k < fault_reader_.count(); ++k) {
+      if (!fault_reader_.info(k).valid_data) continue;
+      const hexa_msg_FaultEvent& f = fault_reader_.sample(k);
+      if (f.reason != hexa_msg_FAULT_SENSOR_INCONSISTENT || f.leg_id < 1 || f.leg_id > kNumLegs)
+        continue;
+      const std::size_t i = f.leg_id - 1u;
+      if (interlock_[i]) continue;
+      // The leg's length reading is wrong: its controller drives the leg on a false length
+      // (a stuck potentiometer runs it into its end stop). Close its valve, for good.
+      interlock_[i] = true;
+      if (forced_reason_[i] == hexa_msg_FAULT_NONE) forced_reason_[i] = hexa_msg_FAULT_SENSOR_INCONSISTENT;
+      log_->error("leg {} tick {}: {} reports its length inconsistent: valve held at null from "
+                  "now on", f.leg_id, tick_, f.source_node);
+    }
+  }
+}
+
 bool PlantNode::ApplyAndStep(std::uint64_t stale_tolerance) {
   hygiene_.stale_tolerance_ticks = stale_tolerance;
   LegArray<double> valve_v{};
   LegArray<CommandCheck> checks{};
+  LegArray<bool> forced{};
   int stale_legs = 0;
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     const LatestCommand& latest = latest_[i];
@@ -365,13 +648,22 @@ bool PlantNode::ApplyAndStep(std::uint64_t stale_tolerance) {
     truth_sample_.command_age_ticks[i] = static_cast<int32_t>(std::clamp<std::int64_t>(age, -1, INT32_MAX));
     checks[i] = CheckCommand(latest, tick_, hygiene_);
     valve_v[i] = SafeValveVoltage(latest, checks[i], hygiene_);
-    if (static_cast<int>(i) < options_.expected_legs && checks[i] == CommandCheck::kStale) ++stale_legs;
+    // A dead leg (no live writer; lockstep: no longer awaited) or one whose length reading
+    // the supervisor found wrong: valve at null whatever its last command says.
+    forced[i] = link_dead_[i] || interlock_[i];
+    if (forced[i]) {
+      valve_v[i] = hygiene_.null_voltage_v;
+      if (!IsCommandFault(checks[i])) checks[i] = CommandCheck::kMissing;  // keeps the episode open
+    }
+    if (static_cast<int>(i) < options_.expected_legs &&
+        (checks[i] == CommandCheck::kStale || link_dead_[i]))
+      ++stale_legs;
   }
-  // Every awaited leg stale in the same tick is not six controller faults: the host did not
-  // run the loop (the plant's own wake-ups, the legs or the network were descheduled). Say
-  // that once, with the measured lateness, instead of six leg faults.
-  const bool overload = options_.common.mode == node::TimeMode::kRealtime &&
-                        options_.expected_legs > 1 && stale_legs == options_.expected_legs;
+  // Every awaited leg stale (or without a live writer) in the same tick is not six controller
+  // faults: the host did not run the loop (the plant's own wake-ups, the legs or the network
+  // were descheduled). Say that once, with the measured lateness, instead of six leg faults.
+  const bool realtime = options_.common.mode == node::TimeMode::kRealtime;
+  const bool overload = realtime && options_.expected_legs > 1 && stale_legs == options_.expected_legs;
   if (overload && !host_overload_reported_) {
     host_overload_reported_ = true;
     std::uint64_t newest = 0;
@@ -393,10 +685,24 @@ bool PlantNode::ApplyAndStep(std::uint64_t stale_tolerance) {
         ++faults_per_leg_[i];
         if (overload) break;  // reported once as the host's, above
         char detail[160];
-        std::snprintf(detail, sizeof detail, "valve command %s (%.6g V, answers tick %llu): valve held at null",
-                      ToString(check), latest_[i].valve_v,
-                      static_cast<unsigned long long>(latest_[i].answered_tick));
-        faults_.Publish(static_cast<uint8_t>(i + 1), tick_, FaultOf(check), detail);
+        hexa_msg_FaultReason reason = FaultOf(check);
+        if (forced[i] && dropped_ & LegBit(static_cast<int>(i) + 1)) {
+          break;  // lockstep: reported when the leg was judged dead (JudgeSilentLegs)
+        } else if (forced[i] && link_dead_[i]) {
+          reason = forced_reason_[i];
+          std::snprintf(detail, sizeof detail, "%s: no live writer of the leg's valve commands "
+                        "(last answer: tick %llu): valve held at null",
+                        reason == hexa_msg_FAULT_WRITER_GONE ? "writer gone" : "liveliness lost",
+                        static_cast<unsigned long long>(latest_[i].answered_tick));
+          gone_reported_[i] = reason == hexa_msg_FAULT_WRITER_GONE;
+        } else if (forced[i]) {
+          break;  // the interlock: the supervisor reported it (TakeFaultEvents)
+        } else {
+          std::snprintf(detail, sizeof detail, "valve command %s (%.6g V, answers tick %llu): valve held at null",
+                        ToString(check), latest_[i].valve_v,
+                        static_cast<unsigned long long>(latest_[i].answered_tick));
+        }
+        faults_.Publish(static_cast<uint8_t>(i + 1), tick_, reason, detail);
         log_->warn("leg {} tick {}: {}", i + 1, tick_, detail);
         break;
       }
@@ -426,11 +732,13 @@ void PlantNode::EndTick() {
   // cause persists sees the fault again.
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     if (!episodes_[i].active()) continue;
+    const bool forced = link_dead_[i] || interlock_[i];
     char detail[160];
     std::snprintf(detail, sizeof detail, "valve command still %s (%llu faulty ticks): valve held at null",
-                  ToString(episodes_[i].latest()),
+                  forced ? "forced to null" : ToString(episodes_[i].latest()),
                   static_cast<unsigned long long>(episodes_[i].fault_ticks()));
-    faults_.Publish(static_cast<uint8_t>(i + 1), tick_, FaultOf(episodes_[i].latest()), detail);
+    faults_.Publish(static_cast<uint8_t>(i + 1), tick_,
+                    forced ? forced_reason_[i] : FaultOf(episodes_[i].latest()), detail);
   }
 }
 
@@ -468,7 +776,7 @@ void PlantNode::AdvanceIfComplete() {
         ack_wait_requested_ = true;
         ack_wait_tick_ = tick_;
         wake_.Set();
-      } else if (tick_ - ack_wait_tick_ >= options_.recorder_sync_window_ticks) {
+      } else if (!sync_suspended_ && tick_ - ack_wait_tick_ >= options_.recorder_sync_window_ticks) {
         // The wait begun at ack_wait_tick_ has not ended: the recorder is that far behind.
         // The main thread publishes tick_ when it ends.
         sync_pending_ = true;
@@ -485,8 +793,60 @@ void PlantNode::AdvanceIfComplete() {
 void PlantNode::StartTick(int64_t now_ns) {
   tick_started_ns_ = now_ns;
   PublishTick();
-  barrier_.Begin(tick_, FirstLegs(options_.expected_legs), now_ns);
+  barrier_.Begin(tick_, static_cast<LegMask>(FirstLegs(options_.expected_legs) & ~dropped_), now_ns);
   TakeCommands(true);  // answers that came in with this callback's data
+}
+
+void PlantNode::WatchSilence(dds_duration_t& wait) {
+  TakeFaultEvents();
+  ReportGoneWriters();
+  const int64_t now = node::MonotonicNow_ns();
+  // This thread runs every 10 ms (20 in a recorder sync). When it ran much later, the host
+  // stalled it, and the legs very likely with it (the control processes share a CPU): their
+  // leases may have lapsed without any fault of theirs. They get a full lease to assert again
+  // before anyone is judged.
+  const int64_t lease_ns = static_cast<int64_t>(options_.common.lockstep_lease_s * 1e9);
+  if (last_watch_ns_ != 0 && now - last_watch_ns_ > lease_ns / 2) {
+    if (host_stalls_++ == 0)
+      log_->warn("tick {}: the plant's watch ran {:.0f} ms late (the host stalled it): dead legs "
+                 "are judged again after one lease (logged once, counted)", tick_,
+                 static_cast<double>(now - last_watch_ns_) * 1e-6);
+    judge_after_ns_ = now + lease_ns;
+  }
+  last_watch_ns_ = now;
+  if (now >= judge_after_ns_) JudgeSilentLegs(now);
+  if (exit_code_ >= 0) return;
+  switch (barrier_.Check(now)) {
+    case LockstepBarrier::Action::kWait:
+      wait = std::clamp<dds_duration_t>(barrier_.next_check_ns() - now, DDS_MSECS(1), DDS_MSECS(10));
+      break;
+    case LockstepBarrier::Action::kReask:
+      // A sample can be lost to a reader that had not yet matched this writer, or to an
+      // ownership hand-over (hot standby): ask the silent legs again for this tick. Leg
+      // controllers answer a repeated tick with their cached command.
+      for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg)
+        if (barrier_.missing() & LegBit(leg)) {
+          PublishTick(leg);
+          ++resent_samples_;
+        }
+      ReaskSupervisor();
+      break;
+    case LockstepBarrier::Action::kTimeout: {
+      log_->error("lockstep: tick {} not answered within {} s by:{}", tick_,
+                  options_.common.lockstep_timeout_s, LegList(barrier_.missing()));
+      for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
+        if (!(barrier_.missing() & LegBit(leg))) continue;
+        char detail[160];
+        std::snprintf(detail, sizeof detail, "lockstep: no command for tick %llu within %.1f s",
+                      static_cast<unsigned long long>(tick_), options_.common.lockstep_timeout_s);
+        faults_.Publish(static_cast<uint8_t>(leg), tick_,
+                        hexa_msg_FAULT_COMMAND_DEADLINE_MISSED, detail);
+      }
+      exit_code_ = 3;
+      running_ = false;
+      break;
+    }
+  }
 }
 
 int PlantNode::RunLockstep(std::uint64_t last_tick) {
@@ -501,46 +861,35 @@ int PlantNode::RunLockstep(std::uint64_t last_tick) {
   }
   waitset_.Detach(peers_.data_condition());  // NodeStatus traffic must not wake this thread
   // The receive thread runs the loop; this thread watches for silence and shutdown, and
-  // keeps the loop within recorder_sync_ticks of the recorder.
+  // keeps the loop within recorder_sync_ticks of the recorder. Every 10 ms at most it judges
+  // the legs the tick still awaits (a dead one is no longer awaited: the detection bound is
+  // the liveliness lease + 10 ms, docs/faults.md), takes the supervisor's sensor faults and
+  // reports writers that are gone.
   while (!shutdown_.requested()) {
     dds_duration_t wait = DDS_MSECS(10);
-    bool start_wait = false;
+    bool waiting_for_acks = false;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (exit_code_ >= 0) break;
       if (ack_wait_requested_) {
         ack_wait_requested_ = false;
         ack_wait_active_ = true;
-        start_wait = true;
         wake_.Set(false);
       }
+      waiting_for_acks = ack_wait_active_;
     }
-    if (start_wait) {
-      // Everything written so far is in every reliable reader's history (the recorder's
-      // too): from then on no sample of it can be lost by a keep-last writer history. The
-      // loop writes on meanwhile (Cyclone's writers are thread-safe). Measured: while the
-      // loop writes at full speed the acknowledgements do not come (this wait ended only
-      // once the loop stopped at the window, ~17 ms later: about two heartbeat intervals,
-      // deploy/cyclonedds-loopback.xml), so the window is what sets the cost.
-      while (!shutdown_.requested() &&
-             (sensors_writer_.all().WaitForAcks(DDS_MSECS(100)) == DDS_RETCODE_TIMEOUT ||
-              truth_writer_.WaitForAcks(DDS_MSECS(100)) == DDS_RETCODE_TIMEOUT)) {
-      }
-      std::lock_guard<std::mutex> lock(mutex_);
-      ack_wait_active_ = false;
-      ++recorder_syncs_;
-      if (sync_pending_) {
-        const int64_t now = node::MonotonicNow_ns();
-        sync_pending_ = false;
-        recorder_sync_wait_s_ += static_cast<double>(now - sync_blocked_since_ns_) * 1e-9;
-        if (running_) {
-          ack_wait_requested_ = true;  // the next wait starts at once
-          ack_wait_tick_ = tick_;
-          StartTick(now);
-          AdvanceIfComplete();
-        }
-      }
-      continue;
+    // Everything written so far is in every reliable reader's history (the recorder's too):
+    // from then on no sample of it can be lost by a keep-last writer history. The loop writes
+    // on meanwhile (Cyclone's writers are thread-safe). Measured: while the loop writes at
+    // full speed the acknowledgements do not come (a wait ends ~17 ms after the loop stopped
+    // at the window: about two heartbeat intervals, deploy/cyclonedds-loopback.xml). Only the all-legs
+    // partition (supervisor, recorder) and the ground truth: a leg controller's lost sample is
+    // repaired by the re-ask, and a hung controller never acknowledges. Waited in 10 ms
+    // slices, between which this thread watches the legs as when it is idle.
+    bool acked = false;
+    if (waiting_for_acks) {
+      acked = sensors_writer_.all().WaitForAcks(DDS_MSECS(10)) == DDS_RETCODE_OK &&
+              truth_writer_.WaitForAcks(DDS_MSECS(10)) == DDS_RETCODE_OK;
     }
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -549,40 +898,54 @@ int PlantNode::RunLockstep(std::uint64_t last_tick) {
       node::service_manager::Watchdog();
       if (exit_code_ >= 0) break;
       const int64_t now = node::MonotonicNow_ns();
-      switch (barrier_.Check(now)) {
-        case LockstepBarrier::Action::kWait:
-          wait = std::max<dds_duration_t>(DDS_MSECS(1), barrier_.next_check_ns() - now);
-          break;
-        case LockstepBarrier::Action::kReask:
-          // A sample can be lost to a reader that had not yet matched this writer, or to an
-          // ownership hand-over (hot standby): ask the silent legs again for this tick. Leg
-          // controllers answer a repeated tick with their cached command.
-          for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg)
-            if (barrier_.missing() & LegBit(leg)) {
-              PublishTick(leg);
-              ++resent_samples_;
-            }
-          ReaskSupervisor();
-          break;
-        case LockstepBarrier::Action::kTimeout: {
-          log_->error("lockstep: tick {} not answered within {} s by:{}", tick_,
-                      options_.common.lockstep_timeout_s, LegList(barrier_.missing()));
-          for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
-            if (!(barrier_.missing() & LegBit(leg))) continue;
-            char detail[160];
-            std::snprintf(detail, sizeof detail, "lockstep: no command for tick %llu within %.1f s",
-                          static_cast<unsigned long long>(tick_), options_.common.lockstep_timeout_s);
-            faults_.Publish(static_cast<uint8_t>(leg), tick_,
-                            hexa_msg_FAULT_COMMAND_DEADLINE_MISSED, detail);
+      bool resume = false;
+      if (waiting_for_acks && acked) {
+        ack_wait_active_ = false;
+        ++recorder_syncs_;
+        if (sync_suspended_) log_->info("tick {}: recorder sync acknowledged again", tick_);
+        sync_suspended_ = false;
+        resume = sync_pending_;
+      } else if (waiting_for_acks && sync_pending_ &&
+                 now - sync_blocked_since_ns_ >
+                     static_cast<int64_t>(options_.recorder_sync_give_up_s * 1e9)) {
+        // A reader does not acknowledge (a dead supervisor or recorder, until discovery
+        // drops it): the control loop must not stand still for it.
+        sync_suspended_ = true;
+        ++recorder_syncs_given_up_;
+        log_->warn("tick {}: a reliable reader has not acknowledged for {:.1f} s (its process "
+                   "is gone or hung): recorder sync given up, the loop runs on (counted, "
+                   "logged per episode)", tick_, options_.recorder_sync_give_up_s);
+        resume = true;
+      }
+      if (resume) {
+        sync_pending_ = false;
+        recorder_sync_wait_s_ += static_cast<double>(now - sync_blocked_since_ns_) * 1e-9;
+        if (running_) {
+          if (!sync_suspended_) {
+            ack_wait_requested_ = true;  // the next wait starts at once
+            ack_wait_tick_ = tick_;
           }
-          exit_code_ = 3;
-          running_ = false;
-          break;
+          StartTick(now);
+          AdvanceIfComplete();
         }
       }
-      if (exit_code_ >= 0) break;
+      if (options_.expect_supervisor && running_) {
+        // The supervisor ends the session (trajectory done, or after holding): no more ticks
+        // (the legs wait for setpoints that will not come; that is no fault), until stopped.
+        peers_.Poll();
+        if (peers_.StateOf("supervisor") == hexa_msg_NODE_STOPPING) {
+          running_ = false;
+          log_->info("the supervisor ended its run at tick {}: no more ticks", tick_);
+        }
+      }
+      if (!running_) {
+        wait = DDS_MSECS(100);  // the run has ended: wait to be stopped
+      } else {
+        WatchSilence(wait);
+        if (exit_code_ >= 0) break;
+      }
     }
-    waitset_.Wait(wait);
+    if (!waiting_for_acks) waitset_.Wait(wait);
   }
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -609,6 +972,12 @@ int PlantNode::RunRealtime(std::uint64_t last_tick) {
     }
     clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
     TakeCommands(false);
+    if (tick_ % 10 == 0) TakeFaultEvents();  // the interlock within 10 ms: no take every tick
+    CheckLinksRealtime();
+    if (tick_ % 100 == 0) {
+      writers_.Refresh(valve_readers_);  // a writer that appeared (a restarted controller)
+      ReportGoneWriters();
+    }
     const int64_t late_ns = node::MonotonicNow_ns() -
                             (static_cast<int64_t>(next.tv_sec) * 1'000'000'000 + next.tv_nsec);
     if (late_ns > 1'000'000) ++overruns_;
@@ -684,9 +1053,14 @@ void PlantNode::WriteSummary(int exit_code) const {
     std::fprintf(f, "%s\n    {\"leg\": %zu, \"command_age\": [", i == 0 ? "" : ",", i + 1);
     for (int k = 0; k < CommandAgeHistogram::kBins; ++k)
       std::fprintf(f, "%s%llu", k == 0 ? "" : ", ", static_cast<unsigned long long>(h.bins[static_cast<std::size_t>(k)]));
-    std::fprintf(f, "], \"no_command\": %llu, \"late_ticks\": %llu, \"faults\": %u}",
+    std::fprintf(f, "], \"no_command\": %llu, \"late_ticks\": %llu, \"faults\": %u, "
+                 "\"dead\": %s, \"forced_reason\": %d, \"interlock\": %s, "
+                 "\"compute_max_s\": %.6f, \"compute_over_budget\": %llu, \"cycles\": %llu}",
                  static_cast<unsigned long long>(h.none), static_cast<unsigned long long>(h.late()),
-                 faults_per_leg_[i]);
+                 faults_per_leg_[i], link_dead_[i] ? "true" : "false",
+                 static_cast<int>(forced_reason_[i]), interlock_[i] ? "true" : "false",
+                 compute_[i].max_s(), static_cast<unsigned long long>(compute_[i].over_budget()),
+                 static_cast<unsigned long long>(compute_[i].cycles()));
   }
   std::fprintf(f, "\n  ]\n}\n");
   std::fclose(f);
@@ -702,6 +1076,13 @@ int PlantNode::Run() {
   node::service_manager::Ready(realtime ? "ticking in real time" : "ticking in lockstep");
   log_->info("ticking in {} mode, profile '{}', seed {}", realtime ? "real-time" : "lockstep",
              options_.profile, options_.seed);
+  log_->info("dead legs: liveliness lease {:.3f} s{}; compute budget {:.3f} ms x {} cycles",
+             realtime ? options_.common.realtime_lease_s : options_.common.lockstep_lease_s,
+             realtime ? std::string() : fmt::format(", answer timeout {:.3f} s",
+                                                    static_cast<double>(silent_params_.answer_timeout_ns) * 1e-9),
+             options_.compute_budget.budget_s * 1e3, options_.compute_budget.overrun_limit);
+  for (const PlantFault& f : options_.plant_faults.faults)
+    log_->warn("FAULT INJECTION: {} of leg {} at t = {:.3f} s", ToString(f.kind), f.leg, f.at_time_s);
   const uint64_t last_tick = options_.duration_s > 0
                                  ? static_cast<uint64_t>(std::llround(options_.duration_s / kTickS))
                                  : UINT64_MAX;
@@ -717,11 +1098,20 @@ int PlantNode::Run() {
   log_->info("stopped at tick {} (t = {:.3f} s): valve deadline misses {}, loop overruns {}, "
              "command faults {}, lockstep resends {} (in {} re-asks, {} to the supervisor), "
              "failed writes {}, recorder syncs {} (the loop stood still for {} of them, "
-             "{:.3f} s), schedule slips {} ({:.1f} ms), rejected commands {}",
+             "{:.3f} s; {} given up), schedule slips {} ({:.1f} ms), lockstep host stalls {} "
+             "(all legs lapsed at once: {}), rejected commands {}; writers:{}",
              tick_, static_cast<double>(tick_) * kTickS, valve.requested_deadline_missed_total,
              overruns_, faults, resent_samples_, barrier_.reasks_total(), supervisor_reasks_,
              sensors_writer_.write_errors_total(), recorder_syncs_, recorder_sync_blocks_,
-             recorder_sync_wait_s_, slips_, static_cast<double>(slipped_ns_) * 1e-6, rejected);
+             recorder_sync_wait_s_, recorder_syncs_given_up_, slips_,
+             static_cast<double>(slipped_ns_) * 1e-6, host_stalls_, all_lapsed_logged_, rejected,
+             writers_.Describe());
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    if (compute_[i].cycles() == 0) continue;
+    log_->info("leg {} compute time: max {:.3f} ms, {} of {} cycles over the {:.3f} ms budget",
+               i + 1, compute_[i].max_s() * 1e3, compute_[i].over_budget(), compute_[i].cycles(),
+               options_.compute_budget.budget_s * 1e3);
+  }
   LogCommandAges();
   WriteSummary(rc);
   if (rc != 4) PublishStatus(hexa_msg_NODE_STOPPING, "stopped");

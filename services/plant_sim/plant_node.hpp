@@ -6,9 +6,15 @@
 // Threads. Lockstep: the tick advances on Cyclone's receive thread, in the ValveCommand
 // reader's data callback: when the last awaited leg has answered tick n the plant steps and
 // publishes tick n + 1 at once, with no hand-over to another thread (docs/performance.md).
-// The main thread only watches for silence (re-ask, timeout) and shutdown. Real time: the
-// main thread ticks on the clock and takes the newest commands at each tick; no thread wakes
-// on their arrival. One mutex guards the loop state in both.
+// The main thread only watches for silence (re-ask, dead legs, timeout) and shutdown. Real
+// time: the main thread ticks on the clock and takes the newest commands at each tick; no
+// thread wakes on their arrival. One mutex guards the loop state in both.
+//
+// Dead legs (docs/faults.md): every leg controller's ValveCommand writer carries its leg in
+// USER_DATA and asserts MANUAL_BY_TOPIC liveliness from its control loop. A leg with no live
+// writer (crashed, hung or silent; or gone), or in lockstep one whose live writer does not
+// answer within the answer timeout, has its valve held at null and is reported with the
+// cause; lockstep stops awaiting it and keeps ticking, so that the supervisor can hold.
 #pragma once
 
 #include <array>
@@ -22,6 +28,7 @@
 #include "hexa/comm/comm.hpp"
 #include "hexa/core/command_hygiene.hpp"
 #include "hexa/core/lockstep_protocol.hpp"
+#include "hexa/core/plant_faults.hpp"
 #include "hexa/core/platform_plant.hpp"
 #include "hexa/services/node.hpp"
 
@@ -34,6 +41,7 @@ struct PlantNodeOptions {
   int expected_legs = 6;           // leg controllers that must answer every tick (1..N)
   bool expect_supervisor = true;   // the supervisor must be RUNNING before tick 0
   bool expect_recorder = false;    // wait for the recorder before tick 0
+  bool expect_standbys = false;    // wait for a hot standby per leg before tick 0
   double duration_s = 0.0;         // stop after this simulated time (0 = until stopped)
   double startup_timeout_s = 30.0; // peers must be ready within this
   std::uint64_t realtime_stale_ticks = 15;  // real time: command tolerance (main.cpp)
@@ -53,6 +61,15 @@ struct PlantNodeOptions {
   // window plus one sync period stays within half of it (PlantNode checks). 0 = never.
   std::uint64_t recorder_sync_ticks = 100;
   std::uint64_t recorder_sync_window_ticks = 1200;
+  // A loop that has stood still this long for a sync gives it up and runs on without blocking
+  // until a wait succeeds again: a reader that never acknowledges (its process killed or hung
+  // and not yet dropped by discovery, 10 s) must not stop the control loop (docs/faults.md).
+  double recorder_sync_give_up_s = 1.0;
+  // Lockstep: a leg whose writer is alive but has not answered this long is dead all the
+  // same (0 = 10 liveliness leases).
+  double answer_timeout_s = 0.0;
+  ComputeBudgetParams compute_budget;  // leg controllers' compute time per cycle
+  PlantFaultParams plant_faults;       // injected rig faults (--fault)
   std::string summary_path;        // write the run's figures here as JSON at exit ("" = no)
   bool tracker = false;            // publish the external pose instrument (calibration, issue 14)
   FreeFallBenchParams free_fall;   // --bench free-fall: the Appendix B bench, not the platform
@@ -90,6 +107,31 @@ class DurationHistogram {
   double sum_s_ = 0.0;
 };
 
+// The leg controllers' ValveCommand writers as the plant's six per-leg readers see them
+// (one reader per leg partition, comm/leg_readers.hpp): which leg each writer drives (its
+// USER_DATA, "leg=N standby=S") and whether it is alive (each reader's liveliness slots,
+// comm/status.hpp). Only a writer in leg N's partition that names leg N counts for leg N; a
+// writer elsewhere or naming another leg counts for none. Refresh() resolves writers seen for
+// the first time (allocates, but only when a writer appears); Counts() reads atomics only.
+class LegWriterTable {
+ public:
+  void Refresh(const comm::LegReaders<hexa_msg_ValveCommand>& readers);
+  LegWriterCounts Counts(int leg) const;
+  // "leg1: 1 alive (primary) ..." for the log. Allocates.
+  std::string Describe() const;
+
+ private:
+  static constexpr std::size_t kSlots = comm::StatusCounters::kMaxWriters;
+  struct PerReader {
+    const comm::StatusCounters* counters = nullptr;
+    std::array<std::int8_t, kSlots> leg{};          // 0 unresolved, -1 not this leg's writer, 1..6
+    std::array<bool, kSlots> standby{};
+    std::array<std::uint8_t, kSlots> unresolved{};  // refreshes that could not resolve the slot
+  };
+  void RefreshOne(const comm::Reader<hexa_msg_ValveCommand>& reader, int reader_leg);
+  LegArray<PerReader> readers_{};
+};
+
 class PlantNode {
  public:
   PlantNode(const PlantNodeOptions& options, const config::SystemConfig& config,
@@ -117,6 +159,18 @@ class PlantNode {
   // Command hygiene and one plant step; false when the plant state became non-finite.
   bool ApplyAndStep(std::uint64_t stale_tolerance);
   void EndTick();
+  // Dead legs: lockstep (main thread) judges the legs the barrier still awaits; real time
+  // (every tick) holds the legs without a live writer. Both publish the cause once.
+  void JudgeSilentLegs(std::int64_t now_ns);
+  // Lockstep main thread, under the lock: faults to take, gone writers, dead legs, re-asks,
+  // the overall timeout; shortens `wait` to the next check.
+  void WatchSilence(dds_duration_t& wait);
+  void CheckLinksRealtime();
+  void MarkLegDead(int leg, hexa_msg_FaultReason reason, const char* detail);
+  void ReportGoneWriters();
+  // Supervisor's sensor-consistency faults: that leg's valve is held at null (interlock).
+  void TakeFaultEvents();
+  void MonitorCompute(const hexa_msg_ValveCommand& c);
   void PublishStatus(hexa_msg_NodeState state, const char* detail);
   void LogLastGoodState() const;
   void LogCommandAges() const;
@@ -148,6 +202,8 @@ class PlantNode {
   node::StatusPublisher status_;
   node::FaultPublisher faults_;
   node::PeerTracker peers_;
+  comm::Topic<hexa_msg_FaultEvent> fault_topic_;
+  comm::Reader<hexa_msg_FaultEvent> fault_reader_;  // polled: never a callback (see .cpp)
   comm::WaitSet waitset_;
 
   std::mutex mutex_;  // everything below; the receive thread and the main thread
@@ -158,6 +214,14 @@ class PlantNode {
   bool ack_wait_active_ = false;     // ... and is in it
   std::uint64_t ack_wait_tick_ = 0;  // the tick at which it was requested
   int64_t sync_blocked_since_ns_ = 0;
+  // Lockstep watch (WatchSilence): when it last ran, no judging before judge_after_ns_ (after
+  // a host stall), stalls seen, rounds in which every awaited leg lapsed at once.
+  int64_t last_watch_ns_ = 0;
+  int64_t judge_after_ns_ = 0;
+  std::uint64_t host_stalls_ = 0;
+  std::uint64_t all_lapsed_logged_ = 0;
+  bool sync_suspended_ = false;  // a sync was given up: no blocking until a wait succeeds
+  std::uint64_t recorder_syncs_given_up_ = 0;
   // Real time: wake-ups later than this restart the schedule (RunRealtime).
   static constexpr int64_t kSlipAfter_ns = 2'000'000;
   std::uint64_t slips_ = 0;
@@ -168,6 +232,17 @@ class PlantNode {
   int exit_code_ = -1;          // set when the run ends (>= 0)
   LegArray<LatestCommand> latest_{};
   LegArray<CommandEpisode> episodes_{};  // fault episodes per leg: one report each
+  LegWriterTable writers_;
+  SilentLegParams silent_params_;
+  LegMask dropped_ = 0;                  // lockstep: legs no longer awaited (dead)
+  LegArray<bool> link_dead_{};           // no live writer now (real time) / dropped (lockstep)
+  LegArray<bool> interlock_{};           // a sensor fault of the leg reported: valve at null
+  LegArray<hexa_msg_FaultReason> forced_reason_{};  // why the valve is forced to null
+  LegArray<bool> gone_reported_{};
+  LegArray<std::uint32_t> link_alive_run_{};
+  LegArray<bool> link_armed_{};  // real time: a writer of the leg has been seen alive  // real time: ticks alive since the leg was dead
+  LegArray<ComputeBudgetMonitor> compute_{};
+  bool imu_lost_reported_ = false;
   bool host_overload_reported_ = false;
   LegArray<std::uint32_t> faults_per_leg_{};
   LegArray<CommandAgeHistogram> command_age_{};

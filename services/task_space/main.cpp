@@ -25,13 +25,18 @@ int main(int argc, char** argv) {
   cli.AddOption("pose-readers", "N",
                 "readers of the pose reports to match before running (1 with a recorder, so "
                 "that the recording has the first report)", "0");
+  cli.AddChoice("fault", {"none", "crash"},
+                "fault injection (docs/faults.md): crash = SIGKILL at --fault-at", "none");
+  cli.AddOption("fault-at", "s", "simulated time at which the fault starts", "0");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
   hexa::task_space::SupervisorNodeOptions o;
   const auto periods = cli.GetInt("periods", 0, 1000);
   const auto startup = cli.GetDouble("startup-timeout", 0.1, 3600);
   const auto pose_readers = cli.GetInt("pose-readers", 0, 16);
-  if (!hexa::node::ReadCommonOptions(cli, o.common) || !periods || !startup || !pose_readers) {
+  const auto fault_at = cli.GetDouble("fault-at", 0, 1e7);
+  if (!hexa::node::ReadCommonOptions(cli, o.common) || !periods || !startup || !pose_readers ||
+      !fault_at) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
@@ -44,13 +49,14 @@ int main(int argc, char** argv) {
   o.feedforward = !cli.Flag("no-feedforward");
   o.startup_timeout_s = *startup;
   o.pose_readers = static_cast<int>(*pose_readers);
+  if (cli.Get("fault") == "crash") o.crash_at_s = *fault_at;
 
   auto log = hexa::logging::Init("supervisor", o.common.log_file, o.common.log_level);
   try {
     hexa::comm::EnsureDdsConfig(o.common.dds_config);
     auto config = hexa::node::LoadConfig(o.common, *log);
     if (!config) return 1;
-    // Before the participant exists: Cyclone's threads inherit the policy (PLATFORM_NOTES).
+    // Before the participant exists: Cyclone's threads inherit the policy (docs/platform_notes.md).
     hexa::node::ApplyScheduling(o.common, 75, *log);
     hexa::task_space::SupervisorNode node(o, *config, log);
     return node.Run();

@@ -1,5 +1,8 @@
 #include "supervisor_node.hpp"
 
+#include <signal.h>
+#include <unistd.h>
+
 #include "hexa/core/calibration.hpp"
 
 #include <algorithm>
@@ -229,11 +232,22 @@ void SupervisorNode::TakeFaults() {
       } else if (f.reason != hexa_msg_FAULT_NONE) {
         system_fault_ = FromWire(f.reason);  // the host or the plant itself
       }
+      if (f.reason == hexa_msg_FAULT_IMU_LOST) imu_lost_ = true;
     }
   }
 }
 
 void SupervisorNode::RunTick(std::uint64_t tick, double time_s) {
+  if (options_.crash_at_s >= 0 && time_s >= options_.crash_at_s) {
+    log_->warn("FAULT INJECTION: supervisor crash (SIGKILL) at t = {:.3f} s", time_s);
+    log_->flush();
+    kill(getpid(), SIGKILL);
+  }
+  // Faults reported by the plant or the legs take effect at the next supervisor tick, not
+  // when the main thread next wakes: lockstep runs many ticks per wall millisecond, and a
+  // dead leg's fault, published before the plant's next tick, must hold the platform at once
+  // (a local take; nothing is sent).
+  TakeFaults();
   const int64_t t0 = node::MonotonicNow_ns();
   input_ = SupervisorInput{};
   input_.time_s = time_s;
@@ -359,9 +373,41 @@ void SupervisorNode::OnData(void* self) {
   node->RunCycle();
 }
 
+bool SupervisorNode::SensorsOfTick(std::uint64_t m) {
+  LegArray<const hexa_msg_LegSensors*> at_m{};
+  for (std::size_t i = 0; i < kNumLegs; ++i)
+    if ((at_m[i] = RingSample(i, m)) == nullptr) return false;
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    sensors_[i] = *at_m[i];
+    sensors_seen_[i] = true;
+  }
+  return true;
+}
+
+bool SupervisorNode::RunLockstepWithoutImu() {
+  // The plant said the IMU delivers nothing: tick m runs on the six legs' samples of m with
+  // the last orientation, as an IMU miss (the plant's FAULT_IMU_LOST holds the platform).
+  bool ran = false;
+  for (;;) {
+    const std::uint64_t m = ran_once_ ? last_run_tick_ + static_cast<std::uint64_t>(5) : 0;
+    if (!SensorsOfTick(m)) return ran;
+    ++imu_misses_consecutive_;
+    RunTick(m, sensors_[0].header.sim_time_s);
+    ran = true;
+    if (exit_code_ >= 0) return ran;
+  }
+}
+
 void SupervisorNode::RunCycle() {
   if (exit_code_ >= 0) return;
   TakeSensors();
+  if (imu_lost_ && options_.common.mode == node::TimeMode::kLockstep) {
+    bool ignored = false;
+    TakeImu(ignored);  // whatever still comes is stale: ignored
+    RunLockstepWithoutImu();
+    if (exit_code_ >= 0) done_.Set();
+    return;
+  }
   bool repeated_imu = false;
   const bool fresh_imu = TakeImu(repeated_imu);
   if (!imu_seen_) return;
@@ -380,13 +426,7 @@ void SupervisorNode::RunCycle() {
       if (repeated_imu && m == last_run_tick_) RepublishSetpoints();
       return;
     }
-    LegArray<const hexa_msg_LegSensors*> at_m{};
-    for (std::size_t i = 0; i < kNumLegs; ++i)
-      if ((at_m[i] = RingSample(i, m)) == nullptr) return;
-    for (std::size_t i = 0; i < kNumLegs; ++i) {
-      sensors_[i] = *at_m[i];
-      sensors_seen_[i] = true;
-    }
+    if (!SensorsOfTick(m)) return;
     RunTick(m, imu_.header.sim_time_s);
   }
   if (exit_code_ >= 0) done_.Set();
@@ -425,23 +465,43 @@ int SupervisorNode::Run() {
     if (exit_code_ >= 0) break;
     TakeOperatorCommands();
     TakeFaults();
+    // Lockstep without the IMU: the tick it awaits may already be here (its data callback
+    // ran before the plant's FAULT_IMU_LOST arrived).
+    if (imu_lost_ && !realtime) RunCycle();
     if (realtime && ran_once_ && node::MonotonicNow_ns() - last_imu_mono_ns_ > imu_due_ns) {
       ++imu_misses_consecutive_;
       last_imu_mono_ns_ = node::MonotonicNow_ns();
-      RunTick(last_run_tick_, imu_.header.sim_time_s);
+      // Once the plant reported the IMU lost: on the legs' newest samples, so that time goes
+      // on without it (the hold, and the exit 1 s after it, must still come).
+      if (imu_lost_ && sensors_seen_[0] && sensors_[0].header.tick > last_run_tick_) {
+        RunTick(sensors_[0].header.tick, sensors_[0].header.sim_time_s);
+      } else {
+        RunTick(last_run_tick_, imu_.header.sim_time_s);
+      }
     }
     if (exit_code_ >= 0) break;
   }
   sensors_reader_.OnDataAvailable(nullptr, nullptr);
   imu_reader_.OnDataAvailable(nullptr, nullptr);
   std::lock_guard<std::mutex> lock(mutex_);
+  // An orderly end, said at once: the legs see their setpoint disposed (not a lapsed lease:
+  // a crash never disposes) and the plant sees STOPPING, before this process's teardown,
+  // which can take a while (a reliable writer lingers for a reader that does not
+  // acknowledge, such as a hung leg's; docs/faults.md).
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    hexa_msg_LegSetpoint key{};
+    key.leg_id = static_cast<uint8_t>(i + 1);
+    setpoint_writer_.Dispose(key);
+  }
   PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
   node::service_manager::Stopping("stopped");
   log_->info("supervisor stopped after {} cycles (state {}), compute median {:.1f} us max {:.1f} us, "
-             "failed writes {}, setpoints re-published {} times (lockstep re-asks)",
+             "failed writes {}, setpoints re-published {} times (lockstep re-asks), largest "
+             "leg-length consistency residual {:.2f} mm (limit {:.1f} mm, docs/faults.md)",
              cycles_, ToString(output_.state), cycle_times_.Median() * 1e6,
              cycle_times_.Max() * 1e6, setpoint_writer_.write_errors_total(),
-             setpoint_republishes_);
+             setpoint_republishes_, supervisor_.max_consistency_residual_m() * 1e3,
+             supervisor_.params().length_consistency_limit_m * 1e3);
   return exit_code_ < 0 ? 0 : exit_code_;
 }
 

@@ -33,6 +33,9 @@ struct SupervisorNodeOptions {
   bool feedforward = true;  // false: no inverse-dynamics feed-forward (whatever the rig file says)
   double startup_timeout_s = 30.0;
   int pose_readers = 0;  // matched PoseReport readers required before RUNNING (the recorder)
+  // Fault injection (docs/faults.md): kill this process with SIGKILL at this simulated time
+  // (< 0: never).
+  double crash_at_s = -1.0;
 };
 
 class SupervisorNode {
@@ -83,6 +86,11 @@ class SupervisorNode {
   std::mutex mutex_;  // everything below
   std::int64_t last_imu_mono_ns_ = 0;  // real time: when the last IMU sample was taken
   LegArray<hexa_msg_LegSensors> sensors_{};
+  bool imu_lost_ = false;  // the plant reported FAULT_IMU_LOST: lockstep runs without it
+  bool RunLockstepWithoutImu();
+  // Lockstep: puts the six legs' samples of tick m (sensor_ring_) into sensors_; false if
+  // one is missing.
+  bool SensorsOfTick(std::uint64_t m);
   LegArray<bool> sensors_seen_{};
   // Lockstep: each leg's last samples by tick. The IMU of tick m is paired with the legs'
   // samples of tick m even when newer ones came first (a re-asked tick arrives after the

@@ -169,6 +169,8 @@ void ExpectSupervisorEq(const hexa::SupervisorParams& a, const hexa::SupervisorP
   EXPECT_EQ(a.outer_loop.max_correction_m, b.outer_loop.max_correction_m);
   EXPECT_EQ(a.outer_loop.translation_gain_scale, b.outer_loop.translation_gain_scale);
   EXPECT_EQ(a.feedforward_enabled, b.feedforward_enabled);
+  EXPECT_EQ(a.length_consistency_limit_m, b.length_consistency_limit_m);
+  EXPECT_EQ(a.length_consistency_ticks, b.length_consistency_ticks);
 }
 
 void ExpectProfileEq(const hexa::DisturbanceProfile& a, const hexa::DisturbanceProfile& b) {
@@ -245,7 +247,8 @@ TEST(RigConfigReference, CoreStructsHaveNotGrownPastTheSchema) {
   EXPECT_EQ(sizeof(hexa::PiParams), 6 * sizeof(double));
   EXPECT_EQ(sizeof(hexa::LegControllerParams), 27 * sizeof(double));
   EXPECT_EQ(sizeof(hexa::OuterLoopParams), 4 * sizeof(double));
-  EXPECT_EQ(sizeof(hexa::SupervisorParams), 16 * sizeof(double));  // + feedforward_enabled (padded)
+  // + feedforward_enabled (padded), length_consistency_ticks (padded)
+  EXPECT_EQ(sizeof(hexa::SupervisorParams), 18 * sizeof(double));
 }
 
 TEST(RigConfigReference, DefaultsBuiltInCodeAreValid) {

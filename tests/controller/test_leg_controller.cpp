@@ -30,7 +30,7 @@ LegControllerInput RestInput(double length_m, double desired_m) {
   return in;
 }
 
-// At least 100,000 random cases per controller: pressures 1-7 bar abs, the full stroke,
+// At least 100,000 random cases per controller: pressures 1-7 bar abs (supply 4-7 bar), the full stroke,
 // leg speeds +-1 m/s, random setpoints (length in the stroke, velocity +-1 m/s, acceleration
 // +-20 m/s^2, correction +-5 mm). Each case is a burst of ticks of a leg moving at constant
 // speed (with sensor-like noise) so that the differentiator sees realistic and extreme
@@ -69,7 +69,8 @@ void RunProperty(LegControllerKind kind, std::uint64_t seed) {
       in.length_m = length;
       in.cap_pressure_pa = uniform(1.0e5, 7.0e5);
       in.rod_pressure_pa = uniform(1.0e5, 7.0e5);
-      in.supply_pressure_pa = uniform(1.0e5, 7.0e5);
+      // Down to the lowest supply the controller works with (below: a held fault, not a case).
+      in.supply_pressure_pa = uniform(config.min_supply_pressure_pa, 7.0e5);
       LegControllerOutput out;
       controller.Update(in, out);
       ASSERT_TRUE(std::isfinite(out.valve_v)) << "case " << c;
@@ -138,6 +139,40 @@ void RunBadInputProperty(LegControllerKind kind, std::uint64_t seed) {
 
 TEST(LegControllerProperty, BsSmcBadInputsHoldAtNull) { RunBadInputProperty(LegControllerKind::kBsSmc, 7); }
 TEST(LegControllerProperty, PiBadInputsHoldAtNull) { RunBadInputProperty(LegControllerKind::kPi, 8); }
+
+// Supply pressure below half the nominal gauge pressure: the valve cannot deliver the flow
+// the controller's model assumes; it holds (valve closed) and says which input (docs/faults.md).
+TEST(LegController, LowSupplyHoldsAndNamesTheInput) {
+  const LegControllerConfig config = MakeConfig(LegControllerKind::kBsSmc);
+  EXPECT_DOUBLE_EQ(config.min_supply_pressure_pa, 4.0e5);  // P_a + (P_s - P_a) / 2, HexaTaar-R
+  // The services build their configuration from the controller model (rig + overlay): same limit.
+  const ControllerModel model = ControllerModel::FromRig(MakeReferenceRig(), LegControllerParams{});
+  for (std::size_t i = 0; i < kNumLegs; ++i)
+    EXPECT_DOUBLE_EQ(LegControllerConfig::FromModel(model, i, LegControllerKind::kBsSmc)
+                         .min_supply_pressure_pa, 4.0e5) << "leg " << i + 1;
+  LegController controller(config);
+  const double mid = config.model.cylinder.mid_stroke_length_m;
+  LegControllerInput in = RestInput(mid, mid + 0.01);
+  LegControllerOutput out;
+  controller.Update(in, out);
+  EXPECT_EQ(out.status, LegControlStatus::kOk);
+  EXPECT_EQ(out.input_fault, LegInputFault::kNone);
+  in.supply_pressure_pa = 3.9e5;
+  controller.Update(in, out);
+  EXPECT_EQ(out.status, LegControlStatus::kHoldBadInput);
+  EXPECT_EQ(out.input_fault, LegInputFault::kSupplyLow);
+  EXPECT_EQ(out.input_fault_value, 3.9e5);
+  EXPECT_EQ(out.valve_v, config.model.valve.null_voltage_v);
+  in.supply_pressure_pa = 7.0e5;
+  in.cap_pressure_pa = 0.0;  // a dead transducer
+  controller.Update(in, out);
+  EXPECT_EQ(out.input_fault, LegInputFault::kCapPressure);
+  EXPECT_STREQ(ToString(out.input_fault), "cap pressure");
+  in.cap_pressure_pa = 4.0e5;
+  controller.Update(in, out);
+  EXPECT_EQ(out.status, LegControlStatus::kOk);
+  EXPECT_EQ(out.input_fault, LegInputFault::kNone);
+}
 
 TEST(LegController, HoldsWithoutSetpoint) {
   LegController c(MakeConfig(LegControllerKind::kBsSmc));

@@ -272,5 +272,86 @@ TEST(PlatformPlant, ResetRepeatsTheRun) {
   EXPECT_EQ(plant.output().legs[0].length_m, first_len);
 }
 
+
+// Rig faults (docs/faults.md): each changes what it should from its time on, nothing before,
+// and the truth of the other legs not at all.
+TEST(PlantFaults, SensorFaultsChangeOnlyTheirReadingFromTheirTimeOn) {
+  PlatformPlantConfig c = Config(true, 21);
+  c.faults.faults = {{PlantFaultKind::kPotStuck, 2, 0.3},
+                     {PlantFaultKind::kPotDrift, 4, 0.3},
+                     {PlantFaultKind::kPressureDead, 5, 0.3},
+                     {PlantFaultKind::kImuDropout, 0, 0.3}};
+  PlatformPlant faulty(c);
+  PlatformPlant healthy(Config(true, 21));
+  LegArray<double> v;
+  double stuck = std::numeric_limits<double>::quiet_NaN();
+  for (int k = 0; k < 600; ++k) {
+    for (std::size_t i = 0; i < kNumLegs; ++i) v[i] = 5.0 + 1.0 * std::sin(2.0 * kPi * 2.0 * k * kTick + i);
+    ASSERT_EQ(faulty.Step(v, kTick), PlantStatus::kOk);
+    ASSERT_EQ(healthy.Step(v, kTick), PlantStatus::kOk);
+    const auto& f = faulty.output();
+    const auto& h = healthy.output();
+    ASSERT_EQ(f.truth.pose.p_BP_B_m, h.truth.pose.p_BP_B_m) << k;  // sensors only: same physics
+    const double t = f.truth.time_s;
+    if (t < 0.3) {
+      for (std::size_t i = 0; i < kNumLegs; ++i) ASSERT_EQ(f.legs[i].length_m, h.legs[i].length_m);
+      ASSERT_FALSE(f.imu.dropped_out);
+      continue;
+    }
+    if (std::isnan(stuck)) {  // the fault's first tick: the reading it keeps
+      EXPECT_EQ(f.legs[1].length_m, h.legs[1].length_m);
+      stuck = f.legs[1].length_m;
+    }
+    EXPECT_EQ(f.legs[1].length_m, stuck);
+    EXPECT_NEAR(f.legs[3].length_m - h.legs[3].length_m, 0.01 * (t - 0.3), 1e-12);
+    EXPECT_EQ(f.legs[4].chamber1_pressure_pa, 0.0);
+    EXPECT_EQ(f.legs[4].chamber2_pressure_pa, h.legs[4].chamber2_pressure_pa);
+    EXPECT_EQ(f.legs[0].length_m, h.legs[0].length_m);
+    EXPECT_TRUE(f.imu.dropped_out);
+    EXPECT_FALSE(f.imu.fresh);
+  }
+  EXPECT_GT(std::abs(healthy.output().legs[1].length_m - stuck), 1e-4);  // the leg moved on
+}
+
+TEST(PlantFaults, SupplyLossEmptiesTheSupplyAndChangesThePhysics) {
+  PlatformPlantConfig c = Config(false);
+  c.faults.faults = {{PlantFaultKind::kSupplyLoss, 0, 0.1}};
+  c.faults.supply_loss_time_constant_s = 0.1;
+  PlatformPlant plant(c);
+  LegArray<double> v;
+  v.fill(7.0);  // valves open to the supply on the cap side
+  for (int k = 0; k < 100; ++k) plant.Step(v, kTick);
+  EXPECT_NEAR(plant.output().legs[0].supply_pressure_pa, 7e5, 1.0);
+  for (int k = 0; k < 100; ++k) plant.Step(v, kTick);
+  // 0.1 s after the fault: P_a + (P_s - P_a) e^-1.
+  EXPECT_NEAR(plant.truth().supply_pressure_pa, 1e5 + 6e5 * std::exp(-1.0), 2e3);
+  for (int k = 0; k < 600; ++k) plant.Step(v, kTick);
+  EXPECT_LT(plant.truth().supply_pressure_pa, 1.01e5);
+}
+
+TEST(PlantFaults, ParseNamesWhatIsWrong) {
+  PlantFault f;
+  EXPECT_EQ(ParsePlantFault("pot-stuck:3:1.5", f), "");
+  EXPECT_EQ(f.kind, PlantFaultKind::kPotStuck);
+  EXPECT_EQ(f.leg, 3);
+  EXPECT_EQ(f.at_time_s, 1.5);
+  EXPECT_EQ(ParsePlantFault("supply-loss:0:2", f), "");
+  EXPECT_NE(ParsePlantFault("supply-loss:2:2", f).find("takes leg 0"), std::string::npos);
+  EXPECT_NE(ParsePlantFault("pot-drift:0:2", f).find("needs a leg"), std::string::npos);
+  EXPECT_NE(ParsePlantFault("pot-drift:7:2", f).find("leg '7'"), std::string::npos);
+  EXPECT_NE(ParsePlantFault("stuck:1:2", f).find("unknown kind"), std::string::npos);
+  EXPECT_NE(ParsePlantFault("pot-stuck:1:inf", f).find("time 'inf'"), std::string::npos);
+  EXPECT_NE(ParsePlantFault("pot-stuck:1:-1", f).find("time"), std::string::npos);
+  EXPECT_NE(ParsePlantFault("pot-stuck:1", f).find("expected"), std::string::npos);
+  std::vector<PlantFault> list;
+  EXPECT_EQ(ParsePlantFaultList("pot-stuck:3:1.5,supply-loss:0:2", list), "");
+  ASSERT_EQ(list.size(), 2u);
+  EXPECT_EQ(list[1].kind, PlantFaultKind::kSupplyLoss);
+  // One bad item: nothing appended, the item named.
+  EXPECT_EQ(ParsePlantFaultList("pot-drift:2:1,imu-dropout:2:1", list).rfind("'imu-dropout:2:1': ", 0), 0u);
+  EXPECT_EQ(list.size(), 2u);
+  EXPECT_NE(ParsePlantFaultList("pot-drift:2:1,", list).find("''"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace hexa

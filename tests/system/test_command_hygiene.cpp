@@ -93,5 +93,34 @@ TEST(CommandEpisode, EndsOnlyAfterAGoodRun) {
   EXPECT_EQ(e.episodes(), 2u);
 }
 
+
+// Compute budget (docs/faults.md): one long cycle is the host preempting the process; a run of
+// `overrun_limit` cycles over budget is a controller that cannot keep 1 kHz.
+TEST(ComputeBudget, SingleLongCyclesAreNotAnOverrunARunIs) {
+  ComputeBudgetParams p;
+  p.budget_s = 0.0005;
+  p.overrun_limit = 20;
+  p.clear_after_ok = 100;
+  ComputeBudgetMonitor m;
+  for (int k = 0; k < 1000; ++k) {  // a long cycle every 10th: never 20 in a row
+    ASSERT_EQ(m.Update(k % 10 == 0 ? 0.004 : 0.00001, p), ComputeBudgetMonitor::Event::kNone) << k;
+  }
+  EXPECT_FALSE(m.active());
+  EXPECT_EQ(m.over_budget(), 100u);
+  for (int k = 0; k < 19; ++k) EXPECT_EQ(m.Update(0.005, p), ComputeBudgetMonitor::Event::kNone);
+  EXPECT_EQ(m.Update(0.006, p), ComputeBudgetMonitor::Event::kStarted);
+  EXPECT_TRUE(m.active());
+  EXPECT_DOUBLE_EQ(m.run_max_s(), 0.006);
+  EXPECT_EQ(m.Update(0.005, p), ComputeBudgetMonitor::Event::kNone);  // one report per episode
+  for (int k = 0; k < 99; ++k) EXPECT_EQ(m.Update(0.0001, p), ComputeBudgetMonitor::Event::kNone);
+  EXPECT_EQ(m.Update(0.0001, p), ComputeBudgetMonitor::Event::kEnded);
+  EXPECT_FALSE(m.active());
+  // Not finite is not within budget.
+  ComputeBudgetMonitor n;
+  p.overrun_limit = 2;
+  n.Update(std::numeric_limits<double>::quiet_NaN(), p);
+  EXPECT_EQ(n.Update(std::numeric_limits<double>::quiet_NaN(), p), ComputeBudgetMonitor::Event::kStarted);
+}
+
 }  // namespace
 }  // namespace hexa

@@ -21,6 +21,37 @@ TEST(LockstepProtocol, SetpointOfTickIsTheNewestIssuedStrictlyBefore) {
   EXPECT_EQ(s, 10u);
 }
 
+// Dead legs (docs/faults.md): no live writer is dead at once, with the cause; a live writer is
+// waited for (a hot standby answers a re-ask) up to the answer timeout.
+TEST(LockstepProtocol, SilentLegVerdictNamesTheCause) {
+  SilentLegParams p;
+  p.answer_timeout_ns = 1'000'000'000;
+  EXPECT_EQ(JudgeSilentLeg({1, 0, 0}, 0, p), SilentLegVerdict::kWait);
+  EXPECT_EQ(JudgeSilentLeg({1, 1, 0}, 999'999'999, p), SilentLegVerdict::kWait);  // standby alive
+  EXPECT_EQ(JudgeSilentLeg({1, 0, 1}, 1'000'000'000, p), SilentLegVerdict::kNoAnswer);
+  EXPECT_EQ(JudgeSilentLeg({0, 1, 0}, 0, p), SilentLegVerdict::kLivelinessLost);
+  EXPECT_EQ(JudgeSilentLeg({0, 1, 1}, 0, p), SilentLegVerdict::kLivelinessLost);  // hung primary,
+                                                                                // standby gone
+  EXPECT_EQ(JudgeSilentLeg({0, 0, 1}, 0, p), SilentLegVerdict::kWriterGone);
+  EXPECT_EQ(JudgeSilentLeg({0, 0, 0}, 0, p), SilentLegVerdict::kWriterGone);
+  EXPECT_STREQ(ToString(SilentLegVerdict::kNoAnswer), "no answer from a live writer");
+}
+
+TEST(LockstepProtocol, ReleasedLegsAreNoLongerAwaited) {
+  LockstepBarrier b;
+  b.Begin(7, FirstLegs(6), 0);
+  EXPECT_FALSE(b.Answer(1, 7));
+  EXPECT_FALSE(b.Release(LegBit(3)));
+  EXPECT_EQ(b.missing(), static_cast<LegMask>(LegBit(2) | LegBit(4) | LegBit(5) | LegBit(6)));
+  for (int leg : {2, 4, 5}) EXPECT_FALSE(b.Answer(leg, 7));
+  EXPECT_FALSE(b.Answer(6, 6));  // an answer to another tick changes nothing
+  EXPECT_TRUE(b.Release(LegBit(6)));
+  // The next tick awaits what the caller says: a dropped leg is left out.
+  b.Begin(8, static_cast<LegMask>(FirstLegs(6) & ~LegBit(3) & ~LegBit(6)), 10);
+  for (int leg : {1, 2, 4}) EXPECT_FALSE(b.Answer(leg, 8));
+  EXPECT_TRUE(b.Answer(5, 8));
+}
+
 LockstepConfig Config(std::uint64_t seed) {
   LockstepConfig c;
   c.seed = seed;

@@ -338,6 +338,34 @@ INSTANTIATE_TEST_SUITE_P(EachCause, SupervisorFault, ::testing::ValuesIn(FaultCa
                            return std::string(info.param.name);
                          });
 
+// A length reading that stops following the leg (stuck potentiometer): the six lengths and
+// the IMU no longer agree; the leg whose reading disagrees with the other five beyond the
+// limit for length_consistency_ticks in a row is named (docs/faults.md).
+TEST(Supervisor, StuckLengthReadingIsNamedAsInconsistent) {
+  Bench bench;
+  StartRequest request;
+  StartAndTrack(bench, request);
+  // Perfect plant: consistent (the fit's residual is micrometres against the 8 mm limit).
+  EXPECT_LT(bench.sup().max_consistency_residual_m(), 1e-4);
+  const SupervisorParams params;
+  // The legs keep following their setpoints; leg 3 reports the length it had.
+  const double stuck = bench.in.length_m[2];
+  double followed = stuck;  // where leg 3 really is
+  int ticks = 0;
+  while (bench.out.state != SupervisorState::kHold && ticks < 400) {
+    bench.Tick();
+    followed = bench.in.length_m[2];
+    bench.in.length_m[2] = stuck;
+    ++ticks;
+  }
+  ASSERT_EQ(bench.out.state, SupervisorState::kHold) << "never detected";
+  EXPECT_EQ(bench.out.fault, FaultReason::kSensorInconsistent) << bench.out.fault_detail.data();
+  EXPECT_EQ(bench.out.fault_leg, 3);
+  // Detected once the error exceeds the limit, after the persistence, not before.
+  EXPECT_GT(std::abs(followed - stuck), params.length_consistency_limit_m);
+  EXPECT_GE(ticks, params.length_consistency_ticks);
+}
+
 TEST(Supervisor, DeadlineMissesUpToTheLimitAreTolerated) {
   Bench bench;
   StartRequest request;

@@ -20,6 +20,11 @@ void AddCommonOptions(cli::Parser& p) {
   p.AddOption("log-file", "file", "also log to this file");
   p.AddChoice("log-level", {"trace", "debug", "info", "warn", "error"}, "log level", "info");
   p.AddOption("lockstep-timeout", "s", "lockstep: a peer silent this long is a fault", "10");
+  p.AddOption("lockstep-lease", "s",
+              "lockstep: liveliness lease of the leg controllers' valve commands (asserted by "
+              "the control loop) and of the supervisor's setpoints; docs/faults.md", "0.2");
+  p.AddOption("rt-lease", "s",
+              "real time: liveliness lease of the leg controllers' valve commands", "0.01");
   p.AddOption("rt-deadline-1ms", "s", "real time: deadline of the 1 ms topics", "0.001");
   p.AddOption("rt-deadline-5ms", "s", "real time: deadline of the 5 ms topics", "0.005");
   p.AddFlag("no-rt-sched", "do not try SCHED_FIFO / mlockall in real time");
@@ -34,7 +39,11 @@ bool ReadCommonOptions(cli::Parser& p, CommonOptions& o) {
   const auto timeout = p.GetDouble("lockstep-timeout", 0.1, 3600);
   const auto d1 = p.GetDouble("rt-deadline-1ms", 0.001, 1.0);
   const auto d5 = p.GetDouble("rt-deadline-5ms", 0.005, 1.0);
-  if (!domain || !timeout || !d1 || !d5) return false;
+  const auto lease = p.GetDouble("lockstep-lease", 0.01, 60);
+  const auto rt_lease = p.GetDouble("rt-lease", 0.003, 10);
+  if (!domain || !timeout || !d1 || !d5 || !lease || !rt_lease) return false;
+  o.lockstep_lease_s = *lease;
+  o.realtime_lease_s = *rt_lease;
   o.domain_id = static_cast<int>(*domain);
   o.lockstep_timeout_s = *timeout;
   o.realtime_deadline_1ms_topics_s = *d1;
@@ -70,11 +79,15 @@ comm::QosParams QosFor(const CommonOptions& o, comm::TopicKind kind) {
   if (o.mode == TimeMode::kLockstep) {
     q.lockstep = true;
     // Simulated time runs at whatever pace the slowest process allows: the deadline is a
-    // stall detector at the lockstep timeout, and the leg's liveliness is AUTOMATIC (a
-    // lockstep pause is not a dead controller).
+    // stall detector at the lockstep timeout. The leg's liveliness is MANUAL_BY_TOPIC as in
+    // real time, with a lease suited to lockstep (0.2 s: a loaded machine's scheduling
+    // stalls stay well below it): asserted by every write, and while the leg waits for the
+    // plant by its main thread only when it can take the control lock and every answer it
+    // computed was published. A crashed, hung or silent controller lets it lapse; the plant
+    // stops awaiting it and a hot standby takes the valve over (docs/faults.md).
     if (comm::NominalPeriod_s(kind)) q.deadline_period_s = o.lockstep_timeout_s;
-    q.valve_liveliness = comm::LivelinessKind::kAutomatic;
-    q.valve_liveliness_lease_s = 0.05;
+    q.valve_liveliness = comm::LivelinessKind::kManualByTopic;
+    q.valve_liveliness_lease_s = o.lockstep_lease_s;
   } else {
     const auto nominal = comm::NominalPeriod_s(kind);
     if (nominal) {
@@ -86,8 +99,10 @@ comm::QosParams QosFor(const CommonOptions& o, comm::TopicKind kind) {
     // lease + 0.5 ms, inside the plant's 15-tick command tolerance, so the platform does not
     // notice the hand-over.
     q.valve_liveliness = comm::LivelinessKind::kManualByTopic;
-    q.valve_liveliness_lease_s = 0.01;
+    q.valve_liveliness_lease_s = o.realtime_lease_s;
   }
+  // The supervisor's process being gone is seen by the legs within this (docs/faults.md).
+  q.setpoint_liveliness_lease_s = o.lockstep_lease_s;
   return q;
 }
 

@@ -9,7 +9,9 @@
 #include <dds/dds.h>
 
 #include <cstdint>
+#include <limits>
 #include <optional>
+#include <string>
 #include <string_view>
 
 namespace hexa::comm {
@@ -71,6 +73,12 @@ struct QosParams {
   // with the same lease, which is compatible with either kind the writer offers.
   LivelinessKind valve_liveliness = LivelinessKind::kAutomatic;
   double valve_liveliness_lease_s = 0.010;
+  // LegSetpoint: AUTOMATIC liveliness lease of the supervisor's writer (infinite = none). A
+  // leg controller learns from it that the supervisor's process is gone (docs/faults.md).
+  double setpoint_liveliness_lease_s = std::numeric_limits<double>::infinity();
+  // Writer only: USER_DATA QoS, readable by every matched reader (the ValveCommand writers
+  // say which leg they drive: "leg=3 standby=0"; docs/faults.md). Empty = none.
+  std::string user_data;
   // ValveCommand writer only: EXCLUSIVE ownership strength (primary 20, standby 10).
   int32_t ownership_strength = kPrimaryOwnershipStrength;
   // Control readers: lockstep needs every sample (a lost one would stall the tick), so the

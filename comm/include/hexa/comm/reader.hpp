@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cstring>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -28,6 +29,10 @@ namespace hexa::comm {
 std::string DescribeMatchedWriter(dds_entity_t reader, dds_instance_handle_t publication);
 // Ownership strength of a matched writer, -1 if unknown.
 int32_t MatchedWriterStrength(dds_entity_t reader, dds_instance_handle_t publication);
+// USER_DATA of a matched writer (QosParams::user_data); nullopt when it is no longer matched.
+// Allocates: not for the cycle.
+std::optional<std::string> MatchedWriterUserData(dds_entity_t reader,
+                                                 dds_instance_handle_t publication);
 
 template <WireType T>
 class Reader {

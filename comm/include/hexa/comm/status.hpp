@@ -65,7 +65,9 @@ using DataCallback = void (*)(void* arg);
 class StatusCounters {
  public:
   static constexpr std::size_t kMaxInstances = 16;
-  static constexpr std::size_t kMaxWriters = 8;
+  // Writers a reader tracks liveliness of: six primaries and six hot standbys of the
+  // ValveCommand topic, with room for restarted ones (a slot is never reused).
+  static constexpr std::size_t kMaxWriters = 32;
 
   StatusCounters() = default;
   StatusCounters(const StatusCounters&) = delete;

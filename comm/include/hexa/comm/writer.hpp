@@ -95,6 +95,13 @@ class Writer {
   dds_return_t Unregister(const T& key_sample) {
     return dds_unregister_instance(entity_.get(), &key_sample);
   }
+  // Disposes the instance of `key_sample`: its readers see NOT_ALIVE_DISPOSED (a writer that
+  // withdraws its data on purpose; a crashed one never disposes).
+  dds_return_t Dispose(const T& key_sample) {
+    const dds_return_t rc = dds_dispose(entity_.get(), &key_sample);
+    if (rc != DDS_RETCODE_OK) counters_->CountWriteError(rc);
+    return rc;
+  }
 
   StatusSnapshot Snapshot() const { return counters_->Snapshot(); }
   const StatusCounters& status() const { return *counters_; }
@@ -150,13 +157,14 @@ class LegRoutedWriter {
     w.Flush();
     return rc;
   }
-  // The all-legs writer's readers (supervisor, recorder) and each leg's; see Writer::WaitForAcks.
-  dds_return_t WaitForAcks(dds_duration_t timeout) {
-    dds_return_t rc = all_.WaitForAcks(timeout);
-    for (auto& w : legs_) {
-      const dds_return_t r = w.WaitForAcks(timeout);
-      if (rc == DDS_RETCODE_OK) rc = r;
+  // Disposes `key_sample`'s instance for the leg's controllers and the all-legs readers.
+  dds_return_t Dispose(const T& key_sample) {
+    dds_return_t rc = all_.Dispose(key_sample);
+    if (key_sample.leg_id >= 1 && key_sample.leg_id <= kLegs) {
+      const dds_return_t leg_rc = legs_[key_sample.leg_id - 1].Dispose(key_sample);
+      if (rc == DDS_RETCODE_OK) rc = leg_rc;
     }
+    Flush();
     return rc;
   }
   Writer<T>& all() { return all_; }

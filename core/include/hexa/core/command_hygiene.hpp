@@ -81,4 +81,31 @@ class CommandEpisode {
   std::uint64_t episodes_ = 0;
 };
 
+// The compute time a leg controller reports with each command (ValveCommand.compute_time_s)
+// against a budget (docs/faults.md): an overrun episode starts when `overrun_limit` cycles in
+// a row exceed the budget (a single long cycle is the host preempting the process, not a
+// slow controller) and ends after `clear_after_ok` cycles in a row within it. Counts every
+// cycle over budget.
+struct ComputeBudgetParams {
+  double budget_s = 0.0005;            // half the 1 ms tick: the rest is for the transport
+  std::uint64_t overrun_limit = 20;    // consecutive cycles over budget
+  std::uint64_t clear_after_ok = 100;
+};
+
+class ComputeBudgetMonitor {
+ public:
+  enum class Event : std::uint8_t { kNone, kStarted, kEnded };
+  Event Update(double compute_s, const ComputeBudgetParams& params);
+  bool active() const { return active_; }
+  std::uint64_t cycles() const { return cycles_; }
+  std::uint64_t over_budget() const { return over_budget_; }  // cycles over budget, all time
+  double max_s() const { return max_s_; }
+  double run_max_s() const { return run_max_s_; }             // largest in the current run over budget
+
+ private:
+  bool active_ = false;
+  std::uint64_t cycles_ = 0, over_budget_ = 0, over_run_ = 0, ok_run_ = 0;
+  double max_s_ = 0.0, run_max_s_ = 0.0;
+};
+
 }  // namespace hexa

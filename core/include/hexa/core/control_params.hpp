@@ -106,6 +106,12 @@ struct SupervisorParams {
   double workspace_max_rotation_rad = 0.5236;  // |rotation from home| beyond -> hold (30 deg)
   bool least_squares_estimator = false; // GQFK (eq 47) by default; six-leg LSQ if true
   double estimator_outlier_threshold_m = 0.003;  // LSQ: residual beyond -> leg excluded
+  // Length consistency (docs/faults.md): every tick the six measured lengths and the IMU
+  // orientation are fitted by least squares (kinematics GqfkLeastSquares); a leg whose length
+  // disagrees with the fit of the other five by more than this, for this many ticks in a row,
+  // has a wrong length reading (stuck or drifting potentiometer): FAULT_SENSOR_INCONSISTENT.
+  double length_consistency_limit_m = 0.008;
+  int length_consistency_ticks = 3;
   OuterLoopParams outer_loop;
   // Platform inverse-dynamics feed-forward (issue 14, core/platform_dynamics.hpp): every
   // setpoint carries the axial force its leg must deliver for the desired motion (nominal

@@ -34,6 +34,19 @@ enum class LegControlStatus : std::uint8_t {
 
 const char* ToString(LegControlStatus status);
 
+// Which input put the controller in kHoldBadInput (kNone otherwise).
+enum class LegInputFault : std::uint8_t {
+  kNone,
+  kTime,            // non-finite tick time
+  kLength,          // potentiometer reading outside the stroke (+ margin) or not finite
+  kCapPressure,     // P1 outside [min_pressure_pa, max_pressure_pa] or not finite
+  kRodPressure,     // P2 likewise
+  kSupplyPressure,  // P_s likewise
+  kSupplyLow,       // P_s below min_supply_pressure_pa: the valve cannot deliver the model's flow
+  kSetpoint,        // setpoint not finite, from the future or beyond the envelope
+};
+const char* ToString(LegInputFault fault);
+
 struct LegControllerConfig {
   LegControllerKind kind = LegControllerKind::kBsSmc;
   LegControllerParams params;
@@ -43,6 +56,10 @@ struct LegControllerConfig {
   double length_margin_m = 0.02;  // beyond either end of the stroke
   double min_pressure_pa = 0.2e5;
   double max_pressure_pa = 12.0e5;
+  // Supply below this: the controller's flow model (eq 4, 5) no longer describes the valve
+  // and the leg cannot follow; hold (valve closed keeps the air in the chambers). FromRig:
+  // half the nominal gauge supply, P_a + (P_s - P_a) / 2 (docs/faults.md).
+  double min_supply_pressure_pa = 0.0;
   double max_setpoint_speed_m_s = 2.0;
   double max_setpoint_acceleration_m_s2 = 100.0;
   double max_correction_m = 0.05;
@@ -92,6 +109,8 @@ struct LegControllerOutput {
   std::uint64_t setpoint_tick = 0;  // tick of the setpoint used
   double valve_v = 5.0;
   LegControlStatus status = LegControlStatus::kHoldNoSetpoint;
+  LegInputFault input_fault = LegInputFault::kNone;  // why kHoldBadInput
+  double input_fault_value = 0.0;                   // the offending value (SI)
   double desired_length_m = 0.0;    // interpolated setpoint + correction actually used
   double desired_velocity_m_s = 0.0;
   double feedforward_force_n = 0.0; // interpolated feed-forward used (0 when none)
@@ -120,9 +139,10 @@ class LegController {
   const LegControllerConfig& config() const { return config_; }
 
  private:
-  bool SensorsValid(const LegControllerInput& in) const;
+  LegInputFault CheckSensors(const LegControllerInput& in, double& value) const;
   bool LengthPlausible(double length_m) const;
-  void Hold(LegControlStatus status, LegControllerOutput& out);
+  void Hold(LegControlStatus status, LegControllerOutput& out,
+            LegInputFault fault = LegInputFault::kNone, double value = 0.0);
 
   LegControllerConfig config_;
   BsSmcController bssmc_;

@@ -65,6 +65,8 @@ class LockstepBarrier {
   // Leg `leg_id` (1..6) answered tick `answered_tick`. Answers for other ticks (a repeated
   // answer, a late answer of an earlier tick) change nothing. Returns complete().
   bool Answer(int leg_id, std::uint64_t answered_tick);
+  // Stops awaiting `legs` for this tick (a leg judged dead: JudgeSilentLeg). Returns complete().
+  bool Release(LegMask legs);
   bool complete() const { return missing_ == 0; }
   std::uint64_t tick() const { return tick_; }
   LegMask missing() const { return missing_; }
@@ -86,6 +88,36 @@ class LockstepBarrier {
   std::int64_t next_reask_ns_ = 0;
   std::uint64_t reasks_total_ = 0;
 };
+
+// What the clock does about an awaited leg that has not answered (docs/faults.md). Its leg
+// controller writers as the transport sees them: `alive` writers assert their liveliness (a
+// leg controller asserts it only while its control cycle runs and publishes what it computes:
+// a crashed, hung or silent controller lets its lease lapse), `not_alive` ones are still
+// known but their lease lapsed, `gone` ones disappeared (writer deleted, or its participant's
+// lease expired: the process is gone).
+struct LegWriterCounts {
+  int alive = 0;
+  int not_alive = 0;
+  int gone = 0;
+};
+
+enum class SilentLegVerdict : std::uint8_t {
+  kWait,            // a live writer may still answer (a hot standby taking over answers a re-ask)
+  kLivelinessLost,  // no live writer, at least one whose lease lapsed: crashed, hung or silent
+  kWriterGone,      // no writer left at all: the process (or its participant) is gone
+  kNoAnswer,        // a live writer, but no answer within the answer timeout
+};
+const char* ToString(SilentLegVerdict verdict);
+
+struct SilentLegParams {
+  // A leg with a live writer that has not answered this long is dead all the same (a cycle
+  // that runs and asserts liveliness but never publishes an answer).
+  std::int64_t answer_timeout_ns = 1'000'000'000;
+};
+
+// Pure: the verdict on an awaited leg silent for `silent_ns` with these writers.
+SilentLegVerdict JudgeSilentLeg(const LegWriterCounts& writers, std::int64_t silent_ns,
+                                const SilentLegParams& params);
 
 // A setpoint as issued by the supervisor at tick `tick`: what LegSetpoint carries on the wire.
 struct IssuedSetpoint {

@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 
 #include "hexa/core/leg_model.hpp"
+#include "hexa/core/plant_faults.hpp"
 #include "hexa/core/pose.hpp"
 #include "hexa/core/rig.hpp"
 #include "hexa/core/sensor_model.hpp"
@@ -70,6 +71,8 @@ struct PlatformPlantConfig {
   // the LuGre dynamics do to an eq 3 fit, docs/identification.md).
   LegModelParams::FrictionModel friction_model = LegModelParams::FrictionModel::kLugre;
   FreeFallBenchParams free_fall;  // enabled: the bench instead of the platform
+  // Injected rig faults (sensors, supply; plant_faults.hpp). None by default.
+  PlantFaultParams faults;
 
   void Validate() const;  // throws std::invalid_argument naming field, value and limit
 };
@@ -156,6 +159,7 @@ class PlatformPlant {
   int SubstepCount(double dt_s) const;  // substeps for the next tick (step control)
   void FillTruth();
   void SampleSensors();
+  void ApplySensorFaults();
 
   PlatformPlantConfig config_;
   GeometryParams true_geometry_;
@@ -178,6 +182,8 @@ class PlatformPlant {
   int last_substep_count_ = 0;
   PlatformPlantOutput output_;
   std::vector<SingleLegPlant> bench_;  // free-fall bench legs (FreeFallBenchParams)
+  LegArray<double> stuck_length_m_{};  // pot-stuck: the reading held
+  LegArray<bool> stuck_latched_{};
 };
 
 }  // namespace hexa

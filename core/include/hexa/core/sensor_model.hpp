@@ -23,6 +23,7 @@ struct LegSensorReading {
 
 struct ImuReading {
   bool fresh = false;  // true on the ticks the 200 Hz IMU produced a new sample
+  bool dropped_out = false;  // plant fault imu-dropout: the IMU delivers nothing (plant_faults.hpp)
   double sample_time_s = 0.0;
   Eigen::Quaterniond q_BP_measured = Eigen::Quaterniond::Identity();
   Eigen::Vector3d angular_rate_B_rad_s = Eigen::Vector3d::Zero();  // true rate (no gyro model)

@@ -51,6 +51,10 @@ enum class FaultReason {
   kTrajectoryRejected,
   kHostOverload,        // real time: every leg's command late at once: the host, not a leg
   kComputeOverrun,      // a leg controller's cycle exceeded its compute budget
+  kWriterGone,          // a leg controller's writer (or its process) disappeared
+  kSupplyPressureLow,   // supply pressure below what the legs need
+  kSensorInconsistent,  // a leg length disagrees with the other legs and the IMU
+  kImuLost,             // the IMU stopped delivering samples
 };
 const char* ToString(FaultReason reason);  // "FAULT_NONE", ...
 
@@ -132,6 +136,9 @@ class Supervisor {
   TrajectoryTiming timing() const { return TimingFrom(params_); }
   const RigParams& rig() const { return rig_; }
   const SupervisorParams& params() const { return params_; }
+  // Largest residual of a leg length against the least-squares fit of all six seen so far
+  // (fault-free: calibration errors and noise; docs/faults.md measures it).
+  double max_consistency_residual_m() const { return max_consistency_residual_m_; }
 
   // Outside the cycle: build a start request from the current rest pose and check it.
   StartRequest PrepareStart(Trajectory trajectory) const;
@@ -173,6 +180,14 @@ class Supervisor {
   double trajectory_start_time_s_ = 0.0;
   double stop_at_s_ = 0.0;  // trajectory time at which the stop law starts
   double trajectory_time_s_ = 0.0;
+
+  // Length consistency (UpdateConsistency): the leg currently disagreeing, for how many
+  // ticks in a row, by how much.
+  void UpdateConsistency(const SupervisorInput& input);
+  int inconsistent_leg_ = -1;
+  int inconsistent_ticks_ = 0;
+  double inconsistent_residual_m_ = 0.0;
+  double max_consistency_residual_m_ = 0.0;
 
   FaultReason fault_ = FaultReason::kNone;
   int fault_leg_ = 0;

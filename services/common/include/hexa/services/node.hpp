@@ -33,6 +33,11 @@ struct CommonOptions {
   std::string log_file;
   std::string log_level = "info";
   double lockstep_timeout_s = 10.0;       // a peer silent this long in lockstep is a fault
+  // Liveliness lease of the leg controllers' ValveCommand writers (MANUAL_BY_TOPIC, asserted
+  // by the control loop; docs/faults.md) in lockstep and in real time; the lockstep one is
+  // also the supervisor's setpoint writer's (AUTOMATIC) in both modes.
+  double lockstep_lease_s = 0.2;
+  double realtime_lease_s = 0.01;
   // Deadline period of the 1 ms topics in real time: the nominal rate is 1 ms, but this
   // VM's scheduling jitter (docs/platform_notes.md) makes a bare 1 ms deadline fire spuriously;
   // the deadline still states the rate and every miss is counted and reported.
@@ -44,7 +49,8 @@ struct CommonOptions {
 };
 
 // Adds --rig --rig-overlay --domain --mode --dds-config --log-file --log-level
-// --lockstep-timeout --rt-deadline-1ms --rt-deadline-5ms --no-rt-sched --rt-priority --cpus.
+// --lockstep-timeout --lockstep-lease --rt-lease --rt-deadline-1ms --rt-deadline-5ms
+// --no-rt-sched --rt-priority --cpus.
 void AddCommonOptions(cli::Parser& parser);
 // Reads them back; false with parser.error() set on a bad value.
 bool ReadCommonOptions(cli::Parser& parser, CommonOptions& options);

@@ -1,0 +1,362 @@
+#!/usr/bin/python3
+"""Fault matrix of the HexaTaar system (docs/faults.md): every fault kind x leg x mode x
+(standby or not), each as a whole hexa_session with the recorder on; one table with the exit
+code, the detected cause, the detection latency, the platform's excursion in the second after
+detection (ground truth), the standby take-over and the data lost in the recording.
+
+    /usr/bin/python3 bench/faults/fault_matrix.py                # leg 3, both modes, +/- standby
+    /usr/bin/python3 bench/faults/fault_matrix.py --legs all     # every leg
+    /usr/bin/python3 bench/faults/fault_matrix.py --rt-series 20 [--stress 1]
+
+--rt-series N runs N fault-free real-time sessions in a row instead (combined trajectory,
+recorder on) and counts completions and recording gaps; --stress K runs `stress-ng --cpu K`
+beside them. As root every session runs in its own network namespace (unshare -n), so that
+nothing crosses to other users of the machine's DDS domains; otherwise on loopback with a
+domain id of its own. Everything measured comes from the session's recording and logs:
+
+  detected      the first FaultEvent after the injection: "source reason leg"
+  latency       wall clock from the injection to that FaultEvent (its source timestamp), and in
+                ticks; the injection instant is the publish time of the plant's sample of the
+                first tick at or after the fault time (the sample the faulty process acts on)
+  excursion     largest distance (mm) / rotation (deg) of the true platform pose in the 1 s
+                (simulated) after detection from its pose at detection
+  take-over     standby rows: publish time of the standby's first command - the primary's
+                last command, as recorded (the recorder, like the plant, sees the owner's)
+  lost          samples missing from the plant's streams (LegSensors x6, GroundTruth,
+                ImuSample unless the IMU was the fault) by tick numbers (hexa_recorder info):
+                the recorder lost them; and gaps of the leg controllers' ValveCommands
+"""
+import argparse
+import csv
+import datetime
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+LEG_FAULTS = ["crash", "hang", "slow", "garbage", "silence"]
+PLANT_LEG_FAULTS = ["pot-stuck", "pot-drift", "pressure-dead"]
+PLANT_FAULTS = ["imu-dropout", "supply-loss"]
+ALL_KINDS = LEG_FAULTS + PLANT_LEG_FAULTS + PLANT_FAULTS + ["supervisor-crash"]
+
+
+def load():
+    return " ".join(open("/proc/loadavg").read().split()[:3])
+
+
+def session_command(args, build, out_dir, fault_args, mode, standby, domain):
+    cmd = [os.path.join(build, "deploy/hexa_session"), "--trajectory", args.trajectory,
+           "--periods", str(args.periods), "--mode", mode, "--seed", str(args.seed),
+           "--out", out_dir, "--domain", str(domain), "--timeout", str(args.timeout)]
+    if standby:
+        cmd.append("--standby")
+    cmd += fault_args
+    return cmd
+
+
+def run_session(args, cmd):
+    """Runs one session (in its own network namespace when root); returns its exit code."""
+    if args.netns:
+        inner = "ip link set lo up && exec " + " ".join(_quote(c) for c in cmd)
+        cmd = ["unshare", "-n", "sh", "-c", inner]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    try:
+        return proc.wait(timeout=args.timeout + 120)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+        return -9
+
+
+def _quote(s):
+    return "'" + s.replace("'", "'\\''") + "'" if re.search(r"[^\w./:=,+-]", s) else s
+
+
+def read_csv(path):
+    if not os.path.exists(path):
+        return []
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def export(build, mcap, out_dir):
+    os.makedirs(out_dir, exist_ok=True)
+    subprocess.run([os.path.join(build, "services/recorder/hexa_recorder"), "export", mcap,
+                    "--out-dir", out_dir], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def info_loss(build, mcap):
+    """Per (topic, key): (missing, gaps, expected) from `hexa_recorder info`."""
+    r = subprocess.run([os.path.join(build, "services/recorder/hexa_recorder"), "info", mcap],
+                       capture_output=True, text=True)
+    loss = {}
+    pat = re.compile(r"^\s+(hexa_\w+)\s+(\S+)\s+ticks (\d+)\.\.(\d+) step (\d+): (\d+) received, "
+                     r"(\d+) expected, (\d+) missing in (\d+) gaps")
+    for line in r.stdout.splitlines():
+        m = pat.match(line)
+        if m:
+            loss[(m.group(1), m.group(2))] = {"missing": int(m.group(8)), "gaps": int(m.group(9)),
+                                              "expected": int(m.group(7)),
+                                              "first": int(m.group(3)), "last": int(m.group(4))}
+    return loss, r.returncode
+
+
+def col(row, *names):
+    for n in names:
+        if n in row and row[n] != "":
+            return row[n]
+    return None
+
+
+def analyse(build, out_dir, case, fault_at_s):
+    mcap = os.path.join(out_dir, "session.mcap")
+    res = {"detected": "-", "lat_ms": None, "lat_ticks": None, "exc_mm": None, "exc_deg": None,
+           "takeover_ms": None, "lost_plant": None, "cmd_gaps": None, "faults": 0}
+    if not os.path.exists(mcap):
+        res["detected"] = "no recording"
+        return res
+    csv_dir = os.path.join(out_dir, "csv")
+    export(build, mcap, csv_dir)
+    sensors = read_csv(os.path.join(csv_dir, "hexa_LegSensors.csv"))
+    faults = read_csv(os.path.join(csv_dir, "hexa_FaultEvent.csv"))
+    truth = read_csv(os.path.join(csv_dir, "hexa_GroundTruth.csv"))
+    valves = read_csv(os.path.join(csv_dir, "hexa_ValveCommand.csv"))
+    fault_tick = int(round(fault_at_s * 1000))
+    leg = case["leg"] if case["leg"] else 1
+    # Injection instant: the plant's sample of the fault tick (of the faulty leg).
+    inject_ns = None
+    for s in sensors:
+        if int(col(s, "header.tick", "tick")) == fault_tick and (
+                int(col(s, "leg_id")) == leg):
+            inject_ns = int(s["publish_time_ns"])
+            break
+    res["faults"] = len(faults)
+    first = None
+    for f in faults:
+        if int(col(f, "tick")) + 5 >= fault_tick:  # events of this fault (not start-up)
+            first = f
+            break
+    if first is not None:
+        reason = col(first, "reason").replace("FAULT_", "")
+        res["detected"] = "%s %s leg %s" % (col(first, "source_node"), reason, col(first, "leg_id"))
+        det_tick = int(col(first, "tick"))
+        res["lat_ticks"] = det_tick - fault_tick
+        det_ns = int(col(first, "source_time_ns") or first["publish_time_ns"])
+        if inject_ns is not None:
+            res["lat_ms"] = (det_ns - inject_ns) * 1e-6
+        # Excursion of the true pose in the simulated second after detection.
+        by_tick = {}
+        for t in truth:
+            by_tick[int(col(t, "header.tick", "tick"))] = t
+        if det_tick in by_tick:
+            p0 = [float(by_tick[det_tick]["position_m[%d]" % k]) for k in range(3)]
+            q0 = [float(by_tick[det_tick]["orientation_wxyz[%d]" % k]) for k in range(4)]
+            exc, rot = 0.0, 0.0
+            for n in range(det_tick, det_tick + 1001):
+                t = by_tick.get(n)
+                if t is None:
+                    continue
+                p = [float(t["position_m[%d]" % k]) for k in range(3)]
+                q = [float(t["orientation_wxyz[%d]" % k]) for k in range(4)]
+                exc = max(exc, sum((a - b) ** 2 for a, b in zip(p, p0)) ** 0.5)
+                dot = abs(sum(a * b for a, b in zip(q, q0)))
+                rot = max(rot, 2.0 * __import__("math").acos(min(1.0, dot)))
+            res["exc_mm"] = exc * 1e3
+            res["exc_deg"] = rot * 57.29577951308232
+    if case["standby"] and case["kind"] in LEG_FAULTS:
+        last_primary, first_standby = None, None
+        for v in valves:
+            if int(col(v, "leg_id")) != leg:
+                continue
+            sb = col(v, "standby") in ("1", "true", "True")
+            t = int(v["publish_time_ns"])
+            if not sb and first_standby is None:
+                last_primary = t
+            elif sb and first_standby is None and last_primary is not None:
+                first_standby = t
+        if last_primary is not None and first_standby is not None:
+            res["takeover_ms"] = (first_standby - last_primary) * 1e-6
+    loss, _ = info_loss(build, mcap)
+    lost = 0
+    gaps = 0
+    for (topic, key), l in loss.items():
+        if topic in ("hexa_LegSensors", "hexa_GroundTruth") or (
+                topic == "hexa_ImuSample" and case["kind"] != "imu-dropout"):
+            lost += l["missing"]
+        if topic == "hexa_ValveCommand":
+            gaps += l["gaps"]
+    res["lost_plant"] = lost
+    res["cmd_gaps"] = gaps
+    return res
+
+
+def cases(args):
+    legs = list(range(1, 7)) if args.legs == "all" else [int(x) for x in args.legs.split(",")]
+    kinds = ALL_KINDS if args.kinds == "all" else args.kinds.split(",")
+    modes = args.modes.split(",")
+    standbys = {"both": [False, True], "no": [False], "yes": [True]}[args.standby]
+    out = []
+    for mode in modes:
+        for kind in kinds:
+            leg_kinds = LEG_FAULTS + PLANT_LEG_FAULTS
+            for leg in (legs if kind in leg_kinds else [0]):
+                for sb in (standbys if kind in LEG_FAULTS else [False]):
+                    reps = args.repeat_rt if mode == "realtime" else 1
+                    for rep in range(reps):
+                        out.append({"mode": mode, "kind": kind, "leg": leg, "standby": sb,
+                                    "rep": rep})
+    return out
+
+
+def fault_args(case, at):
+    k, leg = case["kind"], case["leg"]
+    if k in LEG_FAULTS:
+        return ["--fault", "%d:%s:%g" % (leg, k, at)]
+    if k == "supervisor-crash":
+        return ["--fault", "supervisor:crash:%g" % at]
+    return ["--plant-fault", "%s:%d:%g" % (k, leg, at)]
+
+
+def fmt(v, f="%.1f"):
+    return "-" if v is None else (f % v)
+
+
+def run_matrix(args):
+    rows = []
+    all_cases = cases(args)
+    print("fault matrix: %d sessions, load average %s, %s" % (len(all_cases), load(),
+                                                              datetime.datetime.now().isoformat()))
+    for n, case in enumerate(all_cases):
+        name = "%s_%s_leg%d%s_%d" % (case["mode"], case["kind"], case["leg"],
+                                     "_sb" if case["standby"] else "", case["rep"])
+        out_dir = os.path.join(args.out, name)
+        shutil.rmtree(out_dir, ignore_errors=True)
+        domain = 100 + (os.getpid() + n) % 100
+        cmd = session_command(args, args.build, out_dir, fault_args(case, args.fault_at),
+                              case["mode"], case["standby"], domain)
+        before = load()
+        t0 = time.time()
+        rc = run_session(args, cmd)
+        wall = time.time() - t0
+        res = analyse(args.build, out_dir, case, args.fault_at)
+        row = dict(case, exit=rc, wall_s=wall, load=before, **res)
+        rows.append(row)
+        print("%3d/%d %-9s %-16s leg %d %-3s exit %3s  %-44s %8s ms %6s ticks  exc %6s mm %5s deg  "
+              "take-over %6s ms  lost %s  cmd gaps %s  (%.0f s, load %s)" % (
+                  n + 1, len(all_cases), case["mode"], case["kind"], case["leg"],
+                  "sb" if case["standby"] else "", rc, row["detected"], fmt(row["lat_ms"]),
+                  fmt(row["lat_ticks"], "%d"), fmt(row["exc_mm"]), fmt(row["exc_deg"], "%.2f"),
+                  fmt(row["takeover_ms"]), fmt(row["lost_plant"], "%d"), fmt(row["cmd_gaps"], "%d"),
+                  wall, before), flush=True)
+    with open(os.path.join(args.out, "fault_matrix.json"), "w") as f:
+        json.dump(rows, f, indent=1)
+    with open(os.path.join(args.out, "fault_matrix.md"), "w") as f:
+        f.write("| mode | fault | leg | standby | exit | detected (source reason leg) | latency ms | "
+                "latency ticks | excursion mm / deg (1 s after) | take-over ms | lost (plant "
+                "streams) | command gaps |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+        for r in rows:
+            f.write("| %s | %s | %s | %s | %s | %s | %s | %s | %s / %s | %s | %s | %s |\n" % (
+                r["mode"], r["kind"], r["leg"] or "-", "yes" if r["standby"] else "no", r["exit"],
+                r["detected"], fmt(r["lat_ms"]), fmt(r["lat_ticks"], "%d"), fmt(r["exc_mm"]),
+                fmt(r["exc_deg"], "%.2f"), fmt(r["takeover_ms"]), fmt(r["lost_plant"], "%d"),
+                fmt(r["cmd_gaps"], "%d")))
+    print("table: %s  (load average at the end %s)" % (os.path.join(args.out, "fault_matrix.md"),
+                                                       load()))
+
+
+def run_series(args):
+    stress = None
+    if args.stress > 0:
+        stress = subprocess.Popen(["stress-ng", "--cpu", str(args.stress), "--quiet"],
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                  start_new_session=True)
+        time.sleep(1)
+    rows = []
+    print("real-time series: %d sessions (combined, %d periods, recorder on)%s, load average %s" % (
+        args.rt_series, args.periods, ", stress-ng --cpu %d beside" % args.stress if stress else "",
+        load()))
+    try:
+        for n in range(args.rt_series):
+            out_dir = os.path.join(args.out, "rt_%02d" % n)
+            shutil.rmtree(out_dir, ignore_errors=True)
+            domain = 100 + (os.getpid() + n) % 100
+            cmd = session_command(args, args.build, out_dir, [], "realtime", False, domain)
+            before = load()
+            rc = run_session(args, cmd)
+            mcap = os.path.join(out_dir, "session.mcap")
+            loss, _ = info_loss(args.build, mcap) if os.path.exists(mcap) else ({}, 1)
+            gaps = {}
+            for (topic, key), l in loss.items():
+                g = gaps.setdefault(topic, [0, 0])
+                g[0] += l["gaps"]
+                g[1] += l["missing"]
+            why = ""
+            log = os.path.join(out_dir, "session.log")
+            if rc != 0 and os.path.exists(log):
+                plant = os.path.join(out_dir, "plant.log")
+                lines = [l.strip() for l in open(plant)] if os.path.exists(plant) else []
+                hits = [l for l in lines if "FAULT" in l or "host overload" in l or (
+                    "leg " in l and ("liveliness" in l or "stale" in l or "writer" in l))]
+                why = hits[0][-160:] if hits else ""
+            rec_summary = ""
+            rlog = os.path.join(out_dir, "recorder.console.log")
+            if os.path.exists(rlog):
+                rec_summary = " ".join(l.strip() for l in open(rlog) if l.startswith("hexa_"))
+            row = {"run": n, "exit": rc, "load": before, "gaps": gaps, "why": why,
+                   "recorder": rec_summary}
+            rows.append(row)
+            gap_text = " ".join("%s %d/%d" % (t.replace("hexa_", ""), g[0], g[1])
+                                for t, g in sorted(gaps.items()))
+            print("%2d exit %d  gaps/missing: %s  (load %s) %s" % (n + 1, rc, gap_text, before, why),
+                  flush=True)
+    finally:
+        if stress:
+            os.killpg(stress.pid, signal.SIGTERM)
+            stress.wait()
+    completed = sum(1 for r in rows if r["exit"] == 0)
+    zero_gap = sum(1 for r in rows if r["gaps"] and all(
+        g[0] == 0 for t, g in r["gaps"].items() if t in ("hexa_LegSensors", "hexa_GroundTruth",
+                                                          "hexa_ImuSample")))
+    print("completed %d of %d; recordings without a gap in the plant's streams: %d of %d; load "
+          "average at the end %s" % (completed, len(rows), zero_gap, len(rows), load()))
+    with open(os.path.join(args.out, "rt_series%s.json" % ("_stress" if stress else "")), "w") as f:
+        json.dump(rows, f, indent=1)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--build", default="build")
+    p.add_argument("--out", default="out/faults-" + datetime.datetime.now().strftime("%Y%m%d-%H%M%S"))
+    p.add_argument("--modes", default="lockstep,realtime")
+    p.add_argument("--legs", default="3", help="comma list of legs, or 'all'")
+    p.add_argument("--kinds", default="all", help="comma list of " + " ".join(ALL_KINDS))
+    p.add_argument("--standby", default="both", choices=["both", "no", "yes"])
+    p.add_argument("--repeat-rt", type=int, default=2, help="runs of every real-time row")
+    p.add_argument("--fault-at", type=float, default=1.5, help="simulated time of the fault (s)")
+    p.add_argument("--trajectory", default="combined")
+    p.add_argument("--periods", type=int, default=1)
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--timeout", type=float, default=180)
+    p.add_argument("--rt-series", type=int, default=0)
+    p.add_argument("--stress", type=int, default=0, help="stress-ng --cpu N beside the series")
+    p.add_argument("--netns", choices=["auto", "yes", "no"], default="auto")
+    args = p.parse_args()
+    args.netns = (os.geteuid() == 0) if args.netns == "auto" else args.netns == "yes"
+    args.build = os.path.abspath(args.build)
+    os.makedirs(args.out, exist_ok=True)
+    args.out = os.path.abspath(args.out)
+    if args.rt_series > 0:
+        if args.periods == 1 and "--periods" not in sys.argv:
+            args.periods = 2
+        run_series(args)
+    else:
+        run_matrix(args)
+
+
+if __name__ == "__main__":
+    main()
