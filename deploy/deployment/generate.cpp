@@ -55,10 +55,13 @@ RolePermissions PermissionsOf(Role role, int leg) {
       // plant creates its writer in every session.
       p.publish = {{kLegSensorsTopic, {"", any_leg}}, {kImuSampleTopic, {}}, {kGroundTruthTopic, {}},
                    {kTrackerPoseTopic, {}}, status, faults};
-      p.subscribe = {valve_any, {kLegSetpointTopic, {}}, status};
+      // FaultEvent: the supervisor's FAULT_SENSOR_INCONSISTENT closes that leg's valve
+      // (the plant's interlock, docs/faults.md).
+      p.subscribe = {valve_any, {kLegSetpointTopic, {}}, status, faults};
       break;
     case deployment::LEG:
-      p.publish = {{kValveCommandTopic, {LegPartition(leg)}}, status};
+      // FaultEvent: the leg reports its own held-control episodes (bad input, stale setpoint).
+      p.publish = {{kValveCommandTopic, {LegPartition(leg)}}, status, faults};
       p.subscribe = {{kLegSensorsTopic, {LegPartition(leg)}}, {kLegSetpointTopic, {LegPartition(leg)}}};
       break;
     case deployment::SUPERVISOR:
