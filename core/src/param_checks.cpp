@@ -368,6 +368,21 @@ void CheckSupervisorParams(ParamChecker& c, const SupervisorParams& s, const std
   CheckOuterLoopParams(c, s.outer_loop, p + "outer_loop");
 }
 
+void CheckPlantFaultParams(ParamChecker& c, const PlantFaultParams& f, const std::string& path) {
+  c.Finite(path + ".pot_drift_m_s", f.pot_drift_m_s);
+  c.Positive(path + ".supply_loss_time_constant_s", f.supply_loss_time_constant_s, "time constant");
+  for (std::size_t k = 0; k < f.faults.size(); ++k) {
+    const PlantFault& x = f.faults[k];
+    const std::string at = path + ".faults[" + std::to_string(k) + "]";
+    c.NonNegative(at + ".at_time_s", x.at_time_s, "fault time");
+    if (PlantFaultHasLeg(x.kind)) {
+      c.IntInClosed(at + ".leg", x.leg, 1, static_cast<int>(kNumLegs), std::string(ToString(x.kind)) + " leg");
+    } else {
+      c.IntInClosed(at + ".leg", x.leg, 0, 0, std::string(ToString(x.kind)) + " (not a leg fault) leg");
+    }
+  }
+}
+
 void CheckRigParams(ParamChecker& c, const RigParams& rig) {
   CheckAirParams(c, rig.air);
   CheckCylinderParams(c, rig.cylinder);

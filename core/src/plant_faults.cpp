@@ -1,5 +1,7 @@
 #include "hexa/core/plant_faults.hpp"
 
+#include "hexa/core/param_checks.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -85,20 +87,10 @@ std::string ParsePlantFaultList(std::string_view list, std::vector<PlantFault>& 
 }
 
 void PlantFaultParams::Validate() const {
-  auto require = [](bool ok, const char* field, double value, const char* limit) {
-    if (!ok)
-      throw std::invalid_argument(std::string("PlantFaultParams.") + field + " = " +
-                                  std::to_string(value) + ": must be " + limit);
-  };
-  require(std::isfinite(pot_drift_m_s), "pot_drift_m_s", pot_drift_m_s, "finite");
-  require(std::isfinite(supply_loss_time_constant_s) && supply_loss_time_constant_s > 0,
-          "supply_loss_time_constant_s", supply_loss_time_constant_s, "finite and > 0");
-  for (const PlantFault& f : faults) {
-    require(std::isfinite(f.at_time_s) && f.at_time_s >= 0, "faults[].at_time_s", f.at_time_s,
-            "finite and >= 0");
-    require(PlantFaultHasLeg(f.kind) ? (f.leg >= 1 && f.leg <= static_cast<int>(kNumLegs)) : f.leg == 0,
-            "faults[].leg", f.leg, "1..6 for a leg fault, 0 for imu-dropout and supply-loss");
-  }
+  std::vector<ParamIssue> issues;
+  ParamChecker c(issues);
+  CheckPlantFaultParams(c, *this);
+  ThrowIfIssues(issues, "PlantFaultParams");
 }
 
 }  // namespace hexa

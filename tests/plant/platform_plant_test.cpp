@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -351,6 +352,36 @@ TEST(PlantFaults, ParseNamesWhatIsWrong) {
   EXPECT_EQ(ParsePlantFaultList("pot-drift:2:1,imu-dropout:2:1", list).rfind("'imu-dropout:2:1': ", 0), 0u);
   EXPECT_EQ(list.size(), 2u);
   EXPECT_NE(ParsePlantFaultList("pot-drift:2:1,", list).find("''"), std::string::npos);
+}
+
+TEST(PlantFaults, ValidationNamesFieldValueAndLimit) {
+  PlantFaultParams ok;
+  ok.faults.push_back({PlantFaultKind::kPotStuck, 3, 1.5});
+  ok.faults.push_back({PlantFaultKind::kSupplyLoss, 0, 2.0});
+  EXPECT_NO_THROW(ok.Validate());
+  auto message = [](const PlantFaultParams& p) {
+    try {
+      p.Validate();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  PlantFaultParams p = ok;
+  p.supply_loss_time_constant_s = 0.0;
+  EXPECT_NE(message(p).find("faults.supply_loss_time_constant_s"), std::string::npos) << message(p);
+  p = ok;
+  p.pot_drift_m_s = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(message(p).find("faults.pot_drift_m_s"), std::string::npos) << message(p);
+  p = ok;
+  p.faults[0].leg = 7;  // a sensor fault on a leg that does not exist
+  EXPECT_NE(message(p).find("faults.faults[0].leg"), std::string::npos) << message(p);
+  p = ok;
+  p.faults[1].leg = 2;  // supply loss is not a leg fault
+  EXPECT_NE(message(p).find("faults.faults[1].leg"), std::string::npos) << message(p);
+  p = ok;
+  p.faults[1].at_time_s = -1.0;
+  EXPECT_NE(message(p).find("faults.faults[1].at_time_s"), std::string::npos) << message(p);
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "hexa/core/control_params.hpp"
+#include "hexa/core/plant_faults.hpp"
 #include "hexa/core/rig.hpp"
 
 namespace hexa {
@@ -82,6 +83,10 @@ void CheckOuterLoopParams(ParamChecker& c, const OuterLoopParams& o,
                           const std::string& path = "supervisor.outer_loop");
 void CheckSupervisorParams(ParamChecker& c, const SupervisorParams& s,
                            const std::string& path = "supervisor");
+// Injected rig faults (plant_faults.hpp): drift finite, supply-loss time constant > 0, each
+// fault at a finite time >= 0 on a leg 1..6 (sensor faults) or leg 0 (IMU, supply).
+void CheckPlantFaultParams(ParamChecker& c, const PlantFaultParams& f,
+                           const std::string& path = "faults");
 // Every struct of a RigParams (no cross-struct rule).
 void CheckRigParams(ParamChecker& c, const RigParams& rig);
 
