@@ -287,6 +287,7 @@ SystemConfig Translate(const pb::RigFile& f) {
   c.supervisor.outer_loop.gain = sv.outer_loop().gain();
   c.supervisor.outer_loop.max_correction_m = sv.outer_loop().max_correction_m();
   c.supervisor.outer_loop.translation_gain_scale = sv.outer_loop().translation_gain_scale();
+  c.supervisor.outer_loop.gate_leg_speed_m_s = sv.outer_loop().gate_leg_speed_m_s();
 
   for (const pb::DisturbanceProfileConfig& d : f.disturbance_profile()) c.profiles[d.name()] = FromPb(d);
   c.default_profile = f.default_profile();
@@ -557,6 +558,7 @@ std::string ToTextFormat(const SystemConfig& c) {
   sv->mutable_outer_loop()->set_gain(c.supervisor.outer_loop.gain);
   sv->mutable_outer_loop()->set_max_correction_m(c.supervisor.outer_loop.max_correction_m);
   sv->mutable_outer_loop()->set_translation_gain_scale(c.supervisor.outer_loop.translation_gain_scale);
+  sv->mutable_outer_loop()->set_gate_leg_speed_m_s(c.supervisor.outer_loop.gate_leg_speed_m_s);
 
   for (const auto& [name, profile] : c.profiles) ToPb(name, profile, f.add_disturbance_profile());
   f.set_default_profile(c.default_profile);

@@ -41,11 +41,17 @@ void OuterLoop::Update(const OuterLoopInput& input, OuterLoopOutput& output) noe
   weighted.head<3>() *= params_.translation_gain_scale;
   const Vector6d step = J * weighted;
   const bool integrate = params_.enabled && !input.freeze && step.allFinite();
+  // Speed gate (control_params.hpp): full gain at rest, gain / (1 + r^2) as the legs move.
+  double gain = params_.gain;
+  if (params_.gate_leg_speed_m_s > 0.0) {
+    const double r = input.max_leg_speed_m_s / params_.gate_leg_speed_m_s;
+    if (std::isfinite(r)) gain /= 1.0 + r * r;
+  }
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     output.mapped_error_m[i] = mapped[static_cast<Eigen::Index>(i)];
     if (integrate) {
       const double next =
-          correction_m_[i] + params_.gain * step[static_cast<Eigen::Index>(i)];
+          correction_m_[i] + gain * step[static_cast<Eigen::Index>(i)];
       correction_m_[i] = std::clamp(next, -params_.max_correction_m, params_.max_correction_m);
     }
     output.saturated[i] = std::abs(correction_m_[i]) >= params_.max_correction_m &&

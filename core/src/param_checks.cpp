@@ -328,6 +328,7 @@ void CheckOuterLoopParams(ParamChecker& c, const OuterLoopParams& o, const std::
   c.NonNegative(path + ".max_correction_m", o.max_correction_m, "correction bound");
   c.InClosed(path + ".translation_gain_scale", o.translation_gain_scale, 0.0, 1.0,
              "translation share of the outer-loop gain");
+  c.NonNegative(path + ".gate_leg_speed_m_s", o.gate_leg_speed_m_s, "speed gate (0 = off)");
 }
 
 // Longest blend or stop: with the 1800 s a CSV may span, every accepted trajectory stays under

@@ -439,9 +439,10 @@ void Supervisor::Update(const SupervisorInput& input, SupervisorOutput& output) 
     output.desired = desired;
   } else {
     ol_in.desired = desired.pose;
-    outer_loop_.Update(ol_in, output.outer_loop);
     LegArray<double> length_m{}, speed_m_s{}, accel_m_s2{};
     LegKinematicsOf(rig_.geometry, desired, length_m, speed_m_s, accel_m_s2);  // eq 46
+    for (const double v : speed_m_s) ol_in.max_leg_speed_m_s = std::max(ol_in.max_leg_speed_m_s, std::abs(v));
+    outer_loop_.Update(ol_in, output.outer_loop);
     for (std::size_t i = 0; i < kNumLegs; ++i) {
       output.setpoint[i] = SupervisorLegSetpoint{length_m[i], speed_m_s[i], accel_m_s2[i],
                                                  output.outer_loop.correction_m[i], false};

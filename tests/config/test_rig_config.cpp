@@ -168,6 +168,7 @@ void ExpectSupervisorEq(const hexa::SupervisorParams& a, const hexa::SupervisorP
   EXPECT_EQ(a.outer_loop.gain, b.outer_loop.gain);
   EXPECT_EQ(a.outer_loop.max_correction_m, b.outer_loop.max_correction_m);
   EXPECT_EQ(a.outer_loop.translation_gain_scale, b.outer_loop.translation_gain_scale);
+  EXPECT_EQ(a.outer_loop.gate_leg_speed_m_s, b.outer_loop.gate_leg_speed_m_s);
   EXPECT_EQ(a.feedforward_enabled, b.feedforward_enabled);
   EXPECT_EQ(a.length_consistency_limit_m, b.length_consistency_limit_m);
   EXPECT_EQ(a.length_consistency_ticks, b.length_consistency_ticks);

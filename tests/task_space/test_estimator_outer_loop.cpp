@@ -121,6 +121,38 @@ TEST(OuterLoop, MapsAPoseErrorToTheLegLengthChangeAndSaturates) {
   EXPECT_EQ(out.correction_m, before);
 }
 
+// Speed gate (issue 14b): the integration step is gain / (1 + (v / v0)^2) of the mapped
+// error, v = the largest desired leg speed; v0 = 0 leaves the paper's constant gain.
+TEST(OuterLoop, SpeedGateScalesTheIntegrationStepWithTheLegSpeed) {
+  const RigParams rig = MakeReferenceRig();
+  const Pose desired = PoseFromVector(HomePoseVector(rig.geometry.home_position_m));
+  Pose estimated = desired;
+  estimated.p_BP_B_m.z() -= 0.001;
+  auto first_step = [&](double gate_m_s, double leg_speed_m_s) {
+    OuterLoopParams params;
+    params.gain = 0.2;
+    params.gate_leg_speed_m_s = gate_m_s;
+    OuterLoop loop(rig.geometry, params);
+    OuterLoopInput in{desired, estimated, true, false};
+    in.max_leg_speed_m_s = leg_speed_m_s;
+    OuterLoopOutput out;
+    loop.Update(in, out);
+    return out;
+  };
+  const OuterLoopOutput ungated = first_step(0.0, 0.5);
+  const OuterLoopOutput at_rest = first_step(0.05, 0.0);
+  const OuterLoopOutput at_gate = first_step(0.05, 0.05);
+  const OuterLoopOutput fast = first_step(0.05, 0.5);
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    const double full = 0.2 * ungated.mapped_error_m[i];
+    ASSERT_GT(std::abs(full), 1e-5);
+    EXPECT_NEAR(ungated.correction_m[i], full, 1e-15);
+    EXPECT_NEAR(at_rest.correction_m[i], full, 1e-15);
+    EXPECT_NEAR(at_gate.correction_m[i], 0.5 * full, 1e-15);
+    EXPECT_NEAR(fast.correction_m[i], full / 101.0, 1e-15);
+  }
+}
+
 // Pure kinematic loop: the true base joints are off by up to 2 mm (fixed seed); the legs
 // reach exactly the commanded lengths IK_nominal(desired) + correction; the true pose is
 // the forward kinematics of the true geometry; the IMU reads the true orientation; the

@@ -18,6 +18,9 @@ struct OuterLoopInput {
   Pose estimated;               // PoseEstimator output
   bool estimate_valid = true;   // false -> corrections held, nothing integrated
   bool freeze = false;          // supervisor hold -> corrections held
+  // Largest |desired leg speed| of this step (eq 46); with OuterLoopParams::gate_leg_speed_m_s
+  // the integration is scaled down while the legs move fast.
+  double max_leg_speed_m_s = 0.0;
 };
 
 struct OuterLoopOutput {
