@@ -283,6 +283,7 @@ SystemConfig Translate(const pb::RigFile& f) {
   c.supervisor.feedforward_enabled = sv.feedforward_enabled();
   c.supervisor.length_consistency_limit_m = sv.length_consistency_limit_m();
   c.supervisor.length_consistency_ticks = sv.length_consistency_ticks();
+  c.supervisor.setpoint_lead_s = sv.setpoint_lead_s();
   c.supervisor.outer_loop.enabled = sv.outer_loop().enabled();
   c.supervisor.outer_loop.gain = sv.outer_loop().gain();
   c.supervisor.outer_loop.max_correction_m = sv.outer_loop().max_correction_m();
@@ -554,6 +555,7 @@ std::string ToTextFormat(const SystemConfig& c) {
   sv->set_feedforward_enabled(c.supervisor.feedforward_enabled);
   sv->set_length_consistency_limit_m(c.supervisor.length_consistency_limit_m);
   sv->set_length_consistency_ticks(c.supervisor.length_consistency_ticks);
+  sv->set_setpoint_lead_s(c.supervisor.setpoint_lead_s);
   sv->mutable_outer_loop()->set_enabled(c.supervisor.outer_loop.enabled);
   sv->mutable_outer_loop()->set_gain(c.supervisor.outer_loop.gain);
   sv->mutable_outer_loop()->set_max_correction_m(c.supervisor.outer_loop.max_correction_m);

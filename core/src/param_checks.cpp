@@ -366,6 +366,7 @@ void CheckSupervisorParams(ParamChecker& c, const SupervisorParams& s, const std
              "length-consistency limit (docs/faults.md)");
   c.IntInClosed(p + "length_consistency_ticks", s.length_consistency_ticks, 1, 200,
                 "length-consistency persistence (supervisor ticks)");
+  c.InClosed(p + "setpoint_lead_s", s.setpoint_lead_s, 0.0, 0.05, "setpoint lead (0 = off)");
   CheckOuterLoopParams(c, s.outer_loop, p + "outer_loop");
 }
 

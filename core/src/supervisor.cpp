@@ -140,7 +140,7 @@ void Supervisor::StartTrajectory(const Trajectory& trajectory, double time_s) {
   state_ = SupervisorState::kBlending;
 }
 
-void Supervisor::FillFeedforward(const TrajectorySample& desired, bool moving,
+void Supervisor::FillFeedforward(const TrajectorySample& desired, double sample_time_s, bool moving,
                                  LegArray<SupervisorLegSetpoint>& setpoint) const {
   for (auto& sp : setpoint) {
     sp.feedforward_valid = false;
@@ -156,7 +156,7 @@ void Supervisor::FillFeedforward(const TrajectorySample& desired, bool moving,
     // The force one supervisor period ahead on the same trajectory: the legs interpolate
     // force + rate * dt between setpoints, as they do the length (no 200 Hz staircase).
     TrajectorySample ahead;
-    trajectory_.EvaluateStopped(trajectory_time_s_ + params_.period_s, stop_at_s_, ahead);
+    trajectory_.EvaluateStopped(sample_time_s + params_.period_s, stop_at_s_, ahead);
     const PlatformMotion m{ahead.pose, ahead.twist_B, ahead.twist_rate_B};
     if (LegForcesForMotion(rig_.geometry, inertial_, m, next) != KinStatus::kOk) next = now;
   }
@@ -186,7 +186,7 @@ void Supervisor::EnterHold(FaultReason reason, int leg, const char* detail,
   last_desired_.twist_rate_B.setZero();
   // Held at rest: the feed-forward becomes the static load of the frozen pose (the force
   // of the last setpoint would keep the motion's inertial part).
-  if (initialized_) FillFeedforward(last_desired_, false, last_setpoint_);
+  if (initialized_) FillFeedforward(last_desired_, trajectory_time_s_, false, last_setpoint_);
 }
 
 void Supervisor::HandleCommand(const SupervisorInput& input, SupervisorOutput& output) {
@@ -439,17 +439,26 @@ void Supervisor::Update(const SupervisorInput& input, SupervisorOutput& output) 
     output.desired = desired;
   } else {
     ol_in.desired = desired.pose;
+    // Setpoint lead (control_params.hpp): the legs track the motion setpoint_lead_s ahead.
+    TrajectorySample led = desired;
+    double led_time_s = trajectory_time_s_;
+    const bool moving = state_ != SupervisorState::kIdle;
+    if (moving && params_.setpoint_lead_s > 0.0) {
+      led_time_s = trajectory_time_s_ + params_.setpoint_lead_s;
+      trajectory_.EvaluateStopped(led_time_s, stop_at_s_, led);
+    }
     LegArray<double> length_m{}, speed_m_s{}, accel_m_s2{};
-    LegKinematicsOf(rig_.geometry, desired, length_m, speed_m_s, accel_m_s2);  // eq 46
+    LegKinematicsOf(rig_.geometry, led, length_m, speed_m_s, accel_m_s2);  // eq 46
     for (const double v : speed_m_s) ol_in.max_leg_speed_m_s = std::max(ol_in.max_leg_speed_m_s, std::abs(v));
     outer_loop_.Update(ol_in, output.outer_loop);
     for (std::size_t i = 0; i < kNumLegs; ++i) {
       output.setpoint[i] = SupervisorLegSetpoint{length_m[i], speed_m_s[i], accel_m_s2[i],
                                                  output.outer_loop.correction_m[i], false};
     }
-    FillFeedforward(desired, state_ != SupervisorState::kIdle, output.setpoint);
+    FillFeedforward(led, led_time_s, moving, output.setpoint);
     last_setpoint_ = output.setpoint;
-    last_desired_ = desired;
+    // A HOLD freezes the pose the legs were told (the led one), so that reset rests there.
+    last_desired_ = led;
     output.desired = desired;
   }
 

@@ -172,6 +172,7 @@ void ExpectSupervisorEq(const hexa::SupervisorParams& a, const hexa::SupervisorP
   EXPECT_EQ(a.feedforward_enabled, b.feedforward_enabled);
   EXPECT_EQ(a.length_consistency_limit_m, b.length_consistency_limit_m);
   EXPECT_EQ(a.length_consistency_ticks, b.length_consistency_ticks);
+  EXPECT_EQ(a.setpoint_lead_s, b.setpoint_lead_s);
 }
 
 void ExpectProfileEq(const hexa::DisturbanceProfile& a, const hexa::DisturbanceProfile& b) {
@@ -247,9 +248,9 @@ TEST(RigConfigReference, CoreStructsHaveNotGrownPastTheSchema) {
   EXPECT_EQ(sizeof(hexa::BsSmcParams), 17 * sizeof(double));
   EXPECT_EQ(sizeof(hexa::PiParams), 6 * sizeof(double));
   EXPECT_EQ(sizeof(hexa::LegControllerParams), 27 * sizeof(double));
-  EXPECT_EQ(sizeof(hexa::OuterLoopParams), 4 * sizeof(double));
+  EXPECT_EQ(sizeof(hexa::OuterLoopParams), 5 * sizeof(double));
   // + feedforward_enabled (padded), length_consistency_ticks (padded)
-  EXPECT_EQ(sizeof(hexa::SupervisorParams), 18 * sizeof(double));
+  EXPECT_EQ(sizeof(hexa::SupervisorParams), 20 * sizeof(double));
 }
 
 TEST(RigConfigReference, DefaultsBuiltInCodeAreValid) {

@@ -65,6 +65,7 @@ std::vector<Key> Keys() {
       {"ol_pos", [](auto& c, double v) { c.supervisor.outer_loop.translation_gain_scale = v; }},
       {"ol_max", [](auto& c, double v) { c.supervisor.outer_loop.max_correction_m = v; }},
       {"ol_gate", [](auto& c, double v) { c.supervisor.outer_loop.gate_leg_speed_m_s = v; }},
+      {"lead", [](auto& c, double v) { c.supervisor.setpoint_lead_s = v; }},
       {"ff", [](auto& c, double v) { c.supervisor.feedforward_enabled = v != 0.0; }},
       {"kf", [](auto& c, double v) { c.leg_controller.pi.force_feedforward_v_n = v; }},
       // Supervisor period in ticks (5 = the system's 5 ms; 1 = a setpoint every tick, no

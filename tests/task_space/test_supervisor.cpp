@@ -111,7 +111,9 @@ TEST(Supervisor, NominalRunVisitsEveryStateInOrderWithContinuousSetpoints) {
 }
 
 TEST(Supervisor, FeedforwardIsTheInverseDynamicsOfTheDesiredMotionWithAConsistentRate) {
-  Bench bench;
+  SupervisorParams params;
+  params.setpoint_lead_s = 0.0;  // the desired motion of now (the lead: test below)
+  Bench bench(Vector6d::Zero(), params);
   bench.Tick();
   const StartRequest request = bench.sup().PreparePaperStart(PaperMotion::kCombined, 2);
   ASSERT_TRUE(request.feasibility.feasible) << request.feasibility.message;
@@ -145,6 +147,42 @@ TEST(Supervisor, FeedforwardIsTheInverseDynamicsOfTheDesiredMotionWithAConsisten
   EXPECT_GT(max_force, 20.0);  // the combined motion is far from the static ~13 N
   // At rest again: the static load, no rate.
   for (const auto& sp : bench.out.setpoint) EXPECT_EQ(sp.feedforward_force_rate_n_s, 0.0);
+}
+
+// Setpoint lead (issue 14b): with a lead of one supervisor period the legs get, at every tick,
+// exactly the lengths, rates and feed-forward that the supervisor without lead sends one tick
+// later; the desired pose reported (outer loop, metrics) stays the one of now.
+TEST(Supervisor, SetpointLeadSendsTheMotionOfOnePeriodAhead) {
+  SupervisorParams lead_params, now_params;
+  lead_params.setpoint_lead_s = 0.005;
+  now_params.setpoint_lead_s = 0.0;
+  Bench lead(Vector6d::Zero(), lead_params), now(Vector6d::Zero(), now_params);
+  lead.Tick();
+  now.Tick();
+  const StartRequest request = lead.sup().PreparePaperStart(PaperMotion::kCombined, 2);
+  ASSERT_TRUE(request.feasibility.feasible) << request.feasibility.message;
+  lead.Tick(OperatorCommandKind::kStart, &request);
+  now.Tick(OperatorCommandKind::kStart, &request);
+  now.Tick();
+  int moving = 0;
+  for (int k = 0; k < 1000; ++k) {
+    const LegArray<SupervisorLegSetpoint> ahead = lead.out.setpoint;
+    const Vector6d desired_lead = lead.out.desired_xyz_rpy;
+    const Vector6d desired_now = now.out.desired_xyz_rpy;  // one tick later than lead's
+    for (std::size_t i = 0; i < kNumLegs; ++i) {
+      EXPECT_NEAR(ahead[i].length_m, now.out.setpoint[i].length_m, 1e-12) << "tick " << k;
+      EXPECT_NEAR(ahead[i].velocity_m_s, now.out.setpoint[i].velocity_m_s, 1e-12);
+      EXPECT_NEAR(ahead[i].acceleration_m_s2, now.out.setpoint[i].acceleration_m_s2, 1e-9);
+      EXPECT_NEAR(ahead[i].feedforward_force_n, now.out.setpoint[i].feedforward_force_n, 1e-9);
+      EXPECT_NEAR(ahead[i].feedforward_force_rate_n_s, now.out.setpoint[i].feedforward_force_rate_n_s,
+                  1e-6);
+    }
+    if ((desired_now - desired_lead).norm() > 1e-6) ++moving;
+    lead.Tick();
+    now.Tick();
+    if (now.out.state == SupervisorState::kIdle) break;
+  }
+  EXPECT_GT(moving, 500);  // the lead's reported desired pose is the one of now, not ahead
 }
 
 TEST(Supervisor, FeedforwardDisabledIsNotSent) {
@@ -265,7 +303,6 @@ TEST_P(SupervisorFault, HoldsWithFrozenSetpointsRefusesCommandsAndLeavesOnlyOnRe
   StartRequest request;
   StartAndTrack(bench, request);
   const LegArray<SupervisorLegSetpoint> before = bench.out.setpoint;
-  const Vector6d desired_before = bench.out.desired_xyz_rpy;
 
   bench.follow_ = false;  // the plant holds still; the fault input stays as injected
   c.inject(bench.in);
@@ -283,7 +320,12 @@ TEST_P(SupervisorFault, HoldsWithFrozenSetpointsRefusesCommandsAndLeavesOnlyOnRe
     EXPECT_EQ(bench.out.setpoint[i].acceleration_m_s2, 0.0);
     EXPECT_TRUE(bench.out.setpoint[i].hold);
   }
-  EXPECT_EQ(bench.out.desired_xyz_rpy, desired_before);
+  // The desired pose held is the one whose leg lengths are held (with the setpoint lead
+  // that is the led pose, not the desired pose of the tick before the fault).
+  const Vector6d desired_before = bench.out.desired_xyz_rpy;
+  LegArray<double> held_lengths{};
+  InverseKinematics(MakeReferenceRig().geometry, PoseFromVector(desired_before), held_lengths);
+  for (std::size_t i = 0; i < kNumLegs; ++i) EXPECT_NEAR(held_lengths[i], before[i].length_m, 1e-9);
 
   // Every command but reset is refused; the hold and the fault persist, setpoints stay.
   const StartRequest again = request;

@@ -158,7 +158,7 @@ class Supervisor {
   void HandleCommand(const SupervisorInput& input, SupervisorOutput& output);
   void StartTrajectory(const Trajectory& trajectory, double time_s);
   // Feed-forward of the desired sample (and of the next period's sample while moving).
-  void FillFeedforward(const TrajectorySample& desired, bool moving,
+  void FillFeedforward(const TrajectorySample& desired, double sample_time_s, bool moving,
                        LegArray<SupervisorLegSetpoint>& setpoint) const;
 
   RigParams rig_;
