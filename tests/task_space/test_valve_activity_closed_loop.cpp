@@ -4,7 +4,7 @@
 // chatter"): over the TRACKING window, all six legs, mean |u(k) - u(k-1)| per 1 ms tick and
 // the fraction of ticks with u < 0.05 V or u > 9.95 V.
 // Before the outer loop's speed gate (docs/task_space.md "Outer loop speed gate") the
-// corrections swung between their +-5 mm bounds at 1 Hz and 4.4 % of the ticks were
+// corrections swung between their +-5 mm bounds at 1 Hz and 4.2-4.9 % of the ticks were
 // saturated (seeds 1-3); this test failed then.
 #include <gtest/gtest.h>
 
