@@ -98,10 +98,34 @@ def main():
                     help="closed loop also with the identified overlay's pneumatic values only and its gravity loads only")
     ap.add_argument("--in-process", action="store_true",
                     help="record the experiments with hexa_sim (in-process lockstep) instead of a DDS session")
+    ap.add_argument("--calibration", default=None,
+                    help="kinematic calibration overlay to identify with (hexa_calibrate's output); default: "
+                         "run the calibration session (DDS) and hexa_calibrate first")
+    ap.add_argument("--no-calibration", action="store_true",
+                    help="identify with the rig file's nominal joints and potentiometers (the state before "
+                         "the kinematic calibration reached hexa_identify)")
     a = ap.parse_args()
     b, out = a.build, a.out
     os.makedirs(out, exist_ok=True)
     timings = {}
+
+    # 0. Kinematic calibration (docs/calibration.md): the identification's inverse dynamics
+    #    needs the rig's true joints and potentiometers as the calibrated controllers know them.
+    #    Through DDS in both modes (hexa_sim --calibrate does not write an overlay).
+    calibration = None
+    if not a.no_calibration:
+        calibration = a.calibration or os.path.join(out, "calibration.textproto")
+        if a.calibration is None and not (a.reuse and os.path.exists(calibration)):
+            cal_dir = os.path.join(out, "calibration-session")
+            timings["calibration session"] = run([os.path.join(b, "deploy", "hexa_session"), "--trajectory",
+                                                  "calibration", "--tracker", "--seed", str(a.seed),
+                                                  "--profile", "realistic", "--out", cal_dir,
+                                                  "--domain", str(a.domain + 2), "--timeout", "3600"],
+                                                 os.path.join(out, "calibration-session.log"))
+            timings["hexa_calibrate"] = run([os.path.join(b, "tools", "hexa_calibrate"),
+                                             os.path.join(cal_dir, "session.mcap"), "--out", calibration,
+                                             "--truth-seed", str(a.seed)],
+                                            os.path.join(out, "hexa_calibrate.log"))
 
     # 1. Experiments: through the system (DDS session), or in process (hexa_sim).
     if a.in_process:
@@ -140,7 +164,8 @@ def main():
         timings["hexa_identify"] = run([os.path.join(b, "tools", "hexa_identify"),
                                         ident_mcap, "--out", idd, "--free-fall", ff_mcap,
                                         "--truth-overlay", truth_overlay,
-                                        "--max-iterations", str(a.max_iterations)],
+                                        "--max-iterations", str(a.max_iterations)]
+                                       + (["--rig-overlay", calibration] if calibration else []),
                                        os.path.join(out, "hexa_identify.log"), check=False)
     with open(os.path.join(idd, "identification.json")) as f:
         result = json.load(f)
