@@ -1,6 +1,8 @@
 #!/usr/bin/python3
 """Regenerates docs/identification_results.md (docs/identification.md explains the method):
 
+  0. the kinematic calibration (hexa_session --trajectory calibration --tracker, hexa_calibrate),
+     whose overlay hexa_identify uses for the joints and potentiometers;
   1. the identification experiment through the whole system (hexa_session --experiment
      identify: plant, six leg controllers, supervisor, recorder over loopback DDS; every leg
      driven open loop in turn), and the free-fall bench (hexa_session --experiment free-fall);
@@ -218,9 +220,18 @@ def write_doc(a, result, closed, rigs, friction_study, timings, out):
     else:
         w(f"Experiment: `hexa_session --experiment identify --legs 1-6 --excite-duration {a.excite_duration:g} "
           f"--seed {a.seed} --profile realistic` (DDS, lockstep), free fall: `hexa_session --experiment free-fall`. ")
+    if a.no_calibration:
+        w("Kinematic calibration: NOT used (`--no-calibration`: the rig file's nominal joints and "
+          "potentiometers). ")
+    elif a.calibration:
+        w(f"Kinematic calibration: `{a.calibration}` (given). ")
+    else:
+        w(f"Kinematic calibration: `hexa_session --trajectory calibration --tracker --seed {a.seed}` (DDS) + "
+          "`hexa_calibrate`, passed to hexa_identify with `--rig-overlay`. ")
     w(
       f"Identification: `hexa_identify` (GA: Table 7, MaxIt {result['ga_max_iterations']}, nPop "
-      f"{result['ga_population']}, {result['threads']} threads; least squares: Ceres). Payload scale "
+      f"{result['ga_population']}, {result['threads']} threads, search ranges around the rig file's values "
+      f"(`--ga-space around-nominal`); least squares: Ceres). Payload scale "
       f"estimated {result['payload_scale']:.4f} (truth {result['true_payload_scale']}), pressure noise "
       f"estimated {result.get('pressure_noise_pa', 0):.0f} Pa.\n")
 
