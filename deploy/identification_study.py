@@ -1,6 +1,8 @@
 #!/usr/bin/python3
 """Regenerates docs/identification_results.md (docs/identification.md explains the method):
 
+  0. the kinematic calibration (hexa_session --trajectory calibration --tracker, hexa_calibrate),
+     whose overlay hexa_identify uses for the joints and potentiometers;
   1. the identification experiment through the whole system (hexa_session --experiment
      identify: plant, six leg controllers, supervisor, recorder over loopback DDS; every leg
      driven open loop in turn), and the free-fall bench (hexa_session --experiment free-fall);
@@ -98,10 +100,34 @@ def main():
                     help="closed loop also with the identified overlay's pneumatic values only and its gravity loads only")
     ap.add_argument("--in-process", action="store_true",
                     help="record the experiments with hexa_sim (in-process lockstep) instead of a DDS session")
+    ap.add_argument("--calibration", default=None,
+                    help="kinematic calibration overlay to identify with (hexa_calibrate's output); default: "
+                         "run the calibration session (DDS) and hexa_calibrate first")
+    ap.add_argument("--no-calibration", action="store_true",
+                    help="identify with the rig file's nominal joints and potentiometers (the state before "
+                         "the kinematic calibration reached hexa_identify)")
     a = ap.parse_args()
     b, out = a.build, a.out
     os.makedirs(out, exist_ok=True)
     timings = {}
+
+    # 0. Kinematic calibration (docs/calibration.md): the identification's inverse dynamics
+    #    needs the rig's true joints and potentiometers as the calibrated controllers know them.
+    #    Through DDS in both modes (hexa_sim --calibrate does not write an overlay).
+    calibration = None
+    if not a.no_calibration:
+        calibration = a.calibration or os.path.join(out, "calibration.textproto")
+        if a.calibration is None and not (a.reuse and os.path.exists(calibration)):
+            cal_dir = os.path.join(out, "calibration-session")
+            timings["calibration session"] = run([os.path.join(b, "deploy", "hexa_session"), "--trajectory",
+                                                  "calibration", "--tracker", "--seed", str(a.seed),
+                                                  "--profile", "realistic", "--out", cal_dir,
+                                                  "--domain", str(a.domain + 2), "--timeout", "3600"],
+                                                 os.path.join(out, "calibration-session.log"))
+            timings["hexa_calibrate"] = run([os.path.join(b, "tools", "hexa_calibrate"),
+                                             os.path.join(cal_dir, "session.mcap"), "--out", calibration,
+                                             "--truth-seed", str(a.seed)],
+                                            os.path.join(out, "hexa_calibrate.log"))
 
     # 1. Experiments: through the system (DDS session), or in process (hexa_sim).
     if a.in_process:
@@ -140,7 +166,8 @@ def main():
         timings["hexa_identify"] = run([os.path.join(b, "tools", "hexa_identify"),
                                         ident_mcap, "--out", idd, "--free-fall", ff_mcap,
                                         "--truth-overlay", truth_overlay,
-                                        "--max-iterations", str(a.max_iterations)],
+                                        "--max-iterations", str(a.max_iterations)]
+                                       + (["--rig-overlay", calibration] if calibration else []),
                                        os.path.join(out, "hexa_identify.log"), check=False)
     with open(os.path.join(idd, "identification.json")) as f:
         result = json.load(f)
@@ -193,9 +220,18 @@ def write_doc(a, result, closed, rigs, friction_study, timings, out):
     else:
         w(f"Experiment: `hexa_session --experiment identify --legs 1-6 --excite-duration {a.excite_duration:g} "
           f"--seed {a.seed} --profile realistic` (DDS, lockstep), free fall: `hexa_session --experiment free-fall`. ")
+    if a.no_calibration:
+        w("Kinematic calibration: NOT used (`--no-calibration`: the rig file's nominal joints and "
+          "potentiometers). ")
+    elif a.calibration:
+        w(f"Kinematic calibration: `{a.calibration}` (given). ")
+    else:
+        w(f"Kinematic calibration: `hexa_session --trajectory calibration --tracker --seed {a.seed}` (DDS) + "
+          "`hexa_calibrate`, passed to hexa_identify with `--rig-overlay`. ")
     w(
       f"Identification: `hexa_identify` (GA: Table 7, MaxIt {result['ga_max_iterations']}, nPop "
-      f"{result['ga_population']}, {result['threads']} threads; least squares: Ceres). Payload scale "
+      f"{result['ga_population']}, {result['threads']} threads, search ranges around the rig file's values "
+      f"(`--ga-space around-nominal`); least squares: Ceres). Payload scale "
       f"estimated {result['payload_scale']:.4f} (truth {result['true_payload_scale']}), pressure noise "
       f"estimated {result.get('pressure_noise_pa', 0):.0f} Pa.\n")
 

@@ -5,6 +5,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -657,6 +658,22 @@ StrokeSearchSpace StrokeSearchSpace::Default() {
   //        v_s    B      F_s-F_c F_c    g_o  g_i  g_k
   s.lower << 0.02, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0;
   s.upper << 1.5, 150.0, 150.0, 250.0, 2.0, 2.0, 2.0;
+  return s;
+}
+
+StrokeSearchSpace StrokeSearchSpace::AroundNominal(const StrokeParams& nominal, double factor) {
+  if (!(factor > 1.0) || !std::isfinite(factor)) {
+    throw std::invalid_argument("StrokeSearchSpace::AroundNominal: factor = " + std::to_string(factor) +
+                                " must be finite and > 1");
+  }
+  StrokeSearchSpace s = Default();
+  StrokeParams::Vector v = nominal.ToVector();
+  v[2] -= v[3];  // the GA's variable: F_s - F_c
+  for (int j = 0; j < 4; ++j) {
+    if (!(v[j] > 0.0) || !std::isfinite(v[j])) continue;
+    s.lower[j] = v[j] / factor;
+    s.upper[j] = v[j] * factor;
+  }
   return s;
 }
 

@@ -193,8 +193,13 @@ void WriteReport(const Report& r, const std::map<int, std::array<StrokeDataset, 
      << (r.payload_estimated ? " (estimated: median over the legs)" : " (given)");
   if (r.truth) md << ", true " << Fmt(r.truth->payload_scale(), 5);
   md << ". GA: Table 7 (nVar 7, MaxIt " << r.ga_params.max_iterations << ", nPop " << r.ga_params.population
-     << ", pc 0.8, pm 0.3, mu 0.02), seed " << r.ga_params.seed << ", " << r.threads
-     << " threads. Least squares: Ceres, from the rig file's values.\n\n";
+     << ", pc 0.8, pm 0.3, mu 0.02), seed " << r.ga_params.seed << ", " << r.threads << " threads, "
+     << "search space " << r.ga_space
+     << (r.ga_space == "around-nominal"
+             ? " (v_s, B, F_s - F_c, F_c from the rig file's value / " + Fmt(r.ga_range_factor) + " to x " +
+                   Fmt(r.ga_range_factor) + ")"
+             : std::string(" (fixed ranges)"))
+     << ". Least squares: Ceres, from the rig file's values.\n\n";
   if (!r.payload_per_leg.empty()) {
     md << "Payload scale per leg:";
     for (const auto& [leg, s] : r.payload_per_leg) md << " leg " << leg << " " << Fmt(s, 5) << ";";

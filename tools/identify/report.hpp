@@ -50,7 +50,10 @@ struct Report {
   GaParams ga_params;
   int threads = 2;
   double flat_threshold = 1e-3;
-  StrokeSearchSpace search_space;
+  // How the GA's genes map to the parameters (--ga-space: around-nominal, wide) and the
+  // factor of around-nominal (--ga-range-factor).
+  std::string ga_space = "wide";
+  double ga_range_factor = 2.0;
   double pressure_noise_pa = 0.0;  // compensated in the pressure channels
   double payload_scale = 1.0;
   bool payload_estimated = false;

@@ -249,6 +249,12 @@ double EstimateWhiteNoiseSigma(const std::vector<double>& x, const std::vector<s
 struct StrokeSearchSpace {
   StrokeParams::Vector lower, upper;
   static StrokeSearchSpace Default();  // docs/identification.md gives the ranges
+  // The friction variables (v_s, B, F_s - F_c, F_c) in [nominal / factor, nominal x factor]
+  // of the rig file's values, the gammas in [1, 2] as Default(): the GA's genes then resolve
+  // the range the parameters can plausibly take, and Table 7's mutation step (sigma = 0.1 of
+  // the gene range) shrinks with it (docs/identification.md, "GA search ranges").
+  // factor > 1; a nominal value <= 0 keeps Default()'s range for that variable.
+  static StrokeSearchSpace AroundNominal(const StrokeParams& nominal, double factor);
   StrokeParams Decode(const Genome& genes) const;
   Genome Encode(const StrokeParams& p) const;  // clamped to [0, 1]
 };
