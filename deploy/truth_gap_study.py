@@ -108,9 +108,17 @@ def main():
     scaled_overlay(ov("poly_x1.1.textproto"), rig_text, "polytropic", 1.1)
     scaled_overlay(ov("fric_x1.2.textproto"), rig_text, "friction", 1.2)
     scaled_overlay(ov("fric_x0.833.textproto"), rig_text, "friction", 1 / 1.2)
-    for beta in (90, 110, 121):
-        with open(ov(f"rig_beta{beta}.textproto"), "w") as f:
-            f.write(rig_text.replace("backstepping_beta_1_s: 100", f"backstepping_beta_1_s: {beta}"))
+    # beta_1 rows: the rig file's value x 0.9, 1.1, 1.21 (named by factor; the value may change).
+    beta_re = re.compile(r"(backstepping_beta_1_s:\s*)([0-9.eE+-]+)")
+    found = beta_re.findall(rig_text)
+    if len(found) != 1:
+        raise SystemExit(f"{RIG}: expected one backstepping_beta_1_s, found {len(found)}")
+    beta_nominal = float(found[0][1])
+    betas = {}
+    for name, factor in (("x0.9", 0.9), ("x1.1", 1.1), ("x1.21", 1.21)):
+        betas[name] = beta_nominal * factor
+        with open(ov(f"rig_beta{name}.textproto"), "w") as f:
+            f.write(beta_re.sub(lambda m: m.group(1) + repr(betas[name]), rig_text))
     rows = [
         ("realistic", "nominal rig", []),
         ("realistic", "truth overlay", ["--rig-overlay", a.truth_overlay]),
@@ -125,10 +133,10 @@ def main():
         ("friction x1.2 only", "exact (friction x1.2)", ["--rig", study_rig, "--profile", "fric1.2", "--rig-overlay", ov("fric_x1.2.textproto")]),
         ("= rig file", "friction x1.2", ["--rig", study_rig, "--profile", "same", "--rig-overlay", ov("fric_x1.2.textproto")]),
         ("= rig file", "friction / 1.2", ["--rig", study_rig, "--profile", "same", "--rig-overlay", ov("fric_x0.833.textproto")]),
-        ("realistic, beta_1 90", "nominal rig", ["--rig", ov("rig_beta90.textproto")]),
-        ("realistic, beta_1 110", "nominal rig", ["--rig", ov("rig_beta110.textproto")]),
-        ("realistic, beta_1 110", "truth overlay", ["--rig", ov("rig_beta110.textproto"), "--rig-overlay", a.truth_overlay]),
-        ("realistic, beta_1 121", "truth overlay", ["--rig", ov("rig_beta121.textproto"), "--rig-overlay", a.truth_overlay]),
+        (f"realistic, beta_1 {betas['x0.9']:g}", "nominal rig", ["--rig", ov("rig_betax0.9.textproto")]),
+        (f"realistic, beta_1 {betas['x1.1']:g}", "nominal rig", ["--rig", ov("rig_betax1.1.textproto")]),
+        (f"realistic, beta_1 {betas['x1.1']:g}", "truth overlay", ["--rig", ov("rig_betax1.1.textproto"), "--rig-overlay", a.truth_overlay]),
+        (f"realistic, beta_1 {betas['x1.21']:g}", "truth overlay", ["--rig", ov("rig_betax1.21.textproto"), "--rig-overlay", a.truth_overlay]),
     ]
     print("| plant | controller model | translation RMSE, sum cm | rotation RMSE, sum deg | mean leg RMSE, sum mm |")
     print("|---|---|---|---|---|")
