@@ -54,6 +54,7 @@ def session_command(args, build, out_dir, fault_args, mode, standby, domain):
            "--out", out_dir, "--domain", str(domain), "--timeout", str(args.timeout)]
     if standby:
         cmd.append("--standby")
+    cmd += args.session_arg
     cmd += fault_args
     return cmd
 
@@ -345,6 +346,9 @@ def main():
     p.add_argument("--rt-series", type=int, default=0)
     p.add_argument("--stress", type=int, default=0, help="stress-ng --cpu N beside the series")
     p.add_argument("--netns", choices=["auto", "yes", "no"], default="auto")
+    p.add_argument("--session-arg", action="append", default=[],
+                   help="extra hexa_session argument for every session (repeatable; use "
+                        "--session-arg=--rt-lease --session-arg=0.02)")
     args = p.parse_args()
     args.netns = (os.geteuid() == 0) if args.netns == "auto" else args.netns == "yes"
     args.build = os.path.abspath(args.build)

@@ -66,6 +66,12 @@ SilentLegVerdict JudgeSilentLeg(const LegWriterCounts& writers, std::int64_t sil
   return writers.not_alive > 0 ? SilentLegVerdict::kLivelinessLost : SilentLegVerdict::kWriterGone;
 }
 
+bool RealtimeLapseMeansDead(const LegWriterCounts& writers, std::int64_t command_age_ticks,
+                            std::int64_t confirm_ticks) {
+  if (writers.alive > 0) return false;
+  return command_age_ticks < 0 || command_age_ticks >= confirm_ticks;
+}
+
 LockstepBarrier::Action LockstepBarrier::Check(std::int64_t now_ns) {
   if (complete()) return Action::kWait;
   if (now_ns - began_ns_ >= params_.timeout_ns) return Action::kTimeout;

@@ -226,6 +226,7 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
                     node::QosFor(options.common, comm::TopicKind::kFaultEvent), 64),
       waitset_(participant_) {
   silent_params_ = SilentParams(options);
+  lapse_confirm_ticks_ = std::max<std::int64_t>(1, std::llround(options.common.realtime_lease_s / kTickS));
   forced_reason_.fill(hexa_msg_FAULT_NONE);
   waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
   waitset_.Attach(wake_.get(), kTokenWake);
@@ -574,7 +575,9 @@ void PlantNode::CheckLinksRealtime() {
   // Real time: a leg without a live writer is held at null from this tick (its last commands
   // come from a controller whose loop no longer runs) and reported once (ApplyAndStep); it is
   // released after a writer has been alive for 100 ticks in a row (a flickering lease stays
-  // one episode). Every awaited leg dead at once is the host (ApplyAndStep), not six
+  // one episode). A lapse while the leg's commands are still fresh (newer than the lease; after
+  // a slip of the plant's schedule, than the stale-command tolerance) is the host delaying the
+  // renewal, not the leg (RealtimeLapseMeansDead): it is counted and judged again next tick. Every awaited leg dead at once is the host (ApplyAndStep), not six
   // controllers.
   for (int leg = 1; leg <= options_.expected_legs; ++leg) {
     const std::size_t i = static_cast<std::size_t>(leg - 1);
@@ -584,13 +587,32 @@ void PlantNode::CheckLinksRealtime() {
     if (c.alive == 0) {
       link_alive_run_[i] = 0;
       if (!link_dead_[i]) {
+        const std::int64_t age = latest_[i].received
+                                     ? static_cast<std::int64_t>(tick_) -
+                                           static_cast<std::int64_t>(latest_[i].answered_tick)
+                                     : -1;
+        // After a slip of the plant's schedule the controllers on the same host catch up
+        // over a few ticks: their answers count as fresh for the stale-command tolerance.
+        const std::int64_t confirm =
+            tick_ <= slip_recent_until_tick_
+                ? std::max(lapse_confirm_ticks_, static_cast<std::int64_t>(options_.realtime_stale_ticks))
+                : lapse_confirm_ticks_;
+        if (!RealtimeLapseMeansDead(c, age, confirm)) {
+          // The leg's commands are fresh: the host delayed the lease renewal (counted).
+          if (!lapse_while_fresh_[i]) ++lapses_while_fresh_;
+          lapse_while_fresh_[i] = true;
+          continue;
+        }
         link_dead_[i] = true;
         forced_reason_[i] = WireReason(JudgeSilentLeg(c, 0, silent_params_));
       }
-    } else if (link_dead_[i] && ++link_alive_run_[i] >= 100) {
-      link_dead_[i] = false;
-      forced_reason_[i] = interlock_[i] ? hexa_msg_FAULT_SENSOR_INCONSISTENT : hexa_msg_FAULT_NONE;
-      log_->info("leg {} tick {}: a writer has been alive for 100 ticks: valve released", leg, tick_);
+    } else {
+      lapse_while_fresh_[i] = false;
+      if (link_dead_[i] && ++link_alive_run_[i] >= 100) {
+        link_dead_[i] = false;
+        forced_reason_[i] = interlock_[i] ? hexa_msg_FAULT_SENSOR_INCONSISTENT : hexa_msg_FAULT_NONE;
+        log_->info("leg {} tick {}: a writer has been alive for 100 ticks: valve released", leg, tick_);
+      }
     }
   }
 }
@@ -994,6 +1016,7 @@ int PlantNode::RunRealtime(std::uint64_t last_tick) {
                    "pauses with the host; counted, logged once)", tick_, late_ns * 1e-6);
       ++slips_;
       slipped_ns_ += late_ns;
+      slip_recent_until_tick_ = tick_ + options_.realtime_stale_ticks;
       clock_gettime(CLOCK_MONOTONIC, &next);
     }
     if (!ApplyAndStep(options_.realtime_stale_ticks)) return 4;
@@ -1099,12 +1122,13 @@ int PlantNode::Run() {
              "command faults {}, lockstep resends {} (in {} re-asks, {} to the supervisor), "
              "failed writes {}, recorder syncs {} (the loop stood still for {} of them, "
              "{:.3f} s; {} given up), schedule slips {} ({:.1f} ms), lockstep host stalls {} "
-             "(all legs lapsed at once: {}), rejected commands {}; writers:{}",
+             "(all legs lapsed at once: {}), real-time lease lapses with fresh commands {}, "
+             "rejected commands {}; writers:{}",
              tick_, static_cast<double>(tick_) * kTickS, valve.requested_deadline_missed_total,
              overruns_, faults, resent_samples_, barrier_.reasks_total(), supervisor_reasks_,
              sensors_writer_.write_errors_total(), recorder_syncs_, recorder_sync_blocks_,
              recorder_sync_wait_s_, recorder_syncs_given_up_, slips_,
-             static_cast<double>(slipped_ns_) * 1e-6, host_stalls_, all_lapsed_logged_, rejected,
+             static_cast<double>(slipped_ns_) * 1e-6, host_stalls_, all_lapsed_logged_, lapses_while_fresh_, rejected,
              writers_.Describe());
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     if (compute_[i].cycles() == 0) continue;

@@ -232,6 +232,11 @@ class PlantNode {
   int exit_code_ = -1;          // set when the run ends (>= 0)
   LegArray<LatestCommand> latest_{};
   LegArray<CommandEpisode> episodes_{};  // fault episodes per leg: one report each
+  // Real time: lease lapses while the leg's commands were fresh (the host, not the leg).
+  std::int64_t lapse_confirm_ticks_ = 10;      // the lease in ticks
+  std::uint64_t slip_recent_until_tick_ = 0;  // a slip of the schedule: stale tolerance after it
+  LegArray<bool> lapse_while_fresh_{};
+  std::uint64_t lapses_while_fresh_ = 0;
   LegWriterTable writers_;
   SilentLegParams silent_params_;
   LegMask dropped_ = 0;                  // lockstep: legs no longer awaited (dead)

@@ -37,6 +37,18 @@ TEST(LockstepProtocol, SilentLegVerdictNamesTheCause) {
   EXPECT_STREQ(ToString(SilentLegVerdict::kNoAnswer), "no answer from a live writer");
 }
 
+// Real time: a lease lapse counts only when the leg's commands stopped too (docs/faults.md).
+TEST(LockstepProtocol, RealtimeLapseWithFreshCommandsIsTheHostNotTheLeg) {
+  const std::int64_t confirm = 10;  // a 10 ms lease
+  EXPECT_FALSE(RealtimeLapseMeansDead({1, 0, 0}, 100, confirm));  // alive: never dead here
+  EXPECT_FALSE(RealtimeLapseMeansDead({0, 1, 0}, 1, confirm));    // answered 1 tick ago
+  EXPECT_FALSE(RealtimeLapseMeansDead({0, 1, 0}, 9, confirm));
+  EXPECT_TRUE(RealtimeLapseMeansDead({0, 1, 0}, 10, confirm));    // commands stopped: dead
+  EXPECT_TRUE(RealtimeLapseMeansDead({0, 0, 1}, 10, confirm));    // gone
+  EXPECT_FALSE(RealtimeLapseMeansDead({0, 1, 0}, 14, 15));        // after a slip: tolerance
+  EXPECT_TRUE(RealtimeLapseMeansDead({0, 1, 0}, -1, confirm));    // never answered
+}
+
 TEST(LockstepProtocol, ReleasedLegsAreNoLongerAwaited) {
   LockstepBarrier b;
   b.Begin(7, FirstLegs(6), 0);

@@ -119,6 +119,15 @@ struct SilentLegParams {
 SilentLegVerdict JudgeSilentLeg(const LegWriterCounts& writers, std::int64_t silent_ns,
                                 const SilentLegParams& params);
 
+// Real time, pure: is a leg with no live writer dead? Only if its commands have stopped too:
+// its newest applied answer is at least `confirm_ticks` old (the plant: the lease in ticks, or
+// the stale-command tolerance just after its schedule slipped). A lapse while the leg's
+// commands are fresh is the host's timing (a stall of the control CPU delays the lease renewal
+// and the plant's own ticks alike), not the leg: a crashed, hung or silent controller stops
+// answering, so its command age reaches the lease when the lease lapses. `command_age_ticks` < 0: no command yet (the start-up grace).
+bool RealtimeLapseMeansDead(const LegWriterCounts& writers, std::int64_t command_age_ticks,
+                            std::int64_t confirm_ticks);
+
 // A setpoint as issued by the supervisor at tick `tick`: what LegSetpoint carries on the wire.
 struct IssuedSetpoint {
   std::uint64_t tick = 0;
