@@ -571,6 +571,12 @@ void PlantNode::JudgeSilentLegs(std::int64_t now_ns) {
   AdvanceIfComplete();
 }
 
+std::int64_t PlantNode::CommandAge(std::size_t i) const {
+  const LatestCommand& latest = latest_[i];
+  return latest.received ? static_cast<std::int64_t>(tick_) - static_cast<std::int64_t>(latest.answered_tick)
+                         : -1;
+}
+
 void PlantNode::CheckLinksRealtime() {
   // Real time: a leg without a live writer is held at null from this tick (its last commands
   // come from a controller whose loop no longer runs) and reported once (ApplyAndStep); it is
@@ -587,10 +593,7 @@ void PlantNode::CheckLinksRealtime() {
     if (c.alive == 0) {
       link_alive_run_[i] = 0;
       if (!link_dead_[i]) {
-        const std::int64_t age = latest_[i].received
-                                     ? static_cast<std::int64_t>(tick_) -
-                                           static_cast<std::int64_t>(latest_[i].answered_tick)
-                                     : -1;
+        const std::int64_t age = CommandAge(i);
         // After a slip of the plant's schedule the controllers on the same host catch up
         // over a few ticks: their answers count as fresh for the stale-command tolerance.
         const std::int64_t confirm =
@@ -663,9 +666,7 @@ bool PlantNode::ApplyAndStep(std::uint64_t stale_tolerance) {
   int stale_legs = 0;
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     const LatestCommand& latest = latest_[i];
-    const std::int64_t age = latest.received ? static_cast<std::int64_t>(tick_) -
-                                                   static_cast<std::int64_t>(latest.answered_tick)
-                                             : -1;
+    const std::int64_t age = CommandAge(i);
     command_age_[i].Add(age);
     truth_sample_.command_age_ticks[i] = static_cast<int32_t>(std::clamp<std::int64_t>(age, -1, INT32_MAX));
     checks[i] = CheckCommand(latest, tick_, hygiene_);

@@ -162,6 +162,8 @@ class PlantNode {
   // Dead legs: lockstep (main thread) judges the legs the barrier still awaits; real time
   // (every tick) holds the legs without a live writer. Both publish the cause once.
   void JudgeSilentLegs(std::int64_t now_ns);
+  // Ticks since leg i's newest answered tick (tick_ - answered); -1 before its first command.
+  std::int64_t CommandAge(std::size_t i) const;
   // Lockstep main thread, under the lock: faults to take, gone writers, dead legs, re-asks,
   // the overall timeout; shortens `wait` to the next check.
   void WatchSilence(dds_duration_t& wait);
