@@ -9,11 +9,15 @@ transform - and compares every leg with the recording's ground truth:
 Writes the first frame as PNG. Exit 0 when every check passes, 1 otherwise.
   /usr/bin/python3 render_scene.py FRAMES.json OUT.png [--tolerance-mm 1]
 """
+import faulthandler
 import json
 import sys
 
-import numpy as np
-import matplotlib
+# A hang (one CI run timed out here with no output) prints every thread's stack and exits.
+faulthandler.dump_traceback_later(100, exit=True)
+
+import numpy as np  # noqa: E402
+import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
