@@ -17,6 +17,7 @@
 #include "deployment.hpp"
 #include "generate.hpp"
 #include "unit_file.hpp"
+#include "scratch_dir.hpp"
 
 namespace {
 
@@ -97,8 +98,7 @@ TEST(CommandLine, JoinThenSplitGivesTheSameWords) {
 class Generated : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = ::testing::TempDir() + "/deploy_gen_" + std::to_string(getpid());
-    fs::remove_all(dir_);
+    dir_ = hexa::testing::ScratchDir("deploy_gen");
     const std::string path = std::string(HEXA_SAMPLE_DEPLOYMENTS) + "/five-hosts.textproto";
     loaded_ = LoadDeployment(path);
     ASSERT_TRUE(loaded_.ok);

@@ -18,6 +18,7 @@
 #include "generate.hpp"
 #include "hexa/recorder/recording.hpp"
 #include "process_group.hpp"
+#include "scratch_dir.hpp"
 
 namespace {
 
@@ -89,8 +90,7 @@ Exchange SendMarkedCommand(const std::string& dir, const std::string& dds_config
 TEST(WireEncryption, OperatorCommandIsReadableOnlyWithoutSecurity) {
   if (geteuid() != 0) GTEST_SKIP() << "needs root (tcpdump)";
   if (access("/usr/bin/tcpdump", X_OK) != 0) GTEST_SKIP() << "no tcpdump (Debian package tcpdump)";
-  const std::string dir = ::testing::TempDir() + "/wire_" + std::to_string(getpid());
-  fs::remove_all(dir);
+  const std::string dir = hexa::testing::ScratchDir("wire");
   fs::create_directories(dir + "/plain");
   fs::create_directories(dir + "/secure");
   const int domain = 190 + getpid() % 30;

@@ -17,6 +17,7 @@
 #include "hexa/core/lockstep_simulation.hpp"
 #include "hexa/recorder/report.hpp"
 #include "process_group.hpp"
+#include "scratch_dir.hpp"
 
 namespace hexa::testing {
 
@@ -37,8 +38,7 @@ struct SessionRun {
 // Runs hexa_session with `args` (+ --domain, --out) and waits for it.
 inline SessionRun RunSession(const std::string& name, int domain, std::vector<std::string> args) {
   SessionRun run;
-  run.dir = ::testing::TempDir() + "/" + name + "_" + std::to_string(getpid());
-  std::filesystem::create_directories(run.dir);
+  run.dir = ScratchDir(name);
   deploy::ProcessGroup group;
   deploy::ChildSpec s{"session", {HEXA_SESSION}, {}, run.dir + "/launcher.console.log"};
   s.argv.insert(s.argv.end(), args.begin(), args.end());

@@ -16,6 +16,7 @@
 
 #include "hexa/recorder/recording.hpp"
 #include "process_group.hpp"
+#include "scratch_dir.hpp"
 #include "session_util.hpp"
 
 namespace {
@@ -85,9 +86,7 @@ pid_t FindProcess(const std::string& needle) {
 // truncated ... `hexa_recorder recover` rewrites it") and the others took ~10 s to stop one by
 // one. Now it stops them together, recovers the recording and reports from the recovered copy.
 TEST(Robustness, RecorderKilledMidSessionIsRecoveredAndReported) {
-  const std::string dir = ::testing::TempDir() + "/recorder_killed_" + std::to_string(getpid());
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+  const std::string dir = hexa::testing::ScratchDir("recorder_killed");
   hexa::deploy::ProcessGroup group;
   hexa::deploy::ChildSpec s{"session", {HEXA_SESSION}, {}, dir + "/launcher.console.log"};
   s.argv.insert(s.argv.end(), {"--trajectory", "combined", "--periods", "2", "--domain", "78",

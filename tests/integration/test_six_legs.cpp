@@ -14,6 +14,7 @@
 #include "hexa/config/rig_config.hpp"
 #include "hexa/core/kinematics.hpp"
 #include "process_group.hpp"
+#include "scratch_dir.hpp"
 
 namespace {
 
@@ -30,8 +31,7 @@ std::vector<std::string> Common(const std::string& log_dir, const std::string& n
 
 TEST(SixLegProcesses, HoldHomeThenTrackAStepOfEveryLeg) {
   hexa::comm::EnsureDdsConfig();
-  const std::string dir = ::testing::TempDir() + "/six_legs_" + std::to_string(getpid());
-  ASSERT_EQ(system(("mkdir -p " + dir).c_str()), 0);
+  const std::string dir = hexa::testing::ScratchDir("six_legs");
   ProcessGroup group;
   std::string err;
   for (int leg = 1; leg <= 6; ++leg) {

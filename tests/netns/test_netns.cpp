@@ -15,6 +15,7 @@
 
 #include "hexa/recorder/recording.hpp"
 #include "process_group.hpp"
+#include "scratch_dir.hpp"
 
 namespace {
 
@@ -56,8 +57,7 @@ class TwoHosts : public ::testing::Test {
       ASSERT_TRUE(Shell("ip -n " + ns + " link set " + dev + " up"));
       ASSERT_TRUE(Shell("ip -n " + ns + " link set lo up"));
     }
-    dir_ = ::testing::TempDir() + "/netns_" + id;
-    std::filesystem::create_directories(dir_);
+    dir_ = hexa::testing::ScratchDir("netns");
     std::ofstream(dir_ + "/host_a.xml") << Config(veth_a_, "10.231.77.1", "10.231.77.2");
     std::ofstream(dir_ + "/host_b.xml") << Config(veth_b_, "10.231.77.2", "10.231.77.1");
   }
