@@ -69,7 +69,10 @@ int main(int argc, char** argv) {
     // Before the participant exists: Cyclone's threads inherit the policy (docs/platform_notes.md).
     hexa::node::ApplyScheduling(o.common, 70, *log);
     hexa::leg_ctrl::LegNode node(o, *config, log);
-    return node.Run();
+    const int rc = node.Run();
+    // The loop is over: its teardown must not starve the processes still running (real time).
+    hexa::node::LeaveRealtimeScheduling(o.common, *log);
+    return rc;
   } catch (const std::exception& e) {
     log->error("{}", e.what());
     return 1;

@@ -146,7 +146,10 @@ int main(int argc, char** argv) {
       }
       log->info("true plant parameters written to {} (evaluation only)", cli.Get("truth-out"));
     }
-    return node.Run();
+    const int rc = node.Run();
+    // The loop is over: its teardown must not starve the processes still running (real time).
+    hexa::node::LeaveRealtimeScheduling(o.common, *log);
+    return rc;
   } catch (const std::exception& e) {
     log->error("{}", e.what());
     return 1;

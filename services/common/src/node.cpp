@@ -74,6 +74,13 @@ void ApplyScheduling(const CommonOptions& o, int default_priority, spdlog::logge
     TryRealtimeScheduling(o.realtime_priority > 0 ? o.realtime_priority : default_priority, log);
 }
 
+void LeaveRealtimeScheduling(const CommonOptions& o, spdlog::logger& log) {
+  if (o.mode != TimeMode::kRealtime || !o.try_realtime_scheduling) return;
+  std::string message;
+  const bool ok = sched::LeaveRealtime(message);
+  ok ? log.info("{}", message) : log.warn("{}", message);
+}
+
 comm::QosParams QosFor(const CommonOptions& o, comm::TopicKind kind) {
   comm::QosParams q;
   if (o.mode == TimeMode::kLockstep) {

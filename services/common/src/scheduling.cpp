@@ -1,10 +1,12 @@
 #include "hexa/services/scheduling.hpp"
 
+#include <dirent.h>
 #include <sched.h>
 #include <sys/mman.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 
 namespace hexa::sched {
@@ -91,6 +93,33 @@ bool SetRealtime(int priority, std::string& message) {
     message += std::string("; mlockall not available (") + std::strerror(errno) + ")";
   }
   return ok;
+}
+
+bool LeaveRealtime(std::string& message) {
+  DIR* dir = opendir("/proc/self/task");
+  if (dir == nullptr) {
+    message = std::string("cannot list this process's threads (") + std::strerror(errno) + ")";
+    return false;
+  }
+  int changed = 0;
+  int failed = 0;
+  const sched_param normal{};
+  while (const dirent* e = readdir(dir)) {
+    if (e->d_name[0] < '0' || e->d_name[0] > '9') continue;
+    const pid_t tid = static_cast<pid_t>(std::strtol(e->d_name, nullptr, 10));
+    if (sched_getscheduler(tid) != SCHED_FIFO) continue;  // already normal (or gone)
+    if (sched_setscheduler(tid, SCHED_OTHER, &normal) == 0) {
+      ++changed;
+    } else if (errno != ESRCH) {
+      ++failed;
+    }
+  }
+  closedir(dir);
+  munlockall();
+  message = "left SCHED_FIFO: " + std::to_string(changed) + " threads back to normal scheduling" +
+            (failed > 0 ? ", " + std::to_string(failed) + " refused" : "") +
+            "; memory unlocked";
+  return failed == 0;
 }
 
 }  // namespace hexa::sched

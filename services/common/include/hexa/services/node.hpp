@@ -74,6 +74,11 @@ void TryRealtimeScheduling(int priority, spdlog::logger& log);
 // a refusal (not root, CPU not present) is logged and the service carries on.
 void ApplyScheduling(const CommonOptions& options, int default_priority, spdlog::logger& log);
 
+// After a service's loop has ended, before its DDS entities are deleted: every thread back to
+// normal scheduling (sched::LeaveRealtime) if ApplyScheduling made it SCHED_FIFO, so that the
+// teardown does not starve the control processes still running on the same CPU.
+void LeaveRealtimeScheduling(const CommonOptions& options, spdlog::logger& log);
+
 // NodeStatus writer for one node name.
 class StatusPublisher {
  public:

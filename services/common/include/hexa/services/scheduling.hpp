@@ -24,4 +24,11 @@ bool SetCpuAffinity(const std::vector<int>& cpus, std::string& message);
 // SCHED_FIFO at `priority` (1..98) and mlockall.
 bool SetRealtime(int priority, std::string& message);
 
+// Back to SCHED_OTHER for every thread of the process (/proc/self/task: the policy is per
+// thread, and Cyclone's threads inherited SCHED_FIFO) and munlockall. For a service whose
+// loop has ended: tearing down its DDS entities and its locked memory at SCHED_FIFO on the
+// control CPU starves the processes still running there (a supervisor finishing in real time
+// held the six legs off the CPU for ~10 ms; docs/faults.md). Counts the threads changed.
+bool LeaveRealtime(std::string& message);
+
 }  // namespace hexa::sched
