@@ -59,7 +59,7 @@ struct Options {
   long long seed = 1, domain = 0, periods = 0, stale_ticks = 15;
   bool recorder = true, standby = false, outer_loop = true, rt_sched = true, bridge = false,
        feedforward = true, tracker = false, secure = false;
-  std::string cpus_control, cpus_recorder;
+  std::string cpus_control, cpus_recorder, cpus_standby;
   std::string bridge_listen, bridge_port, bridge_queue_kb;
   int fault_leg = 0;           // 1..6; 0 none
   bool fault_supervisor = false;  // --fault supervisor:crash:T
@@ -163,6 +163,11 @@ int main(int argc, char** argv) {
   cli.AddOption("cpus-recorder", "list|auto|none",
                 "pin the recorder to these CPUs; auto: the other CPUs when --cpus-control is auto",
                 "auto");
+  cli.AddOption("cpus-standby", "list|auto|none",
+                "pin the hot standbys (--standby) to these CPUs; auto: the recorder's CPUs when "
+                "--cpus-control is auto (twelve legs at SCHED_FIFO saturate one CPU and the "
+                "kernel then stops them up to 50 ms a second: docs/performance.md), else the "
+                "control CPUs", "auto");
   cli.AddOption("stale-ticks", "N",
                 "real time: ticks a leg's command may lag before the plant closes its valve and "
                 "reports it", "15");
@@ -225,7 +230,8 @@ int main(int argc, char** argv) {
       o.cpus_recorder = cli.Get("cpus-control") == "auto" ? hexa::sched::FormatCpuList(recorder_auto) : "";
   }
   for (auto [name, field] : {std::pair{"cpus-control", &o.cpus_control},
-                             std::pair{"cpus-recorder", &o.cpus_recorder}}) {
+                             std::pair{"cpus-recorder", &o.cpus_recorder},
+                             std::pair{"cpus-standby", &o.cpus_standby}}) {
     if (cli.Get(name) == "auto" || cli.Get(name) == "none") continue;
     std::vector<int> cpus;
     if (!hexa::sched::ParseCpuList(cli.Get(name), cpus)) {
@@ -234,6 +240,12 @@ int main(int argc, char** argv) {
       return 2;
     }
     *field = cli.Get(name);
+  }
+  if (cli.Get("cpus-standby") == "auto") {
+    // A primary and its standby on different CPUs; with one CPU, where the control runs.
+    o.cpus_standby = cli.Get("cpus-control") == "auto" && !o.cpus_recorder.empty()
+                         ? o.cpus_recorder
+                         : o.cpus_control;
   }
   o.bridge = cli.Flag("bridge");
   o.bridge_listen = cli.Get("bridge-listen");
@@ -346,9 +358,11 @@ int main(int argc, char** argv) {
   log->info("session: trajectory={} controller={} profile={} mode={} seed={} domain={} out={}",
             o.trajectory, o.controller, o.profile, o.mode, o.seed, o.domain, o.out_dir);
   log->info("DDS config: {}", o.dds_config);
-  log->info("CPUs: control processes {}, recorder {}",
+  log->info("CPUs: control processes {}, recorder {}{}{}",
             o.cpus_control.empty() ? "any" : o.cpus_control,
-            o.cpus_recorder.empty() ? "any" : o.cpus_recorder);
+            o.cpus_recorder.empty() ? "any" : o.cpus_recorder,
+            o.standby ? ", hot standbys " : "",
+            o.standby ? (o.cpus_standby.empty() ? "any" : o.cpus_standby) : "");
   std::vector<std::string> overlay_args;  // legs and supervisor only: the plant keeps its truth
   for (const auto& overlay : o.rig_overlays) {
     log->info("rig overlay for the controllers and the supervisor: {}", overlay);
@@ -465,17 +479,22 @@ int main(int argc, char** argv) {
                 o.fault_kind, o.fault_at);
     }
     specs.push_back(spec("leg" + std::to_string(leg), "/services/leg_ctrl/hexa_leg_ctrl", leg_args));
-    if (o.standby)
-      specs.push_back(spec("leg" + std::to_string(leg) + "_standby",
-                           "/services/leg_ctrl/hexa_leg_ctrl",
-                           [&] {
-                             std::vector<std::string> a{"--leg", std::to_string(leg),
-                                                        "--controller", o.controller,
-                                                        "--standby"};
-                             a.insert(a.end(), overlay_args.begin(), overlay_args.end());
-                             if (o.recorder) a.insert(a.end(), {"--valve-readers", "2"});
-                             return a;
-                           }()));
+    if (o.standby) {
+      ChildSpec sb = spec("leg" + std::to_string(leg) + "_standby",
+                          "/services/leg_ctrl/hexa_leg_ctrl", [&] {
+                            std::vector<std::string> a{"--leg", std::to_string(leg),
+                                                       "--controller", o.controller,
+                                                       "--standby"};
+                            a.insert(a.end(), overlay_args.begin(), overlay_args.end());
+                            if (o.recorder) a.insert(a.end(), {"--valve-readers", "2"});
+                            return a;
+                          }());
+      // Its own CPUs (--cpus-standby) instead of the control processes'.
+      auto cpus = std::find(sb.argv.begin(), sb.argv.end(), "--cpus");
+      if (cpus != sb.argv.end()) cpus = sb.argv.erase(cpus, cpus + 2);
+      if (!o.cpus_standby.empty()) sb.argv.insert(sb.argv.end(), {"--cpus", o.cpus_standby});
+      specs.push_back(sb);
+    }
   }
   std::vector<std::string> sup_args{"--trajectory", o.trajectory, "--autostart",
                                     "--exit-when-done", "--periods", std::to_string(o.periods)};

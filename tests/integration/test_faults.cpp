@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "hexa/services/scheduling.hpp"
 #include "session_util.hpp"
 
 namespace {
@@ -91,6 +92,21 @@ TEST(Faults, HotStandbyTakesOverACrashedPrimaryWithoutAFault) {
   EXPECT_GT(driven, 500);
   hexa::testing::ExpectSameAsInProcess(r, hexa::PaperMotion::kCombined, 1, 2,
                                        hexa::LegControllerKind::kBsSmc);
+  // --cpus-standby auto: with two or more CPUs the standbys run on the recorder's CPUs, not
+  // beside their primaries on the control CPU (twelve SCHED_FIFO legs on one CPU saturate it
+  // in real time: docs/performance.md).
+  const auto cpus = hexa::sched::AllowedCpus();
+  if (cpus.size() >= 2) {
+    const std::string control = "CPU affinity: " + std::to_string(cpus.back());
+    for (int leg = 1; leg <= 6; ++leg) {
+      const std::string primary = Slurp(run.dir + "/leg" + std::to_string(leg) + ".log");
+      const std::string standby = Slurp(run.dir + "/leg" + std::to_string(leg) + "_standby.log");
+      EXPECT_NE(primary.find(control), std::string::npos) << "leg " << leg << ": " << primary;
+      EXPECT_NE(standby.find("CPU affinity: "), std::string::npos) << "leg " << leg;
+      EXPECT_EQ(standby.find(control), std::string::npos)
+          << "leg " << leg << "'s standby shares the control CPU: " << standby;
+    }
+  }
 }
 
 // First fault line whose text contains `needle`; "" if none.
