@@ -41,7 +41,7 @@ std::string Slurp(const std::string& path) {
 
 LabSessionOptions Options(const std::string& name) {
   LabSessionOptions o;
-  o.work_dir = "/tmp/hx15-" + name + "-" + std::to_string(getpid());
+  o.work_dir = hexa::testing::ScratchDir("hx15-" + name);  // removed when the test passes
   o.binaries = {{"hexa_plant_sim", HEXA_PLANT_SIM},   {"hexa_leg_ctrl", HEXA_LEG_CTRL},
                 {"hexa_task_space", HEXA_TASK_SPACE}, {"hexa_recorder", HEXA_RECORDER},
                 {"hexa_deploy", HEXA_DEPLOY},         {"hexa_operator", HEXA_OPERATOR}};

@@ -1,6 +1,8 @@
 // zstd chunk compression of the MCAP layer (docs/recorder.md, "Compression"): round trip in both
 // modes, and what the reader says about damaged compressed chunks.
 #include <gtest/gtest.h>
+
+#include "scratch_dir.hpp"
 #include <unistd.h>
 
 #include <cstring>
@@ -17,13 +19,10 @@ namespace hexa::recorder {
 namespace {
 namespace fs = std::filesystem;
 
+// Removed when the test passes, kept when it fails (scratch_dir.hpp).
 fs::path TempDir() {
-  const fs::path d = fs::temp_directory_path() /
-                     ("hexa_zstd_test_" + std::to_string(::getpid()) + "_" +
-                      ::testing::UnitTest::GetInstance()->current_test_info()->name());
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+  return hexa::testing::ScratchDir(
+      std::string("hexa_zstd_test_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
 }
 std::string Slurp(const fs::path& p) {
   std::ifstream f(p, std::ios::binary);

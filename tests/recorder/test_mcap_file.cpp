@@ -1,6 +1,8 @@
 // File layer of the recorder: MCAP writer -> reader, summary, info counts, diff, export,
 // crash safety (kill -9 of a writing child process) and recovery.
 #include <gtest/gtest.h>
+
+#include "scratch_dir.hpp"
 #include <google/protobuf/util/message_differencer.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -23,13 +25,10 @@ namespace {
 namespace fs = std::filesystem;
 namespace gp = google::protobuf;
 
+// Removed when the test passes, kept when it fails (scratch_dir.hpp).
 fs::path TempDir() {
-  const fs::path d = fs::temp_directory_path() /
-                     ("hexa_rec_test_" + std::to_string(::getpid()) + "_" +
-                      ::testing::UnitTest::GetInstance()->current_test_info()->name());
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+  return hexa::testing::ScratchDir(
+      std::string("hexa_rec_test_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
 }
 
 TEST(Crc32, MatchesTheStandardCheckValue) {
