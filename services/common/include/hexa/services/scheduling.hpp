@@ -28,7 +28,7 @@ bool SetRealtime(int priority, std::string& message);
 // thread, and Cyclone's threads inherited SCHED_FIFO) and munlockall. For a service whose
 // loop has ended: tearing down its DDS entities and its locked memory at SCHED_FIFO on the
 // control CPU starves the processes still running there (a supervisor finishing in real time
-// held the six legs off the CPU for ~10 ms; docs/faults.md). Counts the threads changed.
+// held the six legs off the CPU for ~10 ms; docs/performance.md). Counts the threads changed.
 bool LeaveRealtime(std::string& message);
 
 }  // namespace hexa::sched
