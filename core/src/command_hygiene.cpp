@@ -97,4 +97,42 @@ ComputeBudgetMonitor::Event ComputeBudgetMonitor::Update(double compute_s,
   return Event::kNone;
 }
 
+ComputeBudgetMonitor::Event WriterComputeBudgets::Update(std::uint64_t writer,
+                                                         std::uint64_t tick, double compute_s,
+                                                         const ComputeBudgetParams& params) {
+  ++updates_;
+  std::size_t slot = kSlots;
+  for (std::size_t k = 0; k < kSlots; ++k) {
+    if (slots_[k].used && slots_[k].writer == writer) {
+      slot = k;
+      break;
+    }
+  }
+  if (slot == kSlots) {  // a new writer: a free slot, else the one heard from least recently
+    slot = 0;
+    for (std::size_t k = 0; k < kSlots; ++k) {
+      if (!slots_[k].used) {
+        slot = k;
+        break;
+      }
+      if (slots_[k].heard < slots_[slot].heard) slot = k;
+    }
+    slots_[slot] = Slot{};
+    slots_[slot].used = true;
+    slots_[slot].writer = writer;
+  } else if (tick <= slots_[slot].last_tick) {
+    slots_[slot].heard = updates_;
+    return ComputeBudgetMonitor::Event::kNone;  // this writer's tick again, or an older one
+  }
+  Slot& s = slots_[slot];
+  s.heard = updates_;
+  s.last_tick = tick;
+  last_ = slot;
+  const ComputeBudgetMonitor::Event event = s.monitor.Update(compute_s, params);
+  ++cycles_;
+  if (!(compute_s <= params.budget_s)) ++over_budget_;
+  if (compute_s > max_s_) max_s_ = compute_s;
+  return event;
+}
+
 }  // namespace hexa

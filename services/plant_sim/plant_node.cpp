@@ -461,9 +461,11 @@ void PlantNode::TakeCommands(bool feed_barrier) {
           RejectCommand(leg, c, reader.info(k));
           continue;
         }
+        // Every writer's compute time, older answers included: a slow primary's answers are
+        // older than its standby's, and they are what shows it is slow.
+        MonitorCompute(c, reader.info(k).publication_handle);
         LatestCommand& latest = latest_[c.leg_id - 1];
         if (latest.received && c.header.tick < latest.answered_tick) continue;  // older
-        if (!latest.received || c.header.tick > latest.answered_tick) MonitorCompute(c);
         latest = LatestCommand{true, c.header.tick, c.valve_v};
         if (feed_barrier) barrier_.Answer(c.leg_id, c.header.tick);
       }
@@ -484,17 +486,17 @@ void PlantNode::RejectCommand(int reader_leg, const hexa_msg_ValveCommand& c,
              valve_readers_.leg(reader_leg).DescribeWriter(info.publication_handle), reader_leg, n);
 }
 
-void PlantNode::MonitorCompute(const hexa_msg_ValveCommand& c) {
+void PlantNode::MonitorCompute(const hexa_msg_ValveCommand& c, dds_instance_handle_t writer) {
   const std::size_t i = c.leg_id - 1u;
-  ComputeBudgetMonitor& m = compute_[i];
-  switch (m.Update(c.compute_time_s, options_.compute_budget)) {
+  WriterComputeBudgets& m = compute_[i];
+  switch (m.Update(writer, c.header.tick, c.compute_time_s, options_.compute_budget)) {
     case ComputeBudgetMonitor::Event::kStarted: {
       char detail[160];
       std::snprintf(detail, sizeof detail, "compute time over the %.3f ms budget for %llu cycles "
                     "in a row (up to %.3f ms, tick %llu): the controller cannot keep 1 kHz",
                     options_.compute_budget.budget_s * 1e3,
                     static_cast<unsigned long long>(options_.compute_budget.overrun_limit),
-                    m.run_max_s() * 1e3, static_cast<unsigned long long>(c.header.tick));
+                    m.last_run_max_s() * 1e3, static_cast<unsigned long long>(c.header.tick));
       faults_.Publish(c.leg_id, tick_, hexa_msg_FAULT_COMPUTE_OVERRUN, detail);
       log_->warn("leg {} tick {}: {}", c.leg_id, tick_, detail);
       break;

@@ -172,7 +172,7 @@ class PlantNode {
   void ReportGoneWriters();
   // Supervisor's sensor-consistency faults: that leg's valve is held at null (interlock).
   void TakeFaultEvents();
-  void MonitorCompute(const hexa_msg_ValveCommand& c);
+  void MonitorCompute(const hexa_msg_ValveCommand& c, dds_instance_handle_t writer);
   void PublishStatus(hexa_msg_NodeState state, const char* detail);
   void LogLastGoodState() const;
   void LogCommandAges() const;
@@ -248,7 +248,7 @@ class PlantNode {
   LegArray<bool> gone_reported_{};
   LegArray<std::uint32_t> link_alive_run_{};
   LegArray<bool> link_armed_{};  // real time: a writer of the leg has been seen alive  // real time: ticks alive since the leg was dead
-  LegArray<ComputeBudgetMonitor> compute_{};
+  LegArray<WriterComputeBudgets> compute_{};  // per writer: primary and standby
   bool imu_lost_reported_ = false;
   bool host_overload_reported_ = false;
   LegArray<std::uint32_t> faults_per_leg_{};

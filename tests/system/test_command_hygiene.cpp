@@ -122,5 +122,54 @@ TEST(ComputeBudget, SingleLongCyclesAreNotAnOverrunARunIs) {
   EXPECT_EQ(n.Update(std::numeric_limits<double>::quiet_NaN(), p), ComputeBudgetMonitor::Event::kStarted);
 }
 
+// A slow primary beside a hot standby (docs/faults.md): the leg's commands come from both, the
+// slow ones interleaved with fast ones. Judged as one stream no run ever forms; judged per
+// writer the primary's overrun starts at its 20th slow cycle, whatever the standby does.
+TEST(ComputeBudget, ASlowWriterIsFoundBesideAFastOneOfTheSameLeg) {
+  ComputeBudgetParams p;  // 0.5 ms budget, 20 in a row
+  ComputeBudgetMonitor one_stream;
+  WriterComputeBudgets per_writer;
+  const std::uint64_t primary = 0x1111, standby = 0x2222;
+  int started_at = -1;
+  for (int k = 0; k < 40; ++k) {
+    const auto tick = static_cast<std::uint64_t>(1000 + k);
+    EXPECT_EQ(one_stream.Update(0.00001, p), ComputeBudgetMonitor::Event::kNone);
+    EXPECT_EQ(one_stream.Update(0.005, p), ComputeBudgetMonitor::Event::kNone);
+    EXPECT_EQ(per_writer.Update(standby, tick, 0.00001, p), ComputeBudgetMonitor::Event::kNone);
+    // The standby's tick again (a repeated answer) is not a new cycle.
+    EXPECT_EQ(per_writer.Update(standby, tick, 0.00001, p), ComputeBudgetMonitor::Event::kNone);
+    if (per_writer.Update(primary, tick, 0.005, p) == ComputeBudgetMonitor::Event::kStarted) {
+      EXPECT_EQ(started_at, -1) << "one report per episode";
+      started_at = k;
+      EXPECT_DOUBLE_EQ(per_writer.last_run_max_s(), 0.005);
+    }
+  }
+  EXPECT_FALSE(one_stream.active()) << "the interleaved stream hides the slow writer";
+  EXPECT_EQ(started_at, 19);
+  EXPECT_EQ(per_writer.cycles(), 80u);
+  EXPECT_EQ(per_writer.over_budget(), 40u);
+  EXPECT_DOUBLE_EQ(per_writer.max_s(), 0.005);
+  // An older tick of the slow writer is not counted either (its answers arrive in order).
+  EXPECT_EQ(per_writer.Update(primary, 1005, 0.005, p), ComputeBudgetMonitor::Event::kNone);
+  EXPECT_EQ(per_writer.cycles(), 80u);
+}
+
+// More writers than slots: a new one takes the slot heard from least recently; the others
+// keep their runs.
+TEST(ComputeBudget, AWriterBeyondTheSlotsReplacesTheLeastRecentlyHeard) {
+  ComputeBudgetParams p;
+  p.overrun_limit = 3;
+  WriterComputeBudgets m;
+  for (std::uint64_t w = 1; w <= WriterComputeBudgets::kSlots; ++w) m.Update(w, 1, 0.00001, p);
+  // Writer 1 runs over budget twice; the others are heard again, writer 2 last of all before.
+  m.Update(1, 2, 0.005, p);
+  m.Update(1, 3, 0.005, p);
+  for (std::uint64_t w = 3; w <= WriterComputeBudgets::kSlots; ++w) m.Update(w, 2, 0.00001, p);
+  // A fifth writer replaces writer 2 (least recently heard), not writer 1 ...
+  EXPECT_EQ(m.Update(99, 1, 0.00001, p), ComputeBudgetMonitor::Event::kNone);
+  // ... whose run goes on to its third cycle over budget.
+  EXPECT_EQ(m.Update(1, 4, 0.005, p), ComputeBudgetMonitor::Event::kStarted);
+}
+
 }  // namespace
 }  // namespace hexa

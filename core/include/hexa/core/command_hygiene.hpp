@@ -4,6 +4,7 @@
 // reported. Pure, no clock: ticks are arguments.
 #pragma once
 
+#include <array>
 #include <cstdint>
 
 #include "hexa/core/rig.hpp"
@@ -106,6 +107,39 @@ class ComputeBudgetMonitor {
   bool active_ = false;
   std::uint64_t cycles_ = 0, over_budget_ = 0, over_run_ = 0, ok_run_ = 0;
   double max_s_ = 0.0, run_max_s_ = 0.0;
+};
+
+// The compute budget of one leg judged per writer. A primary and its hot standby both write
+// the leg's commands; judged as one stream, a slow primary's long cycles interleave with the
+// standby's short ones and never make a run (real time: a slow primary with a standby went
+// unreported for 1.5-2.3 s; docs/faults.md). Each writer's ticks count once, in its own order
+// (a repeated or older tick of the same writer is not a new cycle). Fixed slots, no allocation:
+// a writer beyond kSlots takes the slot heard from least recently. The totals (cycles, over
+// budget, largest) are over every writer.
+class WriterComputeBudgets {
+ public:
+  static constexpr std::size_t kSlots = 4;
+  // `writer` identifies the writer (its DDS publication handle).
+  ComputeBudgetMonitor::Event Update(std::uint64_t writer, std::uint64_t tick, double compute_s,
+                                     const ComputeBudgetParams& params);
+  // Largest compute time in the current over-budget run of the writer last updated.
+  double last_run_max_s() const { return slots_[last_].monitor.run_max_s(); }
+  std::uint64_t cycles() const { return cycles_; }
+  std::uint64_t over_budget() const { return over_budget_; }
+  double max_s() const { return max_s_; }
+
+ private:
+  struct Slot {
+    bool used = false;
+    std::uint64_t writer = 0;
+    std::uint64_t last_tick = 0;
+    std::uint64_t heard = 0;  // update count when last heard from
+    ComputeBudgetMonitor monitor;
+  };
+  std::array<Slot, kSlots> slots_{};
+  std::size_t last_ = 0;
+  std::uint64_t updates_ = 0, cycles_ = 0, over_budget_ = 0;
+  double max_s_ = 0.0;
 };
 
 }  // namespace hexa
