@@ -59,7 +59,7 @@ struct Options {
   long long seed = 1, domain = 0, periods = 0, stale_ticks = 15;
   bool recorder = true, standby = false, outer_loop = true, rt_sched = true, bridge = false,
        feedforward = true, tracker = false, secure = false;
-  std::string cpus_control, cpus_recorder, cpus_standby;
+  std::string cpus_control, cpus_recorder, cpus_standby, cpus_supervisor;
   std::string bridge_listen, bridge_port, bridge_queue_kb;
   int fault_leg = 0;           // 1..6; 0 none
   bool fault_supervisor = false;  // --fault supervisor:crash:T
@@ -168,6 +168,10 @@ int main(int argc, char** argv) {
                 "--cpus-control is auto (twelve legs at SCHED_FIFO saturate one CPU and the "
                 "kernel then stops them up to 50 ms a second: docs/performance.md), else the "
                 "control CPUs", "auto");
+  cli.AddOption("cpus-supervisor", "list|auto|none",
+                "pin the supervisor to these CPUs; auto: the recorder's CPUs when --cpus-control "
+                "is auto (a supervisor killed on the control CPU stalls the legs ~10 ms while the "
+                "kernel tears it down: docs/faults.md), else the control CPUs", "auto");
   cli.AddOption("stale-ticks", "N",
                 "real time: ticks a leg's command may lag before the plant closes its valve and "
                 "reports it", "15");
@@ -231,7 +235,8 @@ int main(int argc, char** argv) {
   }
   for (auto [name, field] : {std::pair{"cpus-control", &o.cpus_control},
                              std::pair{"cpus-recorder", &o.cpus_recorder},
-                             std::pair{"cpus-standby", &o.cpus_standby}}) {
+                             std::pair{"cpus-standby", &o.cpus_standby},
+                             std::pair{"cpus-supervisor", &o.cpus_supervisor}}) {
     if (cli.Get(name) == "auto" || cli.Get(name) == "none") continue;
     std::vector<int> cpus;
     if (!hexa::sched::ParseCpuList(cli.Get(name), cpus)) {
@@ -241,12 +246,13 @@ int main(int argc, char** argv) {
     }
     *field = cli.Get(name);
   }
-  if (cli.Get("cpus-standby") == "auto") {
-    // A primary and its standby on different CPUs; with one CPU, where the control runs.
-    o.cpus_standby = cli.Get("cpus-control") == "auto" && !o.cpus_recorder.empty()
-                         ? o.cpus_recorder
-                         : o.cpus_control;
-  }
+  // auto: off the control CPU when the CPUs are chosen automatically (the recorder's); with
+  // one CPU, where the control runs. Standbys: a primary and its standby on different CPUs.
+  const std::string off_control = cli.Get("cpus-control") == "auto" && !o.cpus_recorder.empty()
+                                      ? o.cpus_recorder
+                                      : o.cpus_control;
+  if (cli.Get("cpus-standby") == "auto") o.cpus_standby = off_control;
+  if (cli.Get("cpus-supervisor") == "auto") o.cpus_supervisor = off_control;
   o.bridge = cli.Flag("bridge");
   o.bridge_listen = cli.Get("bridge-listen");
   o.bridge_port = cli.Get("bridge-port");
@@ -358,8 +364,9 @@ int main(int argc, char** argv) {
   log->info("session: trajectory={} controller={} profile={} mode={} seed={} domain={} out={}",
             o.trajectory, o.controller, o.profile, o.mode, o.seed, o.domain, o.out_dir);
   log->info("DDS config: {}", o.dds_config);
-  log->info("CPUs: control processes {}, recorder {}{}{}",
+  log->info("CPUs: plant and legs {}, supervisor {}, recorder {}{}{}",
             o.cpus_control.empty() ? "any" : o.cpus_control,
+            o.cpus_supervisor.empty() ? "any" : o.cpus_supervisor,
             o.cpus_recorder.empty() ? "any" : o.cpus_recorder,
             o.standby ? ", hot standbys " : "",
             o.standby ? (o.cpus_standby.empty() ? "any" : o.cpus_standby) : "");
@@ -403,6 +410,12 @@ int main(int argc, char** argv) {
                                   "--lockstep-lease", cli.Get("lockstep-lease")};
   if (!o.cpus_control.empty()) common.insert(common.end(), {"--cpus", o.cpus_control});
   if (!o.rt_sched) common.push_back("--no-rt-sched");
+  // A child on its own CPUs instead of the control processes' (--cpus-standby, --cpus-supervisor).
+  auto pin = [](ChildSpec& s, const std::string& cpus) {
+    auto at = std::find(s.argv.begin(), s.argv.end(), "--cpus");
+    if (at != s.argv.end()) s.argv.erase(at, at + 2);
+    if (!cpus.empty()) s.argv.insert(s.argv.end(), {"--cpus", cpus});
+  };
   auto spec = [&](const std::string& name, const std::string& exe,
                   std::vector<std::string> args) {
     ChildSpec s;
@@ -489,10 +502,7 @@ int main(int argc, char** argv) {
                             if (o.recorder) a.insert(a.end(), {"--valve-readers", "2"});
                             return a;
                           }());
-      // Its own CPUs (--cpus-standby) instead of the control processes'.
-      auto cpus = std::find(sb.argv.begin(), sb.argv.end(), "--cpus");
-      if (cpus != sb.argv.end()) cpus = sb.argv.erase(cpus, cpus + 2);
-      if (!o.cpus_standby.empty()) sb.argv.insert(sb.argv.end(), {"--cpus", o.cpus_standby});
+      pin(sb, o.cpus_standby);
       specs.push_back(sb);
     }
   }
@@ -513,7 +523,9 @@ int main(int argc, char** argv) {
   if (!o.feedforward) sup_args.push_back("--no-feedforward");
   sup_args.insert(sup_args.end(), overlay_args.begin(), overlay_args.end());
   if (o.recorder) sup_args.insert(sup_args.end(), {"--pose-readers", "1"});
-  specs.push_back(spec("supervisor", "/services/task_space/hexa_task_space", sup_args));
+  ChildSpec supervisor = spec("supervisor", "/services/task_space/hexa_task_space", sup_args);
+  pin(supervisor, o.cpus_supervisor);
+  specs.push_back(supervisor);
   std::vector<std::string> plant_args{"--profile", o.profile, "--seed", std::to_string(o.seed),
                                       "--legs", "6", "--supervisor", "--summary",
                                       o.out_dir + "/plant.json", "--stale-ticks",

@@ -106,6 +106,10 @@ TEST(Faults, HotStandbyTakesOverACrashedPrimaryWithoutAFault) {
       EXPECT_EQ(standby.find(control), std::string::npos)
           << "leg " << leg << "'s standby shares the control CPU: " << standby;
     }
+    // --cpus-supervisor auto: the supervisor too (killed there, its teardown stalls the legs).
+    const std::string supervisor = Slurp(run.dir + "/supervisor.log");
+    EXPECT_NE(supervisor.find("CPU affinity: "), std::string::npos) << supervisor;
+    EXPECT_EQ(supervisor.find(control), std::string::npos) << supervisor;
   }
 }
 
