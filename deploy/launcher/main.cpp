@@ -408,21 +408,16 @@ int main(int argc, char** argv) {
   std::vector<std::string> common{"--rig", o.rig, "--domain", std::to_string(o.domain),
                                   "--mode", o.mode, "--rt-lease", cli.Get("rt-lease"),
                                   "--lockstep-lease", cli.Get("lockstep-lease")};
-  if (!o.cpus_control.empty()) common.insert(common.end(), {"--cpus", o.cpus_control});
   if (!o.rt_sched) common.push_back("--no-rt-sched");
-  // A child on its own CPUs instead of the control processes' (--cpus-standby, --cpus-supervisor).
-  auto pin = [](ChildSpec& s, const std::string& cpus) {
-    auto at = std::find(s.argv.begin(), s.argv.end(), "--cpus");
-    if (at != s.argv.end()) s.argv.erase(at, at + 2);
-    if (!cpus.empty()) s.argv.insert(s.argv.end(), {"--cpus", cpus});
-  };
+  // `cpus`: the control CPUs unless the child has its own (--cpus-standby, --cpus-supervisor).
   auto spec = [&](const std::string& name, const std::string& exe,
-                  std::vector<std::string> args) {
+                  std::vector<std::string> args, const std::string& cpus) {
     ChildSpec s;
     s.name = name;
     s.argv = {executable(exe)};
     s.argv.insert(s.argv.end(), args.begin(), args.end());
     s.argv.insert(s.argv.end(), common.begin(), common.end());
+    if (!cpus.empty()) s.argv.insert(s.argv.end(), {"--cpus", cpus});
     s.argv.push_back("--log-file");
     s.argv.push_back(o.out_dir + "/" + name + ".log");
     s.env = env;
@@ -491,7 +486,8 @@ int main(int argc, char** argv) {
       log->warn("fault injection: leg {} primary controller, '{}' at t = {} s", leg,
                 o.fault_kind, o.fault_at);
     }
-    specs.push_back(spec("leg" + std::to_string(leg), "/services/leg_ctrl/hexa_leg_ctrl", leg_args));
+    specs.push_back(spec("leg" + std::to_string(leg), "/services/leg_ctrl/hexa_leg_ctrl", leg_args,
+                         o.cpus_control));
     if (o.standby) {
       ChildSpec sb = spec("leg" + std::to_string(leg) + "_standby",
                           "/services/leg_ctrl/hexa_leg_ctrl", [&] {
@@ -501,8 +497,7 @@ int main(int argc, char** argv) {
                             a.insert(a.end(), overlay_args.begin(), overlay_args.end());
                             if (o.recorder) a.insert(a.end(), {"--valve-readers", "2"});
                             return a;
-                          }());
-      pin(sb, o.cpus_standby);
+                          }(), o.cpus_standby);
       specs.push_back(sb);
     }
   }
@@ -523,9 +518,8 @@ int main(int argc, char** argv) {
   if (!o.feedforward) sup_args.push_back("--no-feedforward");
   sup_args.insert(sup_args.end(), overlay_args.begin(), overlay_args.end());
   if (o.recorder) sup_args.insert(sup_args.end(), {"--pose-readers", "1"});
-  ChildSpec supervisor = spec("supervisor", "/services/task_space/hexa_task_space", sup_args);
-  pin(supervisor, o.cpus_supervisor);
-  specs.push_back(supervisor);
+  specs.push_back(
+      spec("supervisor", "/services/task_space/hexa_task_space", sup_args, o.cpus_supervisor));
   std::vector<std::string> plant_args{"--profile", o.profile, "--seed", std::to_string(o.seed),
                                       "--legs", "6", "--supervisor", "--summary",
                                       o.out_dir + "/plant.json", "--stale-ticks",
@@ -551,7 +545,7 @@ int main(int argc, char** argv) {
     log->info("free-fall experiment: every cylinder hung rod down, chambers vented, {} kg load, "
               "released at {} s (Appendix B)", *free_fall_load, kFreeFallReleaseS);
   }
-  specs.push_back(spec("plant", "/services/plant_sim/hexa_plant_sim", plant_args));
+  specs.push_back(spec("plant", "/services/plant_sim/hexa_plant_sim", plant_args, o.cpus_control));
 
   const auto t0 = std::chrono::steady_clock::now();
   for (const auto& s : specs) {
