@@ -27,6 +27,7 @@ Usage: /usr/bin/python3 bench/loop/run_loop_bench.py [--build build] [--baseline
            [--runs 3] [--rt-runs 10] [--fanout-ticks 10000] [--hog] [--out out/loop-bench]
 """
 import argparse
+import contextlib
 import json
 import os
 import re
@@ -34,6 +35,7 @@ import resource
 import shutil
 import signal
 import statistics
+import struct
 import subprocess
 import sys
 import time
@@ -71,6 +73,26 @@ def udp_datagrams():
 
 
 # ------------------------------------------------------------------------------ anchors
+
+@contextlib.contextmanager
+def cpu_latency_limit(latency_us):
+    """Holds the kernel's CPU wake-up latency limit (/dev/cpu_dma_latency) at latency_us while
+    the block runs, as the system's services do (--cpu-latency-us), so that the anchors are
+    measured under the same setting; None: the machine's own setting."""
+    fd = None
+    if latency_us is not None:
+        try:
+            fd = os.open("/dev/cpu_dma_latency", os.O_WRONLY)
+            os.write(fd, struct.pack("i", latency_us))
+        except OSError as e:
+            log(f"cannot hold /dev/cpu_dma_latency at {latency_us} us ({e}): anchors at the "
+                "machine's setting")
+    try:
+        yield
+    finally:
+        if fd is not None:
+            os.close(fd)
+
 
 def run_cyclictest(loops):
     if shutil.which("cyclictest") is None:
@@ -271,8 +293,14 @@ def main():
     ap.add_argument("--hog", action="store_true", help="a CPU hog on CPU 0 beside everything")
     ap.add_argument("--session-args", default="", help="extra hexa_session arguments "
                     "for --build (e.g. '--cpus-control 1')")
+    ap.add_argument("--cpu-latency-us", default="0",
+                    help="the CPU wake-up latency limit the system's services hold "
+                    "(hexa_session --cpu-latency-us; default 0) and under which the anchors run; "
+                    "'none': the machine's setting for both (a --baseline-build older than the "
+                    "option holds none)")
     ap.add_argument("--out", default=os.path.join(HERE, "out", "loop-bench"))
     a = ap.parse_args()
+    latency = None if a.cpu_latency_us == "none" else int(a.cpu_latency_us)
 
     if os.geteuid() == 0 and os.environ.get("HEXA_BENCH_NETNS") != "1":
         env = dict(os.environ, HEXA_BENCH_NETNS="1")
@@ -294,15 +322,23 @@ def main():
            "builds": {"new": a.build, "baseline": a.baseline_build}}
     try:
         log("cyclictest ...")
-        res["cyclictest"] = run_cyclictest(a.cyclictest_loops)
-        log("ddsperf ping/pong ...")
-        res["ddsperf"] = med_dict([run_ddsperf(6) for _ in range(a.runs)])
-        log("fan-out ...")
-        res["fanout_rec"] = med_dict([run_fanout(a.build, a.fanout_ticks, True)
-                                      for _ in range(a.runs)])
-        res["fanout_norec"] = med_dict([run_fanout(a.build, a.fanout_ticks, False)
-                                        for _ in range(a.runs)])
-        builds = [("new", a.build, a.session_args.split())]
+        res["cyclictest"] = run_cyclictest(a.cyclictest_loops)  # holds 0 us itself
+        res["cpu_latency_us"] = latency
+        with cpu_latency_limit(latency):
+            log("ddsperf ping/pong ...")
+            res["ddsperf"] = med_dict([run_ddsperf(6) for _ in range(a.runs)])
+            log("fan-out ...")
+            res["fanout_rec"] = med_dict([run_fanout(a.build, a.fanout_ticks, True)
+                                          for _ in range(a.runs)])
+            res["fanout_norec"] = med_dict([run_fanout(a.build, a.fanout_ticks, False)
+                                            for _ in range(a.runs)])
+        if latency is not None:
+            log("fan-out at the machine's own CPU latency setting (reference) ...")
+            res["fanout_rec_machine"] = med_dict([run_fanout(a.build, a.fanout_ticks, True)
+                                                  for _ in range(a.runs)])
+        builds = [("new", a.build, a.session_args.split() +
+                   (["--cpu-latency-us", "none"] if latency is None else
+                    ["--cpu-latency-us", str(latency)]))]
         if a.baseline_build:
             builds.append(("baseline", a.baseline_build, []))
         for name, _, _ in builds:
@@ -348,6 +384,10 @@ def print_table(res, builds):
     print(f"loop benchmark: load average before {res['load_before']}, after {res['load_after']}"
           f"{', CPU hog on CPU 0' if res['hog'] else ''}; medians of {res['runs']} runs "
           f"(real time: {res['rt_runs']} runs)")
+    lat = res.get("cpu_latency_us")
+    print("CPU wake-up latency limit (/dev/cpu_dma_latency) held by the system's services and "
+          "during the anchors: " + ("none (the machine's setting)" if lat is None else
+                                    f"{lat} us") + "; the baseline build holds none")
     print()
     print("| anchor | figure |")
     print("|---|---|")
@@ -358,7 +398,9 @@ def print_table(res, builds):
     if dp:
         print(f"| ddsperf ping/pong (waitset) | round trip median {dp['round_trip_median_us']:.0f}"
               f" us, p99 {dp['round_trip_p99_us']:.0f} us |")
-    for name, f in [("fan-out + recorder", fr), ("fan-out, no recorder", fn)]:
+    for name, f in [("fan-out + recorder", fr), ("fan-out, no recorder", fn),
+                    ("fan-out + recorder, machine's CPU latency setting (reference)",
+                     res.get("fanout_rec_machine"))]:
         if f:
             print(f"| {name} | tick median {f['tick_ms_median']:.3f} ms, p99 "
                   f"{f['tick_ms_p99']:.3f} ms, mean {f['tick_ms_mean']:.3f} ms; "

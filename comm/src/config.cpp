@@ -76,6 +76,15 @@ void AppendCycloneConfigTrace(const std::string& log_path) {
   setenv("CYCLONEDDS_URI", uri.c_str(), 1);
 }
 
+void AppendCycloneThreadClass(const std::string& thread_name, const std::string& sched_class) {
+  const char* env = std::getenv("CYCLONEDDS_URI");
+  std::string uri = env != nullptr ? env : "";
+  if (!uri.empty()) uri += ",";
+  uri += "<Threads><Thread Name=\"" + thread_name + "\"><Scheduling><Class>" + sched_class +
+         "</Class></Scheduling></Thread></Threads>";
+  setenv("CYCLONEDDS_URI", uri.c_str(), 1);
+}
+
 CycloneNetworkReport ParseCycloneNetworkLog(std::string_view log_text) {
   // Lines of interest (Cyclone 0.10.2, verbosity config):
   //   "... assuming multicast capable interface lo.selected interfaces: lo (index 1 priority 2)"

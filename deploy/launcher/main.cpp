@@ -176,6 +176,14 @@ int main(int argc, char** argv) {
                 "real time: ticks a leg's command may lag before the plant closes its valve and "
                 "reports it", "15");
   cli.AddFlag("no-rt-sched", "real time: do not ask for SCHED_FIFO (control 70-80, recorder 50)");
+  cli.AddOption("cpu-latency-us", "N|none",
+                "the plant, the leg controllers and the supervisor hold the kernel's CPU wake-up "
+                "latency limit (/dev/cpu_dma_latency) at N us while they run, both modes; 0: idle "
+                "CPUs poll instead of halting; none: the machine's setting (docs/performance.md)",
+                "0");
+  cli.AddChoice("rt-dds-event-thread", {"normal", "fifo"},
+                "real time: scheduling of Cyclone's timed-event thread in the control processes "
+                "(docs/performance.md)", "normal");
   cli.AddFlag("bridge", "also start hexa_bridge: the session live in Foxglove over WebSocket "
               "(docs/foxglove.md)");
   cli.AddOption("bridge-listen", "address", "address hexa_bridge serves on", "127.0.0.1");
@@ -269,8 +277,10 @@ int main(int argc, char** argv) {
   if (cli.Has("domain")) domain = cli.GetInt("domain", 0, 230);
   const auto excite_duration = cli.GetDouble("excite-duration", 1, 3600);
   const auto free_fall_load = cli.GetDouble("free-fall-load-kg", 0, 1000);
+  std::optional<long long> cpu_latency = -1;
+  if (cli.Get("cpu-latency-us") != "none") cpu_latency = cli.GetInt("cpu-latency-us", 0, 100000);
   if (!seed || !periods || !timeout || !domain || !stale_ticks || !excite_duration ||
-      !free_fall_load || !rt_lease || !lockstep_lease) {
+      !free_fall_load || !rt_lease || !lockstep_lease || !cpu_latency) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
@@ -407,7 +417,9 @@ int main(int argc, char** argv) {
   }
   std::vector<std::string> common{"--rig", o.rig, "--domain", std::to_string(o.domain),
                                   "--mode", o.mode, "--rt-lease", cli.Get("rt-lease"),
-                                  "--lockstep-lease", cli.Get("lockstep-lease")};
+                                  "--lockstep-lease", cli.Get("lockstep-lease"),
+                                  "--cpu-latency-us", cli.Get("cpu-latency-us"),
+                                  "--rt-dds-event-thread", cli.Get("rt-dds-event-thread")};
   if (!o.rt_sched) common.push_back("--no-rt-sched");
   // `cpus`: the control CPUs unless the child has its own (--cpus-standby, --cpus-supervisor).
   auto spec = [&](const std::string& name, const std::string& exe,

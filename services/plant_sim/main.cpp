@@ -132,7 +132,7 @@ int main(int argc, char** argv) {
       return 1;
     }
     // Before the participant exists: Cyclone's threads inherit the policy (docs/platform_notes.md).
-    hexa::node::ApplyScheduling(o.common, 80, *log);
+    auto latency_hold = hexa::node::ApplyScheduling(o.common, 80, *log);
     hexa::plant_sim::PlantNode node(o, *config, log);
     if (cli.Has("truth-out")) {
       std::string text;
@@ -148,7 +148,7 @@ int main(int argc, char** argv) {
     }
     const int rc = node.Run();
     // The loop is over: its teardown must not starve the processes still running (real time).
-    hexa::node::LeaveRealtimeScheduling(o.common, *log);
+    hexa::node::LeaveRealtimeScheduling(o.common, latency_hold, *log);
     return rc;
   } catch (const std::exception& e) {
     log->error("{}", e.what());

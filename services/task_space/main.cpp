@@ -57,11 +57,11 @@ int main(int argc, char** argv) {
     auto config = hexa::node::LoadConfig(o.common, *log);
     if (!config) return 1;
     // Before the participant exists: Cyclone's threads inherit the policy (docs/platform_notes.md).
-    hexa::node::ApplyScheduling(o.common, 75, *log);
+    auto latency_hold = hexa::node::ApplyScheduling(o.common, 75, *log);
     hexa::task_space::SupervisorNode node(o, *config, log);
     const int rc = node.Run();
     // The loop is over: its teardown must not starve the processes still running (real time).
-    hexa::node::LeaveRealtimeScheduling(o.common, *log);
+    hexa::node::LeaveRealtimeScheduling(o.common, latency_hold, *log);
     return rc;
   } catch (const std::exception& e) {
     log->error("{}", e.what());

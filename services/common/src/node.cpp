@@ -29,6 +29,14 @@ void AddCommonOptions(cli::Parser& p) {
   p.AddOption("rt-deadline-5ms", "s", "real time: deadline of the 5 ms topics", "0.005");
   p.AddFlag("no-rt-sched", "do not try SCHED_FIFO / mlockall in real time");
   p.AddOption("rt-priority", "N", "real time: SCHED_FIFO priority 1..98 (default: the service's)");
+  p.AddOption("cpu-latency-us", "N|none",
+              "hold the kernel's CPU wake-up latency limit (/dev/cpu_dma_latency) at N us while "
+              "the loop runs (both modes); 0: idle CPUs poll instead of halting "
+              "(docs/performance.md); none: leave the machine's setting", "0");
+  p.AddChoice("rt-dds-event-thread", {"normal", "fifo"},
+              "real time: scheduling of Cyclone's timed-event thread (deadline timers, "
+              "heartbeats): normal keeps its per-millisecond wake-ups off the loop's priority "
+              "(docs/performance.md)", "normal");
   p.AddOption("cpus", "list", "pin every thread to these CPUs, e.g. 1 or 0,1 or 0-1");
 }
 
@@ -53,6 +61,14 @@ bool ReadCommonOptions(cli::Parser& p, CommonOptions& o) {
   o.log_file = p.Get("log-file");
   o.log_level = p.Get("log-level");
   o.try_realtime_scheduling = !p.Flag("no-rt-sched");
+  o.realtime_dds_event_thread_normal = p.Get("rt-dds-event-thread") == "normal";
+  if (p.Get("cpu-latency-us") == "none") {
+    o.cpu_latency_us = -1;
+  } else {
+    const auto latency = p.GetInt("cpu-latency-us", 0, 100000);
+    if (!latency) return false;
+    o.cpu_latency_us = static_cast<int>(*latency);
+  }
   if (p.Has("rt-priority")) {
     const auto prio = p.GetInt("rt-priority", 1, 98);
     if (!prio) return false;
@@ -64,17 +80,34 @@ bool ReadCommonOptions(cli::Parser& p, CommonOptions& o) {
   return true;
 }
 
-void ApplyScheduling(const CommonOptions& o, int default_priority, spdlog::logger& log) {
+sched::CpuLatencyHold ApplyScheduling(const CommonOptions& o, int default_priority,
+                                      spdlog::logger& log) {
   std::string message;
   if (!o.cpus.empty()) {
     const bool ok = sched::SetCpuAffinity(o.cpus, message);
     ok ? log.info("{}", message) : log.warn("{}", message);
   }
-  if (o.mode == TimeMode::kRealtime && o.try_realtime_scheduling)
-    TryRealtimeScheduling(o.realtime_priority > 0 ? o.realtime_priority : default_priority, log);
+  if (o.mode == TimeMode::kRealtime && o.try_realtime_scheduling) {
+    const bool fifo = sched::SetRealtime(
+        o.realtime_priority > 0 ? o.realtime_priority : default_priority, message);
+    fifo ? log.info("{}", message) : log.warn("{}", message);
+    if (fifo && o.realtime_dds_event_thread_normal) {
+      comm::AppendCycloneThreadClass("tev", "timeshare");
+      log.info("Cyclone's timed-event thread (tev: deadline timers, heartbeats) at normal "
+               "scheduling; every other thread at SCHED_FIFO");
+    }
+  }
+  if (o.cpu_latency_us < 0) return {};
+  sched::CpuLatencyHold hold(o.cpu_latency_us, message);
+  hold.held() ? log.info("{}", message) : log.warn("{}", message);
+  return hold;
 }
 
-void LeaveRealtimeScheduling(const CommonOptions& o, spdlog::logger& log) {
+void LeaveRealtimeScheduling(const CommonOptions& o, sched::CpuLatencyHold& latency_hold,
+                             spdlog::logger& log) {
+  const bool held = latency_hold.held();
+  latency_hold.Release();
+  if (held) log.info("CPU wake-up latency limit released");
   if (o.mode != TimeMode::kRealtime || !o.try_realtime_scheduling) return;
   std::string message;
   const bool ok = sched::LeaveRealtime(message);
@@ -140,12 +173,6 @@ std::optional<config::SystemConfig> LoadConfig(const CommonOptions& options, spd
              o.provenance.source_recording);
   }
   return std::move(result.config);
-}
-
-void TryRealtimeScheduling(int priority, spdlog::logger& log) {
-  std::string message;
-  const bool ok = sched::SetRealtime(priority, message);
-  ok ? log.info("{}", message) : log.warn("{}", message);
 }
 
 StatusPublisher::StatusPublisher(const comm::Participant& participant,

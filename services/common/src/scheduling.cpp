@@ -1,8 +1,10 @@
 #include "hexa/services/scheduling.hpp"
 
 #include <dirent.h>
+#include <fcntl.h>
 #include <sched.h>
 #include <sys/mman.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -120,6 +122,44 @@ bool LeaveRealtime(std::string& message) {
             (failed > 0 ? ", " + std::to_string(failed) + " refused" : "") +
             "; memory unlocked";
   return failed == 0;
+}
+
+CpuLatencyHold::CpuLatencyHold(int latency_us, std::string& message, const std::string& device) {
+  const int fd = open(device.c_str(), O_WRONLY | O_CLOEXEC);
+  if (fd < 0) {
+    message = "CPU wake-up latency not limited (" + device + ": " + std::strerror(errno) +
+              "): idle CPUs may halt, every wake-up costs more";
+    return;
+  }
+  const std::int32_t value = latency_us;
+  if (write(fd, &value, sizeof value) != static_cast<ssize_t>(sizeof value)) {
+    message = "CPU wake-up latency not limited (writing " + std::to_string(latency_us) +
+              " to " + device + ": " + std::strerror(errno) + ")";
+    close(fd);
+    return;
+  }
+  fd_ = fd;
+  message = "CPU wake-up latency held at " + std::to_string(latency_us) + " us (" + device +
+            (latency_us == 0 ? "): idle CPUs poll instead of halting while the loop runs"
+                             : "): deeper idle states are off while the loop runs");
+}
+
+CpuLatencyHold::~CpuLatencyHold() { Release(); }
+
+CpuLatencyHold::CpuLatencyHold(CpuLatencyHold&& other) noexcept : fd_(other.fd_) { other.fd_ = -1; }
+
+CpuLatencyHold& CpuLatencyHold::operator=(CpuLatencyHold&& other) noexcept {
+  if (this != &other) {
+    Release();
+    fd_ = other.fd_;
+    other.fd_ = -1;
+  }
+  return *this;
+}
+
+void CpuLatencyHold::Release() {
+  if (fd_ >= 0) close(fd_);
+  fd_ = -1;
 }
 
 }  // namespace hexa::sched

@@ -25,6 +25,12 @@ struct DdsConfigChoice {
 // first thing in main(), before any thread exists (it calls setenv).
 DdsConfigChoice EnsureDdsConfig(std::optional<std::string> override_path = std::nullopt);
 
+// Appends to CYCLONEDDS_URI a fragment that gives Cyclone's thread `thread_name` ("tev",
+// "recvUC", "gc", ...: Cyclone's Domain/Threads/Thread[@Name]) the scheduling class
+// `sched_class` ("timeshare", "realtime" or "default") when the participant creates it.
+// Call after EnsureDdsConfig(), before the participant, before any other thread exists.
+void AppendCycloneThreadClass(const std::string& thread_name, const std::string& sched_class);
+
 // The built-in default configuration file (absolute path).
 std::string DefaultDdsConfigPath();
 

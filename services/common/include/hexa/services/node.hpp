@@ -16,6 +16,7 @@
 #include "hexa/comm/comm.hpp"
 #include "hexa/config/rig_config.hpp"
 #include "hexa/services/cli.hpp"
+#include "hexa/services/scheduling.hpp"
 #include "hexa/services/text.hpp"
 
 namespace hexa::node {
@@ -45,6 +46,12 @@ struct CommonOptions {
   double realtime_deadline_5ms_topics_s = 0.005;
   bool try_realtime_scheduling = true;
   int realtime_priority = 0;   // --rt-priority: SCHED_FIFO priority; 0 = the service's default
+  // --cpu-latency-us: the CPU wake-up latency limit held while the loop runs, both modes (PM
+  // QoS, sched::CpuLatencyHold); -1 = none (leave the machine's setting).
+  int cpu_latency_us = 0;
+  // --rt-dds-event-thread: Cyclone's timed-event thread ("tev") at normal scheduling (true) or
+  // at the process's SCHED_FIFO like every other thread (false).
+  bool realtime_dds_event_thread_normal = true;
   std::vector<int> cpus;       // --cpus: CPU affinity of every thread; empty = any CPU
 };
 
@@ -65,19 +72,27 @@ std::optional<config::SystemConfig> LoadConfig(const std::string& path, spdlog::
 // The rig file and the --rig-overlay files (applied in order, validated like the rig file).
 std::optional<config::SystemConfig> LoadConfig(const CommonOptions& options, spdlog::logger& log);
 
-// SCHED_FIFO + mlockall when allowed (root); logs the outcome, never fails.
-void TryRealtimeScheduling(int priority, spdlog::logger& log);
-
 // Scheduling of a service, applied before its DDS participant exists so that Cyclone's
 // threads inherit it: CPU affinity (--cpus) in both modes; in real time SCHED_FIFO at
-// --rt-priority (else `default_priority`) + mlockall unless --no-rt-sched. Logs what it did;
-// a refusal (not root, CPU not present) is logged and the service carries on.
-void ApplyScheduling(const CommonOptions& options, int default_priority, spdlog::logger& log);
+// --rt-priority (else `default_priority`) + mlockall unless --no-rt-sched, and then:
+// - Cyclone's timed-event thread ("tev": deadline timers, heartbeats, acknacks, discovery)
+//   at normal scheduling unless --rt-dds-event-thread fifo. Every endpoint with a 1 ms
+//   deadline arms a timer that fires each millisecond on that thread; at SCHED_FIFO those
+//   wake-ups (7-8 a tick in the plant) run at the loop's priority on the control CPU, ahead
+//   of the control threads (docs/performance.md). Liveliness (leases) is on another thread.
+// In both modes: the CPU wake-up latency limit (--cpu-latency-us, default 0) held until
+// LeaveRealtimeScheduling.
+// Logs what it did; a refusal (not root, CPU not present, no access to the PM QoS device)
+// is logged and the service carries on. Returns the latency hold (empty if none).
+[[nodiscard]] sched::CpuLatencyHold ApplyScheduling(const CommonOptions& options,
+                                                    int default_priority, spdlog::logger& log);
 
 // After a service's loop has ended, before its DDS entities are deleted: every thread back to
 // normal scheduling (sched::LeaveRealtime) if ApplyScheduling made it SCHED_FIFO, so that the
-// teardown does not starve the control processes still running on the same CPU.
-void LeaveRealtimeScheduling(const CommonOptions& options, spdlog::logger& log);
+// teardown does not starve the control processes still running on the same CPU; drops the
+// CPU wake-up latency hold.
+void LeaveRealtimeScheduling(const CommonOptions& options, sched::CpuLatencyHold& latency_hold,
+                             spdlog::logger& log);
 
 // NodeStatus writer for one node name.
 class StatusPublisher {

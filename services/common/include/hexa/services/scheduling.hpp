@@ -4,6 +4,7 @@
 // CPU that is not there) leaves the process running with normal scheduling.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -30,5 +31,33 @@ bool SetRealtime(int priority, std::string& message);
 // control CPU starves the processes still running there (a supervisor finishing in real time
 // held the six legs off the CPU for ~10 ms; docs/performance.md). Counts the threads changed.
 bool LeaveRealtime(std::string& message);
+
+// A limit on how long the kernel may take to wake an idle CPU (PM QoS, /dev/cpu_dma_latency),
+// held while the object lives: the request is the int32 written to the device and lasts while
+// its file stays open (the kernel drops it when the file is closed, also when the process
+// dies). With 0 us an idle CPU polls instead of halting. On this machine's kind of VM a halted
+// vCPU costs a VM exit and an interrupt to wake (docs/performance.md): a 1 kHz loop of nine
+// processes pays that several times a tick. Costs: the CPUs this host gives the process never
+// sleep while the hold lasts (power, and a hypervisor sees them busy).
+class CpuLatencyHold {
+ public:
+  CpuLatencyHold() = default;
+  // Opens `device` and writes `latency_us` (>= 0). Never throws: on failure the object holds
+  // nothing and `message` says why.
+  CpuLatencyHold(int latency_us, std::string& message,
+                 const std::string& device = "/dev/cpu_dma_latency");
+  ~CpuLatencyHold();
+  CpuLatencyHold(CpuLatencyHold&& other) noexcept;
+  CpuLatencyHold& operator=(CpuLatencyHold&& other) noexcept;
+  CpuLatencyHold(const CpuLatencyHold&) = delete;
+  CpuLatencyHold& operator=(const CpuLatencyHold&) = delete;
+
+  bool held() const { return fd_ >= 0; }
+  // Drops the request now (closes the device).
+  void Release();
+
+ private:
+  int fd_ = -1;
+};
 
 }  // namespace hexa::sched
