@@ -128,7 +128,8 @@ CpuLatencyHold::CpuLatencyHold(int latency_us, std::string& message, const std::
   const int fd = open(device.c_str(), O_WRONLY | O_CLOEXEC);
   if (fd < 0) {
     message = "CPU wake-up latency not limited (" + device + ": " + std::strerror(errno) +
-              "): idle CPUs may halt, every wake-up costs more";
+              "): idle CPUs may halt and every wake-up costs more; the service user needs write "
+              "access to the device (docs/deployment.md), or pass --cpu-latency-us none";
     return;
   }
   const std::int32_t value = latency_us;
