@@ -67,6 +67,10 @@ void GaParams::Validate() const {
           "mutation_sigma_fraction", mutation_sigma_fraction, "finite and > 0");
   Require(selection_pressure >= 0.0 && std::isfinite(selection_pressure), "selection_pressure",
           selection_pressure, "finite and >= 0");
+  Require(success_rule_factor > 0.0 && success_rule_factor < 1.0, "success_rule_factor",
+          success_rule_factor, "in (0, 1)");
+  Require(mutation_sigma_floor > 0.0 && mutation_sigma_floor <= mutation_sigma_fraction,
+          "mutation_sigma_floor", mutation_sigma_floor, "> 0 and <= mutation_sigma_fraction");
 }
 
 GaResult RunGeneticAlgorithm(const GaParams& p, const GaBatchCost& cost,
@@ -81,6 +85,21 @@ GaResult RunGeneticAlgorithm(const GaParams& p, const GaBatchCost& cost,
       std::min(n_var, std::max(p.mutation_rate > 0.0 ? 1 : 0,
                                static_cast<int>(std::ceil(p.mutation_rate * n_var))));
   const double sigma = p.mutation_sigma_fraction * (p.var_max - p.var_min);
+  const double sigma_floor = p.mutation_sigma_floor * (p.var_max - p.var_min);
+  std::vector<double> sigma_gene(static_cast<std::size_t>(n_var), sigma);
+  std::vector<double> spread(static_cast<std::size_t>(n_var), 0.0);
+  auto measure_spread = [&](const std::vector<Individual>& pop) {
+    for (int j = 0; j < n_var; ++j) {
+      double lo = pop.front().genes[static_cast<std::size_t>(j)], hi = lo;
+      for (const Individual& ind : pop) {
+        lo = std::min(lo, ind.genes[static_cast<std::size_t>(j)]);
+        hi = std::max(hi, ind.genes[static_cast<std::size_t>(j)]);
+      }
+      spread[static_cast<std::size_t>(j)] = hi - lo;
+    }
+  };
+  double selection_ratio = 1.0;
+  std::vector<double> mutant_parent_cost;
   auto clamp = [&](double v) { return std::clamp(v, p.var_min, p.var_max); };
 
   std::vector<Genome> batch;
@@ -114,7 +133,15 @@ GaResult RunGeneticAlgorithm(const GaParams& p, const GaBatchCost& cost,
     mean /= static_cast<double>(pop.size());
     result.best_cost_history.push_back(pop.front().cost);
     if (!progress) return true;
-    return progress(GaProgress{iteration, pop.front().cost, mean, result.evaluations});
+    measure_spread(pop);
+    GaProgress g;
+    g.iteration = iteration;
+    g.best_cost = pop.front().cost;
+    g.mean_cost = mean;
+    g.evaluations = result.evaluations;
+    g.max_gene_spread = *std::max_element(spread.begin(), spread.end());
+    g.selection_ratio = selection_ratio;
+    return progress(g);
   };
   bool go_on = report(0);
 
@@ -128,6 +155,7 @@ GaResult RunGeneticAlgorithm(const GaParams& p, const GaBatchCost& cost,
           std::exp(-p.selection_pressure * pop[static_cast<std::size_t>(i)].cost / scale);
       total += probability[static_cast<std::size_t>(i)];
     }
+    selection_ratio = probability.front() / std::max(probability.back(), std::numeric_limits<double>::min());
     auto roulette = [&]() {
       const double r = random.Uniform() * total;
       double c = 0.0;
@@ -142,8 +170,9 @@ GaResult RunGeneticAlgorithm(const GaParams& p, const GaBatchCost& cost,
       const Genome& x1 = pop[static_cast<std::size_t>(roulette())].genes;
       const Genome& x2 = pop[static_cast<std::size_t>(roulette())].genes;
       Genome y1(x1.size()), y2(x1.size());
+      const double a_pair = p.crossover_per_pair ? random.Uniform(-p.crossover_gamma, 1.0 + p.crossover_gamma) : 0.0;
       for (std::size_t j = 0; j < x1.size(); ++j) {
-        const double a = random.Uniform(-p.crossover_gamma, 1.0 + p.crossover_gamma);
+        const double a = p.crossover_per_pair ? a_pair : random.Uniform(-p.crossover_gamma, 1.0 + p.crossover_gamma);
         y1[j] = clamp(a * x1[j] + (1.0 - a) * x2[j]);
         y2[j] = clamp(a * x2[j] + (1.0 - a) * x1[j]);
       }
@@ -151,8 +180,18 @@ GaResult RunGeneticAlgorithm(const GaParams& p, const GaBatchCost& cost,
       batch.push_back(std::move(y2));
     }
     // Mutation: nm mutants of random members.
+    if (p.mutation_step == GaParams::MutationStep::kPopulationSpread) {
+      measure_spread(pop);
+      for (int j = 0; j < n_var; ++j) {
+        sigma_gene[static_cast<std::size_t>(j)] =
+            std::clamp(p.mutation_sigma_fraction * spread[static_cast<std::size_t>(j)], sigma_floor, sigma);
+      }
+    }
+    mutant_parent_cost.clear();
     for (int k = 0; k < n_mutation; ++k) {
-      Genome y = pop[static_cast<std::size_t>(random.Index(n_pop))].genes;
+      const auto parent = static_cast<std::size_t>(random.Index(n_pop));
+      mutant_parent_cost.push_back(pop[parent].cost);
+      Genome y = pop[parent].genes;
       // ceil(mu nVar) distinct genes (partial Fisher-Yates).
       std::vector<int> order(static_cast<std::size_t>(n_var));
       std::iota(order.begin(), order.end(), 0);
@@ -160,11 +199,21 @@ GaResult RunGeneticAlgorithm(const GaParams& p, const GaBatchCost& cost,
         const int pick = m + random.Index(n_var - m);
         std::swap(order[static_cast<std::size_t>(m)], order[static_cast<std::size_t>(pick)]);
         const auto j = static_cast<std::size_t>(order[static_cast<std::size_t>(m)]);
-        y[j] = clamp(y[j] + sigma * random.Normal());
+        y[j] = clamp(y[j] + sigma_gene[j] * random.Normal());
       }
       batch.push_back(std::move(y));
     }
     evaluate(pop);  // appended to the parents
+    if (p.mutation_step == GaParams::MutationStep::kSuccessRule && n_mutation > 0) {
+      int better = 0;
+      const std::size_t first_mutant = pop.size() - static_cast<std::size_t>(n_mutation);
+      for (int k = 0; k < n_mutation; ++k) {
+        if (pop[first_mutant + static_cast<std::size_t>(k)].cost < mutant_parent_cost[static_cast<std::size_t>(k)]) ++better;
+      }
+      const double factor = 5 * better > n_mutation ? 1.0 / p.success_rule_factor
+                            : 5 * better < n_mutation ? p.success_rule_factor : 1.0;
+      for (double& s : sigma_gene) s = std::clamp(s * factor, sigma_floor, sigma);
+    }
     std::stable_sort(pop.begin(), pop.end(), by_cost);
     worst = std::max(worst, pop.back().cost);
     pop.resize(static_cast<std::size_t>(n_pop));

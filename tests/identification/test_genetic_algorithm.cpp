@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <thread>
 
 #include "hexa/core/genetic_algorithm.hpp"
@@ -78,6 +79,80 @@ TEST(GeneticAlgorithm, ConvergesOnAKnownMinimumAndNeverGetsWorse) {
     EXPECT_GE(g, 0.0);
     EXPECT_LE(g, 1.0);
   }
+}
+
+// A correlated flat valley like the friction parameters' (docs/identification.md, "Why the
+// template GA stalls"): genes 0-3 enter mostly through one combination, so Z rises steeply
+// across the valley and slowly (curvature 4e-3, a curvature ratio of 250 as F_c's alone /
+// profile at leg 1 extend) along its direction (0.5, -0.5, 0.5, 0.5); genes 4-6 are a plain
+// bowl. Z = sqrt of the quadratic, as eq 13.
+const double kValleyOptimum[] = {0.35, 0.6, 0.45, 0.55, 0.5, 0.3, 0.7};
+double Valley(const Genome& g) {
+  static const double kAlong[] = {0.5, -0.5, 0.5, 0.5};
+  double d[7];
+  for (int i = 0; i < 7; ++i) d[i] = g[static_cast<std::size_t>(i)] - kValleyOptimum[i];
+  double along = 0.0;
+  for (int i = 0; i < 4; ++i) along += kAlong[i] * d[i];
+  double across = 0.0;  // |d_0..3 - along * kAlong|^2
+  for (int i = 0; i < 4; ++i) across += (d[i] - along * kAlong[i]) * (d[i] - along * kAlong[i]);
+  double bowl = 0.0;
+  for (int i = 4; i < 7; ++i) bowl += d[i] * d[i];
+  return std::sqrt(across + 4e-3 * along * along + bowl);
+}
+
+double DistanceToValleyOptimum(const Genome& g) {
+  double s = 0.0;
+  for (int i = 0; i < 7; ++i) s += (g[static_cast<std::size_t>(i)] - kValleyOptimum[i]) * (g[static_cast<std::size_t>(i)] - kValleyOptimum[i]);
+  return std::sqrt(s);
+}
+
+GaResult RunOnValley(GaParams p) {
+  return RunGeneticAlgorithm(p, [](const std::vector<Genome>& g, std::vector<double>& c) {
+    for (std::size_t i = 0; i < g.size(); ++i) c[i] = Valley(g[i]);
+  });
+}
+
+// What was measured (docs/identification.md): with Table 7's settings (MaxIt 1000, nPop 100,
+// pc 0.8, pm 0.3, mu 0.02) the template GA stalls in the valley, 0.1 of the gene range
+// from the optimum (the population collapses onto one point, then only one-gene steps of
+// sigma 0.1 move it); the 1/5 success rule on the step lets it creep along the valley and
+// ends nearer, but NOT at the optimum (0.06-0.10). This test pins both facts; it is not a
+// test that the GA reaches the optimum, which none of the variants tried does.
+TEST(GeneticAlgorithm, Table7StallsInACorrelatedFlatValleyAndTheSuccessRuleCreepsOn) {
+  double sum_old = 0.0, sum_rule = 0.0;
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    GaParams p;  // Table 7, template operators
+    p.seed = seed;
+    const GaResult old = RunOnValley(p);
+    p.mutation_step = GaParams::MutationStep::kSuccessRule;
+    const GaResult r = RunOnValley(p);
+    std::printf("seed %llu: distance to the optimum, template %.3e, success rule %.3e\n",
+                static_cast<unsigned long long>(seed), DistanceToValleyOptimum(old.best),
+                DistanceToValleyOptimum(r.best));
+    EXPECT_GT(DistanceToValleyOptimum(old.best), 0.05) << "seed " << seed;
+    EXPECT_LT(DistanceToValleyOptimum(r.best), DistanceToValleyOptimum(old.best)) << "seed " << seed;
+    EXPECT_GT(DistanceToValleyOptimum(r.best), 0.01) << "seed " << seed << ": reaches the optimum now; update the docs";
+    sum_old += DistanceToValleyOptimum(old.best);
+    sum_rule += DistanceToValleyOptimum(r.best);
+    for (std::size_t k = 1; k < r.best_cost_history.size(); ++k) {
+      EXPECT_LE(r.best_cost_history[k], r.best_cost_history[k - 1]);  // still elitist
+    }
+  }
+  EXPECT_LT(sum_rule, 0.8 * sum_old);
+}
+
+TEST(GeneticAlgorithm, DeterministicForASeedWithTheOptionalOperators) {
+  GaParams p;
+  p.max_iterations = 60;
+  p.seed = 17;
+  p.crossover_per_pair = true;
+  p.mutation_step = GaParams::MutationStep::kSuccessRule;
+  const GaResult a = RunGeneticAlgorithm(p, Sequential());
+  const GaResult b = RunGeneticAlgorithm(p, TwoThreads());
+  EXPECT_EQ(a.best, b.best);  // bit for bit
+  EXPECT_EQ(a.best_cost_history, b.best_cost_history);
+  p.seed = 18;
+  EXPECT_NE(RunGeneticAlgorithm(p, Sequential()).best, a.best);
 }
 
 TEST(GeneticAlgorithm, ProgressCanStopTheRun) {

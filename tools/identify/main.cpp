@@ -134,6 +134,14 @@ int main(int argc, char** argv) {
                 "(--ga-range-factor), gammas 1-2; wide = fixed ranges v_s 0.02-1.5 m/s, B 0-150 N s/m, "
                 "F_s - F_c 0-150 N, F_c 0-250 N, gammas 1-2 (docs/identification.md)", "around-nominal");
   cli.AddOption("ga-range-factor", "f", "--ga-space around-nominal: the factor f (> 1)", "2");
+  cli.AddChoice("ga-crossover", {"per-gene", "per-pair"},
+                "GA arithmetic crossover: per-gene = the template's a drawn per gene; per-pair = one a "
+                "per parent pair (offspring on the line through the parents; docs/identification.md)",
+                "per-gene");
+  cli.AddChoice("ga-mutation-step", {"range", "population", "success-rule"},
+                "GA mutation step: range = the template's sigma = 0.1 of the gene range; population = "
+                "0.1 of the gene's spread over the population; success-rule = from 0.1 of the range, "
+                "adapted by the 1/5 success rule (docs/identification.md)", "range");
   cli.AddOption("threads", "N", "threads for the GA's fitness evaluations", "2");
   cli.AddOption("diff-window", "N", "Gaussian differentiator window (eq 40, odd, samples)", "41");
   cli.AddOption("diff-sigma", "samples", "Gaussian differentiator sigma (eq 41, samples)", "6");
@@ -384,6 +392,10 @@ int main(int argc, char** argv) {
   report.ga_params.max_iterations = static_cast<int>(*max_it);
   report.ga_params.population = static_cast<int>(*population);
   report.ga_params.seed = static_cast<std::uint64_t>(*seed);
+  report.ga_params.crossover_per_pair = cli.Get("ga-crossover") == "per-pair";
+  report.ga_params.mutation_step = cli.Get("ga-mutation-step") == "population" ? GaParams::MutationStep::kPopulationSpread
+                                   : cli.Get("ga-mutation-step") == "success-rule" ? GaParams::MutationStep::kSuccessRule
+                                                                                   : GaParams::MutationStep::kRange;
   report.threads = static_cast<int>(*threads);
   report.pressure_noise_pa = ic.pressure_noise_sigma_pa;
   report.flat_threshold = *flat;
@@ -462,9 +474,10 @@ int main(int argc, char** argv) {
               const auto now = std::chrono::steady_clock::now();
               if (p.iteration == gp.max_iterations || now - last_print > std::chrono::seconds(2)) {
                 last_print = now;
-                std::printf("\rleg %d %-7s GA: iteration %4d/%d, best Z %.5f, mean %.5f, %llu evaluations, %.1f s   ",
+                std::printf("\rleg %d %-7s GA: iteration %4d/%d, best Z %.5f, mean %.5f, gene spread %.1e, "
+                            "selection ratio %.2f, %llu evaluations, %.1f s   ",
                             leg, ToString(stroke), p.iteration, gp.max_iterations, p.best_cost, p.mean_cost,
-                            static_cast<unsigned long long>(p.evaluations),
+                            p.max_gene_spread, p.selection_ratio, static_cast<unsigned long long>(p.evaluations),
                             std::chrono::duration<double>(now - t0).count());
                 std::fflush(stdout);
               }

@@ -12,6 +12,12 @@
 namespace hexa::identify {
 namespace {
 
+const char* MutationStepName(GaParams::MutationStep m) {
+  return m == GaParams::MutationStep::kPopulationSpread ? "population"
+         : m == GaParams::MutationStep::kSuccessRule    ? "success-rule"
+                                                        : "range";
+}
+
 std::string Fmt(double v, int precision = 4) {
   char b[64];
   std::snprintf(b, sizeof b, "%.*g", precision, v);
@@ -199,6 +205,8 @@ void WriteReport(const Report& r, const std::map<int, std::array<StrokeDataset, 
              ? " (v_s, B, F_s - F_c, F_c from the rig file's value / " + Fmt(r.ga_range_factor) + " to x " +
                    Fmt(r.ga_range_factor) + ")"
              : std::string(" (fixed ranges)"))
+     << ", crossover " << (r.ga_params.crossover_per_pair ? "per-pair" : "per-gene") << ", mutation step "
+     << MutationStepName(r.ga_params.mutation_step)
      << ". Least squares: Ceres, from the rig file's values.\n\n";
   if (!r.payload_per_leg.empty()) {
     md << "Payload scale per leg:";
@@ -348,7 +356,10 @@ void WriteReport(const Report& r, const std::map<int, std::array<StrokeDataset, 
     first = false;
   }
   js << "},\n  \"threads\": " << r.threads << ",\n  \"ga_max_iterations\": " << r.ga_params.max_iterations
-     << ",\n  \"ga_population\": " << r.ga_params.population << ",\n  \"flat_threshold\": " << JsonNumber(r.flat_threshold)
+     << ",\n  \"ga_population\": " << r.ga_params.population
+     << ",\n  \"ga_crossover\": \"" << (r.ga_params.crossover_per_pair ? "per-pair" : "per-gene")
+     << "\",\n  \"ga_mutation_step\": \"" << MutationStepName(r.ga_params.mutation_step)
+     << "\",\n  \"flat_threshold\": " << JsonNumber(r.flat_threshold)
      << ",\n  \"pressure_noise_pa\": " << JsonNumber(r.pressure_noise_pa)
      << ",\n  \"overlay\": " << (r.overlay_refused ? "null" : "\"" + r.overlay_path + "\"")
      << ",\n  \"strokes\": [\n";

@@ -37,6 +37,25 @@ struct GaParams {
   double crossover_gamma = 0.4;
   double mutation_sigma_fraction = 0.1;
   double selection_pressure = 8.0;  // beta
+  // Departures from the template, all off by default here (= the template exactly);
+  // hexa_identify chooses (docs/identification.md, "Why the template GA stalls"):
+  //   - crossover_per_pair: one a per parent pair (y on the line through x1 and x2,
+  //     extended by gamma either side) instead of one a per gene: offspring of two parents
+  //     in a narrow diagonal valley stay in it instead of filling the box around them;
+  //   - mutation_step: the Gaussian step sigma of a mutated gene:
+  //       kRange (template): mutation_sigma_fraction x (VarMax - VarMin), fixed;
+  //       kPopulationSpread: per gene mutation_sigma_fraction x (its spread, max - min,
+  //         over the population);
+  //       kSuccessRule: Rechenberg's 1/5 success rule: starts at the template's sigma, x 1/c
+  //         after an iteration in which more than a fifth of the mutants beat the member
+  //         they were made from, x c after one with fewer (c = success_rule_factor);
+  //     the adapted steps stay within [mutation_sigma_floor, mutation_sigma_fraction] x
+  //     (VarMax - VarMin).
+  enum class MutationStep { kRange, kPopulationSpread, kSuccessRule };
+  bool crossover_per_pair = false;
+  MutationStep mutation_step = MutationStep::kRange;
+  double mutation_sigma_floor = 1e-9;
+  double success_rule_factor = 0.85;
   std::uint64_t seed = 1;
   // Throws std::invalid_argument naming the field, value and limit.
   void Validate() const;
@@ -50,6 +69,10 @@ struct GaProgress {
   int iteration = 0;             // 0 = the initial population
   double best_cost = 0.0;
   double mean_cost = 0.0;        // of the population
+  // Diagnostics: the largest gene spread (max - min over the population, over the genes)
+  // and the ratio of the roulette wheel's largest to smallest selection probability.
+  double max_gene_spread = 0.0;
+  double selection_ratio = 1.0;
   std::uint64_t evaluations = 0;
 };
 // Return false to stop after this iteration.
