@@ -230,8 +230,8 @@ def write_doc(a, result, closed, rigs, friction_study, timings, out):
           "`hexa_calibrate`, passed to hexa_identify with `--rig-overlay`. ")
     w(
       f"Identification: `hexa_identify` (GA: Table 7, MaxIt {result['ga_max_iterations']}, nPop "
-      f"{result['ga_population']}, {result['threads']} threads, search ranges around the rig file's values "
-      f"(`--ga-space around-nominal`); least squares: Ceres). Payload scale "
+      f"{result['ga_population']}, {result['threads']} threads, genes for v_s and eq 3's friction force at 0.1, 0.5, 1.2 m/s "
+      f"in ranges around the rig file's values (`--ga-space force-at-speeds`); least squares: Ceres). Payload scale "
       f"estimated {result['payload_scale']:.4f} (truth {result['true_payload_scale']}), pressure noise "
       f"estimated {result.get('pressure_noise_pa', 0):.0f} Pa.\n")
 

@@ -9,6 +9,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 
 #include "hexa/core/pneumatics.hpp"
 
@@ -677,11 +678,52 @@ StrokeSearchSpace StrokeSearchSpace::AroundNominal(const StrokeParams& nominal, 
   return s;
 }
 
+namespace {
+// Eq 3 at speed v_i for (F_c, F_s - F_c, B): F_c + (F_s - F_c) exp(-(v_i / v_s)^2) + B v_i.
+Eigen::Matrix3d ForceAtSpeedsMatrix(double stribeck_m_s, const std::array<double, 3>& speeds) {
+  Eigen::Matrix3d m;
+  for (int i = 0; i < 3; ++i) {
+    const double u = speeds[static_cast<std::size_t>(i)] / stribeck_m_s;
+    m(i, 0) = 1.0;
+    m(i, 1) = std::exp(-u * u);
+    m(i, 2) = speeds[static_cast<std::size_t>(i)];
+  }
+  return m;
+}
+}  // namespace
+
+StrokeSearchSpace StrokeSearchSpace::ForceAtSpeeds(const StrokeParams& nominal, double factor,
+                                                   const std::array<double, 3>& speeds) {
+  StrokeSearchSpace s = AroundNominal(nominal, factor);
+  if (!(speeds[0] > 0.0 && speeds[1] > speeds[0] && speeds[2] > speeds[1])) {
+    throw std::invalid_argument("StrokeSearchSpace::ForceAtSpeeds: the reference speeds must be > 0 and increasing");
+  }
+  s.force_at_speeds = true;
+  s.reference_speeds_m_s = speeds;
+  const Eigen::Vector3d f =
+      ForceAtSpeedsMatrix(nominal.stribeck_velocity_m_s, speeds) *
+      Eigen::Vector3d(nominal.coulomb_n, nominal.static_n - nominal.coulomb_n, nominal.viscous_n_s_m);
+  for (int i = 0; i < 3; ++i) {
+    s.lower[1 + i] = f[i] / factor;
+    s.upper[1 + i] = f[i] * factor;
+  }
+  return s;
+}
+
 StrokeParams StrokeSearchSpace::Decode(const Genome& genes) const {
   StrokeParams::Vector v;
   for (int j = 0; j < StrokeParams::kCount; ++j) {
     const double g = j < static_cast<int>(genes.size()) ? std::clamp(genes[static_cast<std::size_t>(j)], 0.0, 1.0) : 0.0;
     v[j] = lower[j] + g * (upper[j] - lower[j]);
+  }
+  if (force_at_speeds) {
+    const Eigen::Vector3d c =
+        ForceAtSpeedsMatrix(v[0], reference_speeds_m_s).partialPivLu().solve(Eigen::Vector3d(v[1], v[2], v[3]));
+    // Not projected onto B >= 0, F_s >= F_c: a projection would make a flat plateau the GA
+    // can stall on; the rig validator refuses such values if they are ever the result.
+    v[1] = c[2];  // B
+    v[3] = c[0];  // F_c
+    v[2] = c[1];  // F_s - F_c
   }
   v[2] += v[3];  // F_s = F_c + excess
   return StrokeParams::FromVector(v);
@@ -690,6 +732,12 @@ StrokeParams StrokeSearchSpace::Decode(const Genome& genes) const {
 Genome StrokeSearchSpace::Encode(const StrokeParams& p) const {
   StrokeParams::Vector v = p.ToVector();
   v[2] -= v[3];
+  if (force_at_speeds) {
+    const Eigen::Vector3d f = ForceAtSpeedsMatrix(v[0], reference_speeds_m_s) * Eigen::Vector3d(v[3], v[2], v[1]);
+    v[1] = f[0];
+    v[2] = f[1];
+    v[3] = f[2];
+  }
   Genome g(StrokeParams::kCount);
   for (int j = 0; j < StrokeParams::kCount; ++j) {
     g[static_cast<std::size_t>(j)] = std::clamp((v[j] - lower[j]) / (upper[j] - lower[j]), 0.0, 1.0);

@@ -128,12 +128,14 @@ int main(int argc, char** argv) {
   cli.AddOption("max-iterations", "N", "GA iterations (Table 7: MaxIt = 1000)", "1000");
   cli.AddOption("population", "N", "GA population (Table 7: nPop = 100)", "100");
   cli.AddOption("seed", "N", "GA seed", "1");
-  cli.AddChoice("ga-space", {"around-nominal", "wide"},
+  cli.AddChoice("ga-space", {"around-nominal", "wide", "force-at-speeds"},
                 "how the GA's genes in [0, 1] map to the parameters (linearly, each to a range): "
                 "around-nominal = v_s, B, F_s - F_c, F_c from the rig file's value / f to x f "
                 "(--ga-range-factor), gammas 1-2; wide = fixed ranges v_s 0.02-1.5 m/s, B 0-150 N s/m, "
-                "F_s - F_c 0-150 N, F_c 0-250 N, gammas 1-2 (docs/identification.md)", "around-nominal");
-  cli.AddOption("ga-range-factor", "f", "--ga-space around-nominal: the factor f (> 1)", "2");
+                "F_s - F_c 0-150 N, F_c 0-250 N, gammas 1-2; force-at-speeds = as around-nominal, but "
+                "genes 2-4 are eq 3's friction force at 0.1, 0.5 and 1.2 m/s (default; docs/identification.md)",
+                "force-at-speeds");
+  cli.AddOption("ga-range-factor", "f", "--ga-space around-nominal / force-at-speeds: the factor f (> 1)", "2");
   cli.AddChoice("ga-crossover", {"per-gene", "per-pair"},
                 "GA arithmetic crossover: per-gene = the template's a drawn per gene; per-pair = one a "
                 "per parent pair (offspring on the line through the parents; docs/identification.md)",
@@ -445,9 +447,11 @@ int main(int argc, char** argv) {
       sr.samples = d.samples.size();
       sr.nominal = start;
       sr.nominal_objective = d.Nrmse(start);
-      const StrokeSearchSpace space = report.ga_space == "around-nominal"
-                                          ? StrokeSearchSpace::AroundNominal(start, report.ga_range_factor)
-                                          : StrokeSearchSpace::Default();
+      const StrokeSearchSpace space =
+          report.ga_space == "around-nominal"    ? StrokeSearchSpace::AroundNominal(start, report.ga_range_factor)
+          : report.ga_space == "force-at-speeds" ? StrokeSearchSpace::ForceAtSpeeds(start, report.ga_range_factor,
+                                                                                     {0.1, 0.5, 1.2})
+                                                 : StrokeSearchSpace::Default();
       if (run_lsq) {
         const LsqResult lsq = FitStrokeLeastSquares(d, start);
         sr.lsq = lsq.params;

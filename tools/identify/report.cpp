@@ -204,6 +204,9 @@ void WriteReport(const Report& r, const std::map<int, std::array<StrokeDataset, 
      << (r.ga_space == "around-nominal"
              ? " (v_s, B, F_s - F_c, F_c from the rig file's value / " + Fmt(r.ga_range_factor) + " to x " +
                    Fmt(r.ga_range_factor) + ")"
+         : r.ga_space == "force-at-speeds"
+             ? " (v_s and eq 3's friction force at 0.1, 0.5, 1.2 m/s from the rig file's value / " +
+                   Fmt(r.ga_range_factor) + " to x " + Fmt(r.ga_range_factor) + ")"
              : std::string(" (fixed ranges)"))
      << ", crossover " << (r.ga_params.crossover_per_pair ? "per-pair" : "per-gene") << ", mutation step "
      << MutationStepName(r.ga_params.mutation_step)

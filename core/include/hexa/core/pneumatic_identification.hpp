@@ -255,6 +255,17 @@ struct StrokeSearchSpace {
   // the gene range) shrinks with it (docs/identification.md, "GA search ranges").
   // factor > 1; a nominal value <= 0 keeps Default()'s range for that variable.
   static StrokeSearchSpace AroundNominal(const StrokeParams& nominal, double factor);
+  // Genes 1-3 are the friction force magnitudes of eq 3 at three reference speeds instead
+  // of B, F_s - F_c and F_c (each in [nominal / factor, nominal x factor] of the rig file's
+  // values' force at that speed; v_s and the gammas as AroundNominal): the data fix the
+  // friction curve over the recorded speeds much better than the three coefficients, which
+  // trade off against each other (docs/identification.md, "Why the template GA stalls").
+  // Decoding solves eq 3 at the three speeds for F_c, F_s - F_c and B (given v_s); they
+  // are not projected onto >= 0 (a projection makes a flat plateau the GA stalls on).
+  static StrokeSearchSpace ForceAtSpeeds(const StrokeParams& nominal, double factor,
+                                         const std::array<double, 3>& speeds_m_s);
+  bool force_at_speeds = false;
+  std::array<double, 3> reference_speeds_m_s{};
   StrokeParams Decode(const Genome& genes) const;
   Genome Encode(const StrokeParams& p) const;  // clamped to [0, 1]
 };
