@@ -65,24 +65,29 @@ DdsConfigChoice EnsureDdsConfig(std::optional<std::string> override_path) {
   return choice;
 }
 
-void AppendCycloneConfigTrace(const std::string& log_path) {
+namespace {
+
+// Cyclone merges comma-separated sources in order; a fragment without <CycloneDDS> or
+// <Domain> applies to every domain.
+void AppendCycloneConfigFragment(const std::string& fragment) {
   const char* env = std::getenv("CYCLONEDDS_URI");
   std::string uri = env != nullptr ? env : "";
   if (!uri.empty()) uri += ",";
-  // Cyclone merges comma-separated sources in order; a fragment without <CycloneDDS> or
-  // <Domain> applies to every domain.
-  uri += "<Tracing><Verbosity>config</Verbosity><OutputFile>" + log_path +
-         "</OutputFile></Tracing>";
+  uri += fragment;
   setenv("CYCLONEDDS_URI", uri.c_str(), 1);
 }
 
+}  // namespace
+
+void AppendCycloneConfigTrace(const std::string& log_path) {
+  AppendCycloneConfigFragment("<Tracing><Verbosity>config</Verbosity><OutputFile>" + log_path +
+                              "</OutputFile></Tracing>");
+}
+
 void AppendCycloneThreadClass(const std::string& thread_name, const std::string& sched_class) {
-  const char* env = std::getenv("CYCLONEDDS_URI");
-  std::string uri = env != nullptr ? env : "";
-  if (!uri.empty()) uri += ",";
-  uri += "<Threads><Thread Name=\"" + thread_name + "\"><Scheduling><Class>" + sched_class +
-         "</Class></Scheduling></Thread></Threads>";
-  setenv("CYCLONEDDS_URI", uri.c_str(), 1);
+  AppendCycloneConfigFragment("<Threads><Thread Name=\"" + thread_name +
+                              "\"><Scheduling><Class>" + sched_class +
+                              "</Class></Scheduling></Thread></Threads>");
 }
 
 CycloneNetworkReport ParseCycloneNetworkLog(std::string_view log_text) {
