@@ -277,8 +277,8 @@ int main(int argc, char** argv) {
   if (cli.Has("domain")) domain = cli.GetInt("domain", 0, 230);
   const auto excite_duration = cli.GetDouble("excite-duration", 1, 3600);
   const auto free_fall_load = cli.GetDouble("free-fall-load-kg", 0, 1000);
-  std::optional<long long> cpu_latency = -1;
-  if (cli.Get("cpu-latency-us") != "none") cpu_latency = cli.GetInt("cpu-latency-us", 0, 100000);
+  const auto cpu_latency =
+      cli.GetIntOrWord("cpu-latency-us", "none", -1, 0, hexa::sched::kMaxCpuLatencyUs);
   if (!seed || !periods || !timeout || !domain || !stale_ticks || !excite_duration ||
       !free_fall_load || !rt_lease || !lockstep_lease || !cpu_latency) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());

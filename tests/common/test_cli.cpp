@@ -72,5 +72,19 @@ TEST(Cli, NonFiniteNumbersAreRejected) {
   EXPECT_FALSE(q.GetDouble("at", -1e300, 1e300).has_value());
 }
 
+TEST(Cli, IntegerOrWordReadsTheWordAsItsValueAndChecksNumbers) {
+  auto read = [](const char* value) {
+    Parser p("prog", "test");
+    p.AddOption("cpu-latency-us", "N|none", "latency", "0");
+    EXPECT_TRUE(ParseArgs(p, {"--cpu-latency-us", value}));
+    return p.GetIntOrWord("cpu-latency-us", "none", -1, 0, 100);
+  };
+  EXPECT_EQ(read("none"), -1);
+  EXPECT_EQ(read("7"), 7);
+  EXPECT_FALSE(read("101").has_value());   // outside [0, 100]
+  EXPECT_FALSE(read("-1").has_value());    // the word's value is not a valid number
+  EXPECT_FALSE(read("None").has_value());  // the word exactly
+}
+
 }  // namespace
 }  // namespace hexa::cli

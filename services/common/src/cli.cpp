@@ -169,6 +169,12 @@ std::optional<long long> Parser::GetInt(const std::string& name, long long min, 
   return v;
 }
 
+std::optional<long long> Parser::GetIntOrWord(const std::string& name, const std::string& word,
+                                             long long word_value, long long min, long long max) {
+  if (Get(name) == word) return word_value;
+  return GetInt(name, min, max);
+}
+
 std::optional<double> Parser::GetDouble(const std::string& name, double min, double max) {
   const std::string text = Get(name);
   errno = 0;

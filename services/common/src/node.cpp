@@ -62,13 +62,9 @@ bool ReadCommonOptions(cli::Parser& p, CommonOptions& o) {
   o.log_level = p.Get("log-level");
   o.try_realtime_scheduling = !p.Flag("no-rt-sched");
   o.realtime_dds_event_thread_normal = p.Get("rt-dds-event-thread") == "normal";
-  if (p.Get("cpu-latency-us") == "none") {
-    o.cpu_latency_us = -1;
-  } else {
-    const auto latency = p.GetInt("cpu-latency-us", 0, 100000);
-    if (!latency) return false;
-    o.cpu_latency_us = static_cast<int>(*latency);
-  }
+  const auto latency = p.GetIntOrWord("cpu-latency-us", "none", -1, 0, sched::kMaxCpuLatencyUs);
+  if (!latency) return false;
+  o.cpu_latency_us = static_cast<int>(*latency);
   if (p.Has("rt-priority")) {
     const auto prio = p.GetInt("rt-priority", 1, 98);
     if (!prio) return false;

@@ -41,6 +41,9 @@ class Parser {
   std::vector<std::string> GetAll(const std::string& name) const;
   // Typed getters; on a bad value they return nullopt and set error().
   std::optional<long long> GetInt(const std::string& name, long long min, long long max);
+  // As GetInt, but the word `word` (e.g. "none") is accepted too and reads as `word_value`.
+  std::optional<long long> GetIntOrWord(const std::string& name, const std::string& word,
+                                        long long word_value, long long min, long long max);
   std::optional<double> GetDouble(const std::string& name, double min, double max);
   const std::vector<std::string>& positional() const { return positional_; }
   // Records a validation error found by the caller (e.g. a list a typed getter cannot read);

@@ -39,6 +39,10 @@ bool LeaveRealtime(std::string& message);
 // vCPU costs a VM exit and an interrupt to wake (docs/performance.md): a 1 kHz loop of nine
 // processes pays that several times a tick. Costs: the CPUs this host gives the process never
 // sleep while the hold lasts (power, and a hypervisor sees them busy).
+// The largest limit a service accepts (--cpu-latency-us): 100 ms, far beyond any idle state's
+// exit latency; the kernel's own ceiling is 2000 s.
+constexpr int kMaxCpuLatencyUs = 100000;
+
 class CpuLatencyHold {
  public:
   CpuLatencyHold() = default;
