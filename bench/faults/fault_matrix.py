@@ -25,6 +25,13 @@ domain id of its own. Everything measured comes from the session's recording and
   lost          samples missing from the plant's streams (LegSensors x6, GroundTruth,
                 ImuSample unless the IMU was the fault) by tick numbers (hexa_recorder info):
                 the recorder lost them; and gaps of the leg controllers' ValveCommands
+  after         standby rows: the largest gap between two recorded commands of the leg after
+                the take-over (a standby that took over and then stalled shows here)
+  CPU stalls    with --stall-probe: hexa_cpu_stall_probe runs beside each session (one
+                SCHED_FIFO 99 thread per CPU, 1 ms period): per CPU the largest wake-up delay
+                and the stalls over 5 ms, with the steal time the hypervisor reported; for a
+                row whose session did not end as expected, the largest stall in the 40 ms
+                before its first unexpected FaultEvent
 """
 import argparse
 import csv
@@ -57,6 +64,61 @@ def session_command(args, build, out_dir, fault_args, mode, standby, domain):
     cmd += args.session_arg
     cmd += fault_args
     return cmd
+
+
+def start_probe(args, out_dir):
+    """Starts the CPU stall probe (--stall-probe) for one session; returns (process, json path)."""
+    if not args.stall_probe:
+        return None, None
+    os.makedirs(out_dir, exist_ok=True)
+    path = os.path.join(out_dir, "cpu_stall_probe.json")
+    proc = subprocess.Popen([os.path.join(args.build, "bench/faults/hexa_cpu_stall_probe"), "--out", path,
+                             "--threshold-us", str(args.stall_threshold_us)],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
+    time.sleep(0.2)
+    if proc.poll() is not None:
+        sys.exit("fault_matrix: the CPU stall probe did not start: %s" % proc.stderr.read().decode().strip())
+    return proc, path
+
+
+def stop_probe(proc, path):
+    """Stops the probe; returns its JSON (per_cpu, events) or None."""
+    if proc is None:
+        return None
+    proc.send_signal(signal.SIGTERM)
+    try:
+        proc.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+        return None
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return None
+
+
+def stall_summary(probe):
+    """'cpu0 12.1 ms (3 > 5 ms), cpu1 2.3 ms': each CPU's largest stall and its stalls over 5 ms."""
+    if not probe:
+        return "-"
+    return ", ".join("cpu%d %.1f ms%s" % (c["cpu"], c["max_late_us"] / 1e3,
+                                           " (%d > 5 ms)" % c["over_5ms"] if c["over_5ms"] else "")
+                     for c in probe["per_cpu"])
+
+
+def stall_before(probe, t_ns, window_ns=40000000):
+    """The largest stall (cpu, ms, steal jiffies) that overlaps the window_ns before t_ns."""
+    best = None
+    for e in (probe or {}).get("events", []):
+        start, end = e["due_realtime_ns"], e["due_realtime_ns"] + e["late_us"] * 1000
+        if end >= t_ns - window_ns and start <= t_ns:
+            if best is None or e["late_us"] > best["late_us"]:
+                best = e
+    if best is None:
+        return None
+    return "cpu%d %.1f ms (steal %d jiffies)" % (best["cpu"], best["late_us"] / 1e3, best["steal_jiffies"])
 
 
 def run_session(args, cmd):
@@ -114,10 +176,32 @@ def col(row, *names):
     return None
 
 
+def takeover(valves, leg):
+    """(take-over ms, largest gap after it ms) of a leg from its recorded ValveCommand rows.
+
+    The take-over is the standby's first command after the primary's last one. A standby
+    sample before that (tick 0, or a primary late past its 1 ms deadline: Cyclone then lets the
+    instance's next sample in from any live writer) is not the take-over. The gap after it
+    shows a standby that took over and then stopped answering for a while."""
+    is_standby = lambda v: col(v, "standby") in ("1", "true", "True")
+    mine = [v for v in valves if int(col(v, "leg_id")) == leg]
+    primary = [int(v["publish_time_ns"]) for v in mine if not is_standby(v)]
+    if not primary:
+        return None, None
+    last_primary = max(primary)
+    after = sorted(int(v["publish_time_ns"]) for v in mine
+                   if is_standby(v) and int(v["publish_time_ns"]) > last_primary)
+    if not after:
+        return None, None
+    gap = max(b - a for a, b in zip(after, after[1:])) * 1e-6 if len(after) > 1 else None
+    return (after[0] - last_primary) * 1e-6, gap
+
+
 def analyse(build, out_dir, case, fault_at_s):
     mcap = os.path.join(out_dir, "session.mcap")
     res = {"detected": "-", "lat_ms": None, "lat_ticks": None, "exc_mm": None, "exc_deg": None,
-           "takeover_ms": None, "lost_plant": None, "cmd_gaps": None, "faults": 0}
+           "takeover_ms": None, "after_ms": None, "lost_plant": None, "cmd_gaps": None,
+           "faults": 0, "first_fault_ns": None}
     if not os.path.exists(mcap):
         res["detected"] = "no recording"
         return res
@@ -148,6 +232,7 @@ def analyse(build, out_dir, case, fault_at_s):
         det_tick = int(col(first, "tick"))
         res["lat_ticks"] = det_tick - fault_tick
         det_ns = int(col(first, "source_time_ns") or first["publish_time_ns"])
+        res["first_fault_ns"] = det_ns
         if inject_ns is not None:
             res["lat_ms"] = (det_ns - inject_ns) * 1e-6
         # Excursion of the true pose in the simulated second after detection.
@@ -170,18 +255,7 @@ def analyse(build, out_dir, case, fault_at_s):
             res["exc_mm"] = exc * 1e3
             res["exc_deg"] = rot * 57.29577951308232
     if case["standby"] and case["kind"] in LEG_FAULTS:
-        last_primary, first_standby = None, None
-        for v in valves:
-            if int(col(v, "leg_id")) != leg:
-                continue
-            sb = col(v, "standby") in ("1", "true", "True")
-            t = int(v["publish_time_ns"])
-            if not sb and first_standby is None:
-                last_primary = t
-            elif sb and first_standby is None and last_primary is not None:
-                first_standby = t
-        if last_primary is not None and first_standby is not None:
-            res["takeover_ms"] = (first_standby - last_primary) * 1e-6
+        res["takeover_ms"], res["after_ms"] = takeover(valves, leg)
     loss, _ = info_loss(build, mcap)
     lost = 0
     gaps = 0
@@ -241,31 +315,44 @@ def run_matrix(args):
         cmd = session_command(args, args.build, out_dir, fault_args(case, args.fault_at),
                               case["mode"], case["standby"], domain)
         before = load()
+        probe_proc, probe_path = start_probe(args, out_dir)
         t0 = time.time()
         rc = run_session(args, cmd)
         wall = time.time() - t0
+        probe = stop_probe(probe_proc, probe_path)
         res = analyse(args.build, out_dir, case, args.fault_at)
         row = dict(case, exit=rc, wall_s=wall, load=before, **res)
+        row["cpu_stalls"] = stall_summary(probe)
+        row["stall_at_fault"] = None
+        expected_exit = 0 if (case["standby"] and case["kind"] in ("crash", "hang", "silence")) else None
+        if probe and res["first_fault_ns"] is not None and (expected_exit == 0 or rc not in (3, 5)):
+            row["stall_at_fault"] = stall_before(probe, res["first_fault_ns"])
         rows.append(row)
         print("%3d/%d %-9s %-16s leg %d %-3s exit %3s  %-44s %8s ms %6s ticks  exc %6s mm %5s deg  "
-              "take-over %6s ms  lost %s  cmd gaps %s  (%.0f s, load %s)" % (
+              "take-over %6s ms (after: %s ms)  lost %s  cmd gaps %s  (%.0f s, load %s)%s%s" % (
                   n + 1, len(all_cases), case["mode"], case["kind"], case["leg"],
                   "sb" if case["standby"] else "", rc, row["detected"], fmt(row["lat_ms"]),
                   fmt(row["lat_ticks"], "%d"), fmt(row["exc_mm"]), fmt(row["exc_deg"], "%.2f"),
-                  fmt(row["takeover_ms"]), fmt(row["lost_plant"], "%d"), fmt(row["cmd_gaps"], "%d"),
-                  wall, before), flush=True)
+                  fmt(row["takeover_ms"]), fmt(row["after_ms"]), fmt(row["lost_plant"], "%d"),
+                  fmt(row["cmd_gaps"], "%d"), wall, before,
+                  "  stalls: " + row["cpu_stalls"] if args.stall_probe else "",
+                  "  stall before the fault: " + row["stall_at_fault"] if row["stall_at_fault"] else ""),
+              flush=True)
     with open(os.path.join(args.out, "fault_matrix.json"), "w") as f:
         json.dump(rows, f, indent=1)
     with open(os.path.join(args.out, "fault_matrix.md"), "w") as f:
         f.write("| mode | fault | leg | standby | exit | detected (source reason leg) | latency ms | "
-                "latency ticks | excursion mm / deg (1 s after) | take-over ms | lost (plant "
-                "streams) | command gaps |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+                "latency ticks | excursion mm / deg (1 s after) | take-over ms | largest command "
+                "gap after take-over ms | lost (plant streams) | command gaps | CPU stalls | stall "
+                "before the first unexpected fault |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
         for r in rows:
-            f.write("| %s | %s | %s | %s | %s | %s | %s | %s | %s / %s | %s | %s | %s |\n" % (
+            f.write("| %s | %s | %s | %s | %s | %s | %s | %s | %s / %s | %s | %s | %s | %s | %s | %s |\n" % (
                 r["mode"], r["kind"], r["leg"] or "-", "yes" if r["standby"] else "no", r["exit"],
                 r["detected"], fmt(r["lat_ms"]), fmt(r["lat_ticks"], "%d"), fmt(r["exc_mm"]),
-                fmt(r["exc_deg"], "%.2f"), fmt(r["takeover_ms"]), fmt(r["lost_plant"], "%d"),
-                fmt(r["cmd_gaps"], "%d")))
+                fmt(r["exc_deg"], "%.2f"), fmt(r["takeover_ms"]), fmt(r["after_ms"]),
+                fmt(r["lost_plant"], "%d"), fmt(r["cmd_gaps"], "%d"), r["cpu_stalls"],
+                r["stall_at_fault"] or "-"))
     print("table: %s  (load average at the end %s)" % (os.path.join(args.out, "fault_matrix.md"),
                                                        load()))
 
@@ -288,7 +375,9 @@ def run_series(args):
             domain = 100 + (os.getpid() + n) % 100
             cmd = session_command(args, args.build, out_dir, [], "realtime", False, domain)
             before = load()
+            probe_proc, probe_path = start_probe(args, out_dir)
             rc = run_session(args, cmd)
+            probe = stop_probe(probe_proc, probe_path)
             mcap = os.path.join(out_dir, "session.mcap")
             loss, _ = info_loss(args.build, mcap) if os.path.exists(mcap) else ({}, 1)
             gaps = {}
@@ -309,12 +398,13 @@ def run_series(args):
             if os.path.exists(rlog):
                 rec_summary = " ".join(l.strip() for l in open(rlog) if l.startswith("hexa_"))
             row = {"run": n, "exit": rc, "load": before, "gaps": gaps, "why": why,
-                   "recorder": rec_summary}
+                   "recorder": rec_summary, "cpu_stalls": stall_summary(probe)}
             rows.append(row)
             gap_text = " ".join("%s %d/%d" % (t.replace("hexa_", ""), g[0], g[1])
                                 for t, g in sorted(gaps.items()))
-            print("%2d exit %d  gaps/missing: %s  (load %s) %s" % (n + 1, rc, gap_text, before, why),
-                  flush=True)
+            print("%2d exit %d  gaps/missing: %s  (load %s)%s %s" % (
+                n + 1, rc, gap_text, before,
+                "  stalls: " + row["cpu_stalls"] if args.stall_probe else "", why), flush=True)
     finally:
         if stress:
             os.killpg(stress.pid, signal.SIGTERM)
@@ -346,6 +436,11 @@ def main():
     p.add_argument("--rt-series", type=int, default=0)
     p.add_argument("--stress", type=int, default=0, help="stress-ng --cpu N beside the series")
     p.add_argument("--netns", choices=["auto", "yes", "no"], default="auto")
+    p.add_argument("--stall-probe", action="store_true",
+                   help="run hexa_cpu_stall_probe beside every session (root): CPU stalls per "
+                        "session and the stall before an unexpected fault")
+    p.add_argument("--stall-threshold-us", type=int, default=2000,
+                   help="with --stall-probe: a wake-up later than this is a stall (default 2000)")
     p.add_argument("--session-arg", action="append", default=[],
                    help="extra hexa_session argument for every session (repeatable; use "
                         "--session-arg=--rt-lease --session-arg=0.02)")
