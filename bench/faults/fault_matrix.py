@@ -157,16 +157,22 @@ def info_loss(build, mcap):
     """Per (topic, key): (missing, gaps, expected) from `hexa_recorder info`."""
     r = subprocess.run([os.path.join(build, "services/recorder/hexa_recorder"), "info", mcap],
                        capture_output=True, text=True)
+    return parse_info_loss(r.stdout), r.returncode
+
+
+def parse_info_loss(text):
+    """Per (topic, key) from the "loss from tick numbers" lines of `hexa_recorder info`; the key
+    is "-" or "leg N" (a per-leg instance: LegSensors, ValveCommand, LegSetpoint)."""
     loss = {}
-    pat = re.compile(r"^\s+(hexa_\w+)\s+(\S+)\s+ticks (\d+)\.\.(\d+) step (\d+): (\d+) received, "
+    pat = re.compile(r"^\s+(hexa_\w+)\s+(-|leg \d+)\s+ticks (\d+)\.\.(\d+) step (\d+): (\d+) received, "
                      r"(\d+) expected, (\d+) missing in (\d+) gaps")
-    for line in r.stdout.splitlines():
+    for line in text.splitlines():
         m = pat.match(line)
         if m:
             loss[(m.group(1), m.group(2))] = {"missing": int(m.group(8)), "gaps": int(m.group(9)),
                                               "expected": int(m.group(7)),
                                               "first": int(m.group(3)), "last": int(m.group(4))}
-    return loss, r.returncode
+    return loss
 
 
 def col(row, *names):
@@ -370,7 +376,7 @@ def run_series(args):
         load()))
     try:
         for n in range(args.rt_series):
-            out_dir = os.path.join(args.out, "rt_%02d" % n)
+            out_dir = os.path.join(args.out, "rt_%s%02d" % ("stress_" if stress else "", n))
             shutil.rmtree(out_dir, ignore_errors=True)
             domain = 100 + (os.getpid() + n) % 100
             cmd = session_command(args, args.build, out_dir, [], "realtime", False, domain)

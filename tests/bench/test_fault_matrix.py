@@ -39,6 +39,26 @@ class TakeOver(unittest.TestCase):
         self.assertEqual(fault_matrix.takeover(rows, 4), (None, None))
 
 
+class InfoLoss(unittest.TestCase):
+    # The "loss from tick numbers" block as `hexa_recorder info` prints it.
+    INFO = """loss from tick numbers (per instance):
+  hexa_LegSensors              leg 1        ticks 0..5060 step 1: 5061 received, 5061 expected, 0 missing in 0 gaps (largest 1 ticks), 0 duplicate/reordered
+  hexa_LegSensors              leg 6        ticks 0..5060 step 1: 5051 received, 5061 expected, 10 missing in 2 gaps (largest 6 ticks), 0 duplicate/reordered
+  hexa_ValveCommand            leg 3        ticks 0..5060 step 1: 5050 received, 5061 expected, 11 missing in 1 gaps (largest 12 ticks), 0 duplicate/reordered
+  hexa_GroundTruth             -            ticks 0..5060 step 1: 5061 received, 5061 expected, 0 missing in 0 gaps (largest 1 ticks), 0 duplicate/reordered
+"""
+
+    def test_per_leg_instances_are_read(self):
+        # Before: the key pattern took one word, so every "leg N" line (LegSensors,
+        # ValveCommand) was skipped and their losses were never counted.
+        loss = fault_matrix.parse_info_loss(self.INFO)
+        self.assertEqual(loss[("hexa_LegSensors", "leg 6")]["missing"], 10)
+        self.assertEqual(loss[("hexa_LegSensors", "leg 6")]["gaps"], 2)
+        self.assertEqual(loss[("hexa_ValveCommand", "leg 3")]["gaps"], 1)
+        self.assertEqual(loss[("hexa_GroundTruth", "-")]["missing"], 0)
+        self.assertEqual(len(loss), 4)
+
+
 class Stalls(unittest.TestCase):
     PROBE = {"per_cpu": [{"cpu": 0, "max_late_us": 17825, "over_5ms": 1},
                          {"cpu": 1, "max_late_us": 2100, "over_5ms": 0}],

@@ -437,5 +437,51 @@ TEST(RecordingInfo, InstancesThatStartLateOrEndEarlyAreReported) {
   fs::remove_all(dir);
 }
 
+// A sample that arrives after a later one (an exclusive-ownership hand-over: the standby's
+// answer of tick n lands after the primary's n+1..n+10) fills the hole its lateness opened.
+// Before, every such reordering was counted as missing ticks although each tick was recorded.
+TEST(TickLossTracker, LateSamplesThatFillAHoleAreNotMissing) {
+  TickLossTracker t;
+  for (uint64_t k = 0; k < 100; ++k) t.Add("leg 1", k);
+  for (uint64_t k = 111; k < 200; ++k) t.Add("leg 1", k);  // ticks 100..110 come later
+  for (uint64_t k = 100; k <= 110; ++k) t.Add("leg 1", k);
+  t.Add("leg 1", 150);  // a plain duplicate
+  const auto r = t.Results();
+  ASSERT_EQ(r.size(), 1u);
+  EXPECT_EQ(r[0].expected, 200u);
+  EXPECT_EQ(r[0].missing, 0u);
+  EXPECT_EQ(r[0].gaps, 0u);
+  EXPECT_EQ(r[0].filled_late, 11u);
+  EXPECT_EQ(r[0].not_increasing, 12u);
+  EXPECT_EQ(r[0].max_gap_ticks, 1u);
+}
+
+TEST(TickLossTracker, APartlyFilledHoleLeavesItsUnfilledRunsAsGaps) {
+  TickLossTracker t;
+  for (uint64_t k = 0; k <= 100; k += 5) t.Add("-", k);  // step 5
+  for (uint64_t k = 150; k <= 300; k += 5) t.Add("-", k);  // 105..145 missing: 9 ticks
+  t.Add("-", 120);                                          // one of them arrives late
+  t.Add("-", 122);                                          // off the step: not a hole's tick
+  const auto r = t.Results();
+  ASSERT_EQ(r.size(), 1u);
+  EXPECT_EQ(r[0].step_ticks, 5u);
+  EXPECT_EQ(r[0].missing, 8u);   // 105 110 115 | 125 130 135 140 145
+  EXPECT_EQ(r[0].gaps, 2u);      // split in two by 120
+  EXPECT_EQ(r[0].filled_late, 1u);
+  EXPECT_EQ(r[0].max_gap_ticks, 30u);  // 120 -> 150: five ticks missing in a row, plus a step
+}
+
+TEST(TickLossTracker, AHoleNothingFillsIsCountedAsBefore) {
+  TickLossTracker t;
+  for (uint64_t k = 0; k < 50; ++k) t.Add("leg 2", k);
+  for (uint64_t k = 60; k < 100; ++k) t.Add("leg 2", k);
+  const auto r = t.Results();
+  ASSERT_EQ(r.size(), 1u);
+  EXPECT_EQ(r[0].missing, 10u);
+  EXPECT_EQ(r[0].gaps, 1u);
+  EXPECT_EQ(r[0].max_gap_ticks, 11u);
+  EXPECT_EQ(r[0].filled_late, 0u);
+}
+
 }  // namespace
 }  // namespace hexa::recorder

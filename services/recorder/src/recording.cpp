@@ -368,13 +368,65 @@ void TickLossTracker::AddAt(std::size_t stream_index, uint64_t tick) {
     } else {
       ++s.large_deltas[delta];
     }
+    if (delta > 1) {
+      if (s.jumps.size() < kMaxKept) s.jumps.emplace_back(s.max_tick, tick);
+      else s.overflow = true;
+    }
     s.max_tick = tick;
   } else {
     ++s.not_increasing;  // duplicate or late sample: not a loss, but reported
+    if (s.late.size() < kMaxKept) s.late.push_back(tick);
+    else s.overflow = true;
   }
   s.first = std::min(s.first, tick);
   s.last = s.max_tick;
   ++s.count;
+}
+
+// The holes a stream's forward jumps left, less the ticks that arrived later (reordered):
+// each jump of n steps leaves n - 1 expected ticks (from + k step); a late sample on one of
+// them fills it. What stays unfilled is missing, each run of unfilled ticks one gap, and the
+// largest gap is the longest such run in ticks (plus one step, like a plain jump).
+void TickLossTracker::CountHoles(const Stream& s, StreamLoss& l) {
+  std::vector<uint64_t> late = s.late;
+  std::sort(late.begin(), late.end());
+  late.erase(std::unique(late.begin(), late.end()), late.end());
+  const uint64_t step = l.step_ticks;
+  uint64_t largest = 0;
+  for (uint64_t d = 1; d <= std::min<uint64_t>(step, kSmallDeltas); ++d)
+    if (s.small_deltas[d] > 0) largest = std::max(largest, d);
+  for (const auto& [from, to] : s.jumps) {
+    const uint64_t delta = to - from;
+    if (delta <= step) continue;
+    // Round to the nearest whole number of steps: a late sample shifts one difference.
+    const uint64_t steps = (delta + step / 2) / step;
+    if (steps <= 1) {
+      largest = std::max(largest, delta);
+      continue;
+    }
+    // Positions 1 .. steps-1 of this hole that a late sample filled, ascending.
+    uint64_t filled = 0, runs = 0, previous = 0, longest_run = 0;
+    for (auto it = std::upper_bound(late.begin(), late.end(), from); it != late.end() && *it < to; ++it) {
+      if ((*it - from) % step != 0) continue;
+      const uint64_t position = (*it - from) / step;
+      if (position == 0 || position >= steps) continue;
+      if (position > previous + 1) {
+        ++runs;
+        longest_run = std::max(longest_run, position - previous - 1);
+      }
+      previous = position;
+      ++filled;
+    }
+    if (steps - 1 > previous) {
+      ++runs;
+      longest_run = std::max(longest_run, steps - 1 - previous);
+    }
+    l.filled_late += filled;
+    l.missing += steps - 1 - filled;
+    l.gaps += runs;
+    largest = std::max(largest, runs > 0 ? (longest_run + 1) * step : step);
+  }
+  l.max_gap_ticks = std::max<uint64_t>(largest, step);
 }
 
 std::vector<StreamLoss> TickLossTracker::Results() const {
@@ -401,15 +453,19 @@ std::vector<StreamLoss> TickLossTracker::Results() const {
       l.max_gap_ticks = std::max(l.max_gap_ticks, delta);
     }
     if (l.step_ticks == 0) l.step_ticks = 1;
-    for (const auto& [delta, n] : histogram) {
-      if (delta > l.step_ticks) {
-        // Round to the nearest whole number of steps: a late sample shifts one difference.
-        const uint64_t steps = (delta + l.step_ticks / 2) / l.step_ticks;
-        if (steps > 1) {
-          l.missing += (steps - 1) * n;
-          l.gaps += n;
+    if (s.overflow) {
+      for (const auto& [delta, n] : histogram) {
+        if (delta > l.step_ticks) {
+          // Round to the nearest whole number of steps: a late sample shifts one difference.
+          const uint64_t steps = (delta + l.step_ticks / 2) / l.step_ticks;
+          if (steps > 1) {
+            l.missing += (steps - 1) * n;
+            l.gaps += n;
+          }
         }
       }
+    } else {
+      CountHoles(s, l);
     }
     l.expected = (l.last_tick - l.first_tick) / l.step_ticks + 1;
     out.push_back(l);
@@ -556,10 +612,10 @@ std::string FormatInfo(const RecordingInfo& info) {
                     "  %-28s %-12s ticks %" PRIu64 "..%" PRIu64 " step %" PRIu64
                     ": %" PRIu64 " received, %" PRIu64 " expected, %" PRIu64
                     " missing in %" PRIu64 " gaps (largest %" PRIu64 " ticks), %" PRIu64
-                    " duplicate/reordered\n",
+                    " duplicate/reordered (%" PRIu64 " of them filled a hole)\n",
                     c.topic.c_str(), l.key.empty() ? "-" : l.key.c_str(), l.first_tick,
                     l.last_tick, l.step_ticks, l.count, l.expected, l.missing, l.gaps,
-                    l.max_gap_ticks, l.not_increasing);
+                    l.max_gap_ticks, l.not_increasing, l.filled_late);
       o << line;
       if (l.late_start_ticks > 0 || l.early_end_ticks > 0) {
         std::snprintf(line, sizeof line,

@@ -143,6 +143,7 @@ struct StreamLoss {
   uint64_t gaps = 0;           // number of holes
   uint64_t max_gap_ticks = 0;  // largest tick difference seen
   uint64_t not_increasing = 0; // duplicates or reordered samples
+  uint64_t filled_late = 0;    // ticks of a hole that arrived later (reordered): not missing
   // Against the other instances of the same topic (same step): ticks this stream starts
   // after the earliest first tick / ends before the latest last tick. Not counted as missing
   // (a leg that joined late or crashed sent nothing), but a recorder that matched a writer
@@ -161,11 +162,20 @@ class TickLossTracker {
   std::vector<StreamLoss> Results() const;
 
  private:
+  struct Stream;
+  static void CountHoles(const Stream& s, StreamLoss& l);
   static constexpr uint64_t kSmallDeltas = 16;  // tick differences counted in an array
+  // Forward jumps and late samples kept per stream so that a late sample that fills a hole
+  // (reordered delivery, e.g. an exclusive-ownership hand-over) is not counted as missing.
+  // Past this many of either, the stream's holes are counted as the jumps left them.
+  static constexpr std::size_t kMaxKept = 1u << 20;
   struct Stream {
     uint64_t count = 0, first = 0, last = 0, max_tick = 0, not_increasing = 0;
     std::array<uint64_t, kSmallDeltas + 1> small_deltas{};  // [d] = how often d, d <= 16
     std::map<uint64_t, uint64_t> large_deltas;              // d > 16 (gaps)
+    std::vector<std::pair<uint64_t, uint64_t>> jumps;       // (from, to) of every delta > 1
+    std::vector<uint64_t> late;                             // ticks below the newest seen
+    bool overflow = false;                                  // jumps or late past kMaxKept
   };
   std::map<std::string, std::size_t> index_;  // key -> streams_ index (Results in key order)
   std::vector<Stream> streams_;
