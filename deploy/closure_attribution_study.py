@@ -322,20 +322,26 @@ def report(results, a, groups, skip):
                   "seeds 1-3, cm. sd = standard deviation over the draws; gap = abs(nominal - truth), miss = "
                   "abs(identified - truth), both unperturbed.\n")
             print("| trajectory | nominal | identified | truth | sd nominal | sd identified | sd truth | truth min-max | "
-                  "gap | gap / sd truth | miss | miss / sd truth | closure | closure over the draws: median (min to max) |")
-            print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+                  "gap | gap / sd truth | miss | miss / sd truth | closure | closure per draw: median (min to max) | "
+                  "identified - truth per draw: mean (sd) | closure of the draw means |")
+            print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
             for t in TRAJ:
                 d = {n: [R(f"{n}~{k}")[t] for k in ks] for n in ("nominal", "identified", "truth")}
                 sd = {n: statistics.stdev(v) for n, v in d.items()}
                 nom, ide, tru = R("nominal")[t], R("identified")[t], R("truth")[t]
                 gap, miss = abs(nom - tru), abs(ide - tru)
+                diff = [d["identified"][i] - d["truth"][i] for i in range(a.draws)]
                 cl = sorted(closure(d["nominal"][i], d["identified"][i], d["truth"][i]) for i in range(a.draws))
                 print(f"| {t} | {nom:.3f} | {ide:.3f} | {tru:.3f} | {sd['nominal']:.3f} | {sd['identified']:.3f} | "
                       f"{sd['truth']:.3f} | {min(d['truth']):.3f}-{max(d['truth']):.3f} | {gap:.3f} | {gap / sd['truth']:.1f} | "
                       f"{miss:.3f} | {miss / sd['truth']:.1f} | {100 * closure(nom, ide, tru):.0f} % | "
-                      f"{100 * statistics.median(cl):.0f} % ({100 * cl[0]:.0f} to {100 * cl[-1]:.0f} %) |")
+                      f"{100 * statistics.median(cl):.0f} % ({100 * cl[0]:.0f} to {100 * cl[-1]:.0f} %) | "
+                      f"{statistics.mean(diff):+.3f} ({statistics.stdev(diff):.3f}) | "
+                      f"{100 * closure(*(statistics.mean(d[n]) for n in ('nominal', 'identified', 'truth'))):.0f} % |")
             same = all(R("nominal as overlay")[t] == R("nominal")[t] for t in TRAJ)
             print(f"\nCheck: the rig file's values written as an overlay reproduce the nominal rig: {'yes' if same else 'NO'}.\n")
+        if {"swap-in", "swap-out"} <= skip:
+            continue
         print("Attribution (cm, translation RMSE summed over seeds 1-3): truth overlay with the identified value of "
               "one group (`truth + id`), minus the truth rig; identified overlay with the true value of one group "
               "(`id + truth`), minus the identified rig. Top row: identified - truth.\n")
