@@ -217,15 +217,16 @@ def completed(overlay, rig):
     return o
 
 
-def run_sums(sim, out, overlay_path, mode):
-    """Per trajectory, translation RMSE (cm) summed over seeds 1-3; and the per-seed values.
+def run_sums(sim, out, overlay_path, mode, seeds=(1, 2, 3)):
+    """Per trajectory, translation RMSE (cm) summed over seeds 1-3; and the values per seed of
+    `seeds` (which start with 1, 2, 3).
     Runs are cached in `out` under the overlay's content hash."""
     key = "none"
     if overlay_path:
         with open(overlay_path, "rb") as f:
             key = hashlib.sha1(f.read()).hexdigest()[:12]
     sums, per_seed = {t: 0.0 for t in TRAJ}, {t: [] for t in TRAJ}
-    for seed in (1, 2, 3):
+    for seed in seeds:
         path = os.path.join(out, "runs", f"{mode[1] or 'ff_'}{key}_seed{seed}.json")
         if not os.path.exists(path):
             cmd = [sim, "--seed", str(seed), "--json", path + ".tmp"] + mode[2]
@@ -239,7 +240,7 @@ def run_sums(sim, out, overlay_path, mode):
             if not r[t]["completed"]:
                 raise SystemExit(f"{path}: trajectory {t} not completed")
             v = 100 * norm3(r[t]["rmse_vs_truth"][:3])
-            sums[t] += v
+            sums[t] += v if seed <= 3 else 0.0
             per_seed[t].append(v)
     return sums, per_seed
 
@@ -256,6 +257,9 @@ def main():
     ap.add_argument("--identified-overlay", required=True)
     ap.add_argument("--draws", type=int, default=10)
     ap.add_argument("--perturbation", type=float, default=0.005, help="p of U(-p, p)")
+    ap.add_argument("--seed-triples", type=int, default=1,
+                    help="also run the nominal, identified and truth rigs with seeds 1..3N and print the "
+                         "closure per seed triple (1-3, 4-6, ...) and over all")
     ap.add_argument("--skip", default="", help="comma list of parts to skip: floor, swap-in, swap-out")
     a = ap.parse_args()
     os.makedirs(os.path.join(a.out, "runs"), exist_ok=True)
@@ -302,7 +306,8 @@ def main():
     results = {}
     for mode in MODES:
         for name, path in variants:
-            sums, per_seed = run_sums(sim, a.out, path, mode)
+            seeds = range(1, 3 * a.seed_triples + 1) if name in ("nominal", "identified", "truth") else (1, 2, 3)
+            sums, per_seed = run_sums(sim, a.out, path, mode, seeds)
             results[f"{mode[1]}{name}"] = {"sums": sums, "per_seed": per_seed}
             print(f"{mode[1] or 'ff_'}{name}: " + " ".join(f"{t} {sums[t]:.3f}" for t in TRAJ), file=sys.stderr, flush=True)
     with open(os.path.join(a.out, "summary.json"), "w") as f:
@@ -315,6 +320,20 @@ def report(results, a, groups, skip):
         m = mode[1]
         R = lambda n: results[m + n]["sums"]
         print(f"\n### {mode[0]}\n")
+        if a.seed_triples > 1:
+            P = lambda n, t, lo, hi: sum(results[m + n]["per_seed"][t][lo:hi])
+            print("Closure per seed triple (unperturbed rigs; translation RMSE summed over the triple's seeds), "
+                  f"and over seeds 1-{3 * a.seed_triples} (sums in cm: nominal / identified / truth).\n")
+            trip = [(3 * i, 3 * i + 3) for i in range(a.seed_triples)]
+            print("| trajectory | " + " | ".join(f"seeds {lo + 1}-{hi}" for lo, hi in trip)
+                  + f" | seeds 1-{3 * a.seed_triples} | sums |")
+            print("|---|" + "---|" * (len(trip) + 2))
+            for t in TRAJ:
+                cells = [f"{100 * closure(*(P(n, t, lo, hi) for n in ('nominal', 'identified', 'truth'))):.0f} %"
+                         for lo, hi in trip + [(0, 3 * a.seed_triples)]]
+                sums = " / ".join(f"{P(n, t, 0, 3 * a.seed_triples):.3f}" for n in ("nominal", "identified", "truth"))
+                print(f"| {t} | " + " | ".join(cells) + f" | {sums} |")
+            print()
         if "floor" not in skip:
             ks = range(1, a.draws + 1)
             print(f"Floor: {a.draws} draws, every friction, polytropic and gravity-load value x (1 + U(-{a.perturbation:g}, "
