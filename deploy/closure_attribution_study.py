@@ -18,6 +18,8 @@ seeds, as the study's closure table.
      identified overlay with one group's TRUE value swapped in. Where the identified overlay
      has no value (a parameter reported not identifiable), the rig file's value is used, as
      the controllers do.
+  3. --seed-triples N: the nominal, identified and truth rigs also with seeds 1..3N, the closure
+     per seed triple and over all.
 
     /usr/bin/python3 deploy/closure_attribution_study.py \
         --truth-overlay out/identification/truth_overlay.textproto \
