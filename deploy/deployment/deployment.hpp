@@ -14,6 +14,9 @@ inline constexpr char kDefaultBinDir[] = "/usr/bin";
 inline constexpr char kDefaultConfigDir[] = "/etc/hexa";
 inline constexpr char kDefaultRecordDir[] = "/var/lib/hexa/recordings";
 inline constexpr unsigned kDefaultCertificateDays = 3650;
+// security.metadata_protection when unset (docs/deployment.md, "Governance": the payload is
+// encrypted either way; what NONE saves and gives up is measured and stated there).
+inline constexpr deployment::Protection kDefaultMetadataProtection = deployment::ENCRYPT;
 inline constexpr int kMaxDomainId = 230;
 
 struct LoadedDeployment {
