@@ -400,8 +400,11 @@ int main(int argc, char** argv) {
                 "default");
   cli.AddChoice("loop-metadata-protection", {"default", "ENCRYPT", "SIGN", "NONE"},
                 "secured scenarios: the metadata protection of the 1 kHz loop topics (LegSensors, "
-                "ValveCommand, GroundTruth; default: as --metadata-protection)",
+                "ValveCommand, GroundTruth; default: the deployment's default, NONE)",
                 "default");
+  cli.AddOption("plant-delay-s", "s",
+                "start the plant this long after every other process (their discovery and "
+                "security handshakes with each other done before the clock starts)", "0");
   cli.AddFlag("no-cpu-placement",
               "leave every process unpinned (default: the one-machine session's CPU placement)");
   cli.AddFlag("faults-plain", "run the loss / recorder-loss / partition scenarios without DDS Security");
@@ -433,13 +436,20 @@ int main(int argc, char** argv) {
   if (cli.Get("loop-metadata-protection") != "default")
     base.loop_metadata_protection = cli.Get("loop-metadata-protection");
   base.cpu_placement = !cli.Flag("no-cpu-placement");
+  const auto plant_delay = cli.GetDouble("plant-delay-s", 0, 300);
+  if (!plant_delay) {
+    std::fprintf(stderr, "error: %s\n", cli.error().c_str());
+    return 2;
+  }
+  base.plant_start_delay_s = *plant_delay;
   const std::vector<std::string> auto_args{"--trajectory", "z", "--periods", "1", "--autostart", "--exit-when-done"};
 
   std::printf("five hosts in network namespaces, z trajectory (1 period, 13 s simulated), DDS Security on "
               "unless '-plain' (metadata protection %s, loop topics %s); real-time stale tolerance %d ticks; CPU placement %s; "
+              "plant started %.1f s after the others; "
               "machine shared (load average per row)\n\n",
               cli.Get("metadata-protection").c_str(), cli.Get("loop-metadata-protection").c_str(), base.stale_ticks > 0 ? base.stale_ticks : 15,
-              base.cpu_placement ? "as the one-machine session" : "none");
+              base.cpu_placement ? "as the one-machine session" : "none", base.plant_start_delay_s);
   std::printf("| scenario | done | wall s | sim/wall | CPU s per sim s: all, loop | RMSE x y z mm | rtt med us | rtt p99 us | missing | faults | dropped pkts | load | notes\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (long long k = 0; k < *runs; ++k) {

@@ -177,16 +177,30 @@ std::vector<std::pair<std::string, std::vector<std::string>>> LabSession::Plan()
 bool LabSession::StartAll(std::string& error) {
   // Recorder first and plant last: each process waits for its peers anyway, but this order
   // starts the clock master when everyone else is already there.
+  std::string plant_host;
   for (const auto& [host, units] : Plan()) {
-    std::vector<std::string> ordered = units;
-    std::stable_sort(ordered.begin(), ordered.end(), [](const std::string& a, const std::string& b) {
-      return (a == "hexa-plant.service") < (b == "hexa-plant.service");
-    });
-    for (const auto& unit : ordered) {
+    for (const auto& unit : units) {
+      if (unit == "hexa-plant.service") {
+        plant_host = host;
+        continue;
+      }
       if (!launcher_->Start(host, unit, error)) return false;
     }
   }
-  return true;
+  if (options_.plant_start_delay_s > 0) {
+    // The others discover (and, secured, authenticate) each other before the clock starts.
+    const auto end = std::chrono::steady_clock::now() +
+                     std::chrono::duration<double>(options_.plant_start_delay_s);
+    while (std::chrono::steady_clock::now() < end) {
+      const auto ev = group_.WaitEvent(std::chrono::milliseconds(100));
+      launcher_->Poll();
+      if (ev.kind == ProcessGroup::Event::kChildExited) {
+        error = ev.exit.Describe() + " before the plant was started";
+        return false;
+      }
+    }
+  }
+  return plant_host.empty() || launcher_->Start(plant_host, "hexa-plant.service", error);
 }
 
 std::string LabSession::Recording() const {

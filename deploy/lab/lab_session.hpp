@@ -54,6 +54,9 @@ struct LabSessionOptions {
   // recorder on its first. The lab's five hosts share one machine's CPUs; on real boards each
   // board has its own and the deployment pins what it needs. Off, or with one CPU: unpinned.
   bool cpu_placement = true;
+  // Start the plant (the real-time clock) this long after every other process: their
+  // discovery and security handshakes with each other are then over before tick 0.
+  double plant_start_delay_s = 0;
   std::vector<std::string> extra_hosts;  // more lab hosts outside the deployment (e.g. "intruder")
 };
 

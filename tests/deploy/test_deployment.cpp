@@ -232,9 +232,18 @@ TEST_F(Generated, GovernanceTakesTheProtectionKindsOfTheDeployment) {
     return a == std::string::npos ? std::string("(missing)") : gov.substr(a + element.size() + 2, b - a - element.size() - 2);
   };
   const std::string def = Slurp(dir_ + "/out/security-src/governance.xml");
-  const std::string default_metadata = hexa::deployment::Protection_Name(kDefaultMetadataProtection);
-  EXPECT_EQ(kind(def, "metadata_protection_kind"), default_metadata);
-  EXPECT_EQ(kind(def, "data_protection_kind"), "ENCRYPT");
+  const auto def_star = def.find("<topic_expression>*</topic_expression>");
+  ASSERT_NE(def_star, std::string::npos);
+  EXPECT_EQ(kind(def.substr(def_star), "metadata_protection_kind"),
+            hexa::deployment::Protection_Name(kDefaultMetadataProtection));
+  EXPECT_EQ(kind(def.substr(def_star), "data_protection_kind"), "ENCRYPT");
+  // The default loop rules come first (the sample deployment sets no protection kind).
+  const auto def_valve = def.find("<topic_expression>hexa_ValveCommand</topic_expression>");
+  ASSERT_NE(def_valve, std::string::npos);
+  EXPECT_LT(def_valve, def_star);
+  EXPECT_EQ(kind(def.substr(def_valve), "metadata_protection_kind"),
+            hexa::deployment::Protection_Name(kDefaultLoopMetadataProtection));
+  EXPECT_EQ(kind(def.substr(def_valve), "data_protection_kind"), "ENCRYPT");
   EXPECT_EQ(kind(def, "discovery_protection_kind"), "ENCRYPT");
   EXPECT_EQ(kind(def, "liveliness_protection_kind"), "ENCRYPT");
   auto d = loaded_.deployment;
