@@ -362,14 +362,16 @@ void Partition(const LabSessionOptions& base, double partition_ms, const std::st
   // retransmissions after the heal, so it cannot say what reached the plant when).
   const std::string plant_log = Slurp(s->units().LogOf("hexa-plant"));
   std::smatch m;
-  if (std::regex_search(plant_log, m, std::regex("leg ([123]) tick ([0-9]+): valve command stale \\([^,]*, answers tick ([0-9]+)\\)"))) {
+  // Either the command ages past the tolerance ("stale", answers tick N) or, first since the
+  // 10 ms valve lease, its writer lapses ("liveliness lost", last answer: tick N).
+  if (std::regex_search(plant_log, m, std::regex("leg ([123]) tick ([0-9]+): (?:valve command stale \\([^,]*, answers|liveliness lost: [^(]*\\(last answer:) tick ([0-9]+)\\)"))) {
     const long long at = std::stoll(m[2]), answered = std::stoll(m[3]);
-    std::printf("  plant: leg %s stale at tick %lld, its newest command answered tick %lld: detected %lld ticks "
+    std::printf("  plant: leg %s stale or lapsed at tick %lld, its newest command answered tick %lld: detected %lld ticks "
                 "(ms) after the last command that arrived (tolerance --stale-ticks %d: a command older than "
                 "that is stale)\n",
                 m[1].str().c_str(), at, answered, at - answered, o.stale_ticks > 0 ? o.stale_ticks : 15);
   } else {
-    std::printf("  no stale-command fault of legs 1-3 in the plant's log\n");
+    std::printf("  no stale-command or liveliness fault of legs 1-3 in the plant's log\n");
   }
   if (std::regex_search(plant_log, m, std::regex("leg ([123]) tick ([0-9]+): valve command valid again")))
     std::printf("  plant: leg %s valid again at tick %s\n", m[1].str().c_str(), m[2].str().c_str());
