@@ -24,7 +24,7 @@ int main(int argc, char** argv) {
   cli.AddOption("linger", "s",
                 "keep the command's writer this long after it was acknowledged: a reader that "
                 "matched this writer only just before the write answers at the writer's next "
-                "heartbeat, and Cyclone's wait for acknowledgements does not count it yet "
+                "heartbeat, and Cyclone's wait for acknowledgements does not seem to count it yet "
                 "(commands were lost between hosts: docs/deployment.md)", "0.5");
   cli.AllowPositional("start|stop|reset|home|shutdown", 1);
   const bool parsed = cli.Parse(argc, argv);
