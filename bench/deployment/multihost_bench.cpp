@@ -63,6 +63,12 @@ struct Row {
   std::size_t faults = 0;
   long long dropped = -1;  // nftables counter
   double cpu_s = 0;        // CPU time of all control processes and the recorder
+  // From the plant's READY to the supervisor's end (the loop without start-up and its
+  // security handshakes): per role (plant, supervisor, legs, standbys, recorder) and per
+  // role and thread name ("legs/recvUC").
+  double cpu_loop_s = 0;
+  std::map<std::string, double> cpu_loop_by_role, cpu_loop_by_thread;
+  std::string placement;  // per unit at the plant's READY: CPUs, policies, latency hold
   std::string note;
   std::string load;
 };
@@ -107,6 +113,60 @@ void FromRecording(LabSession& s, Row& row) {
   }
 }
 
+// The role of a unit, for the CPU breakdown.
+std::string RoleOf(const std::string& unit) {
+  if (unit.find("standby") != std::string::npos) return "standbys";
+  if (unit.rfind("hexa-leg", 0) == 0) return "legs";
+  if (unit.rfind("hexa-", 0) == 0) return unit.substr(5);
+  return unit;
+}
+
+// CPU seconds so far: per role and per role/thread, of every unit still running.
+struct CpuSnapshot {
+  std::map<std::string, double> role, thread;
+  std::map<std::string, double> unit;  // unit -> process total
+};
+CpuSnapshot TakeCpuSnapshot(const UnitLauncher& units) {
+  CpuSnapshot snap;
+  for (const auto& name : units.Names()) {
+    const double c = units.CpuSeconds(name);
+    if (c < 0) continue;
+    snap.unit[name] = c;
+    snap.role[RoleOf(name)] += c;
+    for (const auto& [thread, t] : units.ThreadCpuSeconds(name))
+      snap.thread[RoleOf(name) + "/" + thread] += t;
+  }
+  return snap;
+}
+
+// What each unit got of the loop settings, read from the running processes at the plant's
+// READY: its CPUs, its threads' policies (F = SCHED_FIFO, O = SCHED_OTHER; "tev" should be O
+// in real time, the rest F) and whether its log says the CPU wake-up latency is held.
+std::string DescribePlacement(const UnitLauncher& units) {
+  std::string out;
+  std::map<std::string, std::string> groups;  // description -> units
+  for (const auto& name : units.Names()) {
+    int fifo = 0, other = 0;
+    std::string others;
+    for (const auto& [thread, policy] : units.ThreadPolicies(name)) {
+      if (policy == 1) {
+        ++fifo;
+      } else {
+        ++other;
+        others += (others.empty() ? "" : ",") + thread;
+      }
+    }
+    const std::string log = Slurp(units.LogOf(name));
+    const bool hold = log.find("CPU wake-up latency held") != std::string::npos;
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "cpus %s FIFO %d OTHER %d%s%s%s hold %s", units.AllowedCpus(name).c_str(), fifo,
+                  other, others.empty() ? "" : " (", others.c_str(), others.empty() ? "" : ")", hold ? "yes" : "no");
+    groups[buf] += (groups[buf].empty() ? "" : ",") + name.substr(5);
+  }
+  for (const auto& [what, names] : groups) out += (out.empty() ? "" : "; ") + names + ": " + what;
+  return out;
+}
+
 // Runs until the supervisor exits; `during` is called every 0.5 s with the seconds since the
 // plant reported READY (negative before).
 Row RunSession(const std::string& scenario, LabSessionOptions o,
@@ -129,11 +189,19 @@ Row RunSession(const std::string& scenario, LabSessionOptions o,
   }
   const auto t0 = std::chrono::steady_clock::now();
   std::chrono::steady_clock::time_point ready{};
+  CpuSnapshot at_ready, latest;
   while (std::chrono::steady_clock::now() - t0 < timeout) {
     const auto ev = s->Wait(500ms);
     s->units().Poll();
-    if (ready == std::chrono::steady_clock::time_point{} && s->units().Seen("hexa-plant").ready)
+    if (ready == std::chrono::steady_clock::time_point{} && s->units().Seen("hexa-plant").ready) {
       ready = std::chrono::steady_clock::now();
+      at_ready = TakeCpuSnapshot(s->units());
+      row.placement = DescribePlacement(s->units());
+    }
+    // Every unit's CPU while the supervisor still runs (an exited process is gone from /proc).
+    if (ready != std::chrono::steady_clock::time_point{} &&
+        !(ev.kind == ProcessGroup::Event::kChildExited && ev.exit.name == "hexa-supervisor"))
+      latest = TakeCpuSnapshot(s->units());
     if (during) {
       const double since = ready == std::chrono::steady_clock::time_point{}
                                ? -1.0
@@ -164,6 +232,12 @@ Row RunSession(const std::string& scenario, LabSessionOptions o,
       }
     }
   }
+  for (const auto& [role, c] : latest.role) {
+    const double d = c - at_ready.role[role];
+    row.cpu_loop_by_role[role] = d;
+    row.cpu_loop_s += d;
+  }
+  for (const auto& [thread, c] : latest.thread) row.cpu_loop_by_thread[thread] = c - at_ready.thread[thread];
   row.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() -
                                              (ready == std::chrono::steady_clock::time_point{} ? t0 : ready))
                    .count();
@@ -176,13 +250,29 @@ Row RunSession(const std::string& scenario, LabSessionOptions o,
   return row;
 }
 
+// The loop's CPU per simulated second by role, and the costliest threads (>= 2 % of it).
+void PrintCpuDetail(const Row& r) {
+  if (r.sim_s <= 0 || r.cpu_loop_s <= 0) return;
+  std::printf("    CPU s per sim s from the plant's READY: %.3f =", r.cpu_loop_s / r.sim_s);
+  for (const auto& [role, c] : r.cpu_loop_by_role) std::printf(" %s %.3f", role.c_str(), c / r.sim_s);
+  std::vector<std::pair<double, std::string>> threads;
+  for (const auto& [t, c] : r.cpu_loop_by_thread)
+    if (c >= 0.02 * r.cpu_loop_s) threads.emplace_back(c, t);
+  std::sort(threads.rbegin(), threads.rend());
+  std::printf("\n    threads:");
+  for (const auto& [c, t] : threads) std::printf(" %s %.3f", t.c_str(), c / r.sim_s);
+  std::printf("\n");
+}
+
 void Print(const Row& r) {
-  std::printf("| %-22s | %-3s | %6.1f | %5.2f | %5.2f | %5.2f %5.2f %5.2f | %7.0f | %7.0f | %6llu | %3zu | %7lld | %s | %s\n",
+  std::printf("| %-22s | %-3s | %6.1f | %5.2f | %5.2f %5.2f | %5.2f %5.2f %5.2f | %7.0f | %7.0f | %6llu | %3zu | %7lld | %s | %s\n",
               r.scenario.c_str(), r.completed ? "yes" : "NO", r.wall_s, r.wall_s > 0 ? r.sim_s / r.wall_s : 0.0,
-              r.sim_s > 0 ? r.cpu_s / r.sim_s : 0.0,
+              r.sim_s > 0 ? r.cpu_s / r.sim_s : 0.0, r.sim_s > 0 ? r.cpu_loop_s / r.sim_s : 0.0,
               r.rmse_mm[0], r.rmse_mm[1], r.rmse_mm[2], r.rtt_median_us, r.rtt_p99_us,
               static_cast<unsigned long long>(r.missing), r.faults, r.dropped, r.load.c_str(),
               r.note.c_str());
+  PrintCpuDetail(r);
+  if (!r.placement.empty()) std::printf("    placement: %s\n", r.placement.c_str());
   std::fflush(stdout);
 }
 
@@ -272,14 +362,16 @@ void Partition(const LabSessionOptions& base, double partition_ms, const std::st
   // retransmissions after the heal, so it cannot say what reached the plant when).
   const std::string plant_log = Slurp(s->units().LogOf("hexa-plant"));
   std::smatch m;
-  if (std::regex_search(plant_log, m, std::regex("leg ([123]) tick ([0-9]+): valve command stale \\([^,]*, answers tick ([0-9]+)\\)"))) {
+  // Either the command ages past the tolerance ("stale", answers tick N) or, first since the
+  // 10 ms valve lease, its writer lapses ("liveliness lost", last answer: tick N).
+  if (std::regex_search(plant_log, m, std::regex("leg ([123]) tick ([0-9]+): (?:valve command stale \\([^,]*, answers|liveliness lost: [^(]*\\(last answer:) tick ([0-9]+)\\)"))) {
     const long long at = std::stoll(m[2]), answered = std::stoll(m[3]);
-    std::printf("  plant: leg %s stale at tick %lld, its newest command answered tick %lld: detected %lld ticks "
+    std::printf("  plant: leg %s stale or lapsed at tick %lld, its newest command answered tick %lld: detected %lld ticks "
                 "(ms) after the last command that arrived (tolerance --stale-ticks %d: a command older than "
                 "that is stale)\n",
                 m[1].str().c_str(), at, answered, at - answered, o.stale_ticks > 0 ? o.stale_ticks : 15);
   } else {
-    std::printf("  no stale-command fault of legs 1-3 in the plant's log\n");
+    std::printf("  no stale-command or liveliness fault of legs 1-3 in the plant's log\n");
   }
   if (std::regex_search(plant_log, m, std::regex("leg ([123]) tick ([0-9]+): valve command valid again")))
     std::printf("  plant: leg %s valid again at tick %s\n", m[1].str().c_str(), m[2].str().c_str());
@@ -305,6 +397,18 @@ int main(int argc, char** argv) {
   cli.AddOption("partition-ms", "ms", "length of the partition", "300");
   cli.AddOption("build", "dir", "build directory", HEXA_BUILD_DIR);
   cli.AddOption("stale-ticks", "N", "real time: the plant's stale-command tolerance (0 = default 15)", "0");
+  cli.AddChoice("metadata-protection", {"default", "ENCRYPT", "SIGN", "NONE"},
+                "secured scenarios: the governance's metadata protection (data stay ENCRYPTED)",
+                "default");
+  cli.AddChoice("loop-metadata-protection", {"default", "ENCRYPT", "SIGN", "NONE"},
+                "secured scenarios: the metadata protection of the 1 kHz loop topics (LegSensors, "
+                "ValveCommand, GroundTruth; default: the deployment's default, NONE)",
+                "default");
+  cli.AddOption("plant-delay-s", "s",
+                "start the plant this long after every other process (their discovery and "
+                "security handshakes with each other done before the clock starts)", "0");
+  cli.AddFlag("no-cpu-placement",
+              "leave every process unpinned (default: the one-machine session's CPU placement)");
   cli.AddFlag("faults-plain", "run the loss / recorder-loss / partition scenarios without DDS Security");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
@@ -330,12 +434,25 @@ int main(int argc, char** argv) {
   const int domain = 60 + getpid() % 40;
   LabSessionOptions base = BaseOptions(build, HEXA_SOURCE_DIR, "b", domain);
   base.stale_ticks = static_cast<int>(*stale);
+  if (cli.Get("metadata-protection") != "default") base.metadata_protection = cli.Get("metadata-protection");
+  if (cli.Get("loop-metadata-protection") != "default")
+    base.loop_metadata_protection = cli.Get("loop-metadata-protection");
+  base.cpu_placement = !cli.Flag("no-cpu-placement");
+  const auto plant_delay = cli.GetDouble("plant-delay-s", 0, 300);
+  if (!plant_delay) {
+    std::fprintf(stderr, "error: %s\n", cli.error().c_str());
+    return 2;
+  }
+  base.plant_start_delay_s = *plant_delay;
   const std::vector<std::string> auto_args{"--trajectory", "z", "--periods", "1", "--autostart", "--exit-when-done"};
 
   std::printf("five hosts in network namespaces, z trajectory (1 period, 13 s simulated), DDS Security on "
-              "unless '-plain'; real-time stale tolerance %d ticks; machine shared (load average per row)\n\n",
-              base.stale_ticks > 0 ? base.stale_ticks : 15);
-  std::printf("| scenario | done | wall s | sim/wall | CPU s per sim s | RMSE x y z mm | rtt med us | rtt p99 us | missing | faults | dropped pkts | load | notes\n");
+              "unless '-plain' (metadata protection %s, loop topics %s); real-time stale tolerance %d ticks; CPU placement %s; "
+              "plant started %.1f s after the others; "
+              "machine shared (load average per row)\n\n",
+              cli.Get("metadata-protection").c_str(), cli.Get("loop-metadata-protection").c_str(), base.stale_ticks > 0 ? base.stale_ticks : 15,
+              base.cpu_placement ? "as the one-machine session" : "none", base.plant_start_delay_s);
+  std::printf("| scenario | done | wall s | sim/wall | CPU s per sim s: all, loop | RMSE x y z mm | rtt med us | rtt p99 us | missing | faults | dropped pkts | load | notes\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (long long k = 0; k < *runs; ++k) {
     if (want("lockstep")) {

@@ -95,9 +95,17 @@ def session(build, out, secure, mode, domain):
         return None
     r = json.load(open(path))
     rtt = r["control_round_trip_latency_s"]
+    # CPU of every process over its whole life (start-up and handshakes included) per
+    # simulated second (hexa_session's processes.json).
+    cpu = float("nan")
+    procs_path = os.path.join(out, "processes.json")
+    if os.path.exists(procs_path):
+        procs = json.load(open(procs_path))
+        if procs.get("sim_time_s", 0) > 0:
+            cpu = (procs["cpu_user_s"] + procs["cpu_system_s"]) / procs["sim_time_s"]
     return {"speed": r["sim_time_s"] / r["wall_time_s"], "wall": r["wall_time_s"],
             "rtt_med_us": rtt["median"] * 1e6, "rtt_p99_us": rtt["p99"] * 1e6,
-            "rmse_z_mm": r["rmse_vs_ground_truth"]["z_m"] * 1e3}
+            "rmse_z_mm": r["rmse_vs_ground_truth"]["z_m"] * 1e3, "cpu": cpu}
 
 
 def make_ddsperf_security(work, domain):
@@ -172,7 +180,7 @@ def main():
             else:
                 print(f"round {k} {tag}: {r['speed']:.3f}x real time ({r['wall']:.1f} s wall), round trip "
                       f"median {r['rtt_med_us']:.0f} us p99 {r['rtt_p99_us']:.0f} us, RMSE z "
-                      f"{r['rmse_z_mm']:.4f} mm (load {' '.join(load())})")
+                      f"{r['rmse_z_mm']:.4f} mm, CPU {r['cpu']:.3f} s per sim s (load {' '.join(load())})")
             sys.stdout.flush()
         if not a.no_ddsperf:
             for secure in order:
@@ -188,7 +196,8 @@ def main():
     print("\n| | without security | with DDS Security | ratio |")
     print("|---|---|---|---|")
     for key, label in (("speed", f"{a.mode} speed (sim s / wall s)"), ("rtt_med_us", "control round trip median (us)"),
-                       ("rtt_p99_us", "control round trip p99 (us)")):
+                       ("rtt_p99_us", "control round trip p99 (us)"),
+                       ("cpu", "CPU of all processes per sim s (whole life)")):
         p, s = median(rows[False], key), median(rows[True], key)
         print(f"| {label} | {p:.3f} | {s:.3f} | {s / p:.2f} |")
     if not a.no_ddsperf:

@@ -104,6 +104,13 @@ void Validate(const Deployment& d, Checker& c) {
   if (d.security().certificate_days() > 36500)
     c.Error(L.Of("security"), "security.certificate_days",
             "value " + std::to_string(d.security().certificate_days()) + " (limit 1..36500)");
+  // The issue asks protected discovery and liveliness: signed at least.
+  if (d.security().discovery_protection() == deployment::NONE)
+    c.Error(L.Of("security"), "security.discovery_protection",
+            "NONE: discovery must be protected (SIGN or ENCRYPT)");
+  if (d.security().liveliness_protection() == deployment::NONE)
+    c.Error(L.Of("security"), "security.liveliness_protection",
+            "NONE: liveliness must be protected (SIGN or ENCRYPT)");
   const auto& t = d.timing();
   auto fmt = [](double v) {
     std::ostringstream os;
@@ -350,6 +357,15 @@ void ApplyDefaults(Deployment& d) {
   if (d.rig_file().empty()) d.set_rig_file(d.config_dir() + "/rig.textproto");
   if (d.security().certificate_days() == 0)
     d.mutable_security()->set_certificate_days(kDefaultCertificateDays);
+  auto* sec = d.mutable_security();
+  if (sec->metadata_protection() == deployment::PROTECTION_UNSPECIFIED)
+    sec->set_metadata_protection(kDefaultMetadataProtection);
+  if (sec->discovery_protection() == deployment::PROTECTION_UNSPECIFIED)
+    sec->set_discovery_protection(deployment::ENCRYPT);
+  if (sec->liveliness_protection() == deployment::PROTECTION_UNSPECIFIED)
+    sec->set_liveliness_protection(deployment::ENCRYPT);
+  if (sec->loop_metadata_protection() == deployment::PROTECTION_UNSPECIFIED)
+    sec->set_loop_metadata_protection(kDefaultLoopMetadataProtection);
   auto* t = d.mutable_timing();
   if (t->lockstep_timeout_s() == 0) t->set_lockstep_timeout_s(10.0);
   if (t->watchdog_s() == 0)

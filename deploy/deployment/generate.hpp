@@ -5,6 +5,10 @@
 //                                                     the Security section when secured
 //   OUT/hosts/<host>/<config_dir>/deployment.textproto the description itself
 //   OUT/hosts/<host>/lib/systemd/system/hexa-*.service one unit per process, and hexa.target
+//   OUT/hosts/<host>/etc/udev/rules.d/60-hexa-cpu-latency.rules
+//                                                     real time, hosts with a plant, leg or
+//                                                     supervisor: the service user may hold
+//                                                     the CPU wake-up latency limit
 //   OUT/security-src/governance.xml, permissions/<node>.xml, identities.txt
 //                                                     (deploy/make_security.sh signs them)
 #pragma once
@@ -39,6 +43,9 @@ std::vector<std::string> CommandLine(const deployment::Deployment& d, const Proc
 std::string UnitFileText(const deployment::Deployment& d, const ProcessPlan& plan,
                      const HostPaths& paths);
 std::string TargetFileText(const deployment::Deployment& d, const deployment::Host& host);
+// The udev rule that gives group hexa write access to /dev/cpu_dma_latency.
+inline constexpr const char* kCpuLatencyUdevRuleFile = "60-hexa-cpu-latency.rules";
+std::string CpuLatencyUdevRule(const deployment::Deployment& d);
 
 struct GenerateOptions {
   // Paths inside the generated files point into OUT/hosts/<host>/ instead of the on-host

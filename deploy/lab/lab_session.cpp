@@ -7,6 +7,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "hexa/services/scheduling.hpp"
+
 namespace hexa::deploy {
 namespace {
 
@@ -85,6 +87,9 @@ std::unique_ptr<LabSession> LabSession::Create(const LabSessionOptions& o, std::
     << "mode: " << (o.realtime ? "REALTIME" : "LOCKSTEP") << "\n"
     << "security { enabled: " << (o.secure ? "true" : "false")
     << (o.audit ? " audit_dir: " + Quoted((fs::path(o.work_dir) / "audit").string()) : std::string())
+    << (o.metadata_protection.empty() ? std::string() : " metadata_protection: " + o.metadata_protection)
+    << (o.loop_metadata_protection.empty() ? std::string()
+                                           : " loop_metadata_protection: " + o.loop_metadata_protection)
     << " }\n"
     << "bin_dir: " << Quoted(bin.string()) << "\n"
     << "rig_file: " << Quoted(o.rig_file) << "\n"
@@ -105,17 +110,24 @@ std::unique_ptr<LabSession> LabSession::Create(const LabSessionOptions& o, std::
     for (const auto& x : a) out += " arg: " + Quoted(x);
     return out;
   };
-  host_block("io-sup", "  process { role: PLANT" + args(o.plant_args) + " }\n  process { role: SUPERVISOR" +
-                           args(o.supervisor_args) + " }\n  process { role: OPERATOR }\n");
-  host_block("legs-a", "  process { role: LEG leg: 1 }\n  process { role: LEG leg: 2 }\n"
-                       "  process { role: LEG leg: 3 }\n");
-  host_block("legs-b", "  process { role: LEG leg: 4 }\n  process { role: LEG leg: 5 }\n"
-                       "  process { role: LEG leg: 6 }\n");
-  if (o.standbys)
-    host_block("standby-b", "  process { role: LEG leg: 4 standby: true }\n"
-                            "  process { role: LEG leg: 5 standby: true }\n"
-                            "  process { role: LEG leg: 6 standby: true }\n");
-  host_block("recorder", "  process { role: RECORDER }\n");
+  // The one-machine session's placement (hexa_session's "auto" CPU options).
+  const std::vector<int> allowed = sched::AllowedCpus();
+  const bool place = o.cpu_placement && allowed.size() >= 2;
+  const std::string control = place ? " cpu: " + std::to_string(allowed.back()) : "";
+  const std::string other = place ? " cpu: " + std::to_string(allowed.front()) : "";
+  auto legs = [&](int first, const std::string& extra, const std::string& cpu) {
+    std::string out;
+    for (int leg = first; leg < first + 3; ++leg)
+      out += "  process { role: LEG leg: " + std::to_string(leg) + extra + cpu + " }\n";
+    return out;
+  };
+  host_block("io-sup", "  process { role: PLANT" + control + args(o.plant_args) +
+                           " }\n  process { role: SUPERVISOR" + other + args(o.supervisor_args) +
+                           " }\n  process { role: OPERATOR }\n");
+  host_block("legs-a", legs(1, "", control));
+  host_block("legs-b", legs(4, "", control));
+  if (o.standbys) host_block("standby-b", legs(4, " standby: true", other));
+  host_block("recorder", "  process { role: RECORDER" + other + " }\n");
   s->deployment_text_ = d.str();
   const std::string file = (fs::path(o.work_dir) / "deployment.textproto").string();
   std::ofstream(file) << s->deployment_text_;
@@ -165,16 +177,30 @@ std::vector<std::pair<std::string, std::vector<std::string>>> LabSession::Plan()
 bool LabSession::StartAll(std::string& error) {
   // Recorder first and plant last: each process waits for its peers anyway, but this order
   // starts the clock master when everyone else is already there.
+  std::string plant_host;
   for (const auto& [host, units] : Plan()) {
-    std::vector<std::string> ordered = units;
-    std::stable_sort(ordered.begin(), ordered.end(), [](const std::string& a, const std::string& b) {
-      return (a == "hexa-plant.service") < (b == "hexa-plant.service");
-    });
-    for (const auto& unit : ordered) {
+    for (const auto& unit : units) {
+      if (unit == "hexa-plant.service") {
+        plant_host = host;
+        continue;
+      }
       if (!launcher_->Start(host, unit, error)) return false;
     }
   }
-  return true;
+  if (options_.plant_start_delay_s > 0) {
+    // The others discover (and, secured, authenticate) each other before the clock starts.
+    const auto end = std::chrono::steady_clock::now() +
+                     std::chrono::duration<double>(options_.plant_start_delay_s);
+    while (std::chrono::steady_clock::now() < end) {
+      const auto ev = group_.WaitEvent(std::chrono::milliseconds(100));
+      launcher_->Poll();
+      if (ev.kind == ProcessGroup::Event::kChildExited) {
+        error = ev.exit.Describe() + " before the plant was started";
+        return false;
+      }
+    }
+  }
+  return plant_host.empty() || launcher_->Start(plant_host, "hexa-plant.service", error);
 }
 
 std::string LabSession::Recording() const {

@@ -43,7 +43,20 @@ struct LabSessionOptions {
   double lockstep_timeout_s = 0;
   int stale_ticks = 0;
   double startup_timeout_s = 120;
+  // security { metadata_protection: ... }: "" = the deployment's default, else ENCRYPT, SIGN
+  // or NONE (the benchmark's governance variants).
+  std::string metadata_protection;
+  std::string loop_metadata_protection;  // security { loop_metadata_protection: ... } likewise
   bool audit = false;              // security.audit_dir = <work_dir>/audit
+  // Every process gets a `cpu:` as the one-machine session places it (hexa_session
+  // --cpus-control/--cpus-supervisor/--cpus-standby/--cpus-recorder auto): the plant and the
+  // primary legs on this machine's last allowed CPU, the supervisor, the standbys and the
+  // recorder on its first. The lab's five hosts share one machine's CPUs; on real boards each
+  // board has its own and the deployment pins what it needs. Off, or with one CPU: unpinned.
+  bool cpu_placement = true;
+  // Start the plant (the real-time clock) this long after every other process: their
+  // discovery and security handshakes with each other are then over before tick 0.
+  double plant_start_delay_s = 0;
   std::vector<std::string> extra_hosts;  // more lab hosts outside the deployment (e.g. "intruder")
 };
 

@@ -12,6 +12,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "hexa/services/scheduling.hpp"
+
 namespace hexa::deploy {
 namespace {
 
@@ -110,6 +112,15 @@ bool UnitLauncher::Start(const std::string& host, const std::string& unit_name,
   s.argv = lab_.InHost(host, unit.exec_start);
   s.env = env;
   s.log_path = LogOf(name);
+  // CPUAffinity= as systemd applies it: before exec, inherited by every thread (systemd.exec:
+  // a list of CPU indices or ranges separated by blanks or commas).
+  if (std::string affinity = unit.Get("Service.CPUAffinity"); !affinity.empty()) {
+    std::replace(affinity.begin(), affinity.end(), ' ', ',');
+    if (!sched::ParseCpuList(affinity, s.cpus)) {
+      error = path + ": CPUAffinity '" + unit.Get("Service.CPUAffinity") + "' is not a CPU list";
+      return false;
+    }
+  }
   const pid_t pid = group_.Start(s, error);
   if (pid < 0) return false;
   pids_[name] = pid;
@@ -152,24 +163,79 @@ void UnitLauncher::Poll() {
   }
 }
 
-double UnitLauncher::CpuSeconds(const std::string& name) const {
-  const auto it = pids_.find(name);
-  if (it == pids_.end()) return -1;
-  std::ifstream in("/proc/" + std::to_string(it->second) + "/stat");
+namespace {
+
+// user + system seconds, the command name and the scheduling policy (SCHED_OTHER 0,
+// SCHED_FIFO 1, ...) of a /proc/<pid>[/task/<tid>]/stat file; false when it cannot be read
+// (the process or thread has ended).
+bool ReadStat(const std::string& path, double& cpu_s, std::string& comm, int* policy = nullptr) {
+  std::ifstream in(path);
   std::string text;
-  if (!std::getline(in, text)) return -1;
+  if (!std::getline(in, text)) return false;
   // Fields after the command name (which may contain blanks) in parentheses: utime is the
   // 14th field, stime the 15th (proc(5)).
+  const auto open = text.find('(');
   const auto close = text.rfind(')');
-  if (close == std::string::npos) return -1;
+  if (open == std::string::npos || close == std::string::npos || close < open) return false;
+  comm = text.substr(open + 1, close - open - 1);
   std::istringstream rest(text.substr(close + 2));
   std::string field;
   unsigned long long utime = 0, stime = 0;
-  for (int i = 3; i <= 15 && rest >> field; ++i) {
+  const int last = policy != nullptr ? 41 : 15;
+  for (int i = 3; i <= last && rest >> field; ++i) {
     if (i == 14) utime = std::stoull(field);
     if (i == 15) stime = std::stoull(field);
+    if (i == 41) *policy = std::stoi(field);
   }
-  return static_cast<double>(utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
+  cpu_s = static_cast<double>(utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
+  return true;
+}
+
+}  // namespace
+
+double UnitLauncher::CpuSeconds(const std::string& name) const {
+  const auto it = pids_.find(name);
+  if (it == pids_.end()) return -1;
+  double cpu_s = 0;
+  std::string comm;
+  return ReadStat("/proc/" + std::to_string(it->second) + "/stat", cpu_s, comm) ? cpu_s : -1;
+}
+
+std::vector<UnitLauncher::ThreadStat> UnitLauncher::Threads(const std::string& name) const {
+  std::vector<ThreadStat> threads;
+  const auto it = pids_.find(name);
+  if (it == pids_.end()) return threads;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator("/proc/" + std::to_string(it->second) + "/task", ec)) {
+    ThreadStat t;
+    if (ReadStat(e.path().string() + "/stat", t.cpu_s, t.name, &t.policy)) threads.push_back(t);
+  }
+  return threads;
+}
+
+std::map<std::string, double> UnitLauncher::ThreadCpuSeconds(const std::string& name) const {
+  std::map<std::string, double> by_name;
+  for (const auto& t : Threads(name)) by_name[t.name] += t.cpu_s;
+  return by_name;
+}
+
+std::map<std::string, int> UnitLauncher::ThreadPolicies(const std::string& name) const {
+  std::map<std::string, int> by_name;
+  for (const auto& t : Threads(name)) by_name[t.name] = t.policy;
+  return by_name;
+}
+
+std::string UnitLauncher::AllowedCpus(const std::string& name) const {
+  const auto it = pids_.find(name);
+  if (it == pids_.end()) return "";
+  std::ifstream in("/proc/" + std::to_string(it->second) + "/status");
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("Cpus_allowed_list:", 0) == 0) {
+      const auto v = line.find_first_not_of(" \t", line.find(':') + 1);
+      return v == std::string::npos ? "" : line.substr(v);
+    }
+  }
+  return "";
 }
 
 const NotifySeen& UnitLauncher::Seen(const std::string& name) const {

@@ -50,9 +50,30 @@ class UnitLauncher {
   // CPU time (user + system, all threads) a running unit's process has used so far, from
   // /proc/<pid>/stat; -1 when it no longer runs.
   double CpuSeconds(const std::string& name) const;
+  // The same per thread, summed by thread name (Cyclone names its threads: recvUC, tev, gc,
+  // dq.builtins, ...; the process's own threads carry the program's name); empty when the
+  // process no longer runs. A thread that has ended is no longer listed.
+  std::map<std::string, double> ThreadCpuSeconds(const std::string& name) const;
+  // Each thread's scheduling policy by thread name (0 SCHED_OTHER, 1 SCHED_FIFO; threads of
+  // one name that differ: the last one read); empty when the process no longer runs.
+  std::map<std::string, int> ThreadPolicies(const std::string& name) const;
+  // The CPUs the running process may use (/proc/<pid>/status Cpus_allowed_list, e.g. "1" or
+  // "0-1"); "" when it no longer runs.
+  std::string AllowedCpus(const std::string& name) const;
   const UnitFile& Unit(const std::string& name) const { return units_.at(name); }
+  // The process id of a started unit (-1 if never started).
+  pid_t Pid(const std::string& name) const {
+    const auto it = pids_.find(name);
+    return it == pids_.end() ? -1 : it->second;
+  }
 
  private:
+  struct ThreadStat {
+    std::string name;
+    double cpu_s = 0;
+    int policy = -1;
+  };
+  std::vector<ThreadStat> Threads(const std::string& name) const;  // /proc/<pid>/task/*/stat
   struct Socket {
     int fd = -1;
     std::string path;

@@ -1,6 +1,7 @@
 #include "process_group.hpp"
 
 #include <fcntl.h>
+#include <sched.h>
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
@@ -72,6 +73,17 @@ pid_t ProcessGroup::Start(const ChildSpec& spec, std::string& error) {
   for (auto& s : env_strings) envp.push_back(s.data());
   envp.push_back(nullptr);
   const pid_t parent = getpid();
+  cpu_set_t cpu_set;
+  CPU_ZERO(&cpu_set);
+  for (int cpu : spec.cpus) {
+    if (cpu < 0 || cpu >= CPU_SETSIZE) {
+      error = spec.name + ": CPU " + std::to_string(cpu) + " out of range";
+      if (log_fd >= 0) close(log_fd);
+      return -1;
+    }
+    CPU_SET(cpu, &cpu_set);
+  }
+  static constexpr char kAffinityFailed[] = "process_group: sched_setaffinity failed\n";
 
   const pid_t pid = fork();
   if (pid < 0) {
@@ -89,6 +101,10 @@ pid_t ProcessGroup::Start(const ChildSpec& spec, std::string& error) {
     if (log_fd >= 0) {
       dup2(log_fd, STDOUT_FILENO);
       dup2(log_fd, STDERR_FILENO);
+    }
+    if (!spec.cpus.empty() && sched_setaffinity(0, sizeof cpu_set, &cpu_set) != 0) {
+      (void)!write(STDERR_FILENO, kAffinityFailed, sizeof kAffinityFailed - 1);
+      _exit(126);
     }
     execve(argv[0], argv.data(), envp.data());
     _exit(127);

@@ -20,6 +20,9 @@ struct ChildSpec {
   std::vector<std::string> argv;             // argv[0] = executable path
   std::map<std::string, std::string> env;    // added to / overriding the environment
   std::string log_path;                      // stdout + stderr go here; empty = inherit
+  // CPU affinity set in the child before exec (systemd's CPUAffinity=); empty = inherited.
+  // A CPU the machine does not have fails the child (exit 126, message in its log).
+  std::vector<int> cpus{};
 };
 
 struct ChildExit {

@@ -1,5 +1,7 @@
 // hexa_operator: sends one operator command to the supervisor (reliable, keep-all).
+#include <chrono>
 #include <cstdio>
+#include <thread>
 #include <cstring>
 #include <exception>
 #include <string>
@@ -19,12 +21,18 @@ int main(int argc, char** argv) {
   cli.AddOption("trajectory", "name|file.csv", "for start: x y z roll pitch yaw combined or CSV",
                 "combined");
   cli.AddOption("wait", "s", "how long to wait for the supervisor to match", "5");
+  cli.AddOption("linger", "s",
+                "keep the command's writer this long after it was acknowledged: a reader that "
+                "matched this writer only just before the write answers at the writer's next "
+                "heartbeat, and Cyclone's wait for acknowledgements does not seem to count it yet "
+                "(commands were lost between hosts: docs/deployment.md)", "0.5");
   cli.AllowPositional("start|stop|reset|home|shutdown", 1);
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
   const auto domain = cli.GetInt("domain", 0, 230);
   const auto wait_s = cli.GetDouble("wait", 0, 600);
-  if (!domain || !wait_s || cli.positional().size() != 1) {
+  const auto linger_s = cli.GetDouble("linger", 0, 60);
+  if (!domain || !wait_s || !linger_s || cli.positional().size() != 1) {
     std::fprintf(stderr, "error: %s\n(see --help)\n",
                  cli.error().empty() ? "exactly one command is required" : cli.error().c_str());
     return 2;
@@ -74,9 +82,15 @@ int main(int argc, char** argv) {
       ws.Wait(DDS_MSECS(20));
     }
     writer.WriteNow(cmd);
-    // Reliable delivery before the participant goes away.
+    // Reliable delivery before the participant goes away. The wait counts only readers that
+    // have answered a heartbeat; one whose side of the match completes after the write gets
+    // the sample by a repair request after the next heartbeat (10 ms), while this writer
+    // still exists.
     dds_wait_for_acks(writer.get(), DDS_SECS(2));
-    log->info("sent {} to domain {}", what, *domain);
+    std::this_thread::sleep_for(std::chrono::duration<double>(*linger_s));
+    const bool acked = dds_wait_for_acks(writer.get(), DDS_SECS(2)) == DDS_RETCODE_OK;
+    log->info("sent {} to domain {} ({} reader(s) matched{})", what, *domain,
+              writer.Snapshot().publication_matched_current, acked ? ", acknowledged" : ", NOT acknowledged");
     return 0;
   } catch (const std::exception& e) {
     log->error("{}", e.what());

@@ -138,26 +138,34 @@ TEST_F(Generated, CycloneConfigPinsTheInterfaceListsEveryPeerAndIsSecured) {
   EXPECT_EQ(rec.find("name=\"eth0\""), std::string::npos);
 }
 
-// Every generated Cyclone configuration, secured or not, carries the heartbeat setting of the
-// repository's own DDS configurations (the lockstep plant's recorder sync waits for
-// acknowledgements; at Cyclone's default 100 ms lockstep with a recorder ran at 0.5x real time).
-TEST_F(Generated, EveryCycloneConfigHasTheLoopbackConfigsHeartbeat) {
+// Every generated Cyclone configuration, secured or not, carries every <Internal> setting of
+// the repository's own DDS configuration, which the one-machine session runs with: the 10 ms
+// heartbeats (the lockstep plant's recorder sync waits for acknowledgements; at Cyclone's
+// default 100 ms lockstep with a recorder ran at 0.5x real time) and the 250 ms writer linger.
+TEST_F(Generated, EveryCycloneConfigHasTheLoopbackConfigsInternalSettings) {
   const std::string loopback = Slurp(HEXA_LOOPBACK_CONFIG);
-  const std::regex element("<HeartbeatInterval[^>]*>[^<]*</HeartbeatInterval>");
-  std::smatch m;
-  ASSERT_TRUE(std::regex_search(loopback, m, element)) << HEXA_LOOPBACK_CONFIG;
-  const std::string expected = m.str();
-  EXPECT_NE(expected.find("10 ms"), std::string::npos) << expected;
+  const auto begin = loopback.find("<Internal>"), end = loopback.find("</Internal>");
+  ASSERT_TRUE(begin != std::string::npos && end != std::string::npos) << HEXA_LOOPBACK_CONFIG;
+  const std::string internal_block = loopback.substr(begin, end - begin);
+  std::vector<std::string> expected;  // each element of the loopback's <Internal>
+  const std::regex element("<([A-Za-z]+)[^>]*>[^<]*</\\1>");
+  for (std::sregex_iterator it(internal_block.begin(), internal_block.end(), element), last; it != last; ++it)
+    expected.push_back(it->str());
+  ASSERT_GE(expected.size(), 2u) << internal_block;
+  EXPECT_NE(internal_block.find("<HeartbeatInterval minsched=\"10 ms\">10 ms</HeartbeatInterval>"),
+            std::string::npos);
   auto check_tree = [&](const std::string& hosts_dir) {
     int configs = 0;
     for (const auto& host : fs::directory_iterator(hosts_dir)) {
       const std::string xml = Slurp(host.path().string() + "/etc/hexa/cyclonedds.xml");
       ++configs;
-      EXPECT_NE(xml.find(expected), std::string::npos) << host.path() << " lacks " << expected;
       const auto internal = xml.find("<Internal>");
-      EXPECT_TRUE(internal != std::string::npos && xml.find(expected) > internal &&
-                  xml.find(expected) < xml.find("</Internal>"))
-          << host.path() << ": the element must be inside <Internal>";
+      for (const auto& e : expected) {
+        EXPECT_NE(xml.find(e), std::string::npos) << host.path() << " lacks " << e;
+        EXPECT_TRUE(internal != std::string::npos && xml.find(e) > internal &&
+                    xml.find(e) < xml.find("</Internal>"))
+            << host.path() << ": " << e << " must be inside <Internal>";
+      }
     }
     return configs;
   };
@@ -168,6 +176,105 @@ TEST_F(Generated, EveryCycloneConfigHasTheLoopbackConfigsHeartbeat) {
   ASSERT_TRUE(r.ok) << r.error;
   EXPECT_EQ(check_tree(dir_ + "/plain/hosts"), 5);
   EXPECT_EQ(Slurp(dir_ + "/plain/hosts/legs-a/etc/hexa/cyclonedds.xml").find("<Security>"), std::string::npos);
+}
+
+// The loop settings the one-machine session runs with reach every control process of a
+// generated deployment: the CPU wake-up latency hold and Cyclone's timed-event thread at normal
+// scheduling are the services' defaults, which no generated command line overrides (nor does
+// it turn real-time scheduling off); the CPU placement is the unit's CPUAffinity (the services
+// are not given a --cpus of their own that could contradict it); and the service user may hold
+// the latency limit (the device is root's): a udev rule on every real-time host with a
+// control process.
+TEST_F(Generated, ControlProcessesGetTheLoopSettings) {
+  int control_units = 0;
+  for (const auto& h : loaded_.deployment.host()) {
+    for (const auto& e : fs::directory_iterator(Host(h.name(), "lib/systemd/system"))) {
+      if (e.path().extension() != ".service") continue;
+      UnitFile u;
+      std::string err;
+      ASSERT_TRUE(ParseUnitFile(e.path().string(), u, err)) << err;
+      if (u.exec_start.at(0) == "/bin/sh") continue;  // the recorder: not a control process
+      ++control_units;
+      for (const char* overriding : {"--cpu-latency-us", "--rt-dds-event-thread", "--no-rt-sched", "--cpus"})
+        EXPECT_EQ(std::find(u.exec_start.begin(), u.exec_start.end(), overriding), u.exec_start.end())
+            << e.path() << " passes " << overriding;
+      EXPECT_EQ(u.Get("Service.CPUSchedulingPolicy"), "fifo") << e.path();
+    }
+  }
+  EXPECT_EQ(control_units, 11);  // plant, supervisor, 6 legs, 3 standbys
+  // CPUAffinity from `cpu:` (io-sup: plant 1, supervisor 0), none where the file gives none.
+  UnitFile u;
+  std::string err;
+  ASSERT_TRUE(ParseUnitFile(Host("io-sup", "lib/systemd/system/hexa-supervisor.service"), u, err)) << err;
+  EXPECT_EQ(u.Get("Service.CPUAffinity"), "0");
+  ASSERT_TRUE(ParseUnitFile(Host("legs-a", "lib/systemd/system/hexa-leg1.service"), u, err)) << err;
+  EXPECT_EQ(u.Get("Service.CPUAffinity"), "");
+
+  const std::string rule_rel = std::string("etc/udev/rules.d/") + kCpuLatencyUdevRuleFile;
+  for (const char* host : {"io-sup", "legs-a", "legs-b", "standby-b"}) {
+    const std::string rule = Slurp(Host(host, rule_rel));
+    EXPECT_NE(rule.find("KERNEL==\"cpu_dma_latency\", GROUP=\"hexa\", MODE=\"0660\"\n"), std::string::npos)
+        << host << ": " << rule;
+  }
+  EXPECT_FALSE(fs::exists(Host("recorder", rule_rel))) << "the recorder does not hold the limit";
+  auto lockstep = loaded_.deployment;
+  lockstep.set_mode(hexa::deployment::LOCKSTEP);
+  lockstep.mutable_timing()->set_watchdog_s(30);
+  ASSERT_TRUE(Generate(lockstep, "", dir_ + "/lockstep", GenerateOptions{}).ok);
+  EXPECT_FALSE(fs::exists(dir_ + "/lockstep/hosts/io-sup/" + rule_rel)) << "lockstep runs as generated, unprivileged";
+}
+
+// The governance's protection kinds: data always ENCRYPT; metadata, discovery and liveliness
+// from the deployment (defaults from ApplyDefaults).
+TEST_F(Generated, GovernanceTakesTheProtectionKindsOfTheDeployment) {
+  auto kind = [](const std::string& gov, const std::string& element) {
+    const auto a = gov.find("<" + element + ">"), b = gov.find("</" + element + ">");
+    return a == std::string::npos ? std::string("(missing)") : gov.substr(a + element.size() + 2, b - a - element.size() - 2);
+  };
+  const std::string def = Slurp(dir_ + "/out/security-src/governance.xml");
+  const auto def_star = def.find("<topic_expression>*</topic_expression>");
+  ASSERT_NE(def_star, std::string::npos);
+  EXPECT_EQ(kind(def.substr(def_star), "metadata_protection_kind"),
+            hexa::deployment::Protection_Name(kDefaultMetadataProtection));
+  EXPECT_EQ(kind(def.substr(def_star), "data_protection_kind"), "ENCRYPT");
+  // The default loop rules come first (the sample deployment sets no protection kind).
+  const auto def_valve = def.find("<topic_expression>hexa_ValveCommand</topic_expression>");
+  ASSERT_NE(def_valve, std::string::npos);
+  EXPECT_LT(def_valve, def_star);
+  EXPECT_EQ(kind(def.substr(def_valve), "metadata_protection_kind"),
+            hexa::deployment::Protection_Name(kDefaultLoopMetadataProtection));
+  EXPECT_EQ(kind(def.substr(def_valve), "data_protection_kind"), "ENCRYPT");
+  EXPECT_EQ(kind(def, "discovery_protection_kind"), "ENCRYPT");
+  EXPECT_EQ(kind(def, "liveliness_protection_kind"), "ENCRYPT");
+  auto d = loaded_.deployment;
+  d.mutable_security()->set_metadata_protection(hexa::deployment::NONE);
+  d.mutable_security()->set_discovery_protection(hexa::deployment::SIGN);
+  d.mutable_security()->set_liveliness_protection(hexa::deployment::SIGN);
+  d.mutable_security()->set_loop_metadata_protection(hexa::deployment::PROTECTION_UNSPECIFIED);  // as metadata
+  ASSERT_TRUE(Generate(d, "", dir_ + "/variant", GenerateOptions{}).ok);
+  const std::string var = Slurp(dir_ + "/variant/security-src/governance.xml");
+  EXPECT_EQ(kind(var, "metadata_protection_kind"), "NONE");
+  EXPECT_EQ(kind(var, "data_protection_kind"), "ENCRYPT");
+  EXPECT_EQ(kind(var, "discovery_protection_kind"), "SIGN");
+  EXPECT_EQ(kind(var, "liveliness_protection_kind"), "SIGN");
+  EXPECT_EQ(var.find("<topic_expression>hexa_ValveCommand"), std::string::npos) << "one rule when they agree";
+  // The 1 kHz loop topics with their own metadata protection: a rule each, before "*" (the
+  // first matching rule applies), data still ENCRYPT.
+  d.mutable_security()->set_metadata_protection(hexa::deployment::ENCRYPT);
+  d.mutable_security()->set_loop_metadata_protection(hexa::deployment::NONE);
+  ASSERT_TRUE(Generate(d, "", dir_ + "/loop", GenerateOptions{}).ok);
+  const std::string loop = Slurp(dir_ + "/loop/security-src/governance.xml");
+  const auto star = loop.find("<topic_expression>*</topic_expression>");
+  ASSERT_NE(star, std::string::npos);
+  EXPECT_EQ(kind(loop.substr(star), "metadata_protection_kind"), "ENCRYPT");
+  for (const char* topic : {"hexa_LegSensors", "hexa_ValveCommand", "hexa_GroundTruth"}) {
+    const auto at = loop.find(std::string("<topic_expression>") + topic + "</topic_expression>");
+    ASSERT_NE(at, std::string::npos) << topic;
+    EXPECT_LT(at, star) << topic;
+    EXPECT_EQ(kind(loop.substr(at), "metadata_protection_kind"), "NONE") << topic;
+    EXPECT_EQ(kind(loop.substr(at), "data_protection_kind"), "ENCRYPT") << topic;
+  }
+  EXPECT_EQ(loop.find("<topic_expression>hexa_OperatorCommand"), std::string::npos);
 }
 
 TEST_F(Generated, PermissionsFollowTheIssuesAccessTable) {

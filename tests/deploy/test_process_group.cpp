@@ -1,10 +1,13 @@
 // The process supervision used by the launcher and the integration tests: children are
 // reaped, stopped in order, and never outlive their parent.
+#include <sched.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <fstream>
+#include <string>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -127,4 +130,37 @@ TEST(ProcessGroup, ChildrenDieWhenTheParentIsKilled) {
   waitpid(middle, nullptr, 0);
   EXPECT_TRUE(GoneWithin(grandchild, 3000ms)) << "grandchild " << grandchild << " survived";
   if (Alive(grandchild)) kill(grandchild, SIGKILL);
+}
+
+// CPUAffinity= of a unit (the multi-host lab plays systemd): set in the child before exec.
+TEST(ProcessGroup, PinsTheChildToItsCpus) {
+  cpu_set_t allowed;
+  CPU_ZERO(&allowed);
+  ASSERT_EQ(sched_getaffinity(0, sizeof allowed, &allowed), 0);
+  int last = -1;
+  for (int c = 0; c < CPU_SETSIZE; ++c)
+    if (CPU_ISSET(c, &allowed)) last = c;
+  ASSERT_GE(last, 0);
+  ProcessGroup group;
+  const std::string log = ::testing::TempDir() + "/pg_cpus.log";
+  std::string err;
+  ChildSpec spec{"pinned", {"/bin/sh", "-c", "grep Cpus_allowed_list /proc/self/status"}, {}, log};
+  spec.cpus = {last};
+  ASSERT_GT(group.Start(spec, err), 0) << err;
+  auto ev = group.WaitEvent(5000ms);
+  ASSERT_EQ(ev.kind, ProcessGroup::Event::kChildExited);
+  EXPECT_EQ(ev.exit.exit_code, 0);
+  std::ifstream in(log);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line.substr(line.find_first_not_of(" \t", line.find(':') + 1)), std::to_string(last)) << line;
+
+  // A CPU the machine does not have: the child fails before exec (as systemd fails the unit).
+  spec.name = "nowhere";
+  spec.cpus = {CPU_SETSIZE - 1};
+  spec.log_path = ::testing::TempDir() + "/pg_cpus_bad.log";
+  ASSERT_GT(group.Start(spec, err), 0) << err;
+  ev = group.WaitEvent(5000ms);
+  ASSERT_EQ(ev.kind, ProcessGroup::Event::kChildExited);
+  EXPECT_EQ(ev.exit.exit_code, 126);
 }

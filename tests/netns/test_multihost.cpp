@@ -4,6 +4,7 @@
 // started from its generated systemd unit (Environment, ExecStartPre, ExecStart; systemd's
 // side of sd_notify played by the test). DDS Security on: authentication, access control,
 // encryption. Needs root (skips otherwise).
+#include <sched.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -115,6 +116,37 @@ TEST_F(SecuredFiveHosts, LockstepSessionFromGeneratedUnitsIsLosslessAndBitIdenti
 
   ASSERT_TRUE(s->StartAll(err)) << err;
   const auto t0 = std::chrono::steady_clock::now();
+  // The loop settings of the one-machine session, as the running processes got them from
+  // their units: each process on its unit's CPUAffinity (the lab places them as hexa_session
+  // does: plant and primary legs on the last CPU, supervisor, standbys and recorder on the
+  // first), and every control process holding the CPU wake-up latency limit.
+  while (!s->units().Seen("hexa-plant").ready && std::chrono::steady_clock::now() - t0 < 300s) {
+    const auto ev = s->Wait(200ms);
+    s->units().Poll();
+    ASSERT_NE(ev.kind, ProcessGroup::Event::kChildExited) << ev.exit.Describe() << "; logs in " << s->work_dir();
+  }
+  ASSERT_TRUE(s->units().Seen("hexa-plant").ready) << "logs in " << s->work_dir();
+  int pinned = 0;
+  for (const auto& name : s->units().Names()) {
+    const std::string affinity = s->units().Unit(name).Get("Service.CPUAffinity");
+    if (!affinity.empty()) {
+      ++pinned;
+      EXPECT_EQ(s->units().AllowedCpus(name), affinity) << name;
+    }
+    if (name != "hexa-recorder") {
+      EXPECT_NE(Slurp(s->units().LogOf(name)).find("CPU wake-up latency held at 0 us"), std::string::npos)
+          << name << ": " << s->units().LogOf(name);
+    }
+  }
+  cpu_set_t allowed;
+  CPU_ZERO(&allowed);
+  ASSERT_EQ(sched_getaffinity(0, sizeof allowed, &allowed), 0);
+  if (CPU_COUNT(&allowed) >= 2) {
+    EXPECT_EQ(pinned, 12);  // every process of the lab
+    EXPECT_NE(s->units().AllowedCpus("hexa-plant"), s->units().AllowedCpus("hexa-supervisor"));
+    EXPECT_EQ(s->units().AllowedCpus("hexa-plant"), s->units().AllowedCpus("hexa-leg1"));
+    EXPECT_EQ(s->units().AllowedCpus("hexa-supervisor"), s->units().AllowedCpus("hexa-leg4-standby"));
+  }
   const auto sup = RunToEnd(*s, 400s);
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ASSERT_EQ(sup.name, "hexa-supervisor") << "timeout; logs in " << s->work_dir();
