@@ -402,7 +402,7 @@ int main(int argc, char** argv) {
                 "default");
   cli.AddChoice("loop-metadata-protection", {"default", "ENCRYPT", "SIGN", "NONE"},
                 "secured scenarios: the metadata protection of the 1 kHz loop topics (LegSensors, "
-                "ValveCommand, GroundTruth; default: the deployment's default, NONE)",
+                "ValveCommand, GroundTruth; default: the deployment's default, as the metadata: ENCRYPT)",
                 "default");
   cli.AddOption("plant-delay-s", "s",
                 "start the plant this long after every other process (their discovery and "

@@ -365,7 +365,7 @@ void ApplyDefaults(Deployment& d) {
   if (sec->liveliness_protection() == deployment::PROTECTION_UNSPECIFIED)
     sec->set_liveliness_protection(deployment::ENCRYPT);
   if (sec->loop_metadata_protection() == deployment::PROTECTION_UNSPECIFIED)
-    sec->set_loop_metadata_protection(kDefaultLoopMetadataProtection);
+    sec->set_loop_metadata_protection(sec->metadata_protection());
   auto* t = d.mutable_timing();
   if (t->lockstep_timeout_s() == 0) t->set_lockstep_timeout_s(10.0);
   if (t->watchdog_s() == 0)

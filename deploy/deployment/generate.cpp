@@ -267,7 +267,7 @@ std::string GovernanceXml(const Deployment& d) {
   const auto& sec = d.security();
   const char* metadata = ProtectionName(sec.metadata_protection());
   const char* loop = ProtectionName(sec.loop_metadata_protection() == deployment::PROTECTION_UNSPECIFIED
-                                        ? kDefaultLoopMetadataProtection
+                                        ? sec.metadata_protection()
                                         : sec.loop_metadata_protection());
   std::ostringstream os;
   os << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"

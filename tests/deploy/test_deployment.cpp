@@ -237,13 +237,10 @@ TEST_F(Generated, GovernanceTakesTheProtectionKindsOfTheDeployment) {
   EXPECT_EQ(kind(def.substr(def_star), "metadata_protection_kind"),
             hexa::deployment::Protection_Name(kDefaultMetadataProtection));
   EXPECT_EQ(kind(def.substr(def_star), "data_protection_kind"), "ENCRYPT");
-  // The default loop rules come first (the sample deployment sets no protection kind).
-  const auto def_valve = def.find("<topic_expression>hexa_ValveCommand</topic_expression>");
-  ASSERT_NE(def_valve, std::string::npos);
-  EXPECT_LT(def_valve, def_star);
-  EXPECT_EQ(kind(def.substr(def_valve), "metadata_protection_kind"),
-            hexa::deployment::Protection_Name(kDefaultLoopMetadataProtection));
-  EXPECT_EQ(kind(def.substr(def_valve), "data_protection_kind"), "ENCRYPT");
+  // By default the loop topics are protected like every other topic: one "*" rule, ENCRYPT
+  // (the sample deployment sets no protection kind; NONE on them is the file's explicit choice).
+  EXPECT_EQ(kind(def.substr(def_star), "metadata_protection_kind"), "ENCRYPT");
+  EXPECT_EQ(def.find("<topic_expression>hexa_ValveCommand</topic_expression>"), std::string::npos);
   EXPECT_EQ(kind(def, "discovery_protection_kind"), "ENCRYPT");
   EXPECT_EQ(kind(def, "liveliness_protection_kind"), "ENCRYPT");
   auto d = loaded_.deployment;
