@@ -10,6 +10,8 @@
 //        overshoot and what remains after removing the fitted harmonic (issue 14)
 //   platform_study legs <traj> [options]       per-leg lag against the trajectory of NOW (no
 //        setpoint lead) and the force budget along each leg (issue 14c, see Legs below)
+//   platform_study modes [options]             leg-space modal masses at home and the BS-SMC
+//        velocity loop's crossover and phase margin on each (issue 14c, see Modes below)
 //
 // Overrides (key=value) start from the struct defaults (= deploy/rigs/hexataar_r.textproto):
 // see kKeys below. Output: per trajectory the RMSE vs ground truth per axis (cm, deg), leg
@@ -31,7 +33,11 @@
 #include <vector>
 
 #include "hexa/config/rig_config.hpp"
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+
 #include "hexa/core/bssmc_controller.hpp"
+#include "hexa/core/kinematics.hpp"
 #include "hexa/core/feasibility.hpp"
 #include "hexa/core/lockstep_simulation.hpp"
 
@@ -479,6 +485,54 @@ void Legs(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
   }
 }
 
+
+// Leg-space modes at home (issue 14c): eigenvalues of J^-T M_p J^-1 + m_leg I (eq 48; the
+// rig's platform mass and inertia, the pistons' moving mass), and for each the BS-SMC's
+// velocity loop c / (m s) * beta / (s + beta) * exp(-s tau): c = M lambda + K xi + k_s,
+// tau = spool filter + valve spool + the velocity estimate's group delay. Crossover and phase
+// margin (docs/task_space.md "Per-leg lag and leg 2's overshoot on combined").
+void Modes(const hexa::LockstepConfig& config) {
+  const hexa::RigParams& rig = config.rig;
+  hexa::Pose home;
+  home.p_BP_B_m = rig.geometry.home_position_m;
+  home.R_BP.setIdentity();
+  hexa::Matrix6d J;
+  hexa::LegJacobian(rig.geometry, home, J);
+  hexa::Matrix6d mp = hexa::Matrix6d::Zero();
+  mp.topLeftCorner<3, 3>() = rig.platform.mass_kg * Eigen::Matrix3d::Identity();
+  mp.bottomRightCorner<3, 3>() = rig.platform.inertia_diag_kg_m2.asDiagonal();
+  const hexa::Matrix6d j_inv = J.inverse();
+  const hexa::Matrix6d ml = j_inv.transpose() * mp * j_inv +
+                            rig.cylinder.moving_mass_kg * hexa::Matrix6d::Identity();
+  const Eigen::SelfAdjointEigenSolver<hexa::Matrix6d> eig(ml);
+  const hexa::BsSmcParams& b = config.leg_controller.bssmc;
+  const double c = b.effective_mass_kg * b.lambda_1_s + b.switching_gain_n * b.boundary_layer_xi_s_m +
+                   b.reaching_proportional_n_s_m;
+  hexa::DifferentiatorConfig dc;
+  dc.params = config.leg_controller.differentiator;
+  dc.sample_period_s = config.tick_s;
+  const double tau = b.spool_filter_time_constant_s + rig.valve.spool_time_constant_s +
+                     hexa::GaussianDifferentiator(dc).GroupDelaySamples() * config.tick_s;
+  const double beta = b.backstepping_beta_1_s;
+  std::printf("velocity gain c %.1f N s/m, beta %.1f 1/s, lag %.2f ms\n", c, beta, 1000 * tau);
+  std::printf("mode mass kg | task direction (x y z m, roll pitch yaw rad per unit) | crossover Hz | phase margin deg\n");
+  for (int k = 0; k < 6; ++k) {
+    const double m = eig.eigenvalues()[k];
+    auto gain = [&](double w) { return c / (m * w) * beta / std::hypot(w, beta); };
+    double lo = 1e-3, hi = 1e5;  // |L| falls monotonically with w
+    for (int it = 0; it < 200; ++it) {
+      const double mid = std::sqrt(lo * hi);
+      (gain(mid) > 1.0 ? lo : hi) = mid;
+    }
+    const double w = lo;
+    const double phase = -0.5 * 3.14159265358979323846 - std::atan(w / beta) - w * tau;
+    const hexa::Vector6d dir = j_inv * eig.eigenvectors().col(k);
+    std::printf("%8.3f | %7.3f %7.3f %7.3f %7.3f %7.3f %7.3f | %6.1f | %6.1f\n", m, dir[0], dir[1], dir[2],
+                dir[3], dir[4], dir[5], w / (2 * 3.14159265358979323846),
+                180.0 + phase * 57.29577951308232);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -488,7 +542,7 @@ int main(int argc, char** argv) {
                                       PaperMotion::kRoll, PaperMotion::kPitch, PaperMotion::kYaw,
                                       PaperMotion::kCombined};
   int periods = 0;
-  bool trace = false, fit = false, legs = false;
+  bool trace = false, fit = false, legs = false, modes = false;
   const auto keys = Keys();
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
@@ -498,6 +552,8 @@ int main(int argc, char** argv) {
       PaperMotion m;
       if (!hexa::ParsePaperMotion(next(), m)) return Usage();
       motions = {m};
+    } else if (arg == "modes") {
+      modes = true;
     } else if (arg == "--seed") {
       config.seed = std::strtoull(next().c_str(), nullptr, 10);
     } else if (arg == "--controller") {
@@ -560,6 +616,10 @@ int main(int argc, char** argv) {
   }
   if (legs) {
     Legs(config, motions.front(), periods);
+    return 0;
+  }
+  if (modes) {
+    Modes(config);
     return 0;
   }
   double score = 0.0;
