@@ -8,6 +8,10 @@
 //   platform_study fit <traj> [options]        first-harmonic fit of the tracking window:
 //        per axis and per leg the amplitude ratio true/desired, the phase lag, the mean peak
 //        overshoot and what remains after removing the fitted harmonic (issue 14)
+//   platform_study legs <traj> [options]       per-leg lag against the trajectory of NOW (no
+//        setpoint lead) and the force budget along each leg (issue 14c, see Legs below)
+//   platform_study modes [options]             leg-space modal masses at home and the BS-SMC
+//        velocity loop's crossover and phase margin on each (issue 14c, see Modes below)
 //
 // Overrides (key=value) start from the struct defaults (= deploy/rigs/hexataar_r.textproto):
 // see kKeys below. Output: per trajectory the RMSE vs ground truth per axis (cm, deg), leg
@@ -29,6 +33,12 @@
 #include <vector>
 
 #include "hexa/config/rig_config.hpp"
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+
+#include "hexa/core/bssmc_controller.hpp"
+#include "hexa/core/kinematics.hpp"
+#include "hexa/core/feasibility.hpp"
 #include "hexa/core/lockstep_simulation.hpp"
 
 namespace {
@@ -68,6 +78,13 @@ std::vector<Key> Keys() {
       {"lead", [](auto& c, double v) { c.supervisor.setpoint_lead_s = v; }},
       {"ff", [](auto& c, double v) { c.supervisor.feedforward_enabled = v != 0.0; }},
       {"kf", [](auto& c, double v) { c.leg_controller.pi.force_feedforward_v_n = v; }},
+      // Plant-only changes (diagnosis, issue 14c): the valve spool's time constant (the
+      // controllers do not use it), and the plant's friction model (0 LuGre, 1 static eq 3).
+      {"pspool", [](auto& c, double v) { c.rig.valve.spool_time_constant_s = v; }},
+      {"pfric_static", [](auto& c, double v) {
+         c.plant_friction_model = v != 0.0 ? hexa::LegModelParams::FrictionModel::kStatic
+                                           : hexa::LegModelParams::FrictionModel::kLugre;
+       }},
       // Supervisor period in ticks (5 = the system's 5 ms; 1 = a setpoint every tick, no
       // interpolation inside the period). The outer-loop gain is per supervisor step: scale
       // it with ol_gain to keep its integral rate.
@@ -185,6 +202,15 @@ hexa::PaperSessionResult RunSession(const hexa::LockstepConfig& config, PaperMot
   return result;
 }
 
+// One tick of a paper session: the start command goes with the first supervisor tick.
+// Returns false when the plant reports an error.
+bool TickSession(hexa::LockstepSimulation& sim, const hexa::StartRequest& start, bool due,
+                 bool started) {
+  const bool starting = due && !started;
+  return sim.Tick(starting ? hexa::OperatorCommandKind::kStart : hexa::OperatorCommandKind::kNone,
+                  starting ? &start : nullptr) == hexa::PlantStatus::kOk;
+}
+
 void Trace(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
   hexa::LockstepSimulation sim(config);
   sim.Tick();
@@ -199,10 +225,7 @@ void Trace(const hexa::LockstepConfig& config, PaperMotion motion, int periods) 
   hexa::LegArray<double> corr{};
   while (sim.time_s() < 600.0) {
     const bool due = sim.supervisor_due();
-    auto cmd = (due && !started) ? hexa::OperatorCommandKind::kStart : hexa::OperatorCommandKind::kNone;
-    if (sim.Tick(cmd, cmd == hexa::OperatorCommandKind::kStart ? &start : nullptr) !=
-        hexa::PlantStatus::kOk)
-      break;
+    if (!TickSession(sim, start, due, started)) break;
     if (due) {
       started = true;
       state = sim.supervisor_output().state;
@@ -261,12 +284,22 @@ Harmonic FitHarmonic(const std::vector<double>& t, const std::vector<double>& y,
   return Harmonic{x[0], x[1], x[2]};
 }
 
+// Angular frequency of a paper motion (rad/s) and an angle wrapped to (-pi, pi].
+double MotionOmega(PaperMotion motion) {
+  return 2.0 * 3.14159265358979323846 * (motion == PaperMotion::kCombined ? 1.0 : 0.1);
+}
+double WrapPi(double a) {
+  while (a > 3.14159265358979323846) a -= 2 * 3.14159265358979323846;
+  while (a < -3.14159265358979323846) a += 2 * 3.14159265358979323846;
+  return a;
+}
+
 void Fit(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
   hexa::LockstepSimulation sim(config);
   sim.Tick();
   const hexa::StartRequest start = sim.supervisor().PreparePaperStart(motion, periods);
   const double f_hz = motion == PaperMotion::kCombined ? 1.0 : 0.1;
-  const double w = 2.0 * 3.14159265358979323846 * f_hz;
+  const double w = MotionOmega(motion);
   std::vector<double> t;
   std::vector<double> des[6], tru[6], leg_des[6], leg_true[6], leg_corr[6];
   bool started = false, left_idle = false;
@@ -297,9 +330,7 @@ void Fit(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
   for (int k = 0; k < 6; ++k) {
     const double unit = k < 3 ? 100.0 : 57.29577951308232;
     const Harmonic hd = FitHarmonic(t, des[k], w), ht = FitHarmonic(t, tru[k], w);
-    double lag = hd.phase_rad() - ht.phase_rad();
-    while (lag > 3.14159265358979323846) lag -= 2 * 3.14159265358979323846;
-    while (lag < -3.14159265358979323846) lag += 2 * 3.14159265358979323846;
+    const double lag = WrapPi(hd.phase_rad() - ht.phase_rad());
     // Mean over periods of (max true - max desired) in each period window.
     const double period = 1.0 / f_hz;
     double over = 0.0;
@@ -333,14 +364,172 @@ void Fit(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
   for (int i = 0; i < 6; ++i) {
     const Harmonic hd = FitHarmonic(t, leg_des[i], w), ht = FitHarmonic(t, leg_true[i], w),
                    hc = FitHarmonic(t, leg_corr[i], w);
-    double lag = hd.phase_rad() - ht.phase_rad(), lag_c = hd.phase_rad() - hc.phase_rad();
-    for (double* l : {&lag, &lag_c}) {
-      while (*l > 3.14159265358979323846) *l -= 2 * 3.14159265358979323846;
-      while (*l < -3.14159265358979323846) *l += 2 * 3.14159265358979323846;
-    }
+    const double lag = WrapPi(hd.phase_rad() - ht.phase_rad());
+    const double lag_c = WrapPi(hd.phase_rad() - hc.phase_rad());
     std::printf("%d   | %8.3f | %8.4f | %7.2f | %7.3f (%7.2f)\n", i + 1, 1000 * hd.amplitude(),
                 ht.amplitude() / hd.amplitude(), 1000.0 * lag / w, 1000 * hc.amplitude(),
                 1000.0 * lag_c / w);
+  }
+}
+
+
+// Per-leg analysis of the tracking window (issue 14c), every 1 ms tick. The desired leg
+// motion is the trajectory's at the CURRENT time (no setpoint lead), from the desired pose
+// through eq 46. Per leg: first-harmonic gain / lag of the true length against it, RMSE;
+// the force budget along the leg (N RMS and 1st-harmonic amplitude / phase against the
+// desired leg velocity, + = leads): F_ff the feed-forward used, z = P1 A1 - P2 A2 - phi
+// (eq 35, the pressure loop's tracking error), the friction mismatch (plant friction on
+// the rod + the controller's estimate F_f(v_d) + B v_d), the feedback part of phi
+// (phi - phi_model); valve saturation and the share of ticks inside the null band.
+void Legs(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
+  const double w = MotionOmega(motion);
+  hexa::LockstepSimulation sim(config);
+  sim.Tick();
+  const hexa::StartRequest start = sim.supervisor().PreparePaperStart(motion, periods);
+  hexa::BsSmcConfig bc;
+  bc.params = config.leg_controller.bssmc;
+  bc.differentiator = config.leg_controller.differentiator;
+  bc.model = hexa::NominalLegModel::FromRig(config.rig);
+  const hexa::BsSmcController estimate(bc);
+  const double pa_ar = config.rig.air.atmosphere_pressure_pa * config.rig.cylinder.rod_area_m2;
+  // HEXA_LEGS_TRACE=<leg 1-6>: per-tick CSV of that leg on stderr.
+  const char* trace_env = std::getenv("HEXA_LEGS_TRACE");
+  const int trace_leg = trace_env ? std::atoi(trace_env) - 1 : -1;
+  if (trace_leg >= 0)
+    std::fprintf(stderr, "t,ld_now,l_true,vd_now,v_true,vd_cmd,v_hat,fric_est,fric_plant,z,fb,ff,u,p1,p2\n");
+  std::vector<double> t;
+  enum { kLd, kL, kVd, kFf, kZ, kFric, kFb, kVhat, kVtrue, kN };
+  std::vector<double> s[6][kN];
+  long sat[6] = {}, band[6] = {}, n_ticks = 0;
+  bool started = false, left_idle = false;
+  double t_start = 0.0;
+  hexa::SupervisorState state = hexa::SupervisorState::kIdle;
+  while (sim.time_s() < 600.0) {
+    const bool due = sim.supervisor_due();
+    if (due && !started) t_start = sim.time_s();
+    if (!TickSession(sim, start, due, started)) break;
+    if (due) {
+      started = true;
+      state = sim.supervisor_output().state;
+      if (state != hexa::SupervisorState::kIdle) left_idle = true;
+      if (state == hexa::SupervisorState::kHold || (left_idle && state == hexa::SupervisorState::kIdle)) break;
+    }
+    if (state != hexa::SupervisorState::kTracking) continue;
+    const auto& p = sim.plant_before_step();
+    const double tt = p.truth.time_s - t_start;
+    hexa::TrajectorySample d;
+    start.trajectory.Evaluate(tt, d);
+    hexa::LegArray<double> ld{}, vd{}, ad{};
+    hexa::LegKinematicsOf(config.rig.geometry, d, ld, vd, ad);
+    t.push_back(tt);
+    ++n_ticks;
+    for (std::size_t i = 0; i < 6; ++i) {
+      const auto& o = sim.leg_outputs()[i];
+      const auto& f = p.leg_forces[i];
+      const double vdi = o.desired_velocity_m_s;
+      const auto& fd = vdi >= 0.0 ? bc.model.friction.extend : bc.model.friction.retract;
+      const double fric_est = estimate.FrictionEstimateN(vdi) + bc.params.viscous_estimate_scale * fd.viscous_n_s_m * vdi;
+      // phi_model = F_ff + B v_d + Pa Ar + F_f(v_d) (bssmc_controller.cpp)
+      const double phi_model = o.feedforward_force_n + fric_est + pa_ar;
+      s[i][kLd].push_back(ld[i]);
+      s[i][kL].push_back(p.truth.length_m[i]);
+      s[i][kVd].push_back(vd[i]);
+      s[i][kFf].push_back(o.feedforward_force_n);
+      s[i][kZ].push_back(o.force_error_n);
+      s[i][kFric].push_back(f.friction_n + fric_est);
+      s[i][kFb].push_back(o.desired_force_n - phi_model);
+      s[i][kVhat].push_back(o.velocity_m_s);
+      s[i][kVtrue].push_back(p.truth.piston_velocity_m_s[i]);
+      const double u = sim.applied_valve_v()[i];
+      if (static_cast<int>(i) == trace_leg) {
+        std::fprintf(stderr, "%.3f,%.6f,%.6f,%.4f,%.4f,%.4f,%.4f,%.2f,%.2f,%.2f,%.2f,%.2f,%.3f,%.0f,%.0f\n", tt,
+                     ld[i], p.truth.length_m[i], vd[i], p.truth.piston_velocity_m_s[i], vdi,
+                     o.velocity_m_s, fric_est, f.friction_n, o.force_error_n,
+                     o.desired_force_n - phi_model, o.feedforward_force_n, u,
+                     p.legs[i].chamber1_pressure_pa, p.legs[i].chamber2_pressure_pa);
+      }
+      sat[i] += (u < 0.05 || u > 9.95) ? 1 : 0;
+      band[i] += std::abs(u - 5.0) < 2.5 ? 1 : 0;
+    }
+  }
+  const auto wrap = WrapPi;
+  auto rms = [](const std::vector<double>& v) {
+    double q = 0.0;
+    for (double x : v) q += x * x;
+    return v.empty() ? 0.0 : std::sqrt(q / static_cast<double>(v.size()));
+  };
+  std::printf("leg | amp mm | gain | lag ms | rmse mm | vhat lag ms | F_ff amp N (ph deg) | z rms N, amp (ph) | "
+              "fric mismatch rms N, amp (ph) | feedback rms N, amp (ph) | sat %% | band %%\n");
+  for (int i = 0; i < 6; ++i) {
+    const Harmonic hd = FitHarmonic(t, s[i][kLd], w), ht = FitHarmonic(t, s[i][kL], w);
+    const Harmonic hv = FitHarmonic(t, s[i][kVd], w);
+    const Harmonic hvh = FitHarmonic(t, s[i][kVhat], w), hvt = FitHarmonic(t, s[i][kVtrue], w);
+    std::vector<double> e(t.size());
+    for (std::size_t k = 0; k < t.size(); ++k) e[k] = s[i][kL][k] - s[i][kLd][k];
+    auto force = [&](int q) {
+      const Harmonic h = FitHarmonic(t, s[i][q], w);
+      std::vector<double> c = s[i][q];
+      for (double& x : c) x -= h.c;
+      std::printf(" | %6.1f %6.1f (%5.0f)", rms(c), h.amplitude(),
+                  wrap(h.phase_rad() - hv.phase_rad()) * 57.29577951308232);
+    };
+    std::printf("%d | %6.2f | %6.4f | %6.2f | %6.3f | %6.2f", i + 1, 1000 * hd.amplitude(),
+                ht.amplitude() / hd.amplitude(), 1000 * wrap(hd.phase_rad() - ht.phase_rad()) / w,
+                1000 * rms(e), 1000 * wrap(hvt.phase_rad() - hvh.phase_rad()) / w);
+    const Harmonic hf = FitHarmonic(t, s[i][kFf], w);
+    std::printf(" | %6.1f (%5.0f)", hf.amplitude(), wrap(hf.phase_rad() - hv.phase_rad()) * 57.29577951308232);
+    force(kZ);
+    force(kFric);
+    force(kFb);
+    std::printf(" | %5.2f | %5.1f\n", 100.0 * sat[i] / std::max(1L, n_ticks), 100.0 * band[i] / std::max(1L, n_ticks));
+  }
+}
+
+
+// Leg-space modes at home (issue 14c): eigenvalues of J^-T M_p J^-1 + m_leg I (eq 48; the
+// rig's platform mass and inertia, the pistons' moving mass), and for each the BS-SMC's
+// velocity loop c / (m s) * beta / (s + beta) * exp(-s tau): c = M lambda + K xi + k_s,
+// tau = spool filter + valve spool + the velocity estimate's group delay. Crossover and phase
+// margin (docs/task_space.md "Per-leg lag and leg 2's overshoot on combined").
+void Modes(const hexa::LockstepConfig& config) {
+  const hexa::RigParams& rig = config.rig;
+  hexa::Pose home;
+  home.p_BP_B_m = rig.geometry.home_position_m;
+  home.R_BP.setIdentity();
+  hexa::Matrix6d J;
+  hexa::LegJacobian(rig.geometry, home, J);
+  hexa::Matrix6d mp = hexa::Matrix6d::Zero();
+  mp.topLeftCorner<3, 3>() = rig.platform.mass_kg * Eigen::Matrix3d::Identity();
+  mp.bottomRightCorner<3, 3>() = rig.platform.inertia_diag_kg_m2.asDiagonal();
+  const hexa::Matrix6d j_inv = J.inverse();
+  const hexa::Matrix6d ml = j_inv.transpose() * mp * j_inv +
+                            rig.cylinder.moving_mass_kg * hexa::Matrix6d::Identity();
+  const Eigen::SelfAdjointEigenSolver<hexa::Matrix6d> eig(ml);
+  const hexa::BsSmcParams& b = config.leg_controller.bssmc;
+  const double c = b.effective_mass_kg * b.lambda_1_s + b.switching_gain_n * b.boundary_layer_xi_s_m +
+                   b.reaching_proportional_n_s_m;
+  hexa::DifferentiatorConfig dc;
+  dc.params = config.leg_controller.differentiator;
+  dc.sample_period_s = config.tick_s;
+  const double tau = b.spool_filter_time_constant_s + rig.valve.spool_time_constant_s +
+                     hexa::GaussianDifferentiator(dc).GroupDelaySamples() * config.tick_s;
+  const double beta = b.backstepping_beta_1_s;
+  std::printf("velocity gain c %.1f N s/m, beta %.1f 1/s, lag %.2f ms\n", c, beta, 1000 * tau);
+  std::printf("mode mass kg | task direction (x y z m, roll pitch yaw rad per unit) | crossover Hz | phase margin deg\n");
+  for (int k = 0; k < 6; ++k) {
+    const double m = eig.eigenvalues()[k];
+    auto gain = [&](double w) { return c / (m * w) * beta / std::hypot(w, beta); };
+    double lo = 1e-3, hi = 1e5;  // |L| falls monotonically with w
+    for (int it = 0; it < 200; ++it) {
+      const double mid = std::sqrt(lo * hi);
+      (gain(mid) > 1.0 ? lo : hi) = mid;
+    }
+    const double w = lo;
+    const double phase = -0.5 * 3.14159265358979323846 - std::atan(w / beta) - w * tau;
+    const hexa::Vector6d dir = j_inv * eig.eigenvectors().col(k);
+    std::printf("%8.3f | %7.3f %7.3f %7.3f %7.3f %7.3f %7.3f | %6.1f | %6.1f\n", m, dir[0], dir[1], dir[2],
+                dir[3], dir[4], dir[5], w / (2 * 3.14159265358979323846),
+                180.0 + phase * 57.29577951308232);
   }
 }
 
@@ -353,16 +542,18 @@ int main(int argc, char** argv) {
                                       PaperMotion::kRoll, PaperMotion::kPitch, PaperMotion::kYaw,
                                       PaperMotion::kCombined};
   int periods = 0;
-  bool trace = false, fit = false;
+  bool trace = false, fit = false, legs = false, modes = false;
   const auto keys = Keys();
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
     auto next = [&]() -> std::string { return a + 1 < argc ? argv[++a] : std::string(); };
-    if (arg == "trace" || arg == "fit") {
-      (arg == "trace" ? trace : fit) = true;
+    if (arg == "trace" || arg == "fit" || arg == "legs") {
+      (arg == "trace" ? trace : arg == "fit" ? fit : legs) = true;
       PaperMotion m;
       if (!hexa::ParsePaperMotion(next(), m)) return Usage();
       motions = {m};
+    } else if (arg == "modes") {
+      modes = true;
     } else if (arg == "--seed") {
       config.seed = std::strtoull(next().c_str(), nullptr, 10);
     } else if (arg == "--controller") {
@@ -421,6 +612,14 @@ int main(int argc, char** argv) {
   }
   if (fit) {
     Fit(config, motions.front(), periods);
+    return 0;
+  }
+  if (legs) {
+    Legs(config, motions.front(), periods);
+    return 0;
+  }
+  if (modes) {
+    Modes(config);
     return 0;
   }
   double score = 0.0;

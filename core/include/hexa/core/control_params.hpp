@@ -10,7 +10,7 @@ namespace hexa {
 struct DifferentiatorParams {
   int window = 15;                  // N, samples (at most 32)
   double sigma = 0.85;              // standard deviation of w(x), in samples
-  double centre_lag_samples = 2.0;  // c of eq 40, in samples before the newest sample
+  double centre_lag_samples = 1.0;  // c of eq 40, in samples before the newest sample (docs/controller.md)
 };
 
 // Backstepping-sliding mode controller (Sec. 3.2, eq 19-45).
