@@ -29,8 +29,11 @@ set(HEXA_PKG_UNIT_FILES "")
 foreach(u ${HEXA_PKG_UNITS})
   list(APPEND HEXA_PKG_UNIT_FILES "${HEXA_PKG_GEN}/hosts/local/lib/systemd/system/${u}")
 endforeach()
+# The deployment is real time: the generator also writes the udev rule that lets the service
+# user hold /dev/cpu_dma_latency (docs/deployment.md, "Real time on the target").
+set(HEXA_PKG_UDEV_RULE "${HEXA_PKG_GEN}/hosts/local/etc/udev/rules.d/60-hexa-cpu-latency.rules")
 add_custom_command(
-  OUTPUT ${HEXA_PKG_UNIT_FILES} "${HEXA_PKG_GEN}/hosts/local/etc/hexa/cyclonedds.xml"
+  OUTPUT ${HEXA_PKG_UNIT_FILES} "${HEXA_PKG_GEN}/hosts/local/etc/hexa/cyclonedds.xml" "${HEXA_PKG_UDEV_RULE}"
   COMMAND "${CMAKE_COMMAND}" -E rm -rf "${HEXA_PKG_GEN}"
   COMMAND hexa_deploy generate "${HEXA_PKG_DIR}/single-host.textproto" --out "${HEXA_PKG_GEN}"
   DEPENDS hexa_deploy "${HEXA_PKG_DIR}/single-host.textproto"
@@ -40,9 +43,10 @@ add_custom_command(
   COMMAND gzip -9n -c "${HEXA_PKG_DIR}/changelog" > "${CMAKE_BINARY_DIR}/package/changelog.Debian.gz"
   DEPENDS "${HEXA_PKG_DIR}/changelog")
 add_custom_target(hexa_package_files ALL
-  DEPENDS ${HEXA_PKG_UNIT_FILES} "${CMAKE_BINARY_DIR}/package/changelog.Debian.gz")
+  DEPENDS ${HEXA_PKG_UNIT_FILES} "${HEXA_PKG_UDEV_RULE}" "${CMAKE_BINARY_DIR}/package/changelog.Debian.gz")
 install(FILES ${HEXA_PKG_UNIT_FILES} DESTINATION /lib/systemd/system)
 install(FILES "${HEXA_PKG_GEN}/hosts/local/etc/hexa/cyclonedds.xml" DESTINATION /etc/hexa)
+install(FILES "${HEXA_PKG_UDEV_RULE}" DESTINATION /lib/udev/rules.d)
 install(FILES README.md docs/deployment.md "${CMAKE_BINARY_DIR}/package/changelog.Debian.gz"
         DESTINATION ${HEXA_PKG_DOC})
 
