@@ -330,8 +330,10 @@ def run_matrix(args):
         row = dict(case, exit=rc, wall_s=wall, load=before, **res)
         row["cpu_stalls"] = stall_summary(probe)
         row["stall_at_fault"] = None
-        expected_exit = 0 if (case["standby"] and case["kind"] in ("crash", "hang", "silence")) else None
-        if probe and res["first_fault_ns"] is not None and (expected_exit == 0 or rc not in (3, 5)):
+        # A fault is unexpected in a take-over row (it should complete without one) and in any
+        # session that did not end as a held fault should (exit 3, or 5 for the supervisor).
+        taken_over = case["standby"] and case["kind"] in ("crash", "hang", "silence")
+        if probe and res["first_fault_ns"] is not None and (taken_over or rc not in (3, 5)):
             row["stall_at_fault"] = stall_before(probe, res["first_fault_ns"])
         rows.append(row)
         print("%3d/%d %-9s %-16s leg %d %-3s exit %3s  %-44s %8s ms %6s ticks  exc %6s mm %5s deg  "
