@@ -15,7 +15,10 @@
 int main(int argc, char** argv) {
   hexa::cli::Parser cli("hexa_operator",
                         "Sends an operator command to the supervisor: hexa_operator [options] "
-                        "start|stop|reset|home|shutdown");
+                        "start|stop|reset|home|shutdown\n"
+                        "Exit status: 0 sent and acknowledged by every matched reader, 1 no "
+                        "supervisor matched within --wait (or a DDS error), 2 bad arguments, 3 "
+                        "sent but not acknowledged.");
   cli.AddOption("domain", "id", "DDS domain id", "0");
   cli.AddOption("dds-config", "file", "Cyclone DDS configuration (default: loopback only)");
   cli.AddOption("trajectory", "name|file.csv", "for start: x y z roll pitch yaw combined or CSV",
@@ -89,8 +92,15 @@ int main(int argc, char** argv) {
     dds_wait_for_acks(writer.get(), DDS_SECS(2));
     std::this_thread::sleep_for(std::chrono::duration<double>(*linger_s));
     const bool acked = dds_wait_for_acks(writer.get(), DDS_SECS(2)) == DDS_RETCODE_OK;
-    log->info("sent {} to domain {} ({} reader(s) matched{})", what, *domain,
-              writer.Snapshot().publication_matched_current, acked ? ", acknowledged" : ", NOT acknowledged");
+    const auto matched = writer.Snapshot().publication_matched_current;
+    if (!acked) {
+      // Not a success: the supervisor may not have the command (exit 3, docs/deployment.md).
+      log->error("sent {} to domain {} but it was NOT acknowledged by every matched reader "
+                 "({} matched) within 2 s after the {} s linger: the supervisor may not have it",
+                 what, *domain, matched, *linger_s);
+      return 3;
+    }
+    log->info("sent {} to domain {} ({} reader(s) matched, acknowledged)", what, *domain, matched);
     return 0;
   } catch (const std::exception& e) {
     log->error("{}", e.what());
