@@ -56,6 +56,7 @@ int main(int argc, char** argv) {
   cli.AddOption("settle-s", "s", "pause between the match and the first write", "2");
   cli.AddOption("drain-s", "s", "pause after the last write before the statistics", "1");
   cli.AddOption("lease-s", "s", "the writer's liveliness lease (production: 0.010 in real time)", "0.010");
+  cli.AddFlag("writer-best-effort", "offer BEST_EFFORT instead of the production RELIABLE (experiment)");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
   const auto domain = cli.GetInt("domain", 0, 230);
@@ -77,17 +78,29 @@ int main(int argc, char** argv) {
     comm::Topic<hexa_msg_ValveCommand> topic(participant);
     comm::QosParams params;
     params.valve_liveliness_lease_s = *lease;
-    comm::Writer<hexa_msg_ValveCommand> writer(participant, topic, params,
-                                               {comm::LegPartition(static_cast<int>(*leg))});
+    // The production writer QoS; --writer-best-effort (an experiment, not production) offers
+    // BEST_EFFORT instead: Cyclone 0.10's best-effort readers then see an unreliable proxy
+    // writer (docs/deployment.md, "The lossy recorder link").
+    const comm::Qos qos = comm::MakeQos(comm::TopicKind::kValveCommand, comm::EndpointRole::kWriter, params);
+    if (cli.Flag("writer-best-effort")) dds_qset_reliability(qos.get(), DDS_RELIABILITY_BEST_EFFORT, 0);
+    const comm::OwnedEntity publisher =
+        comm::CreatePublisher(participant, {comm::LegPartition(static_cast<int>(*leg))});
+    const comm::OwnedEntity writer(
+        comm::CheckDds(dds_create_writer(publisher.get(), topic.get(), qos.get(), nullptr), "cannot create the writer"));
+    auto matched = [&] {
+      dds_publication_matched_status_t st{};
+      dds_get_publication_matched_status(writer.get(), &st);
+      return st.current_count;
+    };
     const int64_t give_up = MonotonicNs() + static_cast<int64_t>(*match_wait * 1e9);
-    while (writer.Snapshot().publication_matched_current < static_cast<uint32_t>(*readers)) {
+    while (matched() < static_cast<uint32_t>(*readers)) {
       if (MonotonicNs() > give_up) {
         std::fprintf(stderr, "no %lld readers after %.0f s\n", static_cast<long long>(*readers), *match_wait);
         return 3;
       }
       SleepUntil(MonotonicNs() + 10000000);
     }
-    std::printf("matched %u\n", writer.Snapshot().publication_matched_current);
+    std::printf("matched %u\n", matched());
     std::fflush(stdout);
     SleepUntil(MonotonicNs() + static_cast<int64_t>(*settle * 1e9));
     hexa_msg_ValveCommand c{};
@@ -103,7 +116,7 @@ int main(int argc, char** argv) {
       c.header.tick = static_cast<uint64_t>(i);
       c.header.sim_time_s = static_cast<double>(i) * 1e-3;
       const int64_t t0 = MonotonicNs();
-      if (writer.Write(c, comm::RealtimeNow_ns()) != DDS_RETCODE_OK) ++errors;
+      if (dds_write_ts(writer.get(), &c, comm::RealtimeNow_ns()) != DDS_RETCODE_OK) ++errors;
       max_write_ns = std::max(max_write_ns, MonotonicNs() - t0);
     }
     SleepUntil(MonotonicNs() + static_cast<int64_t>(*drain * 1e9));

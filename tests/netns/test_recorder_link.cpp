@@ -44,7 +44,7 @@ std::string AddressOnly(const std::string& cidr) { return cidr.substr(0, cidr.fi
 
 struct LinkRun {
   long long written = -1, write_errors = -1, rexmit_bytes = -1, throttle_count = -1;
-  long long received = -1, missing = -1, dds_lost = -1;
+  long long received = -1, missing = -1, gaps = -1, dds_lost = -1;
   long long dropped = -1;
   long long rcvbuf_errors = -1;  // the recorder host's kernel: receive buffer full
   std::string logs;
@@ -128,15 +128,16 @@ class RecorderLink : public ::testing::Test {
       r.throttle_count = std::stoll(m[4]);
     }
     const std::string rl = Slurp(rec.log_path);
-    if (std::regex_search(rl, m, std::regex("hexa_ValveCommand +([0-9]+) +([0-9]+) +[0-9]+ +([0-9]+)"))) {
+    if (std::regex_search(rl, m, std::regex("hexa_ValveCommand +([0-9]+) +([0-9]+) +([0-9]+) +([0-9]+)"))) {
       r.received = std::stoll(m[1]);
       r.missing = std::stoll(m[2]);
-      r.dds_lost = std::stoll(m[3]);
+      r.gaps = std::stoll(m[3]);
+      r.dds_lost = std::stoll(m[4]);
     }
     std::printf("[ %s ] writer: %s", reliability.c_str(), w.substr(std::min(w.size(), w.rfind("statistics"))).c_str());
-    std::printf("[ %s ] recorder: received %lld missing %lld dds_lost %lld; nftables dropped %lld packets at 'rec', "
-                "its kernel %lld (receive buffer full)\n",
-                reliability.c_str(), r.received, r.missing, r.dds_lost, r.dropped, r.rcvbuf_errors);
+    std::printf("[ %s ] recorder: received %lld missing %lld in %lld gaps (dds_lost %lld); nftables dropped %lld packets "
+                "at 'rec', its kernel %lld (receive buffer full)\n",
+                reliability.c_str(), r.received, r.missing, r.gaps, r.dds_lost, r.dropped, r.rcvbuf_errors);
     return r;
   }
 
@@ -151,16 +152,23 @@ TEST_F(RecorderLink, LossyRecorderLinkCostsTheControlWriterNothing) {
   EXPECT_EQ(be.write_errors, 0);
   EXPECT_EQ(be.rexmit_bytes, 0) << "the control writer retransmitted for the recorder; logs " << be.logs;
   EXPECT_EQ(be.throttle_count, 0);
-  // What the link dropped is missing in the recording, not repaired: about 20 % of 3000
-  // (counted from tick gaps between the samples that arrived, so a loss at either end is
-  // not seen), and never more than the packets nftables dropped (which also counts
-  // discovery and liveliness traffic to the recorder's host) plus those the recorder host's
-  // kernel dropped because the recorder's socket buffer was full (a recorder descheduled on a
-  // loaded machine: its own loss, counted, and again nothing the writer repairs).
+  // What the link dropped is missing in the recording, not repaired (counted from tick gaps
+  // between the samples that arrived, so a loss at either end is not seen). Every gap starts
+  // with a packet dropped by nftables (which also counts discovery and liveliness traffic to
+  // the recorder's host) or by the recorder host's kernel because the recorder's socket
+  // buffer was full (a recorder descheduled on a loaded machine: its own loss, and again
+  // nothing the writer repairs). Each such packet costs the recording up to two samples, not
+  // one: Debian's Cyclone DDS 0.10.2 keeps a best-effort reader of a reliable writer "out of
+  // sync" and discards the sample after a lost one as too old (eclipse-cyclonedds issue 1561,
+  // fixed upstream in 11.0 by commit 011f80a6 "Unreliable readers are always in sync with
+  // pwr"; docs/deployment.md, "The lossy recorder link"). Measured here: 1000-1050 samples
+  // missing in 367-390 gaps for 690-750 dropped packets; with a best-effort writer (an
+  // experiment of hexa_recorder_link_writer) 573 in 470 gaps for 718.
   EXPECT_GT(be.dropped, 300);
   EXPECT_GT(be.missing, 300);
   ASSERT_GE(be.rcvbuf_errors, 0);
-  EXPECT_LE(be.missing, be.dropped + be.rcvbuf_errors);
+  EXPECT_LE(be.gaps, be.dropped + be.rcvbuf_errors);
+  EXPECT_LE(be.missing, 2 * (be.dropped + be.rcvbuf_errors));
   EXPECT_LE(be.received + be.missing, 3000);
   EXPECT_GE(be.received + be.missing, 2980);  // P(20 losses in a row at 20 %) ~ 1e-14
 }
