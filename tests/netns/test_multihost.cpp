@@ -84,6 +84,19 @@ hexa::deploy::ChildExit RunToEnd(LabSession& s, std::chrono::seconds timeout) {
   return sup;
 }
 
+// A lockstep recording of the z trajectory (one period): complete, nothing missing in any
+// periodic stream, and bit-identical to the in-process simulation.
+void ExpectLosslessAndSameAsInProcess(const std::string& mcap) {
+  const auto info = hexa::recorder::Inspect(mcap);
+  EXPECT_TRUE(info.complete);
+  for (const auto& ch : info.channels) {
+    if (ch.loss_analysed) {
+      EXPECT_EQ(ch.missing, 0u) << ch.topic;
+    }
+  }
+  hexa::testing::ExpectSameAsInProcess(hexa::recorder::ComputeSessionReport(mcap), hexa::PaperMotion::kZ, 1, 1);
+}
+
 class SecuredFiveHosts : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -164,15 +177,7 @@ TEST_F(SecuredFiveHosts, LockstepSessionFromGeneratedUnitsIsLosslessAndBitIdenti
 
   const std::string mcap = s->Recording();
   ASSERT_FALSE(mcap.empty()) << "no recording in " << s->work_dir() << "/rec";
-  const auto info = hexa::recorder::Inspect(mcap);
-  EXPECT_TRUE(info.complete);
-  for (const auto& ch : info.channels) {
-    if (ch.loss_analysed) {
-      EXPECT_EQ(ch.missing, 0u) << ch.topic;
-    }
-  }
-  const auto report = hexa::recorder::ComputeSessionReport(mcap);
-  hexa::testing::ExpectSameAsInProcess(report, hexa::PaperMotion::kZ, 1, 1);
+  ExpectLosslessAndSameAsInProcess(mcap);
   std::printf("secured five-host lockstep session: %.1f s wall, recording %s\n", wall_s, mcap.c_str());
 }
 
@@ -205,14 +210,7 @@ TEST_F(SecuredFourHosts, LockstepSessionFromTheFourHostFileIsLosslessAndBitIdent
   EXPECT_EQ(sup.exit_code, 0) << sup.Describe() << "; logs in " << s->work_dir();
   const std::string mcap = s->Recording();
   ASSERT_FALSE(mcap.empty()) << "no recording in " << s->work_dir() << "/rec";
-  const auto info = hexa::recorder::Inspect(mcap);
-  EXPECT_TRUE(info.complete);
-  for (const auto& ch : info.channels) {
-    if (ch.loss_analysed) {
-      EXPECT_EQ(ch.missing, 0u) << ch.topic;
-    }
-  }
-  hexa::testing::ExpectSameAsInProcess(hexa::recorder::ComputeSessionReport(mcap), hexa::PaperMotion::kZ, 1, 1);
+  ExpectLosslessAndSameAsInProcess(mcap);
   std::printf("secured four-host lockstep session: %.1f s wall, recording %s\n", wall_s, mcap.c_str());
 }
 
