@@ -13,6 +13,7 @@
 //                   heal, reset, start again; detection delay, HOLD, resumption
 // Needs root (network namespaces, nftables). Timing figures depend on the machine's load:
 // the bench prints the load average with each row. Not a test: nothing is asserted.
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -71,7 +72,25 @@ struct Row {
   std::string placement;  // per unit at the plant's READY: CPUs, policies, latency hold
   std::string note;
   std::string load;
+  // Wall clock (CLOCK_REALTIME, the clock of DDS source times) of the plant's READY and of
+  // the session's end as the bench saw them, and of the first FaultEvent in the recording
+  // (0: none): bench/deployment/cpu_utilisation.py lays the per-CPU samples beside them.
+  std::int64_t ready_ns = 0, end_ns = 0, first_fault_ns = 0;
+  std::string first_fault;
+  std::string work_dir;
+  // Recorder's own count: samples of the periodic topics that reached it / that Cyclone
+  // counted lost (best-effort readers: sequence-number gaps), from its summary.
+  std::string recorder_summary;
+  // UDP datagrams the recorder host's kernel dropped (receive buffer full): loss on the host,
+  // not on its link.
+  long long recorder_rcvbuf_errors = -1;
 };
+
+std::int64_t WallNow_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
+}
 
 LabSessionOptions BaseOptions(const std::string& build, const std::string& source, const std::string& name,
                               int domain) {
@@ -108,6 +127,18 @@ void FromRecording(LabSession& s, Row& row) {
     for (const auto& [t, m] : r.missing) row.missing += m;
     row.faults = r.faults.size();
     row.sim_s = r.sim_time_s;
+    // The first fault, with its wall-clock time.
+    hexa::recorder::ReadRecording(mcap, [&](const hexa::recorder::McapChannel& ch,
+                                            const hexa::recorder::McapMessageView&,
+                                            const google::protobuf::Message& msg) {
+      if (ch.topic != "hexa_FaultEvent") return;
+      rec::FaultEvent f;
+      f.ParseFromString(msg.SerializeAsString());
+      if (row.first_fault_ns != 0 && f.source_time_ns() >= row.first_fault_ns) return;
+      row.first_fault_ns = f.source_time_ns();
+      row.first_fault = f.source_node() + " leg " + std::to_string(f.leg_id()) + " tick " +
+                        std::to_string(f.tick()) + " " + rec::FaultReason_Name(f.reason());
+    });
   } catch (const std::exception& e) {
     row.note += std::string(" report failed: ") + e.what() + ";";
   }
@@ -195,6 +226,7 @@ Row RunSession(const std::string& scenario, LabSessionOptions o,
     s->units().Poll();
     if (ready == std::chrono::steady_clock::time_point{} && s->units().Seen("hexa-plant").ready) {
       ready = std::chrono::steady_clock::now();
+      row.ready_ns = WallNow_ns();
       at_ready = TakeCpuSnapshot(s->units());
       row.placement = DescribePlacement(s->units());
     }
@@ -238,12 +270,28 @@ Row RunSession(const std::string& scenario, LabSessionOptions o,
     row.cpu_loop_s += d;
   }
   for (const auto& [thread, c] : latest.thread) row.cpu_loop_by_thread[thread] = c - at_ready.thread[thread];
+  row.end_ns = WallNow_ns();
+  row.recorder_rcvbuf_errors = s->lab().UdpReceiveBufferErrors("recorder");
   row.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() -
                                              (ready == std::chrono::steady_clock::time_point{} ? t0 : ready))
                    .count();
   s->StopAll();
   FromRecording(*s, row);
+  row.work_dir = o.work_dir;
   row.note += " logs " + o.work_dir + ";";
+  // The recorder's summary (stdout at its stop): per topic received, missing, dds_lost.
+  {
+    const std::string rec_log = Slurp(s->units().LogOf("hexa-recorder"));
+    std::smatch rm;
+    std::string summary;
+    for (const char* topic : {"hexa_LegSensors", "hexa_ValveCommand", "hexa_GroundTruth", "hexa_ImuSample",
+                              "hexa_LegSetpoint", "hexa_PoseReport"}) {
+      if (std::regex_search(rec_log, rm, std::regex(std::string(topic) + " +([0-9]+) +([0-9-]+) +([0-9-]+) +([0-9]+)")))
+        summary += std::string(summary.empty() ? "" : ", ") + (topic + 5) + " received " + rm[1].str() +
+                   " missing " + rm[2].str() + " dds_lost " + rm[4].str();
+    }
+    row.recorder_summary = summary;
+  }
   const std::string plant = Slurp(s->units().LogOf("hexa-plant"));
   std::smatch m;
   if (std::regex_search(plant, m, std::regex("command faults ([0-9]+)"))) row.note += " plant command faults " + m[1].str() + ";";
@@ -273,6 +321,19 @@ void Print(const Row& r) {
               r.note.c_str());
   PrintCpuDetail(r);
   if (!r.placement.empty()) std::printf("    placement: %s\n", r.placement.c_str());
+  if (!r.first_fault.empty())
+    std::printf("    first fault: %s, %.3f s after the plant's READY\n", r.first_fault.c_str(),
+                r.ready_ns > 0 ? static_cast<double>(r.first_fault_ns - r.ready_ns) * 1e-9 : 0.0);
+  if (!r.recorder_summary.empty())
+    std::printf("    recorder: %s; its host's kernel dropped %lld datagrams (receive buffer full)\n",
+                r.recorder_summary.c_str(), r.recorder_rcvbuf_errors);
+  // One machine-readable line per run (bench/deployment/cpu_utilisation.py).
+  std::printf("RUN {\"scenario\": \"%s\", \"completed\": %s, \"ready_ns\": %lld, \"end_ns\": %lld, "
+              "\"first_fault_ns\": %lld, \"first_fault\": \"%s\", \"dropped\": %lld, \"missing\": %llu, "
+              "\"logs\": \"%s\"}\n",
+              r.scenario.c_str(), r.completed ? "true" : "false", static_cast<long long>(r.ready_ns),
+              static_cast<long long>(r.end_ns), static_cast<long long>(r.first_fault_ns), r.first_fault.c_str(),
+              r.dropped, static_cast<unsigned long long>(r.missing), r.work_dir.c_str());
   std::fflush(stdout);
 }
 
@@ -389,7 +450,7 @@ void Partition(const LabSessionOptions& base, double partition_ms, const std::st
 
 int main(int argc, char** argv) {
   hexa::cli::Parser cli("hexa_multihost_bench",
-                        "Networked deployment figures: five hosts in network namespaces (root).");
+                        "Networked deployment figures: four or five hosts in network namespaces (root).");
   cli.AddOption("scenarios", "list", "comma list: lockstep lockstep-plain realtime realtime-plain loss recorder-loss partition",
                 "lockstep,lockstep-plain,realtime,loss,recorder-loss,partition");
   cli.AddOption("runs", "N", "runs of each session scenario", "1");
@@ -409,7 +470,15 @@ int main(int argc, char** argv) {
                 "security handshakes with each other done before the clock starts)", "0");
   cli.AddFlag("no-cpu-placement",
               "leave every process unpinned (default: the one-machine session's CPU placement)");
+  cli.AddFlag("split-legs-b",
+              "with the CPU placement: the primary legs of host legs-b on the first CPU (with the "
+              "supervisor and the recorder) instead of beside the plant on the last");
   cli.AddFlag("faults-plain", "run the loss / recorder-loss / partition scenarios without DDS Security");
+  cli.AddOption("deployment", "name|file",
+                "the hosts and processes: five-hosts (default: the built-in five-host layout, the same "
+                "as deploy/deployments/five-hosts.textproto), four-hosts "
+                "(deploy/deployments/four-hosts.textproto: no standbys) or a deployment file",
+                "five-hosts");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
   const auto runs = cli.GetInt("runs", 1, 100);
@@ -438,20 +507,31 @@ int main(int argc, char** argv) {
   if (cli.Get("loop-metadata-protection") != "default")
     base.loop_metadata_protection = cli.Get("loop-metadata-protection");
   base.cpu_placement = !cli.Flag("no-cpu-placement");
+  base.split_legs_b = cli.Flag("split-legs-b");
   const auto plant_delay = cli.GetDouble("plant-delay-s", 0, 300);
   if (!plant_delay) {
     std::fprintf(stderr, "error: %s\n", cli.error().c_str());
     return 2;
   }
   base.plant_start_delay_s = *plant_delay;
+  const std::string deployment = cli.Get("deployment");
+  if (deployment != "five-hosts") {
+    base.layout_file = deployment.find('/') == std::string::npos && deployment.find('.') == std::string::npos
+                           ? std::string(HEXA_SOURCE_DIR) + "/deploy/deployments/" + deployment + ".textproto"
+                           : deployment;
+  }
   const std::vector<std::string> auto_args{"--trajectory", "z", "--periods", "1", "--autostart", "--exit-when-done"};
 
-  std::printf("five hosts in network namespaces, z trajectory (1 period, 13 s simulated), DDS Security on "
+  std::printf("deployment %s in network namespaces, z trajectory (1 period, 13 s simulated), DDS Security on "
               "unless '-plain' (metadata protection %s, loop topics %s); real-time stale tolerance %d ticks; CPU placement %s; "
               "plant started %.1f s after the others; "
               "machine shared (load average per row)\n\n",
+              base.layout_file.empty() ? "five-hosts (built-in layout)" : base.layout_file.c_str(),
               cli.Get("metadata-protection").c_str(), cli.Get("loop-metadata-protection").c_str(), base.stale_ticks > 0 ? base.stale_ticks : 15,
-              base.cpu_placement ? "as the one-machine session" : "none", base.plant_start_delay_s);
+              !base.cpu_placement ? "none"
+              : base.split_legs_b ? "as the one-machine session but legs-b's legs on the first CPU"
+                                  : "as the one-machine session",
+              base.plant_start_delay_s);
   std::printf("| scenario | done | wall s | sim/wall | CPU s per sim s: all, loop | RMSE x y z mm | rtt med us | rtt p99 us | missing | faults | dropped pkts | load | notes\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (long long k = 0; k < *runs; ++k) {

@@ -152,7 +152,8 @@ Qos MakeQos(TopicKind kind, EndpointRole role, const QosParams& params) {
   // Reliability. Writers always offer RELIABLE (offered >= requested), so each reader picks.
   // Writers use keep-last histories (below), so a reliable writer never blocks in write();
   // max_blocking_time only matters for the keep-all OperatorCommand writer.
-  const bool reliable = writer || recorder || !IsPeriodic(kind) || params.lockstep;
+  const bool reliable = writer || !IsPeriodic(kind) ||
+                        (recorder ? !params.recorder_periodic_best_effort : params.lockstep);
   dds_qset_reliability(q, reliable ? DDS_RELIABILITY_RELIABLE : DDS_RELIABILITY_BEST_EFFORT,
                        DDS_MSECS(100));
 

@@ -390,7 +390,9 @@ std::vector<std::string> CommandLine(const Deployment& d, const ProcessPlan& pla
                         " record --output " + d.record_dir() +
                         "/session-$(date -u +%Y%m%d-%H%M%S).mcap --domain " + domain +
                         " --dds-config " + dds_config;
-      if (realtime) cmd += " --rt-priority " + std::to_string(prio);
+      // Real time: the periodic topics best effort, so that no control writer repairs what
+      // the recorder's link drops (docs/deployment.md, "The lossy recorder link").
+      if (realtime) cmd += " --rt-priority " + std::to_string(prio) + " --periodic-reliability best-effort";
       for (const auto& a : p.arg()) cmd += " " + a;
       return {"/bin/sh", "-c", cmd};
     }

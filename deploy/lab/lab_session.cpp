@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
+#include "deployment.hpp"
 #include "hexa/services/scheduling.hpp"
 
 namespace hexa::deploy {
@@ -56,9 +58,25 @@ std::unique_ptr<LabSession> LabSession::Create(const LabSessionOptions& o, std::
   std::unique_ptr<LabSession> s(new LabSession());
   s->options_ = o;
   fs::create_directories(o.work_dir);
-  std::vector<std::string> hosts{"io-sup", "legs-a", "legs-b"};
-  if (o.standbys) hosts.push_back("standby-b");
-  hosts.push_back("recorder");
+  // The layout: the built-in one, or a deployment file's hosts and processes.
+  std::optional<deployment::Deployment> layout;
+  if (!o.layout_file.empty()) {
+    LoadedDeployment loaded = LoadDeployment(o.layout_file);
+    if (!loaded.ok) {
+      error = "layout " + o.layout_file + ":";
+      for (const auto& e : loaded.errors) error += " " + e;
+      return nullptr;
+    }
+    layout = std::move(loaded.deployment);
+  }
+  std::vector<std::string> hosts;
+  if (layout) {
+    for (const auto& h : layout->host()) hosts.push_back(h.name());
+  } else {
+    hosts = {"io-sup", "legs-a", "legs-b"};
+    if (o.standbys) hosts.push_back("standby-b");
+    hosts.push_back("recorder");
+  }
   std::vector<std::string> all_hosts = hosts;
   all_hosts.insert(all_hosts.end(), o.extra_hosts.begin(), o.extra_hosts.end());
   s->lab_ = NetnsLab::Create(o.tag, all_hosts, o.subnet, error);
@@ -121,13 +139,45 @@ std::unique_ptr<LabSession> LabSession::Create(const LabSessionOptions& o, std::
       out += "  process { role: LEG leg: " + std::to_string(leg) + extra + cpu + " }\n";
     return out;
   };
-  host_block("io-sup", "  process { role: PLANT" + control + args(o.plant_args) +
-                           " }\n  process { role: SUPERVISOR" + other + args(o.supervisor_args) +
-                           " }\n  process { role: OPERATOR }\n");
-  host_block("legs-a", legs(1, "", control));
-  host_block("legs-b", legs(4, "", control));
-  if (o.standbys) host_block("standby-b", legs(4, " standby: true", other));
-  host_block("recorder", "  process { role: RECORDER" + other + " }\n");
+  std::vector<std::string> recorder_hosts, other_hosts;  // start order: recorder first
+  if (layout) {
+    for (const auto& h : layout->host()) {
+      std::string processes;
+      bool has_recorder = false;
+      for (const auto& p : h.process()) {
+        const bool is_control = p.role() == deployment::PLANT ||
+                                (p.role() == deployment::LEG && !p.standby() && !(o.split_legs_b && h.name() == "legs-b"));
+        std::string line = std::string("  process { role: ") + ToString(p.role());
+        if (p.role() == deployment::LEG) {
+          line += " leg: " + std::to_string(p.leg());
+          if (p.standby()) line += " standby: true";
+        }
+        if (p.role() != deployment::OPERATOR) line += is_control ? control : other;
+        std::vector<std::string> extra(p.arg().begin(), p.arg().end());
+        if (p.role() == deployment::PLANT) extra.insert(extra.end(), o.plant_args.begin(), o.plant_args.end());
+        if (p.role() == deployment::SUPERVISOR)
+          extra.insert(extra.end(), o.supervisor_args.begin(), o.supervisor_args.end());
+        processes += line + args(extra) + " }\n";
+        has_recorder = has_recorder || p.role() == deployment::RECORDER;
+      }
+      host_block(h.name(), processes);
+      (has_recorder ? recorder_hosts : other_hosts).push_back(h.name());
+    }
+  } else {
+    host_block("io-sup", "  process { role: PLANT" + control + args(o.plant_args) +
+                             " }\n  process { role: SUPERVISOR" + other + args(o.supervisor_args) +
+                             " }\n  process { role: OPERATOR }\n");
+    host_block("legs-a", legs(1, "", control));
+    host_block("legs-b", legs(4, "", o.split_legs_b ? other : control));
+    if (o.standbys) host_block("standby-b", legs(4, " standby: true", other));
+    host_block("recorder", "  process { role: RECORDER" + other + " }\n");
+    recorder_hosts = {"recorder"};
+    other_hosts = {"legs-a", "legs-b"};
+    if (o.standbys) other_hosts.push_back("standby-b");
+    other_hosts.push_back("io-sup");
+  }
+  s->hosts_ = recorder_hosts;
+  s->hosts_.insert(s->hosts_.end(), other_hosts.begin(), other_hosts.end());
   s->deployment_text_ = d.str();
   const std::string file = (fs::path(o.work_dir) / "deployment.textproto").string();
   std::ofstream(file) << s->deployment_text_;
@@ -167,10 +217,7 @@ LabSession::~LabSession() {
 
 std::vector<std::pair<std::string, std::vector<std::string>>> LabSession::Plan() const {
   std::vector<std::pair<std::string, std::vector<std::string>>> plan;
-  for (const char* h : {"recorder", "legs-a", "legs-b", "standby-b", "io-sup"}) {
-    if (std::string(h) == "standby-b" && !options_.standbys) continue;
-    plan.emplace_back(h, launcher_->UnitsOf(h));
-  }
+  for (const auto& h : hosts_) plan.emplace_back(h, launcher_->UnitsOf(h));
   return plan;
 }
 

@@ -9,6 +9,7 @@
 //                              legs-b     legs 4-6
 //                              standby-b  hot standbys of legs 4-6 (optional)
 //                              recorder   recorder
+// or those of a deployment file (LabSessionOptions::layout_file).
 #pragma once
 
 #include <chrono>
@@ -54,10 +55,21 @@ struct LabSessionOptions {
   // recorder on its first. The lab's five hosts share one machine's CPUs; on real boards each
   // board has its own and the deployment pins what it needs. Off, or with one CPU: unpinned.
   bool cpu_placement = true;
+  // With cpu_placement: the primary legs of host "legs-b" (legs 4-6) on the first CPU with the
+  // supervisor and the recorder instead of beside the plant: the control load of the two legs
+  // boards spread over both CPUs, closer to boards that each have their own CPU (the
+  // benchmark's --cpu-placement split).
+  bool split_legs_b = false;
   // Start the plant (the real-time clock) this long after every other process: their
   // discovery and security handshakes with each other are then over before tick 0.
   double plant_start_delay_s = 0;
   std::vector<std::string> extra_hosts;  // more lab hosts outside the deployment (e.g. "intruder")
+  // A deployment file whose hosts and processes the lab runs instead of the built-in layout
+  // above (e.g. deploy/deployments/four-hosts.textproto): its host names, and per process the
+  // role, leg, standby and args. The lab replaces its interfaces and addresses by its own
+  // veths, its mode, security and timing by the options above, and its `cpu:` by the lab's
+  // placement (cpu_placement). `standbys` is then ignored. Empty: the built-in layout.
+  std::string layout_file;
 };
 
 class LabSession {
@@ -98,6 +110,7 @@ class LabSession {
   std::unique_ptr<NetnsLab> lab_;
   std::unique_ptr<UnitLauncher> launcher_;
   std::string generated_, deployment_text_;
+  std::vector<std::string> hosts_;  // the deployment's hosts, in start order (recorder first)
 };
 
 // Runs a command to completion (stdout+stderr to `log`), returns its exit code (-1 on

@@ -5,9 +5,11 @@
 
 #include <cerrno>
 #include <cstdio>
+#include <iterator>
 #include <regex>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 namespace hexa::deploy {
 namespace {
@@ -136,6 +138,27 @@ long long NetnsLab::DroppedInput(const std::string& host) const {
   if (!RunShell(Ip() + " netns exec " + h.ns + " " + Nft() + " list table inet hexa_lab", &out))
     return -1;
   return CounterOf(out, "loss");
+}
+
+long long NetnsLab::UdpReceiveBufferErrors(const std::string& host) const {
+  const LabHost& h = this->host(host);
+  std::string out;
+  if (!RunShell(Ip() + " netns exec " + h.ns + " cat /proc/net/snmp", &out)) return -1;
+  // Two "Udp:" lines: the field names, then the values.
+  std::istringstream in(out);
+  std::vector<std::string> names;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("Udp: ", 0) != 0) continue;
+    std::istringstream words(line.substr(5));
+    std::vector<std::string> w{std::istream_iterator<std::string>(words), std::istream_iterator<std::string>()};
+    if (names.empty()) {
+      names = w;
+      continue;
+    }
+    for (std::size_t i = 0; i < names.size() && i < w.size(); ++i)
+      if (names[i] == "RcvbufErrors") return std::stoll(w[i]);
+  }
+  return -1;
 }
 
 bool NetnsLab::Partition(const std::string& host, std::string& error) {

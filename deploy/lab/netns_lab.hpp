@@ -50,6 +50,10 @@ class NetnsLab {
   bool SetInputLoss(const std::string& host, int percent, std::string& error);
   // Packets dropped so far by the loss rule of `host` (its nftables counter), -1 on error.
   long long DroppedInput(const std::string& host) const;
+  // UDP datagrams the kernel of `host`'s namespace dropped because a socket's receive buffer
+  // was full (/proc/net/snmp Udp RcvbufErrors, for the whole namespace), -1 on error: loss on
+  // the host itself (a receiver too slow), not on its link.
+  long long UdpReceiveBufferErrors(const std::string& host) const;
   // Cuts `host` off the bridge in both directions / restores it.
   bool Partition(const std::string& host, std::string& error);
   bool Heal(const std::string& host, std::string& error);

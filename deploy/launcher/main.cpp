@@ -451,6 +451,9 @@ int main(int argc, char** argv) {
     // Real time: SCHED_FIFO below the control processes (70-80). A SCHED_OTHER recorder
     // beside SCHED_FIFO peers is starved and loses samples.
     if (o.mode == "realtime" && o.rt_sched) r.argv.insert(r.argv.end(), {"--rt-priority", "50"});
+    // Real time: the periodic topics best effort, as the controllers read them; no control
+    // writer repairs what the recorder misses (docs/deployment.md, "The lossy recorder link").
+    if (o.mode == "realtime") r.argv.insert(r.argv.end(), {"--periodic-reliability", "best-effort"});
     r.env = env;
     r.env["HEXA_IDENTITY"] = "recorder";
     r.log_path = o.out_dir + "/recorder.console.log";

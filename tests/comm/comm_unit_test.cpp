@@ -122,6 +122,28 @@ TEST_F(CommUnit, QosProfilesMatchTheTopicTable) {
   }
 }
 
+// Real-time recorder (QosParams::recorder_periodic_best_effort): every periodic topic best
+// effort, so no control writer repairs the recorder's link; the event topics stay reliable.
+// Default (lockstep): reliable everywhere. The writers always offer RELIABLE.
+TEST_F(CommUnit, RealTimeRecorderReadsPeriodicTopicsBestEffort) {
+  QosParams rt;
+  rt.recorder_periodic_best_effort = true;
+  for (int k = 0; k < kTopicKindCount; ++k) {
+    const auto kind = static_cast<TopicKind>(k);
+    dds_reliability_kind_t rel;
+    dds_duration_t blocking = 0;
+    const Qos r = MakeQos(kind, EndpointRole::kRecorderReader, rt);
+    ASSERT_TRUE(dds_qget_reliability(r.get(), &rel, &blocking));
+    EXPECT_EQ(rel, NominalPeriod_s(kind) ? DDS_RELIABILITY_BEST_EFFORT : DDS_RELIABILITY_RELIABLE) << TopicName(kind);
+    const Qos d = MakeQos(kind, EndpointRole::kRecorderReader);
+    ASSERT_TRUE(dds_qget_reliability(d.get(), &rel, &blocking));
+    EXPECT_EQ(rel, DDS_RELIABILITY_RELIABLE) << TopicName(kind);
+    const Qos w = MakeQos(kind, EndpointRole::kWriter, rt);
+    ASSERT_TRUE(dds_qget_reliability(w.get(), &rel, &blocking));
+    EXPECT_EQ(rel, DDS_RELIABILITY_RELIABLE) << TopicName(kind);
+  }
+}
+
 TEST_F(CommUnit, QosParamsValidateNamesTheField) {
   QosParams p;
   p.deadline_period_s = -0.001;

@@ -178,6 +178,28 @@ TEST_F(Generated, EveryCycloneConfigHasTheLoopbackConfigsInternalSettings) {
   EXPECT_EQ(Slurp(dir_ + "/plain/hosts/legs-a/etc/hexa/cyclonedds.xml").find("<Security>"), std::string::npos);
 }
 
+// A real-time recorder reads the periodic topics best effort (docs/deployment.md, "The lossy
+// recorder link": a reliable one made the control writers repair its lossy link on the control
+// CPU); a lockstep one stays reliable (the lockstep plant waits for its acknowledgements).
+TEST_F(Generated, RealTimeRecorderReadsThePeriodicTopicsBestEffort) {
+  UnitFile u;
+  std::string err;
+  ASSERT_TRUE(ParseUnitFile(Host("recorder", "lib/systemd/system/hexa-recorder.service"), u, err)) << err;
+  ASSERT_EQ(loaded_.deployment.mode(), hexa::deployment::REALTIME);
+  ASSERT_FALSE(u.exec_start.empty());
+  EXPECT_NE(u.exec_start.back().find("--periodic-reliability best-effort"), std::string::npos) << u.exec_start.back();
+
+  auto lockstep = loaded_.deployment;
+  lockstep.set_mode(hexa::deployment::LOCKSTEP);
+  lockstep.mutable_timing()->set_watchdog_s(30);
+  const auto r = Generate(lockstep, "", dir_ + "/lockstep-rec", GenerateOptions{});
+  ASSERT_TRUE(r.ok) << r.error;
+  UnitFile l;
+  ASSERT_TRUE(ParseUnitFile(dir_ + "/lockstep-rec/hosts/recorder/lib/systemd/system/hexa-recorder.service", l, err)) << err;
+  ASSERT_FALSE(l.exec_start.empty());
+  EXPECT_EQ(l.exec_start.back().find("--periodic-reliability"), std::string::npos) << l.exec_start.back();
+}
+
 // The loop settings the one-machine session runs with reach every control process of a
 // generated deployment: the CPU wake-up latency hold and Cyclone's timed-event thread at normal
 // scheduling are the services' defaults, which no generated command line overrides (nor does

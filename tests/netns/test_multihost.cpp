@@ -84,6 +84,19 @@ hexa::deploy::ChildExit RunToEnd(LabSession& s, std::chrono::seconds timeout) {
   return sup;
 }
 
+// A lockstep recording of the z trajectory (one period): complete, nothing missing in any
+// periodic stream, and bit-identical to the in-process simulation.
+void ExpectLosslessAndSameAsInProcess(const std::string& mcap) {
+  const auto info = hexa::recorder::Inspect(mcap);
+  EXPECT_TRUE(info.complete);
+  for (const auto& ch : info.channels) {
+    if (ch.loss_analysed) {
+      EXPECT_EQ(ch.missing, 0u) << ch.topic;
+    }
+  }
+  hexa::testing::ExpectSameAsInProcess(hexa::recorder::ComputeSessionReport(mcap), hexa::PaperMotion::kZ, 1, 1);
+}
+
 class SecuredFiveHosts : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -164,16 +177,41 @@ TEST_F(SecuredFiveHosts, LockstepSessionFromGeneratedUnitsIsLosslessAndBitIdenti
 
   const std::string mcap = s->Recording();
   ASSERT_FALSE(mcap.empty()) << "no recording in " << s->work_dir() << "/rec";
-  const auto info = hexa::recorder::Inspect(mcap);
-  EXPECT_TRUE(info.complete);
-  for (const auto& ch : info.channels) {
-    if (ch.loss_analysed) {
-      EXPECT_EQ(ch.missing, 0u) << ch.topic;
-    }
-  }
-  const auto report = hexa::recorder::ComputeSessionReport(mcap);
-  hexa::testing::ExpectSameAsInProcess(report, hexa::PaperMotion::kZ, 1, 1);
+  ExpectLosslessAndSameAsInProcess(mcap);
   std::printf("secured five-host lockstep session: %.1f s wall, recording %s\n", wall_s, mcap.c_str());
+}
+
+// The layout without standbys, from the sample deployment file
+// deploy/deployments/four-hosts.textproto (its hosts and processes; the lab gives the
+// interfaces, addresses and CPU placement): plant + supervisor, legs 1-3, legs 4-6,
+// recorder. Secured lockstep: the z trajectory completes, nothing lost, bit-identical to the
+// in-process simulation.
+class SecuredFourHosts : public SecuredFiveHosts {};
+
+TEST_F(SecuredFourHosts, LockstepSessionFromTheFourHostFileIsLosslessAndBitIdentical) {
+  std::string err;
+  LabSessionOptions o = Options("ls4");
+  o.layout_file = HEXA_FOUR_HOSTS;
+  auto s = LabSession::Create(o, err);
+  ASSERT_TRUE(s) << err;
+  std::vector<std::string> hosts;
+  std::size_t units = 0;
+  for (const auto& [host, u] : s->Plan()) {
+    hosts.push_back(host);
+    units += u.size();
+  }
+  EXPECT_EQ(hosts, (std::vector<std::string>{"recorder", "io-sup", "legs-a", "legs-b"}));
+  EXPECT_EQ(units, 9u);  // plant, supervisor, 6 legs, recorder: no standby
+  ASSERT_TRUE(s->StartAll(err)) << err;
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto sup = RunToEnd(*s, 400s);
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  ASSERT_EQ(sup.name, "hexa-supervisor") << "timeout; logs in " << s->work_dir();
+  EXPECT_EQ(sup.exit_code, 0) << sup.Describe() << "; logs in " << s->work_dir();
+  const std::string mcap = s->Recording();
+  ASSERT_FALSE(mcap.empty()) << "no recording in " << s->work_dir() << "/rec";
+  ExpectLosslessAndSameAsInProcess(mcap);
+  std::printf("secured four-host lockstep session: %.1f s wall, recording %s\n", wall_s, mcap.c_str());
 }
 
 // A rogue participant on the control network, three kinds at once, during a secured

@@ -208,7 +208,8 @@ int RunRecord(const std::vector<std::string>& argv) {
   const Args a = ParseArgs(argv,
                            {"output", "o", "domain", "topics", "exclude", "duration-s", "flush-ms",
                             "batch-ms", "sync", "dds-config", "rt-priority", "cpus",
-                            "compression", "zstd-level", "rig", "profile", "seed", "scene-hz"},
+                            "compression", "zstd-level", "rig", "profile", "seed", "scene-hz",
+                            "periodic-reliability"},
                            {"quiet", "no-scene"});
   if (a.help) {
     std::fputs(
@@ -217,6 +218,7 @@ int RunRecord(const std::vector<std::string>& argv) {
         "                            [--batch-ms MS] [--sync none|fflush|fdatasync]\n"
         "                            [--dds-config FILE.xml] [--rt-priority N] [--cpus LIST]\n"
         "                            [--compression none|zstd]\n"
+        "                            [--periodic-reliability reliable|best-effort]\n"
         "Subscribes to every topic of the system (reliable, keep-all recorder QoS) or the ones\n"
         "matching --topics, and writes each sample as protobuf to one MCAP channel per topic\n"
         "(log time = when taken from DDS, within --batch-ms of receipt; publish time = the\n"
@@ -232,6 +234,12 @@ int RunRecord(const std::vector<std::string>& argv) {
         "--rt-priority N: SCHED_FIFO at N (1..98) + mlockall, for real-time sessions whose\n"
         "control processes run SCHED_FIFO (a SCHED_OTHER recorder beside them is starved);\n"
         "--cpus LIST pins it (e.g. 0): both before DDS starts, so Cyclone's threads inherit.\n"
+        "--periodic-reliability best-effort: the periodic topics (1 kHz and 200 Hz) are read\n"
+        "best effort, as the real-time controllers read them: no control writer repairs what\n"
+        "the recorder's link drops (a lossy, slow or cut-off recorder costs the loop nothing);\n"
+        "a dropped sample is missing in the recording and counted per topic. For real-time\n"
+        "sessions (hexa_session and hexa_deploy pass it); default reliable (lockstep: the\n"
+        "plant waits for the recorder and nothing is lost).\n"
         "topics: hexa_LegSensors hexa_ValveCommand hexa_ImuSample hexa_LegSetpoint\n"
         "        hexa_PoseReport hexa_GroundTruth hexa_TrackerPose hexa_OperatorCommand\n"
         "        hexa_NodeStatus hexa_FaultEvent\n"
@@ -282,7 +290,11 @@ int RunRecord(const std::vector<std::string>& argv) {
   RecordingWriter writer(cfg);
   writer.Open(out);
   std::vector<std::unique_ptr<TopicRecorderBase>> topics;
-  const comm::QosParams params;
+  comm::QosParams params;
+  const std::string periodic = a.Get("periodic-reliability", "reliable");
+  if (periodic != "reliable" && periodic != "best-effort")
+    throw UsageError("--periodic-reliability must be reliable or best-effort, got '" + periodic + "'");
+  params.recorder_periodic_best_effort = periodic == "best-effort";
   ForEachTopicType([&](auto pair) {
     using T = typename decltype(pair)::Dds;
     using P = typename decltype(pair)::Proto;
@@ -321,8 +333,8 @@ int RunRecord(const std::vector<std::string>& argv) {
   status_writer.WriteNow(status);
   node::service_manager::Ready(status.detail);
   if (!quiet)
-    std::fprintf(stderr, "record: domain %d, %zu topics -> %s\n",
-                 static_cast<int>(participant.domain_id()), topics.size(), out.c_str());
+    std::fprintf(stderr, "record: domain %d, %zu topics -> %s (periodic topics %s)\n",
+                 static_cast<int>(participant.domain_id()), topics.size(), out.c_str(), periodic.c_str());
 
   const int64_t start_ns = comm::RealtimeNow_ns();
   const int64_t end_ns =
