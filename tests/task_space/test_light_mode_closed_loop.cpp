@@ -9,7 +9,8 @@
 // combined trajectory, rig-file defaults: the default must track better than the old delay,
 // scored as the sum over the six axes of RMSE / (one fifth of the paper's Table 10). Measured
 // when written: 15.55 with the default, 17.07 with 2 samples (ratio 0.911). With the old
-// default both runs are the same configuration and the test fails.
+// default both runs are the same configuration and the test fails. With the feedback rate in
+// phi_dot of issue 14d on (defaults): 7.79 vs 8.72 (ratio 0.893).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -27,9 +28,12 @@ constexpr double kTable10Fifth[6] = {0.00169, 0.00241, 0.00059, 1.193 / 5.0 * 3.
                                      1.817 / 5.0 * 3.14159265358979323846 / 180.0,
                                      2.433 / 5.0 * 3.14159265358979323846 / 180.0};
 
-// Threshold of the velocity error's part above ~10 Hz (see below): measured values in the
-// test's comment, TO BE SET.
-constexpr double kLimitCycleThreshold_m_s = 0.1;
+// Thresholds of the velocity error's part above ~10 Hz (test at the end). Measured when
+// written (seed 1): ideal 0.114 m/s with the feedback rate (a 0.4), 0.194 without;
+// realistic 0.071 with, 0.185 without. On the ideal plant (nominal 0.88 kg modes, predicted
+// margin +5.6 deg) a smaller 20 Hz oscillation remains, hence the higher threshold there.
+constexpr double kLimitCycleThresholdIdeal_m_s = 0.15;
+constexpr double kLimitCycleThresholdRealistic_m_s = 0.12;
 
 double CombinedScore(double centre_lag_samples) {
   LockstepConfig config;  // struct defaults = deploy/rigs/hexataar_r.textproto
@@ -109,8 +113,9 @@ TEST(LightModeClosedLoop, FeedbackRateInPhiDotStopsTheLightModeLimitCycleOnCombi
     const Oscillation now = CombinedVelocityError(realistic, fraction);
     const Oscillation old = CombinedVelocityError(realistic, 0.0);
     ASSERT_TRUE(now.completed && old.completed);
-    EXPECT_LT(now.above_10hz_rms_m_s, kLimitCycleThreshold_m_s) << (realistic ? "realistic" : "ideal");
-    EXPECT_GT(old.above_10hz_rms_m_s, kLimitCycleThreshold_m_s) << (realistic ? "realistic" : "ideal");
+    const double threshold = realistic ? kLimitCycleThresholdRealistic_m_s : kLimitCycleThresholdIdeal_m_s;
+    EXPECT_LT(now.above_10hz_rms_m_s, threshold) << (realistic ? "realistic" : "ideal");
+    EXPECT_GT(old.above_10hz_rms_m_s, threshold) << (realistic ? "realistic" : "ideal");
   }
 }
 
