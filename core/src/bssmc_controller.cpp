@@ -19,6 +19,16 @@ DifferentiatorConfig DiffConfig(const BsSmcConfig& c) {
   return d;
 }
 
+LegObserverConfig ObserverConfig(const BsSmcConfig& c) {
+  LegObserverConfig o;
+  o.period_s = c.period_s;
+  o.mass_kg = c.params.observer_mass_kg;
+  o.length_sigma_m = c.params.observer_length_sigma_m;
+  o.force_sigma_n = c.params.observer_force_sigma_n;
+  o.disturbance_rate_m_s3 = c.params.observer_disturbance_rate_m_s3;
+  return o;
+}
+
 }  // namespace
 
 NominalLegModel NominalLegModel::FromRig(const RigParams& rig) {
@@ -51,13 +61,18 @@ BsSmcController::BsSmcController(const BsSmcConfig& config)
       orifice_(config.model.air, config.model.valve.discharge_coefficient,
                kDefaultLaminarPressureRatio),
       velocity_diff_(DiffConfig(config)),
-      force_diff_(DiffConfig(config)) {}
+      force_diff_(DiffConfig(config)),
+      observer_(ObserverConfig(config)) {}
 
 void BsSmcController::Reset() {
   velocity_diff_.Reset();
   force_diff_.Reset();
+  observer_.Reset();
   filtered_spool_m_ = 0.0;
   integral_force_n_ = 0.0;
+  feedback_primed_ = false;
+  previous_feedback_n_ = 0.0;
+  feedback_rate_n_s_ = 0.0;
 }
 
 double BsSmcController::SpoolFractionForArea(double area_fraction) const {
@@ -79,6 +94,13 @@ double BsSmcController::FrictionEstimateN(double velocity_m_s) const {
   const double magnitude = d.coulomb_n + (d.static_n - d.coulomb_n) * std::exp(-ratio * ratio);
   return config_.params.friction_estimate_scale * magnitude *
          std::tanh(velocity_m_s / config_.params.friction_smoothing_velocity_m_s);
+}
+
+double BsSmcController::FeedbackRateFraction(double desired_velocity_m_s) const {
+  const BsSmcParams& p = config_.params;
+  if (p.feedback_rate_full_speed_m_s <= 0.0) return p.feedback_rate_fraction;
+  const double r = desired_velocity_m_s / p.feedback_rate_full_speed_m_s;
+  return p.feedback_rate_fraction * (1.0 - std::exp(-r * r));
 }
 
 void BsSmcController::Update(const BsSmcInput& in, BsSmcOutput& out) {
@@ -134,7 +156,37 @@ void BsSmcController::Update(const BsSmcInput& in, BsSmcOutput& out) {
   // at 1 kHz and its derivative drove a 34 Hz limit cycle (docs/controller.md); beta z
   // corrects what the model part misses.
   const double phi_model = phi_hat + p.effective_mass_kg * p.lambda_1_s * edot_m_s;
-  const double phi_dot = force_diff_.Update(phi_model);  // eq 40
+  double phi_dot = force_diff_.Update(phi_model);  // eq 40
+  // Optional band-limited rate of the feedback part (issue 14d, deviation from eq 38):
+  // dirty derivative s / (tau s + 1) by backward Euler, y_k = (tau y_k-1 + u_k - u_k-1) / (tau + h).
+  // Observer variant: the rate is analytic, from the leg observer's acceleration and
+  // velocity, low-passed y_k = (tau y_k-1 + h r_k) / (tau + h).
+  if (p.feedback_rate_fraction > 0.0) {
+    const double tau = p.feedback_rate_time_constant_s;
+    const double h = config_.period_s;
+    if (p.feedback_rate_from_observer) {
+      observer_.Update(x_m, in.cap_pressure_pa * cyl.cap_area_m2 -
+                                in.rod_pressure_pa * cyl.annulus_area_m2 -
+                                m.air.atmosphere_pressure_pa * cyl.rod_area_m2);
+      const double eddot = observer_.acceleration_m_s2() - in.desired_acceleration_m_s2;
+      const double sdot = eddot + p.lambda_1_s * (observer_.velocity_m_s() - in.desired_velocity_m_s);
+      const double th = std::tanh(p.boundary_layer_xi_s_m * s_m_s);
+      const double rate = -p.effective_mass_kg * p.lambda_1_s * eddot -
+                          (p.switching_gain_n * p.boundary_layer_xi_s_m * (1.0 - th * th) +
+                           p.reaching_proportional_n_s_m) * sdot;
+      if (std::isfinite(rate)) feedback_rate_n_s_ = (tau * feedback_rate_n_s_ + h * rate) / (tau + h);
+    } else {
+      const double feedback_n = -p.effective_mass_kg * p.lambda_1_s * edot_m_s -
+                                p.switching_gain_n * std::tanh(p.boundary_layer_xi_s_m * s_m_s) -
+                                p.reaching_proportional_n_s_m * s_m_s;
+      if (feedback_primed_ && std::isfinite(feedback_n)) {
+        feedback_rate_n_s_ = (tau * feedback_rate_n_s_ + (feedback_n - previous_feedback_n_)) / (tau + h);
+      }
+      feedback_primed_ = std::isfinite(feedback_n);
+      previous_feedback_n_ = feedback_n;
+    }
+    phi_dot += FeedbackRateFraction(vd) * feedback_rate_n_s_;
+  }
 
   // Backstepping (eq 35, 38): drive z to zero at rate beta.
   const double p1 = in.cap_pressure_pa;
@@ -199,6 +251,7 @@ void BsSmcController::Update(const BsSmcInput& in, BsSmcOutput& out) {
   out.valve_v = std::isfinite(u_v) ? u_clamped : valve.null_voltage_v;
   out.sliding_surface_m_s = s_m_s;
   out.velocity_m_s = v_m_s;
+  out.feedback_rate_n_s = FeedbackRateFraction(vd) * feedback_rate_n_s_;
   out.desired_force_n = phi;
   out.desired_force_rate_n_s = phi_dot;
   out.force_error_n = z_n;

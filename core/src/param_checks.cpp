@@ -297,6 +297,16 @@ void CheckBsSmcParams(ParamChecker& c, const BsSmcParams& b, const std::string& 
   c.NonNegative(p + "integral_active_below_m_s", b.integral_active_below_m_s, "speed");
   c.Positive(p + "integral_leak_time_constant_s", b.integral_leak_time_constant_s, "time constant");
   c.NonNegative(p + "integral_deadband_m", b.integral_deadband_m, "deadband");
+  c.InClosed(p + "feedback_rate_fraction", b.feedback_rate_fraction, 0.0, 1.0,
+             "fraction of the feedback part's rate in phi_dot");
+  c.InClosed(p + "feedback_rate_time_constant_s", b.feedback_rate_time_constant_s, 0.0, 1.0,
+             "time constant");
+  c.NonNegative(p + "feedback_rate_full_speed_m_s", b.feedback_rate_full_speed_m_s, "speed");
+  c.Positive(p + "observer_mass_kg", b.observer_mass_kg, "observer mass");
+  c.Positive(p + "observer_length_sigma_m", b.observer_length_sigma_m, "position noise");
+  c.NonNegative(p + "observer_force_sigma_n", b.observer_force_sigma_n, "force noise");
+  c.Positive(p + "observer_disturbance_rate_m_s3", b.observer_disturbance_rate_m_s3,
+             "disturbance random walk");
 }
 
 void CheckPiParams(ParamChecker& c, const PiParams& p, const std::string& path) {

@@ -114,6 +114,9 @@ CASES = {
     "end_stop_too_stiff": replace(r"end_stop_stiffness_n_m:", "end_stop_stiffness_n_m: 1e9",
                                   "end stop stiffer than the plant's step resolves"),
     "heat_ratio_above_monatomic": replace(r"heat_ratio:", "heat_ratio: 1.8", "k above 5/3"),
+    "feedback_rate_fraction_above_one": replace(r"feedback_rate_fraction:", "feedback_rate_fraction: 1.5",
+                                                "more than the feedback part's whole rate in phi_dot"),
+    "observer_mass_zero": replace(r"observer_mass_kg:", "observer_mass_kg: 0", "observer without mass"),
 }
 
 

@@ -138,6 +138,14 @@ void ExpectLegControllerEq(const hexa::LegControllerParams& a, const hexa::LegCo
   EXPECT_EQ(a.bssmc.reaching_proportional_n_s_m, b.bssmc.reaching_proportional_n_s_m);
   EXPECT_EQ(a.bssmc.null_band_area_fraction, b.bssmc.null_band_area_fraction);
   EXPECT_EQ(a.bssmc.spool_filter_time_constant_s, b.bssmc.spool_filter_time_constant_s);
+  EXPECT_EQ(a.bssmc.feedback_rate_fraction, b.bssmc.feedback_rate_fraction);
+  EXPECT_EQ(a.bssmc.feedback_rate_time_constant_s, b.bssmc.feedback_rate_time_constant_s);
+  EXPECT_EQ(a.bssmc.feedback_rate_from_observer, b.bssmc.feedback_rate_from_observer);
+  EXPECT_EQ(a.bssmc.observer_mass_kg, b.bssmc.observer_mass_kg);
+  EXPECT_EQ(a.bssmc.observer_length_sigma_m, b.bssmc.observer_length_sigma_m);
+  EXPECT_EQ(a.bssmc.observer_force_sigma_n, b.bssmc.observer_force_sigma_n);
+  EXPECT_EQ(a.bssmc.observer_disturbance_rate_m_s3, b.bssmc.observer_disturbance_rate_m_s3);
+  EXPECT_EQ(a.bssmc.feedback_rate_full_speed_m_s, b.bssmc.feedback_rate_full_speed_m_s);
   EXPECT_EQ(a.bssmc.integral_gain_n_m, b.bssmc.integral_gain_n_m);
   EXPECT_EQ(a.bssmc.integral_limit_n, b.bssmc.integral_limit_n);
   EXPECT_EQ(a.bssmc.integral_active_below_m_s, b.bssmc.integral_active_below_m_s);
@@ -245,9 +253,9 @@ TEST(RigConfigReference, CoreStructsHaveNotGrownPastTheSchema) {
   EXPECT_EQ(sizeof(hexa::SensorNoiseParams), 6 * sizeof(double));  // 5 doubles + int (padded)
   EXPECT_EQ(sizeof(hexa::DisturbanceProfile), 9 * sizeof(double));  // bool (padded) + 8 doubles
   EXPECT_EQ(sizeof(hexa::DifferentiatorParams), 3 * sizeof(double));  // int (padded) + 2 doubles
-  EXPECT_EQ(sizeof(hexa::BsSmcParams), 17 * sizeof(double));
+  EXPECT_EQ(sizeof(hexa::BsSmcParams), 25 * sizeof(double));  // 24 doubles + feedback_rate_from_observer (padded)
   EXPECT_EQ(sizeof(hexa::PiParams), 6 * sizeof(double));
-  EXPECT_EQ(sizeof(hexa::LegControllerParams), 27 * sizeof(double));
+  EXPECT_EQ(sizeof(hexa::LegControllerParams), 35 * sizeof(double));
   EXPECT_EQ(sizeof(hexa::OuterLoopParams), 5 * sizeof(double));
   // + feedforward_enabled (padded), length_consistency_ticks (padded)
   EXPECT_EQ(sizeof(hexa::SupervisorParams), 20 * sizeof(double));
@@ -359,6 +367,11 @@ const std::vector<BrokenCase> kBrokenCases = {
      "<= 5.129139494e-05 s"},
     {"heat_ratio_above_monatomic", "air.heat_ratio", "heat capacity ratio of a gas", "1.8",
      "(1, 1.6667]"},
+    // Feedback rate in phi_dot and its leg observer (issue 14d).
+    {"feedback_rate_fraction_above_one", "leg_controller.bssmc.feedback_rate_fraction",
+     "fraction of the feedback part's rate in phi_dot is out of range", "1.5", "[0, 1]"},
+    {"observer_mass_zero", "leg_controller.bssmc.observer_mass_kg", "observer mass must be positive", "0",
+     "> 0"},
 };
 
 class BrokenFile : public ::testing::TestWithParam<BrokenCase> {};

@@ -25,6 +25,7 @@
 //        extend, above 7 V as retract; a 25 Hz full-swing limit cycle gives 50)
 // and once per run the same figures at IDLE (3 s of idle hold at home, after 0.5 s settling).
 #include <cmath>
+#include <complex>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -77,6 +78,15 @@ std::vector<Key> Keys() {
       {"ol_gate", [](auto& c, double v) { c.supervisor.outer_loop.gate_leg_speed_m_s = v; }},
       {"lead", [](auto& c, double v) { c.supervisor.setpoint_lead_s = v; }},
       {"ff", [](auto& c, double v) { c.supervisor.feedforward_enabled = v != 0.0; }},
+      // Feedback part's rate in phi_dot (issue 14d): fraction alpha and low-pass tau_fb.
+      {"fb_alpha", [](auto& c, double v) { c.leg_controller.bssmc.feedback_rate_fraction = v; }},
+      {"fb_tau", [](auto& c, double v) { c.leg_controller.bssmc.feedback_rate_time_constant_s = v; }},
+      {"fb_speed", [](auto& c, double v) { c.leg_controller.bssmc.feedback_rate_full_speed_m_s = v; }},
+      {"fb_obs", [](auto& c, double v) { c.leg_controller.bssmc.feedback_rate_from_observer = v != 0.0; }},
+      {"obs_m", [](auto& c, double v) { c.leg_controller.bssmc.observer_mass_kg = v; }},
+      {"obs_x", [](auto& c, double v) { c.leg_controller.bssmc.observer_length_sigma_m = v; }},
+      {"obs_f", [](auto& c, double v) { c.leg_controller.bssmc.observer_force_sigma_n = v; }},
+      {"obs_d", [](auto& c, double v) { c.leg_controller.bssmc.observer_disturbance_rate_m_s3 = v; }},
       {"kf", [](auto& c, double v) { c.leg_controller.pi.force_feedforward_v_n = v; }},
       // Plant-only changes (diagnosis, issue 14c): the valve spool's time constant (the
       // controllers do not use it), and the plant's friction model (0 LuGre, 1 static eq 3).
@@ -488,7 +498,8 @@ void Legs(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
 
 // Leg-space modes at home (issue 14c): eigenvalues of J^-T M_p J^-1 + m_leg I (eq 48; the
 // rig's platform mass and inertia, the pistons' moving mass), and for each the BS-SMC's
-// velocity loop c / (m s) * beta / (s + beta) * exp(-s tau): c = M lambda + K xi + k_s,
+// velocity loop c / (m s) * P(s) * exp(-s tau): c = M lambda + K xi + k_s, P(s) = beta / (s + beta)
+// or, with the feedback rate in phi_dot (issue 14d), ((a + beta tf) s + beta) / ((tf s + 1)(s + beta)),
 // tau = spool filter + valve spool + the velocity estimate's group delay. Crossover and phase
 // margin (docs/task_space.md "Per-leg lag and leg 2's overshoot on combined").
 void Modes(const hexa::LockstepConfig& config) {
@@ -514,18 +525,28 @@ void Modes(const hexa::LockstepConfig& config) {
   const double tau = b.spool_filter_time_constant_s + rig.valve.spool_time_constant_s +
                      hexa::GaussianDifferentiator(dc).GroupDelaySamples() * config.tick_s;
   const double beta = b.backstepping_beta_1_s;
-  std::printf("velocity gain c %.1f N s/m, beta %.1f 1/s, lag %.2f ms\n", c, beta, 1000 * tau);
+  // Path from the feedback force to the pressure force (eq 38 with the optional feedback
+  // rate in phi_dot, issue 14d): ((a + beta tf) s + beta) / ((tf s + 1)(s + beta)), a the
+  // fraction, tf its low-pass; a = 0: beta / (s + beta).
+  const double a = b.feedback_rate_fraction;
+  const double tf = b.feedback_rate_time_constant_s;
+  auto path = [&](double w) {
+    const std::complex<double> s(0.0, w);
+    return ((a + beta * tf) * s + beta) / ((tf * s + 1.0) * (s + beta));
+  };
+  std::printf("velocity gain c %.1f N s/m, beta %.1f 1/s, lag %.2f ms, feedback rate fraction %.2f, "
+              "low-pass %.2f ms\n", c, beta, 1000 * tau, a, 1000 * tf);
   std::printf("mode mass kg | task direction (x y z m, roll pitch yaw rad per unit) | crossover Hz | phase margin deg\n");
   for (int k = 0; k < 6; ++k) {
     const double m = eig.eigenvalues()[k];
-    auto gain = [&](double w) { return c / (m * w) * beta / std::hypot(w, beta); };
-    double lo = 1e-3, hi = 1e5;  // |L| falls monotonically with w
+    auto gain = [&](double w) { return c / (m * w) * std::abs(path(w)); };
+    double lo = 1e-3, hi = 1e5;  // |L| falls monotonically with w (|path| <= 1 + a / (beta tf))
     for (int it = 0; it < 200; ++it) {
       const double mid = std::sqrt(lo * hi);
       (gain(mid) > 1.0 ? lo : hi) = mid;
     }
     const double w = lo;
-    const double phase = -0.5 * 3.14159265358979323846 - std::atan(w / beta) - w * tau;
+    const double phase = -0.5 * 3.14159265358979323846 + std::arg(path(w)) - w * tau;
     const hexa::Vector6d dir = j_inv * eig.eigenvectors().col(k);
     std::printf("%8.3f | %7.3f %7.3f %7.3f %7.3f %7.3f %7.3f | %6.1f | %6.1f\n", m, dir[0], dir[1], dir[2],
                 dir[3], dir[4], dir[5], w / (2 * 3.14159265358979323846),

@@ -14,6 +14,7 @@
 #include <cstdio>
 
 #include "hexa/core/lockstep_simulation.hpp"
+#include "tracking_session.hpp"
 
 namespace hexa {
 namespace {
@@ -29,25 +30,11 @@ Activity RunCombined(std::uint64_t seed) {
   config.seed = seed;
   config.disturbance = MakeRealisticDisturbanceProfile();
   config.controller = LegControllerKind::kBsSmc;
-  LockstepSimulation sim(config);
-  if (sim.Tick() != PlantStatus::kOk) return {};
-  const StartRequest start = sim.supervisor().PreparePaperStart(PaperMotion::kCombined);
-  bool started = false, left_idle = false, primed = false;
-  SupervisorState state = SupervisorState::kIdle;
+  bool primed = false;
   LegArray<double> prev{};
   double sum_step = 0.0;
   long saturated = 0, samples = 0;
-  while (sim.time_s() < 60.0) {
-    const bool due = sim.supervisor_due();
-    const auto cmd = (due && !started) ? OperatorCommandKind::kStart : OperatorCommandKind::kNone;
-    if (sim.Tick(cmd, cmd == OperatorCommandKind::kStart ? &start : nullptr) != PlantStatus::kOk) break;
-    if (due) {
-      started = true;
-      state = sim.supervisor_output().state;
-      if (state != SupervisorState::kIdle) left_idle = true;
-      if (state == SupervisorState::kHold || (left_idle && state == SupervisorState::kIdle)) break;
-    }
-    if (state != SupervisorState::kTracking) continue;
+  const bool completed = RunTrackingWindow(config, PaperMotion::kCombined, [&](const LockstepSimulation& sim) {
     const LegArray<double>& u = sim.applied_valve_v();
     for (std::size_t i = 0; i < kNumLegs; ++i) {
       if (primed) {
@@ -58,9 +45,9 @@ Activity RunCombined(std::uint64_t seed) {
       prev[i] = u[i];
     }
     primed = true;
-  }
+  });
   Activity a;
-  a.completed = left_idle && state == SupervisorState::kIdle && samples > 0;
+  a.completed = completed && samples > 0;
   if (samples > 0) {
     a.mean_step_v = sum_step / static_cast<double>(samples);
     a.saturated_fraction = static_cast<double>(saturated) / static_cast<double>(samples);

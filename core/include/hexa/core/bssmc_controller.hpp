@@ -10,14 +10,17 @@
 //      retract) chosen by the sign of the required flow term, spool -> voltage (eq 42, 44),
 //   saturated to the valve's 0-10 V.
 //
-// phi_dot is the Gaussian derivative (eq 40) of phi, as in the paper. Velocity x_dot is the
-// Gaussian derivative of the measured length.
+// phi_dot is the Gaussian derivative (eq 40) of phi's model part, plus (issue 14d) a fraction of
+// the low-passed rate of its feedback part from the leg observer (leg_observer.hpp;
+// docs/controller.md "Feedback rate in phi_dot"). Velocity x_dot is the Gaussian derivative of
+// the measured length.
 //
 // Update neither throws nor allocates and never returns a non-finite voltage.
 #pragma once
 
 #include "hexa/core/control_params.hpp"
 #include "hexa/core/differentiator.hpp"
+#include "hexa/core/leg_observer.hpp"
 #include "hexa/core/pneumatics.hpp"
 #include "hexa/core/rig.hpp"
 
@@ -63,6 +66,7 @@ struct BsSmcOutput {
   double valve_v = 5.0;
   double sliding_surface_m_s = 0.0;   // S (eq 19)
   double velocity_m_s = 0.0;          // x_dot estimate (eq 40)
+  double feedback_rate_n_s = 0.0;     // the feedback part's rate added to phi_dot (times the fraction)
   double desired_force_n = 0.0;       // phi (eq 45)
   double desired_force_rate_n_s = 0.0;  // phi_dot (eq 40 applied to phi)
   double force_error_n = 0.0;         // z (eq 35)
@@ -90,13 +94,22 @@ class BsSmcController {
   // inverted, with the optional linear band near null). Clamped to [0, 1].
   double SpoolFractionForArea(double area_fraction) const;
 
+  // Fraction of the feedback part's rate in phi_dot at this desired speed (the speed schedule
+  // of BsSmcParams::feedback_rate_full_speed_m_s).
+  double FeedbackRateFraction(double desired_velocity_m_s) const;
+
  private:
   BsSmcConfig config_;
   OrificeFlowModel orifice_;  // eq 4, 5 with the plant's laminar band (pneumatics.hpp)
   GaussianDifferentiator velocity_diff_;
   GaussianDifferentiator force_diff_;
+  LegObserver observer_;  // used only with feedback_rate_from_observer
   double filtered_spool_m_ = 0.0;  // state of the spool command filter
   double integral_force_n_ = 0.0;  // k_i * integral(S dt), clamped
+  // Band-limited derivative of phi's feedback part (feedback_rate_* in BsSmcParams).
+  bool feedback_primed_ = false;
+  double previous_feedback_n_ = 0.0;
+  double feedback_rate_n_s_ = 0.0;
 };
 
 }  // namespace hexa

@@ -55,6 +55,31 @@ struct BsSmcParams {
   // action against static friction otherwise hunts around the setpoint (measured at idle:
   // +-0.7 mm at ~1 Hz without it).
   double integral_deadband_m = 0.0003;
+  // Rate of the feedback part of phi in phi_dot (issue 14d, NOT in the paper's form; a
+  // deviation from eq 38, docs/deviations.md). phi_dot = d/dt(model part) (eq 40) +
+  // feedback_rate_fraction * LP(d/dt(feedback part)), the feedback part being
+  // -M lambda e_dot - K tanh(xi S) - k_s S, LP a first-order low-pass of time constant
+  // feedback_rate_time_constant_s (a band-limited derivative). With it the feedback force
+  // reaches the pressure force through ((a + beta tau) s + beta) / ((tau s + 1)(s + beta))
+  // instead of beta / (s + beta): phase back on the velocity loop of the platform's light
+  // modes (docs/task_space.md "Feedback rate in phi_dot"). 0 = off (only beta z acts on it).
+  double feedback_rate_fraction = 0.4;          // docs/task_space.md "Feedback rate in phi_dot"
+  double feedback_rate_time_constant_s = 0.001;
+  // Speed schedule of the fraction: a_eff = a (1 - exp(-(v_d / this)^2)), v_d the desired
+  // piston speed; 0 = a at every speed. Below ~0.05 m/s the plant's own bristle damping keeps
+  // the light modes quiet (docs/task_space.md) and the rate term only slows the force build-up
+  // against static friction (an observer cannot tell a stuck piston from a lagging one).
+  double feedback_rate_full_speed_m_s = 0.1;
+  // Source of that rate. false: the backward difference of the feedback part computed from
+  // the eq 40 velocity (numerical, carries the potentiometer noise twice differentiated).
+  // true: analytic, d/dt(feedback) = -M lambda e_ddot - (K xi sech^2(xi S) + k_s) S_dot with
+  // e_ddot, e_dot from the leg observer (core/leg_observer.hpp: position + pneumatic force ->
+  // velocity, acceleration), whose model and noise figures are the observer_* fields.
+  bool feedback_rate_from_observer = true;
+  double observer_mass_kg = 1.0;   // between the light modes (0.88 kg) and the z mode (1.5 kg)
+  double observer_length_sigma_m = 0.05e-3;
+  double observer_force_sigma_n = 3.0;
+  double observer_disturbance_rate_m_s3 = 100.0;
 };
 
 // PI baseline (paper ref [11]) with anti-windup, plus two terms that are not in ref [11]
