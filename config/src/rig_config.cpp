@@ -260,6 +260,9 @@ SystemConfig Translate(const pb::RigFile& f) {
   c.leg_controller.bssmc.integral_active_below_m_s = b.integral_active_below_m_s();
   c.leg_controller.bssmc.integral_leak_time_constant_s = b.integral_leak_time_constant_s();
   c.leg_controller.bssmc.integral_deadband_m = b.integral_deadband_m();
+  c.leg_controller.bssmc.dither_amplitude_n = b.dither_amplitude_n();
+  c.leg_controller.bssmc.dither_frequency_hz = b.dither_frequency_hz();
+  c.leg_controller.bssmc.dither_gate_speed_m_s = b.dither_gate_speed_m_s();
   c.leg_controller.pi.proportional_v_m = lc.pi().proportional_v_m();
   c.leg_controller.pi.integral_v_m_s = lc.pi().integral_v_m_s();
   c.leg_controller.pi.integrator_limit_v = lc.pi().integrator_limit_v();
@@ -532,6 +535,9 @@ std::string ToTextFormat(const SystemConfig& c) {
   b->set_integral_active_below_m_s(c.leg_controller.bssmc.integral_active_below_m_s);
   b->set_integral_leak_time_constant_s(c.leg_controller.bssmc.integral_leak_time_constant_s);
   b->set_integral_deadband_m(c.leg_controller.bssmc.integral_deadband_m);
+  b->set_dither_amplitude_n(c.leg_controller.bssmc.dither_amplitude_n);
+  b->set_dither_frequency_hz(c.leg_controller.bssmc.dither_frequency_hz);
+  b->set_dither_gate_speed_m_s(c.leg_controller.bssmc.dither_gate_speed_m_s);
   lc->mutable_pi()->set_proportional_v_m(c.leg_controller.pi.proportional_v_m);
   lc->mutable_pi()->set_integral_v_m_s(c.leg_controller.pi.integral_v_m_s);
   lc->mutable_pi()->set_integrator_limit_v(c.leg_controller.pi.integrator_limit_v);

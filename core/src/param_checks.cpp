@@ -297,6 +297,12 @@ void CheckBsSmcParams(ParamChecker& c, const BsSmcParams& b, const std::string& 
   c.NonNegative(p + "integral_active_below_m_s", b.integral_active_below_m_s, "speed");
   c.Positive(p + "integral_leak_time_constant_s", b.integral_leak_time_constant_s, "time constant");
   c.NonNegative(p + "integral_deadband_m", b.integral_deadband_m, "deadband");
+  c.NonNegative(p + "dither_amplitude_n", b.dither_amplitude_n, "dither amplitude");
+  // At least 4 samples per cycle of the 1 ms control period.
+  c.Positive(p + "dither_frequency_hz", b.dither_frequency_hz, "dither frequency");
+  c.InClosed(p + "dither_frequency_hz", b.dither_frequency_hz, 0.0, 250.0,
+             "dither frequency (at least 4 samples per cycle of the 1 ms control period)");
+  c.Positive(p + "dither_gate_speed_m_s", b.dither_gate_speed_m_s, "dither gate speed");
 }
 
 void CheckPiParams(ParamChecker& c, const PiParams& p, const std::string& path) {

@@ -114,6 +114,8 @@ CASES = {
     "end_stop_too_stiff": replace(r"end_stop_stiffness_n_m:", "end_stop_stiffness_n_m: 1e9",
                                   "end stop stiffer than the plant's step resolves"),
     "heat_ratio_above_monatomic": replace(r"heat_ratio:", "heat_ratio: 1.8", "k above 5/3"),
+    "dither_too_fast": replace(r"dither_frequency_hz:", "dither_frequency_hz: 400",
+                               "2.5 control periods per dither cycle"),
 }
 
 

@@ -143,6 +143,9 @@ void ExpectLegControllerEq(const hexa::LegControllerParams& a, const hexa::LegCo
   EXPECT_EQ(a.bssmc.integral_active_below_m_s, b.bssmc.integral_active_below_m_s);
   EXPECT_EQ(a.bssmc.integral_leak_time_constant_s, b.bssmc.integral_leak_time_constant_s);
   EXPECT_EQ(a.bssmc.integral_deadband_m, b.bssmc.integral_deadband_m);
+  EXPECT_EQ(a.bssmc.dither_amplitude_n, b.bssmc.dither_amplitude_n);
+  EXPECT_EQ(a.bssmc.dither_frequency_hz, b.bssmc.dither_frequency_hz);
+  EXPECT_EQ(a.bssmc.dither_gate_speed_m_s, b.bssmc.dither_gate_speed_m_s);
   EXPECT_EQ(a.pi.proportional_v_m, b.pi.proportional_v_m);
   EXPECT_EQ(a.pi.integral_v_m_s, b.pi.integral_v_m_s);
   EXPECT_EQ(a.pi.integrator_limit_v, b.pi.integrator_limit_v);
@@ -359,6 +362,9 @@ const std::vector<BrokenCase> kBrokenCases = {
      "<= 5.129139494e-05 s"},
     {"heat_ratio_above_monatomic", "air.heat_ratio", "heat capacity ratio of a gas", "1.8",
      "(1, 1.6667]"},
+    // Issue 14 (pure z): the BS-SMC's dither needs at least 4 control periods per cycle.
+    {"dither_too_fast", "leg_controller.bssmc.dither_frequency_hz", "dither frequency", "400",
+     "[0, 250]"},
 };
 
 class BrokenFile : public ::testing::TestWithParam<BrokenCase> {};

@@ -55,6 +55,17 @@ struct BsSmcParams {
   // action against static friction otherwise hunts around the setpoint (measured at idle:
   // +-0.7 mm at ~1 Hz without it).
   double integral_deadband_m = 0.0003;
+  // Dither (NOT in the paper; issue 14, docs/controller.md "Dither"): a sinusoidal force
+  // A sin(2 pi f t) exp(-(v_d / v_g)^2) added to eq 14's friction estimate while the setpoint
+  // is slow. It is part of the model part of phi, so phi_dot carries its rate and the valve
+  // follows it: it keeps the spool off its null, where the chatter band's quadratic area law
+  // (null_band_area_fraction) makes the pressure loop's small-signal gain vanish, and it keeps
+  // the bristles of a slowly moving leg from sticking. t = the sensor tick x period_s (common
+  // to the six legs, lockstep and real time alike); f is rounded to period_s / N, N integer.
+  // 0 N = off (the paper's eq 14).
+  double dither_amplitude_n = 7.5;     // issue 14 grid (docs/task_space.md "Dither")
+  double dither_frequency_hz = 25.0;   // between the platform's presliding resonances (docs)
+  double dither_gate_speed_m_s = 0.05;  // |v_d| of the paper's 0.1 Hz motions: <= 0.045 m/s
 };
 
 // PI baseline (paper ref [11]) with anti-windup, plus two terms that are not in ref [11]
