@@ -248,9 +248,9 @@ TEST(RigConfigReference, CoreStructsHaveNotGrownPastTheSchema) {
   EXPECT_EQ(sizeof(hexa::SensorNoiseParams), 6 * sizeof(double));  // 5 doubles + int (padded)
   EXPECT_EQ(sizeof(hexa::DisturbanceProfile), 9 * sizeof(double));  // bool (padded) + 8 doubles
   EXPECT_EQ(sizeof(hexa::DifferentiatorParams), 3 * sizeof(double));  // int (padded) + 2 doubles
-  EXPECT_EQ(sizeof(hexa::BsSmcParams), 17 * sizeof(double));
+  EXPECT_EQ(sizeof(hexa::BsSmcParams), 20 * sizeof(double));
   EXPECT_EQ(sizeof(hexa::PiParams), 6 * sizeof(double));
-  EXPECT_EQ(sizeof(hexa::LegControllerParams), 27 * sizeof(double));
+  EXPECT_EQ(sizeof(hexa::LegControllerParams), 30 * sizeof(double));
   EXPECT_EQ(sizeof(hexa::OuterLoopParams), 5 * sizeof(double));
   // + feedforward_enabled (padded), length_consistency_ticks (padded)
   EXPECT_EQ(sizeof(hexa::SupervisorParams), 20 * sizeof(double));

@@ -2,14 +2,14 @@
 // z and the stick-slip of the slow motions"). On the paper's 0.1 Hz motions the legs stick and
 // slip: the plant's LuGre bristles hold a slowly moving piston while the force builds, the
 // pressure loop is slow near the valve's null (chatter band), and the leg breaks away and
-// overshoots. The dither (default 7.5 N at 25 Hz on the friction estimate while |v_d| is
-// below ~0.05 m/s) keeps the valve off its null and the bristles moving.
+// overshoots. The dither (default 7.5 N at 25 Hz on the friction estimate, gated off above
+// ~0.12 m/s of desired leg speed) keeps the valve off its null and the bristles moving.
 //
 // Realistic profile, seed 1, nominal calibration, lockstep in process, pure z (all six legs
 // move alike), rig-file defaults: the mean number of stick events per leg and second (a run of
 // >= 10 ms with |true piston speed| < 2 mm/s while |desired leg speed| > 5 mm/s) with the
 // default dither must be below half of that without it, and the z RMSE against ground truth
-// must not be worse. Measured when written: 1.28 vs 4.78 events per second, z 0.0880 vs
+// must not be worse. Measured when written: 0.40 vs 4.78 events per second, z 0.0631 vs
 // 0.0995 cm. With the old default (no dither) both runs are the same and the test fails.
 #include <gtest/gtest.h>
 

@@ -65,7 +65,7 @@ struct BsSmcParams {
   // 0 N = off (the paper's eq 14).
   double dither_amplitude_n = 7.5;     // issue 14 grid (docs/task_space.md "Dither")
   double dither_frequency_hz = 25.0;   // between the platform's presliding resonances (docs)
-  double dither_gate_speed_m_s = 0.05;  // |v_d| of the paper's 0.1 Hz motions: <= 0.045 m/s
+  double dither_gate_speed_m_s = 0.12;  // grid (docs); the 0.1 Hz motions: |v_d| <= 0.045 m/s
 };
 
 // PI baseline (paper ref [11]) with anti-windup, plus two terms that are not in ref [11]
