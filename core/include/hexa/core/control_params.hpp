@@ -61,11 +61,13 @@ struct BsSmcParams {
   // follows it: it keeps the spool off its null, where the chatter band's quadratic area law
   // (null_band_area_fraction) makes the pressure loop's small-signal gain vanish, and it keeps
   // the bristles of a slowly moving leg from sticking. t = the sensor tick x period_s (common
-  // to the six legs, lockstep and real time alike); f is rounded to period_s / N, N integer.
+  // to the six legs, lockstep and real time alike); f is rounded to 1 / (N period_s), N integer.
   // 0 N = off (the paper's eq 14).
-  double dither_amplitude_n = 7.5;     // issue 14 grid (docs/task_space.md "Dither")
-  double dither_frequency_hz = 25.0;   // between the platform's presliding resonances (docs)
-  double dither_gate_speed_m_s = 0.12;  // grid (docs); the 0.1 Hz motions: |v_d| <= 0.045 m/s
+  // Grid on the seven trajectories, seeds 1-3 (docs/task_space.md "Pure z and the stick-slip
+  // of the slow motions"); the paper's 0.1 Hz motions move the legs at |v_d| <= 0.045 m/s.
+  double dither_amplitude_n = 7.5;
+  double dither_frequency_hz = 25.0;
+  double dither_gate_speed_m_s = 0.12;
 };
 
 // PI baseline (paper ref [11]) with anti-windup, plus two terms that are not in ref [11]
