@@ -268,6 +268,9 @@ SystemConfig Translate(const pb::RigFile& f) {
   c.leg_controller.bssmc.observer_force_sigma_n = b.observer_force_sigma_n();
   c.leg_controller.bssmc.observer_disturbance_rate_m_s3 = b.observer_disturbance_rate_m_s3();
   c.leg_controller.bssmc.feedback_rate_full_speed_m_s = b.feedback_rate_full_speed_m_s();
+  c.leg_controller.bssmc.dither_amplitude_n = b.dither_amplitude_n();
+  c.leg_controller.bssmc.dither_frequency_hz = b.dither_frequency_hz();
+  c.leg_controller.bssmc.dither_gate_speed_m_s = b.dither_gate_speed_m_s();
   c.leg_controller.pi.proportional_v_m = lc.pi().proportional_v_m();
   c.leg_controller.pi.integral_v_m_s = lc.pi().integral_v_m_s();
   c.leg_controller.pi.integrator_limit_v = lc.pi().integrator_limit_v();
@@ -548,6 +551,9 @@ std::string ToTextFormat(const SystemConfig& c) {
   b->set_observer_force_sigma_n(c.leg_controller.bssmc.observer_force_sigma_n);
   b->set_observer_disturbance_rate_m_s3(c.leg_controller.bssmc.observer_disturbance_rate_m_s3);
   b->set_feedback_rate_full_speed_m_s(c.leg_controller.bssmc.feedback_rate_full_speed_m_s);
+  b->set_dither_amplitude_n(c.leg_controller.bssmc.dither_amplitude_n);
+  b->set_dither_frequency_hz(c.leg_controller.bssmc.dither_frequency_hz);
+  b->set_dither_gate_speed_m_s(c.leg_controller.bssmc.dither_gate_speed_m_s);
   lc->mutable_pi()->set_proportional_v_m(c.leg_controller.pi.proportional_v_m);
   lc->mutable_pi()->set_integral_v_m_s(c.leg_controller.pi.integral_v_m_s);
   lc->mutable_pi()->set_integrator_limit_v(c.leg_controller.pi.integrator_limit_v);

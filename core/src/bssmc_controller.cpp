@@ -1,5 +1,6 @@
 #include "hexa/core/bssmc_controller.hpp"
 
+#include "hexa/core/friction.hpp"
 #include "hexa/core/param_checks.hpp"
 #include "hexa/core/pneumatics.hpp"
 
@@ -11,6 +12,8 @@
 
 namespace hexa {
 namespace {
+
+constexpr double kPi = 3.14159265358979323846;
 
 DifferentiatorConfig DiffConfig(const BsSmcConfig& c) {
   DifferentiatorConfig d;
@@ -52,6 +55,10 @@ void BsSmcConfig::Validate() const {
   CheckFrictionParams(c, model.friction);
   CheckPolytropicSet(c, model.polytropic);
   c.Positive("period_s", period_s, "control period");
+  if (period_s > 0.0) {
+    c.InClosed("params.dither_frequency_hz", params.dither_frequency_hz, 0.0, 0.25 / period_s,
+               "dither frequency (at least 4 control periods per cycle)");
+  }
   ThrowIfIssues(issues, "BsSmcConfig");
   DiffConfig(*this).Validate();
 }
@@ -88,10 +95,8 @@ double BsSmcController::FrictionEstimateN(double velocity_m_s) const {
   // Eq 14's bracket: F_c sgn(v) + (F_s - F_c) exp(-(v/v_s)^2) sgn(v), per stroke direction
   // (Table 8 as magnitudes), sgn smoothed to tanh(v / v_eps) so that the estimate is
   // continuous through a reversal (docs/controller.md).
-  const FrictionParams& f = config_.model.friction;
-  const FrictionDirectionParams& d = velocity_m_s >= 0.0 ? f.extend : f.retract;
-  const double ratio = velocity_m_s / d.stribeck_velocity_m_s;
-  const double magnitude = d.coulomb_n + (d.static_n - d.coulomb_n) * std::exp(-ratio * ratio);
+  const double magnitude =
+      StribeckLevelN(FrictionForDirection(config_.model.friction, velocity_m_s), velocity_m_s);
   return config_.params.friction_estimate_scale * magnitude *
          std::tanh(velocity_m_s / config_.params.friction_smoothing_velocity_m_s);
 }
@@ -101,6 +106,17 @@ double BsSmcController::FeedbackRateFraction(double desired_velocity_m_s) const 
   if (p.feedback_rate_full_speed_m_s <= 0.0) return p.feedback_rate_fraction;
   const double r = desired_velocity_m_s / p.feedback_rate_full_speed_m_s;
   return p.feedback_rate_fraction * (1.0 - std::exp(-r * r));
+}
+
+double BsSmcController::DitherForceN(std::uint64_t tick, double desired_velocity_m_s) const {
+  const BsSmcParams& p = config_.params;
+  if (p.dither_amplitude_n <= 0.0) return 0.0;
+  // Period N ticks (f rounded to 1 / (N period_s), N >= 4 by validation); the phase from the
+  // tick modulo N stays exact however long the run.
+  const auto n = static_cast<std::uint64_t>(std::llround(1.0 / (p.dither_frequency_hz * config_.period_s)));
+  const double phase = 2.0 * kPi * static_cast<double>(tick % n) / static_cast<double>(n);
+  const double q = desired_velocity_m_s / p.dither_gate_speed_m_s;
+  return p.dither_amplitude_n * std::sin(phase) * std::exp(-q * q);
 }
 
 void BsSmcController::Update(const BsSmcInput& in, BsSmcOutput& out) {
@@ -123,16 +139,18 @@ void BsSmcController::Update(const BsSmcInput& in, BsSmcOutput& out) {
   const double vd = in.desired_velocity_m_s;
   const FrictionDirectionParams& fd = vd >= 0.0 ? m.friction.extend : m.friction.retract;
   const double b_hat = p.viscous_estimate_scale * fd.viscous_n_s_m;  // eq 21
+  // Friction estimate of eq 14 at v_d, plus the dither (not in the paper; control_params.hpp).
+  const double friction_n = FrictionEstimateN(vd) + DitherForceN(in.tick, vd);
   double phi_hat = 0.0;
   if (in.has_feedforward) {
     // Known load (issue 14): the platform inverse dynamics takes the place of M x_ddot_d and
     // of the lumped gravity constant F_g; M stays as the gain of the feedback M lambda e_dot.
     const double c_hat = -m.air.atmosphere_pressure_pa * cyl.rod_area_m2 - in.feedforward_force_n -
-                         FrictionEstimateN(vd);  // eq 14
+                         friction_n;  // eq 14
     phi_hat = -p.effective_mass_kg * p.lambda_1_s * edot_m_s + b_hat * vd - c_hat;  // eq 25
   } else {
     const double c_hat = -m.air.atmosphere_pressure_pa * cyl.rod_area_m2 - p.gravity_load_n -
-                         FrictionEstimateN(vd);  // eq 14
+                         friction_n;  // eq 14
     phi_hat = p.effective_mass_kg * (in.desired_acceleration_m_s2 - p.lambda_1_s * edot_m_s) +
               b_hat * vd - c_hat;  // eq 25
   }

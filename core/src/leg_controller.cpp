@@ -280,6 +280,7 @@ void LegController::Update(const LegControllerInput& raw, LegControllerOutput& o
     b.desired_acceleration_m_s2 = ad_m_s2;
     b.has_feedforward = in.feedforward_valid;
     b.feedforward_force_n = ff_n;
+    b.tick = in.tick;
     BsSmcOutput o;
     bssmc_.Update(b, o);
     out.valve_v = o.valve_v;

@@ -307,6 +307,12 @@ void CheckBsSmcParams(ParamChecker& c, const BsSmcParams& b, const std::string& 
   c.NonNegative(p + "observer_force_sigma_n", b.observer_force_sigma_n, "force noise");
   c.Positive(p + "observer_disturbance_rate_m_s3", b.observer_disturbance_rate_m_s3,
              "disturbance random walk");
+  c.NonNegative(p + "dither_amplitude_n", b.dither_amplitude_n, "dither amplitude");
+  // At least 4 samples per cycle of the 1 ms control period.
+  c.Positive(p + "dither_frequency_hz", b.dither_frequency_hz, "dither frequency");
+  c.InClosed(p + "dither_frequency_hz", b.dither_frequency_hz, 0.0, 250.0,
+             "dither frequency (at least 4 samples per cycle of the 1 ms control period)");
+  c.Positive(p + "dither_gate_speed_m_s", b.dither_gate_speed_m_s, "dither gate speed");
 }
 
 void CheckPiParams(ParamChecker& c, const PiParams& p, const std::string& path) {

@@ -117,6 +117,8 @@ CASES = {
     "feedback_rate_fraction_above_one": replace(r"feedback_rate_fraction:", "feedback_rate_fraction: 1.5",
                                                 "more than the feedback part's whole rate in phi_dot"),
     "observer_mass_zero": replace(r"observer_mass_kg:", "observer_mass_kg: 0", "observer without mass"),
+    "dither_too_fast": replace(r"dither_frequency_hz:", "dither_frequency_hz: 400",
+                               "2.5 control periods per dither cycle"),
 }
 
 

@@ -151,6 +151,9 @@ void ExpectLegControllerEq(const hexa::LegControllerParams& a, const hexa::LegCo
   EXPECT_EQ(a.bssmc.integral_active_below_m_s, b.bssmc.integral_active_below_m_s);
   EXPECT_EQ(a.bssmc.integral_leak_time_constant_s, b.bssmc.integral_leak_time_constant_s);
   EXPECT_EQ(a.bssmc.integral_deadband_m, b.bssmc.integral_deadband_m);
+  EXPECT_EQ(a.bssmc.dither_amplitude_n, b.bssmc.dither_amplitude_n);
+  EXPECT_EQ(a.bssmc.dither_frequency_hz, b.bssmc.dither_frequency_hz);
+  EXPECT_EQ(a.bssmc.dither_gate_speed_m_s, b.bssmc.dither_gate_speed_m_s);
   EXPECT_EQ(a.pi.proportional_v_m, b.pi.proportional_v_m);
   EXPECT_EQ(a.pi.integral_v_m_s, b.pi.integral_v_m_s);
   EXPECT_EQ(a.pi.integrator_limit_v, b.pi.integrator_limit_v);
@@ -253,9 +256,9 @@ TEST(RigConfigReference, CoreStructsHaveNotGrownPastTheSchema) {
   EXPECT_EQ(sizeof(hexa::SensorNoiseParams), 6 * sizeof(double));  // 5 doubles + int (padded)
   EXPECT_EQ(sizeof(hexa::DisturbanceProfile), 9 * sizeof(double));  // bool (padded) + 8 doubles
   EXPECT_EQ(sizeof(hexa::DifferentiatorParams), 3 * sizeof(double));  // int (padded) + 2 doubles
-  EXPECT_EQ(sizeof(hexa::BsSmcParams), 25 * sizeof(double));  // 24 doubles + feedback_rate_from_observer (padded)
+  EXPECT_EQ(sizeof(hexa::BsSmcParams), 28 * sizeof(double));  // 27 doubles + feedback_rate_from_observer (padded)
   EXPECT_EQ(sizeof(hexa::PiParams), 6 * sizeof(double));
-  EXPECT_EQ(sizeof(hexa::LegControllerParams), 35 * sizeof(double));
+  EXPECT_EQ(sizeof(hexa::LegControllerParams), 38 * sizeof(double));
   EXPECT_EQ(sizeof(hexa::OuterLoopParams), 5 * sizeof(double));
   // + feedforward_enabled (padded), length_consistency_ticks (padded)
   EXPECT_EQ(sizeof(hexa::SupervisorParams), 20 * sizeof(double));
@@ -372,6 +375,9 @@ const std::vector<BrokenCase> kBrokenCases = {
      "fraction of the feedback part's rate in phi_dot is out of range", "1.5", "[0, 1]"},
     {"observer_mass_zero", "leg_controller.bssmc.observer_mass_kg", "observer mass must be positive", "0",
      "> 0"},
+    // Issue 14 (pure z): the BS-SMC's dither needs at least 4 control periods per cycle.
+    {"dither_too_fast", "leg_controller.bssmc.dither_frequency_hz", "dither frequency", "400",
+     "[0, 250]"},
 };
 
 class BrokenFile : public ::testing::TestWithParam<BrokenCase> {};

@@ -10,9 +10,16 @@
 //        overshoot and what remains after removing the fitted harmonic (issue 14)
 //   platform_study legs <traj> [options]       per-leg lag against the trajectory of NOW (no
 //        setpoint lead) and the force budget along each leg (issue 14c, see Legs below)
+//   platform_study reversals <traj> [options]  where the moving axis' error is made (issue
+//        14, pure z): share of the squared error within +-N ms of the desired motion's
+//        reversals, bias / first harmonic / rest, the rest's share above 1 Hz, and per leg
+//        the stick-slip (see Reversals below)
 //   platform_study modes [options]             leg-space modal masses at home and the BS-SMC
 //        velocity loop's crossover and phase margin on each (issue 14c, see Modes below)
 //
+// --calibrate (needs --rig): first the kinematic calibration procedure in process, exactly as
+// hexa_sim --calibrate (tools/calibrate/calibrate_in_process.hpp), then the run with the
+// fitted calibration in the controllers: the acceptance figures' configuration.
 // Overrides (key=value) start from the struct defaults (= deploy/rigs/hexataar_r.textproto):
 // see kKeys below. Output: per trajectory the RMSE vs ground truth per axis (cm, deg), leg
 // RMSE (mm), fraction of ticks with a saturated valve, and the score: the mean over the
@@ -30,9 +37,11 @@
 #include <cstdlib>
 #include <cstring>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "calibrate_in_process.hpp"
 #include "hexa/config/rig_config.hpp"
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
@@ -88,9 +97,22 @@ std::vector<Key> Keys() {
       {"obs_f", [](auto& c, double v) { c.leg_controller.bssmc.observer_force_sigma_n = v; }},
       {"obs_d", [](auto& c, double v) { c.leg_controller.bssmc.observer_disturbance_rate_m_s3 = v; }},
       {"kf", [](auto& c, double v) { c.leg_controller.pi.force_feedforward_v_n = v; }},
+      // BS-SMC integral of S and friction compensation (issue 14, pure z).
+      {"ki_n", [](auto& c, double v) { c.leg_controller.bssmc.integral_gain_n_m = v; }},
+      {"iact", [](auto& c, double v) { c.leg_controller.bssmc.integral_active_below_m_s = v; }},
+      {"ileak", [](auto& c, double v) { c.leg_controller.bssmc.integral_leak_time_constant_s = v; }},
+      {"ilim_n", [](auto& c, double v) { c.leg_controller.bssmc.integral_limit_n = v; }},
+      {"idb", [](auto& c, double v) { c.leg_controller.bssmc.integral_deadband_m = v; }},
+      {"fsmooth", [](auto& c, double v) { c.leg_controller.bssmc.friction_smoothing_velocity_m_s = v; }},
+      // Dither: amplitude N (0 = off, the paper's eq 14), frequency Hz, gate speed m/s.
+      {"dither", [](auto& c, double v) { c.leg_controller.bssmc.dither_amplitude_n = v; }},
+      {"dither_hz", [](auto& c, double v) { c.leg_controller.bssmc.dither_frequency_hz = v; }},
+      {"dither_gate", [](auto& c, double v) { c.leg_controller.bssmc.dither_gate_speed_m_s = v; }},
       // Plant-only changes (diagnosis, issue 14c): the valve spool's time constant (the
       // controllers do not use it), and the plant's friction model (0 LuGre, 1 static eq 3).
       {"pspool", [](auto& c, double v) { c.rig.valve.spool_time_constant_s = v; }},
+      // The plant's LuGre bristle damping sigma1 (the controllers do not use it).
+      {"psigma1", [](auto& c, double v) { c.rig.friction.bristle_damping_n_s_m = v; }},
       {"pfric_static", [](auto& c, double v) {
          c.plant_friction_model = v != 0.0 ? hexa::LegModelParams::FrictionModel::kStatic
                                            : hexa::LegModelParams::FrictionModel::kLugre;
@@ -124,7 +146,7 @@ std::vector<int> MovingAxes(PaperMotion m) {
 
 int Usage() {
   std::fprintf(stderr,
-               "usage: platform_study [trace <traj>] [--rig file|default] [--seed N] [--controller bssmc|pi] [--ideal]\n"
+               "usage: platform_study [trace|fit|legs|reversals <traj> | modes] [--rig file|default] [--calibrate] [--seed N] [--controller bssmc|pi] [--ideal]\n"
                "       [--traj all|x,y,z,roll,pitch,yaw,combined] [--periods N] [key=value ...]\n"
                "keys:");
   for (const auto& k : Keys()) std::fprintf(stderr, " %s", k.name);
@@ -219,6 +241,37 @@ bool TickSession(hexa::LockstepSimulation& sim, const hexa::StartRequest& start,
   const bool starting = due && !started;
   return sim.Tick(starting ? hexa::OperatorCommandKind::kStart : hexa::OperatorCommandKind::kNone,
                   starting ? &start : nullptr) == hexa::PlantStatus::kOk;
+}
+
+// Runs a paper session on `sim` (already ticked once) and calls
+// fn(plant, t, desired sample, desired leg lengths, desired leg rates) on every 1 ms tick of
+// the tracking window: t from the start command, the trajectory at the CURRENT time (no
+// setpoint lead), leg lengths and rates through eq 46 on `geometry`.
+template <class Fn>
+void ForEachTrackingTick(hexa::LockstepSimulation& sim, const hexa::StartRequest& start,
+                         const hexa::GeometryParams& geometry, Fn&& fn) {
+  bool started = false, left_idle = false;
+  double t_start = 0.0;
+  hexa::SupervisorState state = hexa::SupervisorState::kIdle;
+  while (sim.time_s() < 600.0) {
+    const bool due = sim.supervisor_due();
+    if (due && !started) t_start = sim.time_s();
+    if (!TickSession(sim, start, due, started)) break;
+    if (due) {
+      started = true;
+      state = sim.supervisor_output().state;
+      if (state != hexa::SupervisorState::kIdle) left_idle = true;
+      if (state == hexa::SupervisorState::kHold || (left_idle && state == hexa::SupervisorState::kIdle)) break;
+    }
+    if (state != hexa::SupervisorState::kTracking) continue;
+    const auto& p = sim.plant_before_step();
+    const double tt = p.truth.time_s - t_start;
+    hexa::TrajectorySample d;
+    start.trajectory.Evaluate(tt, d);
+    hexa::LegArray<double> ld{}, vd{}, ad{};
+    hexa::LegKinematicsOf(geometry, d, ld, vd, ad);
+    fn(p, tt, d, ld, vd);
+  }
 }
 
 void Trace(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
@@ -411,26 +464,10 @@ void Legs(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
   enum { kLd, kL, kVd, kFf, kZ, kFric, kFb, kVhat, kVtrue, kN };
   std::vector<double> s[6][kN];
   long sat[6] = {}, band[6] = {}, n_ticks = 0;
-  bool started = false, left_idle = false;
-  double t_start = 0.0;
-  hexa::SupervisorState state = hexa::SupervisorState::kIdle;
-  while (sim.time_s() < 600.0) {
-    const bool due = sim.supervisor_due();
-    if (due && !started) t_start = sim.time_s();
-    if (!TickSession(sim, start, due, started)) break;
-    if (due) {
-      started = true;
-      state = sim.supervisor_output().state;
-      if (state != hexa::SupervisorState::kIdle) left_idle = true;
-      if (state == hexa::SupervisorState::kHold || (left_idle && state == hexa::SupervisorState::kIdle)) break;
-    }
-    if (state != hexa::SupervisorState::kTracking) continue;
-    const auto& p = sim.plant_before_step();
-    const double tt = p.truth.time_s - t_start;
-    hexa::TrajectorySample d;
-    start.trajectory.Evaluate(tt, d);
-    hexa::LegArray<double> ld{}, vd{}, ad{};
-    hexa::LegKinematicsOf(config.rig.geometry, d, ld, vd, ad);
+  ForEachTrackingTick(sim, start, config.rig.geometry, [&](const hexa::PlatformPlantOutput& p, double tt,
+                                                          const hexa::TrajectorySample&,
+                                                          const hexa::LegArray<double>& ld,
+                                                          const hexa::LegArray<double>& vd) {
     t.push_back(tt);
     ++n_ticks;
     for (std::size_t i = 0; i < 6; ++i) {
@@ -461,7 +498,7 @@ void Legs(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
       sat[i] += (u < 0.05 || u > 9.95) ? 1 : 0;
       band[i] += std::abs(u - 5.0) < 2.5 ? 1 : 0;
     }
-  }
+  });
   const auto wrap = WrapPi;
   auto rms = [](const std::vector<double>& v) {
     double q = 0.0;
@@ -492,6 +529,123 @@ void Legs(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
     force(kFric);
     force(kFb);
     std::printf(" | %5.2f | %5.1f\n", 100.0 * sat[i] / std::max(1L, n_ticks), 100.0 * band[i] / std::max(1L, n_ticks));
+  }
+}
+
+// Where the moving axis' error is made (issue 14, pure z). Every 1 ms tick of the tracking
+// window: e = true pose - desired pose of NOW (the trajectory at the current time, no setpoint
+// lead) on the moving axis of a pure motion. Printed: RMSE; bias (mean), the first harmonic
+// at the motion's frequency and the rest, and the rest's share above 1 Hz (a centred 1 s
+// moving average is the part below); the share of the squared error and the RMS within
+// +-N ms of the reversals of the desired motion (zero crossings of its rate). Per leg: the
+// share of ticks the piston is stuck (|true piston speed| < 2 mm/s while the desired leg speed
+// is above 5 mm/s), the number of stick events per second (a stuck run of >= 10 ms), and the
+// RMS of the piston speed error v_true - v_d. HEXA_REVERSALS_TRACE=<file> writes the per-tick
+// CSV (t, desired and true moving axis, each leg's desired and true speed) to that file.
+void Reversals(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
+  const auto axes = MovingAxes(motion);
+  if (axes.size() != 1) {
+    std::fprintf(stderr, "reversals: a pure motion (x y z roll pitch yaw)\n");
+    return;
+  }
+  const int ax = axes.front();
+  const double unit = ax < 3 ? 100.0 : 57.29577951308232;  // cm, deg
+  const double w = MotionOmega(motion);
+  hexa::LockstepSimulation sim(config);
+  sim.Tick();
+  const hexa::StartRequest start = sim.supervisor().PreparePaperStart(motion, periods);
+  const char* trace_path = std::getenv("HEXA_REVERSALS_TRACE");
+  std::FILE* trace = trace_path ? std::fopen(trace_path, "w") : nullptr;
+  if (trace) {
+    std::fprintf(trace, "t,desired,true");
+    for (int i = 1; i <= 6; ++i) std::fprintf(trace, ",vd%d,v%d", i, i);
+    std::fprintf(trace, "\n");
+  }
+  std::vector<double> t, e, rate;
+  std::vector<double> vd[6], vt[6];
+  ForEachTrackingTick(sim, start, config.rig.geometry, [&](const hexa::PlatformPlantOutput& p, double tt,
+                                                          const hexa::TrajectorySample& d,
+                                                          const hexa::LegArray<double>&,
+                                                          const hexa::LegArray<double>& vdl) {
+    const double truth = hexa::VectorFromPose(p.truth.pose)[ax];
+    t.push_back(tt);
+    e.push_back(unit * (truth - d.vector.q[ax]));
+    rate.push_back(d.vector.q_dot[ax]);
+    if (trace) std::fprintf(trace, "%.3f,%.7f,%.7f", tt, d.vector.q[ax], truth);
+    for (std::size_t i = 0; i < 6; ++i) {
+      vd[i].push_back(vdl[i]);
+      vt[i].push_back(p.truth.piston_velocity_m_s[i]);
+      if (trace) std::fprintf(trace, ",%.5f,%.5f", vdl[i], p.truth.piston_velocity_m_s[i]);
+    }
+    if (trace) std::fprintf(trace, "\n");
+  });
+  if (trace) std::fclose(trace);
+  const std::size_t n = t.size();
+  if (n < 2000) {
+    std::fprintf(stderr, "reversals: tracking window too short (%zu ticks)\n", n);
+    return;
+  }
+  auto rms = [](const std::vector<double>& v) {
+    double q = 0.0;
+    for (double x : v) q += x * x;
+    return std::sqrt(q / static_cast<double>(v.size()));
+  };
+  double mean = 0.0;
+  for (double x : e) mean += x / static_cast<double>(n);
+  const Harmonic h = FitHarmonic(t, e, w);
+  std::vector<double> rest(n), slow(n), fast(n);
+  for (std::size_t k = 0; k < n; ++k) rest[k] = e[k] - (h.c + h.a * std::sin(w * t[k]) + h.b * std::cos(w * t[k]));
+  const std::size_t half = 500;  // 1 s centred moving average at 1 ms
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t a = k > half ? k - half : 0, b = std::min(n - 1, k + half);
+    double sum = 0.0;
+    for (std::size_t j = a; j <= b; ++j) sum += rest[j];
+    slow[k] = sum / static_cast<double>(b - a + 1);
+    fast[k] = rest[k] - slow[k];
+  }
+  std::printf("moving axis RMSE %.4f %s: bias %+.4f, 1st harmonic %.4f (lag %.1f ms), rest %.4f of which "
+              "above 1 Hz %.4f\n",
+              rms(e), ax < 3 ? "cm" : "deg", mean, h.amplitude() / std::sqrt(2.0),
+              1000.0 * WrapPi(-h.phase_rad()) / w, rms(rest), rms(fast));
+  std::vector<double> rev;
+  for (std::size_t k = 1; k < n; ++k)
+    if ((rate[k] > 0.0) != (rate[k - 1] > 0.0)) rev.push_back(t[k]);
+  double sq_all = 0.0;
+  for (double x : e) sq_all += x * x;
+  std::printf("reversals at");
+  for (double r : rev) std::printf(" %.3f", r);
+  std::printf(" s\n+-N ms | time share | squared-error share | RMS inside | RMS outside\n");
+  for (double win_ms : {100.0, 250.0, 500.0, 1000.0}) {
+    double sq_in = 0.0;
+    long in = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      bool near = false;
+      for (double r : rev) near = near || std::abs(t[k] - r) <= win_ms / 1000.0;
+      if (near) {
+        sq_in += e[k] * e[k];
+        ++in;
+      }
+    }
+    const long out = static_cast<long>(n) - in;
+    std::printf("%6.0f | %.3f | %.3f | %.4f | %.4f\n", win_ms, static_cast<double>(in) / static_cast<double>(n),
+                sq_all > 0.0 ? sq_in / sq_all : 0.0, in ? std::sqrt(sq_in / static_cast<double>(in)) : 0.0,
+                out ? std::sqrt((sq_all - sq_in) / static_cast<double>(out)) : 0.0);
+  }
+  std::printf("leg | stuck share (|v| < 2 mm/s, |v_d| > 5 mm/s) | stick events /s | v error RMS m/s\n");
+  for (int i = 0; i < 6; ++i) {
+    long moving = 0, stuck = 0, events = 0, run = 0;
+    std::vector<double> ve(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      ve[k] = vt[i][k] - vd[i][k];
+      const bool mv = std::abs(vd[i][k]) > 0.005;
+      const bool st = mv && std::abs(vt[i][k]) < 0.002;
+      moving += mv ? 1 : 0;
+      stuck += st ? 1 : 0;
+      run = st ? run + 1 : 0;
+      events += run == 10 ? 1 : 0;
+    }
+    std::printf("%d | %.3f | %.2f | %.4f\n", i + 1, moving ? static_cast<double>(stuck) / static_cast<double>(moving) : 0.0,
+                static_cast<double>(events) / (t.back() - t.front()), rms(ve));
   }
 }
 
@@ -563,13 +717,14 @@ int main(int argc, char** argv) {
                                       PaperMotion::kRoll, PaperMotion::kPitch, PaperMotion::kYaw,
                                       PaperMotion::kCombined};
   int periods = 0;
-  bool trace = false, fit = false, legs = false, modes = false;
+  bool trace = false, fit = false, legs = false, modes = false, reversals = false, calibrate = false;
+  std::optional<hexa::config::SystemConfig> loaded_rig;
   const auto keys = Keys();
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
     auto next = [&]() -> std::string { return a + 1 < argc ? argv[++a] : std::string(); };
-    if (arg == "trace" || arg == "fit" || arg == "legs") {
-      (arg == "trace" ? trace : arg == "fit" ? fit : legs) = true;
+    if (arg == "trace" || arg == "fit" || arg == "legs" || arg == "reversals") {
+      (arg == "trace" ? trace : arg == "fit" ? fit : arg == "legs" ? legs : reversals) = true;
       PaperMotion m;
       if (!hexa::ParsePaperMotion(next(), m)) return Usage();
       motions = {m};
@@ -594,6 +749,9 @@ int main(int argc, char** argv) {
       config.leg_controller = loaded.config.leg_controller;
       config.supervisor = loaded.config.supervisor;
       config.disturbance = loaded.config.profiles.at(loaded.config.default_profile);
+      loaded_rig = loaded.config;
+    } else if (arg == "--calibrate") {
+      calibrate = true;
     } else if (arg == "--ideal") {
       config.disturbance = hexa::MakeIdealDisturbanceProfile();
     } else if (arg == "--periods") {
@@ -626,6 +784,23 @@ int main(int argc, char** argv) {
     } else {
       return Usage();
     }
+  }
+  if (calibrate) {
+    if (!loaded_rig) {
+      std::fprintf(stderr, "--calibrate needs --rig\n");
+      return 2;
+    }
+    // As hexa_sim --calibrate, with the key=value overrides of the leg controllers' parameters
+    // (the rig file's nominal leg model, every leg the same parameters: the default rig file has
+    // no per-leg overrides), then the fit.
+    config.controllers = hexa::ControllerModel::FromRig(loaded_rig->rig, config.leg_controller);
+    hexa::KinematicCalibration calibration;
+    if (!hexa::calib::CalibrateInProcess(config, calibration, stderr)) return 1;
+    hexa::calib::ApplyKinematicCalibration(calibration, config);
+  }
+  if (reversals) {
+    Reversals(config, motions.front(), periods);
+    return 0;
   }
   if (trace) {
     Trace(config, motions.front(), periods);

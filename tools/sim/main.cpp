@@ -7,98 +7,12 @@
 #include <string>
 #include <vector>
 
-#include "calibration_fit.hpp"
+#include "calibrate_in_process.hpp"
 #include "experiment.hpp"
 #include "hexa/config/rig_config.hpp"
 #include "hexa/core/calibration.hpp"
 #include "hexa/core/lockstep_simulation.hpp"
 #include "hexa/services/cli.hpp"
-
-namespace {
-
-// The calibration procedure in process (what hexa_session --trajectory calibration --tracker
-// + hexa_calibrate do over DDS): the supervisor visits the designed poses, the tracker
-// measures them, the still windows are averaged and fitted. Prints the fit against the
-// plant's truth; returns false when the run or the fit failed.
-bool CalibrateInProcess(const hexa::LockstepConfig& base, hexa::KinematicCalibration& out) {
-  hexa::LockstepConfig config = base;
-  config.tracker.enabled = true;
-  config.controllers.reset();  // nominal model: what is being calibrated
-  // The outer loop integrates estimation noise at rest (docs/task_space.md, idle wander:
-  // ~1 mm); the calibration wants the legs still where they are commanded.
-  config.supervisor.outer_loop.enabled = false;
-  hexa::LockstepSimulation sim(config);
-  sim.Tick();
-  const hexa::Supervisor& sup = sim.supervisor();
-  const hexa::StartRequest start = sup.PrepareStart(hexa::MakeCalibrationTrajectory(
-      config.rig, sup.rest_xyz_rpy(), sup.home_xyz_rpy(), sup.timing(),
-      hexa::CalibrationProcedureParams{}));
-  if (!start.feasibility.feasible) {
-    std::fprintf(stderr, "calibration trajectory rejected: %s\n", start.feasibility.message.c_str());
-    return false;
-  }
-  hexa::CalibrationSampleCollector collector(hexa::StillWindowParams{});
-  bool started = false, left_idle = false;
-  while (sim.time_s() < 1000.0) {
-    const bool due = sim.supervisor_due();
-    const auto cmd = due && !started ? hexa::OperatorCommandKind::kStart : hexa::OperatorCommandKind::kNone;
-    if (sim.Tick(cmd, cmd == hexa::OperatorCommandKind::kStart ? &start : nullptr) !=
-        hexa::PlantStatus::kOk) {
-      return false;
-    }
-    const std::uint64_t tick = sim.tick() - 1;
-    const auto& p = sim.plant_before_step();
-    for (std::size_t i = 0; i < hexa::kNumLegs; ++i) collector.AddReading(tick, i, p.legs[i].length_m);
-    if (p.tracker.fresh) collector.AddTracker(tick, p.tracker.p_BP_B_m, p.tracker.q_BP);
-    if (!due) continue;
-    started = true;
-    const auto& out = sim.supervisor_output();
-    collector.AddDesired(tick, out.desired_xyz_rpy, out.state != hexa::SupervisorState::kHold);
-    if (out.state == hexa::SupervisorState::kHold) {
-      std::fprintf(stderr, "calibration run went to HOLD: %s\n", out.fault_detail.data());
-      return false;
-    }
-    if (out.state != hexa::SupervisorState::kIdle) left_idle = true;
-    if (left_idle && out.state == hexa::SupervisorState::kIdle) break;
-  }
-  const auto samples = collector.Samples();
-  const double mid = config.rig.cylinder.mid_stroke_length_m;
-  const auto fit = hexa::calib::FitKinematicCalibration(
-      samples, mid, hexa::NominalCalibration(config.rig.geometry), hexa::calib::FitOptions{});
-  std::printf("calibration: %.1f s simulated, %zu samples (tracker measurements in still windows), %s\n", sim.time_s(), samples.size(),
-              fit.message.c_str());
-  if (!fit.ok) return false;
-  const hexa::PlatformPlant& plant = sim.plant();
-  double worst_joint = 0, worst_offset = 0, worst_gain = 0;
-  for (std::size_t i = 0; i < hexa::kNumLegs; ++i) {
-    hexa::LegCalibration truth;
-    truth.p_BA_B_m = plant.true_geometry().p_BA_B[i];
-    truth.p_PB_P_m = plant.true_geometry().p_PB_P[i];
-    truth.potentiometer_offset_m = plant.sensors().calibration().offset_m[i];
-    truth.potentiometer_gain = 1.0 + plant.sensors().calibration().gain_error[i];
-    const hexa::LegCalibrationVector e = fit.calibration[i].AsVector() - truth.AsVector();
-    double truth_rms = 0.0;  // how well the TRUE parameters explain the data (data quality)
-    for (const auto& smp : samples) {
-      const double r = smp.reading_m[i] - hexa::PredictedReadingM(truth, smp.pose, mid);
-      truth_rms += r * r;
-    }
-    truth_rms = std::sqrt(truth_rms / static_cast<double>(samples.size()));
-    std::printf("  leg %zu: data residual with the true parameters %.4f mm\n", i + 1, 1e3 * truth_rms);
-    worst_joint = std::max(worst_joint, e.head<6>().cwiseAbs().maxCoeff());
-    worst_offset = std::max(worst_offset, std::abs(e[6]));
-    worst_gain = std::max(worst_gain, std::abs(e[7]));
-    std::printf("  leg %zu residual vs truth: joints (mm)", i + 1);
-    for (int k = 0; k < 6; ++k) std::printf(" %+.4f", 1e3 * e[k]);
-    std::printf(" | offset %+.4f mm | gain %+.1f ppm | fit rms %.4f mm\n", 1e3 * e[6], 1e6 * e[7],
-                1e3 * fit.legs[i].final_rms_m);
-  }
-  std::printf("  worst residual: joint %.4f mm, offset %.4f mm, gain %.1f ppm\n", 1e3 * worst_joint,
-              1e3 * worst_offset, 1e6 * worst_gain);
-  out = fit.calibration;
-  return true;
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   hexa::cli::Parser cli("hexa_sim",
@@ -200,15 +114,8 @@ int main(int argc, char** argv) {
   bool calibrated = false;
   if (cli.Flag("calibrate")) {
     hexa::KinematicCalibration calibration;
-    if (!CalibrateInProcess(config, calibration)) return 1;
-    // The fitted calibration reaches the controllers as a rig overlay would (ControllerModel).
-    hexa::ControllerModel model = *config.controllers;
-    model.geometry = hexa::CalibratedGeometry(model.geometry, calibration);
-    for (std::size_t i = 0; i < hexa::kNumLegs; ++i) {
-      model.legs[i].potentiometer.offset_m = calibration[i].potentiometer_offset_m;
-      model.legs[i].potentiometer.gain = calibration[i].potentiometer_gain;
-    }
-    config.controllers = model;
+    if (!hexa::calib::CalibrateInProcess(config, calibration, stdout)) return 1;
+    hexa::calib::ApplyKinematicCalibration(calibration, config);
     calibrated = true;
   }
 

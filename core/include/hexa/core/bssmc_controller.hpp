@@ -18,6 +18,8 @@
 // Update neither throws nor allocates and never returns a non-finite voltage.
 #pragma once
 
+#include <cstdint>
+
 #include "hexa/core/control_params.hpp"
 #include "hexa/core/differentiator.hpp"
 #include "hexa/core/leg_observer.hpp"
@@ -60,6 +62,9 @@ struct BsSmcInput {
   // the feedback term M lambda e_dot).
   bool has_feedforward = false;
   double feedforward_force_n = 0.0;
+  // Sensor tick of this period (LegControllerInput::tick): the dither's time base, the same
+  // for the six legs.
+  std::uint64_t tick = 0;
 };
 
 struct BsSmcOutput {
@@ -90,6 +95,8 @@ class BsSmcController {
   // Static friction estimate of eq 14 (without the viscous part), signed: opposes v.
   double FrictionEstimateN(double velocity_m_s) const;
 
+  // Dither force (params.dither_*) at sensor tick `tick` for desired velocity v_d; 0 when off.
+  double DitherForceN(std::uint64_t tick, double desired_velocity_m_s) const;
   // Spool fraction X / X_max for a required orifice-area fraction A_v / A_max (eq 43
   // inverted, with the optional linear band near null). Clamped to [0, 1].
   double SpoolFractionForArea(double area_fraction) const;

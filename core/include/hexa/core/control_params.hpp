@@ -80,6 +80,19 @@ struct BsSmcParams {
   double observer_length_sigma_m = 0.05e-3;
   double observer_force_sigma_n = 3.0;
   double observer_disturbance_rate_m_s3 = 100.0;
+  // Dither (NOT in the paper; issue 14, docs/controller.md "Dither"): a sinusoidal force
+  // A sin(2 pi f t) exp(-(v_d / v_g)^2) added to eq 14's friction estimate while the setpoint
+  // is slow. It is part of the model part of phi, so phi_dot carries its rate and the valve
+  // follows it: it keeps the spool off its null, where the chatter band's quadratic area law
+  // (null_band_area_fraction) makes the pressure loop's small-signal gain vanish, and it keeps
+  // the bristles of a slowly moving leg from sticking. t = the sensor tick x period_s (common
+  // to the six legs, lockstep and real time alike); f is rounded to 1 / (N period_s), N integer.
+  // 0 N = off (the paper's eq 14).
+  // Grid on the seven trajectories, seeds 1-3 (docs/task_space.md "Pure z and the stick-slip
+  // of the slow motions"); the paper's 0.1 Hz motions move the legs at |v_d| <= 0.045 m/s.
+  double dither_amplitude_n = 7.5;
+  double dither_frequency_hz = 25.0;
+  double dither_gate_speed_m_s = 0.12;
 };
 
 // PI baseline (paper ref [11]) with anti-windup, plus two terms that are not in ref [11]
