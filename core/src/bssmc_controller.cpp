@@ -1,4 +1,5 @@
 #include "hexa/core/bssmc_controller.hpp"
+#include "hexa/core/math_constants.hpp"
 
 #include "hexa/core/friction.hpp"
 #include "hexa/core/param_checks.hpp"
@@ -12,8 +13,6 @@
 
 namespace hexa {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 DifferentiatorConfig DiffConfig(const BsSmcConfig& c) {
   DifferentiatorConfig d;

@@ -1,4 +1,5 @@
 #include "hexa/core/excitation.hpp"
+#include "hexa/core/math_constants.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,8 +10,6 @@
 
 namespace hexa {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 void Require(bool ok, const char* field, double value, const char* limit) {
   if (ok) return;

@@ -1,5 +1,6 @@
 // Limits derived from physics (see physical_limits.hpp, docs/config.md "Physical limits").
 #include "hexa/core/physical_limits.hpp"
+#include "hexa/core/math_constants.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
@@ -15,7 +16,6 @@
 namespace hexa {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kUniversalGasConstant_j_mol_k = 8.314462618;
 // Second virial coefficient of air near room temperature (about -8 cm3/mol at 290-300 K):
 // Z = pV/(nRT) = 1 + B p / (R_u T) to first order.

@@ -1,4 +1,5 @@
 #include "hexa/core/platform_plant.hpp"
+#include "hexa/core/math_constants.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -15,8 +16,6 @@
 
 namespace hexa {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // State layout: p (0..2), q wxyz (3..6), v (7..9), w (10..12), then per leg
 // P1, P2, spool, bristle (13 + 4 i ...).

@@ -1,11 +1,10 @@
 #include "hexa/core/rig.hpp"
+#include "hexa/core/math_constants.hpp"
 
 #include <cmath>
 
 namespace hexa {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 Eigen::Vector3d OnCircle(double radius_m, double azimuth_deg) {
   const double a = azimuth_deg * kPi / 180.0;

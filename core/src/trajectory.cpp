@@ -1,6 +1,7 @@
 // Trajectories of the task-space supervisor: blend, tracking, stop (see trajectory.hpp and
 // docs/task_space.md for the formulas).
 #include "hexa/core/trajectory.hpp"
+#include "hexa/core/math_constants.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,8 +10,6 @@
 
 namespace hexa {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // Minimum-jerk ramp sigma(s) = 10 s^3 - 15 s^4 + 6 s^5 on [0, 1] and its derivatives in s,
 // plus W(s) = integral_0^s sigma = 2.5 s^4 - 3 s^5 + s^6 (the warped reference time).
