@@ -262,7 +262,18 @@ TEST_F(SecuredFiveHosts, RogueParticipantsReachNothing) {
   std::ofstream(dir + "/rogue_foreign.xml") << foreign;
 
   ASSERT_TRUE(s->StartAll(err)) << err;
-  // The rogues start while the processes discover each other and keep writing into the run.
+  // The rogues start once the plant has found its peers and write into the run. Not before:
+  // the plant's unicast discovery lists only the deployment's hosts, so a rogue that starts
+  // first is found only at its next periodic SPDP (about 8 s later, Cyclone's default
+  // interval for a 10 s lease), after it has stopped writing.
+  {
+    const auto ready_by = std::chrono::steady_clock::now() + 120s;
+    while (Slurp(s->units().LogOf("hexa-plant")).find("all peers ready") == std::string::npos) {
+      ASSERT_LT(std::chrono::steady_clock::now(), ready_by) << "the plant never found its peers; logs in " << dir;
+      const auto ev = s->Wait(100ms);
+      ASSERT_NE(ev.kind, ProcessGroup::Event::kChildExited) << ev.exit.Describe() << "; logs in " << dir;
+    }
+  }
   const std::string domain = std::to_string(o.domain);
   const std::vector<std::string> rogue{HEXA_ROGUE, "--domain", domain, "--duration", "4", "--match-wait", "5"};
   auto start_rogue = [&](const std::string& name, const std::string& config, std::vector<std::string> extra) {
