@@ -11,6 +11,7 @@ Usage: /usr/bin/python3 deploy/paper_tables.py [--build build] [--seed 1] [--out
 import argparse
 import json
 import os
+import re
 import statistics
 import subprocess
 import sys
@@ -34,7 +35,12 @@ def run(build, out_dir, traj, controller, profile, seed, mode, domain, reuse=Fal
     if reuse and os.path.exists(report_path):
         with open(report_path) as f:
             report = json.load(f)
-        return {"exit": 0 if report["session"].get("completed") == "yes" else 1,
+        code = 0 if report["session"].get("completed") == "yes" else 1
+        log = os.path.join(d, "session.log")
+        if code and os.path.exists(log):  # the session's own exit status, as first run
+            m = re.findall(r"did NOT complete \(exit (\d+)\)", open(log).read())
+            code = int(m[-1]) if m else code
+        return {"exit": code,
                 "report": report, "dir": d, "cmd": " ".join(cmd)}
     t0 = time.time()
     p = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -220,8 +226,9 @@ def main():
         L.append("### Real time against lockstep (combined, BS-SMC)\n")
         done = sum(1 for r in rts if r["exit"] == 0)
         L.append(f"{len(rts)} real-time sessions in a row, every one listed; {done} of {len(rts)} "
-                 "completed. A session that went to HOLD has no tracking window, hence no RMSE "
-                 "(its supervisor and plant logs in OUT say why).\n")
+                 "completed. A session that went to HOLD has no tracking window, hence no RMSE; one that "
+                 "went to HOLD later shows its RMSE up to the HOLD, marked (HOLD) (the supervisor "
+                 "and plant logs in OUT say why).\n")
         L.append("| mode | exit | X cm | Y cm | Z cm | rot X | rot Y | rot Z | latency median / "
                  "p99 / max us | deadline misses |")
         L.append("|---|---|---|---|---|---|---|---|---|---|")
@@ -232,7 +239,7 @@ def main():
                 continue
             lat = rep["control_round_trip_latency_s"]
             dm = ", ".join(f"{k}: {v}" for k, v in rep["deadline_misses"].items())
-            L.append(f"| {name} | {r['exit']} | " + " | ".join(fmt(value(r, i)) for i in range(6)) +
+            L.append(f"| {name} | {r['exit']} | " + " | ".join(fmt(value(r, i), r["exit"] == 0) for i in range(6)) +
                      f" | {lat['median'] * 1e6:.0f} / {lat['p99'] * 1e6:.0f} / "
                      f"{lat['max'] * 1e6:.0f} | {dm} |")
         L.append("")
