@@ -37,6 +37,9 @@ struct StatusSnapshot {
   // Reader side.
   uint32_t requested_deadline_missed_total = 0;
   uint32_t requested_incompatible_qos_total = 0;
+  // The policy that made the latest incompatible writer not match (dds_qos_policy_id_t;
+  // QosPolicyName in qos.hpp names it), 0 = none yet.
+  uint32_t requested_incompatible_qos_last_policy = 0;
   uint32_t sample_lost_total = 0;
   uint32_t sample_rejected_total = 0;
   uint32_t liveliness_alive_count = 0;      // writers currently alive
@@ -115,6 +118,7 @@ class StatusCounters {
 
   std::atomic<uint32_t> requested_deadline_missed_total_{0};
   std::atomic<uint32_t> requested_incompatible_qos_total_{0};
+  std::atomic<uint32_t> requested_incompatible_qos_last_policy_{0};
   std::atomic<uint32_t> sample_lost_total_{0};
   std::atomic<uint32_t> sample_rejected_total_{0};
   std::atomic<uint32_t> liveliness_alive_count_{0};
