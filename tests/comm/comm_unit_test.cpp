@@ -315,6 +315,14 @@ TEST_F(CommUnit, ReliableReaderOfARealTimePeriodicWriterReportsReliability) {
   EXPECT_EQ(reliable.Take(), 0);
   EXPECT_EQ(reliable.Snapshot().requested_incompatible_qos_total, 1u);
   EXPECT_EQ(QosPolicyName(reliable.Snapshot().requested_incompatible_qos_last_policy), "RELIABILITY");
+  EXPECT_EQ(reliable.Snapshot().requested_incompatible_qos_not_partition_total, 1u);
+  // A partition mismatch (by design: the legs' partitions) is incompatible QoS to Cyclone too,
+  // but not counted as "not partition".
+  Reader<hexa_msg_GroundTruth> other_partition(p, topic, EndpointRole::kControlReader, rt, 16, {"hexa.elsewhere"});
+  EXPECT_EQ(other_partition.Take(), 0);
+  EXPECT_GE(other_partition.Snapshot().requested_incompatible_qos_total, 1u);
+  EXPECT_EQ(QosPolicyName(other_partition.Snapshot().requested_incompatible_qos_last_policy), "PARTITION");
+  EXPECT_EQ(other_partition.Snapshot().requested_incompatible_qos_not_partition_total, 0u);
   EXPECT_EQ(best_effort.Take(), 1);
   EXPECT_EQ(control.Take(), 1);
   EXPECT_EQ(writer.Snapshot().publication_matched_current, 2u);

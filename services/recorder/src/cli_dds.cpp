@@ -211,9 +211,10 @@ dds_domainid_t ParseDomain(const Args& a) {
 // samples are not recorded. The usual cause: a real-time session's periodic writers offer
 // BEST_EFFORT and the recorder was started without --periodic-reliability best-effort.
 static void ReportIncompatibleWriters(TopicRecorderBase& t, const std::string& periodic_reliability) {
+  // Partition mismatches are by design (the leg partitions' writers; status.hpp) and left out.
   const comm::StatusSnapshot st = t.Status();
-  if (st.requested_incompatible_qos_total <= t.incompatible_reported) return;
-  t.incompatible_reported = st.requested_incompatible_qos_total;
+  if (st.requested_incompatible_qos_not_partition_total <= t.incompatible_reported) return;
+  t.incompatible_reported = st.requested_incompatible_qos_not_partition_total;
   const std::string policy = comm::QosPolicyName(st.requested_incompatible_qos_last_policy);
   std::string hint;
   if (policy == "RELIABILITY" && t.periodic && periodic_reliability == "reliable")
@@ -222,7 +223,7 @@ static void ReportIncompatibleWriters(TopicRecorderBase& t, const std::string& p
   std::fprintf(stderr,
                "record: error: %s: %u writer(s) so far do not match this recorder (incompatible QoS, "
                "last policy %s): their samples are NOT recorded.%s\n",
-               t.name.c_str(), st.requested_incompatible_qos_total, policy.c_str(), hint.c_str());
+               t.name.c_str(), st.requested_incompatible_qos_not_partition_total, policy.c_str(), hint.c_str());
 }
 
 int RunRecord(const std::vector<std::string>& argv) {
@@ -408,6 +409,7 @@ int RunRecord(const std::vector<std::string>& argv) {
               " bytes (chunk records %" PRIu64 " bytes, stored %" PRIu64 ", compression %s)\n",
               elapsed_s, out.c_str(), ws.messages, ws.chunks, ws.bytes, ws.chunk_records_bytes,
               ws.chunk_stored_bytes, cfg.compression == McapCompression::kZstd ? "zstd" : "none");
+  // incompatible: writers refused for their QoS, partition mismatches (by design) left out.
   std::printf("%-22s %10s %10s %8s %12s %12s %12s\n", "topic", "received", "missing", "gaps",
               "dds_lost", "dds_rejected", "incompatible");
   LossEventCounter events;
@@ -424,8 +426,9 @@ int RunRecord(const std::vector<std::string>& argv) {
     std::printf("%-22s %10" PRIu64 " %10s %8s %12u %12u %12u\n", t->name.c_str(), t->received,
                 t->periodic ? std::to_string(missing).c_str() : "-",
                 t->periodic ? std::to_string(gaps).c_str() : "-", st.sample_lost_total,
-                st.sample_rejected_total, st.requested_incompatible_qos_total);
-    if (t->periodic && t->received == 0 && st.requested_incompatible_qos_total > 0) unmatched.push_back(t->name);
+                st.sample_rejected_total, st.requested_incompatible_qos_not_partition_total);
+    if (t->periodic && t->received == 0 && st.requested_incompatible_qos_not_partition_total > 0)
+      unmatched.push_back(t->name);
   }
   // One event per producer and tick with a loss: comparable with the datagrams a link
   // dropped (one batch of a producer per tick), where a sample count is not.
