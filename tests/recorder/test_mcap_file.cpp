@@ -244,9 +244,18 @@ TEST(RecordingInfo, CountsAndLossOfTheSyntheticRecordingAreExact) {
   // 1 kHz topics: (n - 1) / span. GroundTruth has 1000 samples 999 ms apart.
   EXPECT_NEAR(by_topic["hexa_GroundTruth"]->rate_hz, 1000.0, 1e-9);
   EXPECT_EQ(by_topic["hexa_LegSensors"]->metadata.at(kMetaPeriodS), "0.001");
+  // Loss events: the plant's ticks 50 (ImuSample) and 100-104 (leg 3's LegSensors), leg 2's
+  // ValveCommand of tick 500.
+  EXPECT_EQ(info.loss_events.events.at("plant"), 6u);
+  EXPECT_EQ(info.loss_events.events.at("leg 2"), 1u);
+  EXPECT_EQ(info.loss_events.total_events, 7u);
+  EXPECT_EQ(info.loss_events.total_samples, 7u);
   const std::string text = FormatInfo(info);
   EXPECT_NE(text.find("hexa_LegSensors"), std::string::npos);
   EXPECT_NE(text.find("leg 3"), std::string::npos);
+  EXPECT_NE(text.find("loss events (missing samples per producer and tick, one per lost batch): 7 for 7 samples"),
+            std::string::npos)
+      << text;
 }
 
 // The late ticks of the report come from the plant's GroundTruth.command_age_ticks, per leg.
