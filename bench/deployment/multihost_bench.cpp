@@ -63,6 +63,7 @@ struct Row {
   std::uint64_t missing = 0;
   std::size_t faults = 0;
   long long dropped = -1;  // nftables counter
+  long long input_packets = -1;  // packets the loss rule saw (dropped or not)
   double cpu_s = 0;        // CPU time of all control processes and the recorder
   // From the plant's READY to the supervisor's end (the loop without start-up and its
   // security handshakes): per role (plant, supervisor, legs, standbys, recorder) and per
@@ -81,6 +82,8 @@ struct Row {
   // Recorder's own count: samples of the periodic topics that reached it / that Cyclone
   // counted lost (best-effort readers: sequence-number gaps), from its summary.
   std::string recorder_summary;
+  // The recorder's loss events (producer x tick with samples missing: one per lost batch).
+  std::string recorder_loss_events;
   // UDP datagrams the recorder host's kernel dropped (receive buffer full): loss on the host,
   // not on its link.
   long long recorder_rcvbuf_errors = -1;
@@ -276,6 +279,9 @@ Row RunSession(const std::string& scenario, LabSessionOptions o,
                                              (ready == std::chrono::steady_clock::time_point{} ? t0 : ready))
                    .count();
   s->StopAll();
+  // Once more with every process stopped: the counters of a loss rule then hold everything
+  // dropped while the session's processes ran, not only until the last 0.5 s poll.
+  if (during) during(*s, 1e9);
   FromRecording(*s, row);
   row.work_dir = o.work_dir;
   row.note += " logs " + o.work_dir + ";";
@@ -291,6 +297,7 @@ Row RunSession(const std::string& scenario, LabSessionOptions o,
                    " missing " + rm[2].str() + " dds_lost " + rm[4].str();
     }
     row.recorder_summary = summary;
+    if (std::regex_search(rec_log, rm, std::regex("loss events [^:]*: ([^\n]*)"))) row.recorder_loss_events = rm[1].str();
   }
   const std::string plant = Slurp(s->units().LogOf("hexa-plant"));
   std::smatch m;
@@ -327,6 +334,11 @@ void Print(const Row& r) {
   if (!r.recorder_summary.empty())
     std::printf("    recorder: %s; its host's kernel dropped %lld datagrams (receive buffer full)\n",
                 r.recorder_summary.c_str(), r.recorder_rcvbuf_errors);
+  if (!r.recorder_loss_events.empty())
+    std::printf("    recorder loss events (producer x tick, one per lost batch): %s\n", r.recorder_loss_events.c_str());
+  if (r.dropped >= 0)
+    std::printf("    nftables: %lld of %lld packets dropped on the lossy host's input (%.2f %%)\n", r.dropped,
+                r.input_packets, r.input_packets > 0 ? 100.0 * static_cast<double>(r.dropped) / static_cast<double>(r.input_packets) : 0.0);
   // One machine-readable line per run (bench/deployment/cpu_utilisation.py).
   std::printf("RUN {\"scenario\": \"%s\", \"completed\": %s, \"ready_ns\": %lld, \"end_ns\": %lld, "
               "\"first_fault_ns\": %lld, \"first_fault\": \"%s\", \"dropped\": %lld, \"missing\": %llu, "
@@ -570,7 +582,7 @@ int main(int argc, char** argv) {
         o.secure = !cli.Flag("faults-plain");
         o.supervisor_args = auto_args;
         bool applied = false, failed = false;
-        long long dropped = -1;
+        long long dropped = -1, input = -1;
         Row row = RunSession(std::string(o.secure ? "rt secured " : "rt plain ") + std::to_string(p) + "% loss " + host, o,
                              [&](LabSession& s, double since_ready) {
                                std::string err;
@@ -579,9 +591,13 @@ int main(int argc, char** argv) {
                                  failed = !applied;
                                  if (failed) std::fprintf(stderr, "%s\n", err.c_str());
                                }
-                               if (applied) dropped = std::max(dropped, s.lab().DroppedInput(host));
+                               if (applied) {
+                                 dropped = std::max(dropped, s.lab().DroppedInput(host));
+                                 input = std::max(input, s.lab().InputPackets(host));
+                               }
                              });
         row.dropped = dropped;
+        row.input_packets = input;
         Print(row);
       }
     }

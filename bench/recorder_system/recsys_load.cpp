@@ -51,6 +51,9 @@ int main(int argc, char** argv) {
   comm::Participant p(domain);
   comm::QosParams params;
   params.deadline_period_s = std::numeric_limits<double>::infinity();
+  // Reliable writers (the lockstep QoS): the recorder under test reads with its default,
+  // reliable QoS, which a real-time (best-effort) periodic writer does not match.
+  params.lockstep = true;
   comm::Topic<hexa_msg_LegSensors> ts(p);
   comm::Topic<hexa_msg_ValveCommand> tv(p);
   comm::Topic<hexa_msg_GroundTruth> tg(p);

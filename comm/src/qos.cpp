@@ -106,6 +106,27 @@ Qos& Qos::operator=(Qos&& other) noexcept {
   return *this;
 }
 
+std::string QosPolicyName(uint32_t policy_id) {
+  switch (policy_id) {
+    case DDS_USERDATA_QOS_POLICY_ID: return "USER_DATA";
+    case DDS_DURABILITY_QOS_POLICY_ID: return "DURABILITY";
+    case DDS_PRESENTATION_QOS_POLICY_ID: return "PRESENTATION";
+    case DDS_DEADLINE_QOS_POLICY_ID: return "DEADLINE";
+    case DDS_LATENCYBUDGET_QOS_POLICY_ID: return "LATENCY_BUDGET";
+    case DDS_OWNERSHIP_QOS_POLICY_ID: return "OWNERSHIP";
+    case DDS_OWNERSHIPSTRENGTH_QOS_POLICY_ID: return "OWNERSHIP_STRENGTH";
+    case DDS_LIVELINESS_QOS_POLICY_ID: return "LIVELINESS";
+    case DDS_TIMEBASEDFILTER_QOS_POLICY_ID: return "TIME_BASED_FILTER";
+    case DDS_PARTITION_QOS_POLICY_ID: return "PARTITION";
+    case DDS_RELIABILITY_QOS_POLICY_ID: return "RELIABILITY";
+    case DDS_DESTINATIONORDER_QOS_POLICY_ID: return "DESTINATION_ORDER";
+    case DDS_HISTORY_QOS_POLICY_ID: return "HISTORY";
+    case DDS_RESOURCELIMITS_QOS_POLICY_ID: return "RESOURCE_LIMITS";
+    case DDS_DURABILITYSERVICE_QOS_POLICY_ID: return "DURABILITY_SERVICE";
+    default: return "policy " + std::to_string(policy_id);
+  }
+}
+
 dds_duration_t DeadlinePeriod_ns(TopicKind kind, const QosParams& params) {
   const std::optional<double> nominal = NominalPeriod_s(kind);
   if (!nominal) return DDS_INFINITY;
@@ -149,11 +170,20 @@ Qos MakeQos(TopicKind kind, EndpointRole role, const QosParams& params) {
   const bool writer = role == EndpointRole::kWriter;
   const bool recorder = role == EndpointRole::kRecorderReader;
 
-  // Reliability. Writers always offer RELIABLE (offered >= requested), so each reader picks.
+  // Reliability. Event topics: RELIABLE everywhere. Periodic topics in lockstep: RELIABLE
+  // everywhere (a lost sample would stall the tick). Periodic topics in real time: the writer
+  // offers BEST_EFFORT, so every reader must request it (a reliable request does not match:
+  // Cyclone reports REQUESTED_INCOMPATIBLE_QOS with the RELIABILITY policy). Not only to
+  // spare the writer repairs: Debian's Cyclone DDS 0.10.2 drops the sample after every lost
+  // one for a best-effort reader of a *reliable* writer (eclipse-cyclonedds issue 1561, fixed
+  // in 11.0), so a reliable real-time writer cost its control readers a second tick per lost
+  // packet (docs/deployment.md, "The lossy recorder link"). The recorder's periodic readers
+  // follow recorder_periodic_best_effort (real time) instead of `lockstep`.
   // Writers use keep-last histories (below), so a reliable writer never blocks in write();
   // max_blocking_time only matters for the keep-all OperatorCommand writer.
-  const bool reliable = writer || !IsPeriodic(kind) ||
-                        (recorder ? !params.recorder_periodic_best_effort : params.lockstep);
+  const bool reliable =
+      !IsPeriodic(kind) ||
+      (recorder ? !params.recorder_periodic_best_effort : params.lockstep);
   dds_qset_reliability(q, reliable ? DDS_RELIABILITY_RELIABLE : DDS_RELIABILITY_BEST_EFFORT,
                        DDS_MSECS(100));
 

@@ -171,6 +171,9 @@ void StatusCounters::OnPublicationMatched(const dds_publication_matched_status_t
 }
 void StatusCounters::OnRequestedIncompatibleQos(
     const dds_requested_incompatible_qos_status_t& s) {
+  requested_incompatible_qos_last_policy_.store(s.last_policy_id, kRelaxed);
+  if (s.last_policy_id != DDS_PARTITION_QOS_POLICY_ID && s.total_count_change > 0)
+    requested_incompatible_qos_not_partition_total_.fetch_add(static_cast<uint32_t>(s.total_count_change), kRelaxed);
   requested_incompatible_qos_total_.store(s.total_count, kRelaxed);
 }
 void StatusCounters::OnOfferedIncompatibleQos(const dds_offered_incompatible_qos_status_t& s) {
@@ -181,6 +184,9 @@ StatusSnapshot StatusCounters::Snapshot() const {
   StatusSnapshot s;
   s.requested_deadline_missed_total = requested_deadline_missed_total_.load(kRelaxed);
   s.requested_incompatible_qos_total = requested_incompatible_qos_total_.load(kRelaxed);
+  s.requested_incompatible_qos_last_policy = requested_incompatible_qos_last_policy_.load(kRelaxed);
+  s.requested_incompatible_qos_not_partition_total =
+      requested_incompatible_qos_not_partition_total_.load(kRelaxed);
   s.sample_lost_total = sample_lost_total_.load(kRelaxed);
   s.sample_rejected_total = sample_rejected_total_.load(kRelaxed);
   s.liveliness_alive_count = liveliness_alive_count_.load(kRelaxed);

@@ -18,8 +18,9 @@ std::string Ip() { return access("/usr/sbin/ip", X_OK) == 0 ? "/usr/sbin/ip" : "
 std::string Nft() { return access("/usr/sbin/nft", X_OK) == 0 ? "/usr/sbin/nft" : "/sbin/nft"; }
 
 long long CounterOf(const std::string& listing, const std::string& comment) {
-  // "... counter packets 12 bytes 3456 drop comment "loss"" (nft list output)
-  const std::regex re("counter packets ([0-9]+) bytes [0-9]+ drop comment \"" + comment + "\"");
+  // "... counter packets 12 bytes 3456 drop comment "loss"" (nft list output; the "input"
+  // rule has no verdict)
+  const std::regex re("counter packets ([0-9]+) bytes [0-9]+ (?:drop )?comment \"" + comment + "\"");
   std::smatch m;
   return std::regex_search(listing, m, re) ? std::stoll(m[1]) : -1;
 }
@@ -109,7 +110,7 @@ std::vector<std::string> NetnsLab::InHost(const std::string& host,
   return out;
 }
 
-bool NetnsLab::SetInputLoss(const std::string& host, int percent, std::string& error) {
+bool NetnsLab::SetInputLoss(const std::string& host, int percent, std::string& error, const std::string& match) {
   const LabHost& h = this->host(host);
   const std::string nft = Ip() + " netns exec " + h.ns + " " + Nft();
   std::string out;
@@ -122,8 +123,10 @@ bool NetnsLab::SetInputLoss(const std::string& host, int percent, std::string& e
   for (const std::string& cmd :
        {nft + " add table inet hexa_lab",
         nft + " add chain inet hexa_lab input '{ type filter hook input priority 0; policy accept; }'",
-        nft + " add rule inet hexa_lab input iifname '\"" + h.veth + "\"' numgen random mod 100 '<' " +
-            std::to_string(percent) + " counter drop comment '\"loss\"'"}) {
+        nft + " add rule inet hexa_lab input iifname '\"" + h.veth + "\"' " + match +
+            " counter comment '\"input\"'",
+        nft + " add rule inet hexa_lab input iifname '\"" + h.veth + "\"' " + match +
+            " numgen random mod 100 '<' " + std::to_string(percent) + " counter drop comment '\"loss\"'"}) {
     if (!RunShell(cmd, &out)) {
       error = "nft (input loss on " + h.ns + ") failed: " + cmd + ": " + out;
       return false;
@@ -132,13 +135,17 @@ bool NetnsLab::SetInputLoss(const std::string& host, int percent, std::string& e
   return true;
 }
 
-long long NetnsLab::DroppedInput(const std::string& host) const {
+long long NetnsLab::LossTableCounter(const std::string& host, const std::string& comment) const {
   const LabHost& h = this->host(host);
   std::string out;
   if (!RunShell(Ip() + " netns exec " + h.ns + " " + Nft() + " list table inet hexa_lab", &out))
     return -1;
-  return CounterOf(out, "loss");
+  return CounterOf(out, comment);
 }
+
+long long NetnsLab::DroppedInput(const std::string& host) const { return LossTableCounter(host, "loss"); }
+
+long long NetnsLab::InputPackets(const std::string& host) const { return LossTableCounter(host, "input"); }
 
 long long NetnsLab::UdpReceiveBufferErrors(const std::string& host) const {
   const LabHost& h = this->host(host);

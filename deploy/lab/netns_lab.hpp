@@ -46,10 +46,14 @@ class NetnsLab {
   // argv prefixed with `ip netns exec <ns of host>`.
   std::vector<std::string> InHost(const std::string& host, const std::vector<std::string>& argv) const;
 
-  // Drops `percent` % of the packets arriving at `host` (0 removes the rule).
-  bool SetInputLoss(const std::string& host, int percent, std::string& error);
+  // Drops `percent` % of the packets arriving at `host` (0 removes the rule); with `match`
+  // (an nftables expression, e.g. "udp dport { 7411, 7413 }") only of the packets it matches.
+  bool SetInputLoss(const std::string& host, int percent, std::string& error, const std::string& match = "");
   // Packets dropped so far by the loss rule of `host` (its nftables counter), -1 on error.
   long long DroppedInput(const std::string& host) const;
+  // Packets the loss rule of `host` saw so far (dropped or not; its nftables counter), -1 on
+  // error: DroppedInput / InputPackets is the loss rate the link really had.
+  long long InputPackets(const std::string& host) const;
   // UDP datagrams the kernel of `host`'s namespace dropped because a socket's receive buffer
   // was full (/proc/net/snmp Udp RcvbufErrors, for the whole namespace), -1 on error: loss on
   // the host itself (a receiver too slow), not on its link.
@@ -64,6 +68,8 @@ class NetnsLab {
   static void CleanStale(const std::string& tag);
 
  private:
+  // The packet count of the rule with `comment` in `host`'s loss table, -1 on error.
+  long long LossTableCounter(const std::string& host, const std::string& comment) const;
   NetnsLab() = default;
   std::string tag_;
   std::string switch_ns_;

@@ -415,6 +415,7 @@ TEST_F(CommProcess, StalledReliableReaderNeverBlocksKeepLastWriters) {
   Participant p(kDomainStalledReader);
   QosParams params;
   params.deadline_period_s = std::numeric_limits<double>::infinity();
+  params.lockstep = true;  // reliable writers (a lockstep plant), as the reliable reader needs
   Topic<hexa_msg_LegSensors> sensors_topic(p);
   Topic<hexa_msg_GroundTruth> truth_topic(p);
   Writer<hexa_msg_LegSensors> sensors(p, sensors_topic, params);

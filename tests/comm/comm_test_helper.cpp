@@ -82,6 +82,9 @@ int PubAll(const Args& a) {
   ShutdownGuard guard(p);
   QosParams params;
   params.deadline_period_s = std::numeric_limits<double>::infinity();
+  // Reliable writers on every topic (the lockstep QoS): sub-all reads with the default,
+  // reliable recorder QoS, which a real-time (best-effort) periodic writer does not match.
+  params.lockstep = true;
   Topic<hexa_msg_LegSensors> t1(p);
   Topic<hexa_msg_ValveCommand> t2(p);
   Topic<hexa_msg_ImuSample> t3(p);

@@ -1,8 +1,9 @@
 // hexa_recorder_link_writer: a leg controller's ValveCommand writer without the controller
 // (test tool of RecorderLink.*, tests/netns/test_recorder_link.cpp). It writes leg --leg's
 // commands in that leg's partition with the production real-time writer QoS
-// (comm::MakeQos(kValveCommand, kWriter), keep-last history, 10 ms liveliness lease) once
-// --readers readers matched, after --settle-s (the test sets up its fault meanwhile), at
+// (comm::MakeQos(kValveCommand, kWriter): BEST_EFFORT, keep-last history, 10 ms liveliness
+// lease), or with --lockstep-writer the lockstep one (RELIABLE), once --readers readers
+// matched (0: at once), after --settle-s (the test sets up its fault meanwhile), at
 // --rate-hz, ticks 0..--samples-1; then waits --drain-s and prints the writer's Cyclone
 // statistics: what the readers' acknowledgements made it do.
 //   "matched N"  (before the settle pause)
@@ -56,14 +57,14 @@ int main(int argc, char** argv) {
   cli.AddOption("settle-s", "s", "pause between the match and the first write", "2");
   cli.AddOption("drain-s", "s", "pause after the last write before the statistics", "1");
   cli.AddOption("lease-s", "s", "the writer's liveliness lease (production: 0.010 in real time)", "0.010");
-  cli.AddFlag("writer-best-effort", "offer BEST_EFFORT instead of the production RELIABLE (experiment)");
+  cli.AddFlag("lockstep-writer", "the lockstep writer QoS (RELIABLE) instead of the real-time one (BEST_EFFORT)");
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
   const auto domain = cli.GetInt("domain", 0, 230);
   const auto leg = cli.GetInt("leg", 1, 6);
   const auto samples = cli.GetInt("samples", 1, 10000000);
   const auto rate = cli.GetDouble("rate-hz", 1, 100000);
-  const auto readers = cli.GetInt("readers", 1, 100);
+  const auto readers = cli.GetInt("readers", 0, 100);
   const auto match_wait = cli.GetDouble("match-wait-s", 0, 3600);
   const auto settle = cli.GetDouble("settle-s", 0, 3600);
   const auto drain = cli.GetDouble("drain-s", 0, 3600);
@@ -78,11 +79,8 @@ int main(int argc, char** argv) {
     comm::Topic<hexa_msg_ValveCommand> topic(participant);
     comm::QosParams params;
     params.valve_liveliness_lease_s = *lease;
-    // The production writer QoS; --writer-best-effort (an experiment, not production) offers
-    // BEST_EFFORT instead: Cyclone 0.10's best-effort readers then see an unreliable proxy
-    // writer (docs/deployment.md, "The lossy recorder link").
+    params.lockstep = cli.Flag("lockstep-writer");
     const comm::Qos qos = comm::MakeQos(comm::TopicKind::kValveCommand, comm::EndpointRole::kWriter, params);
-    if (cli.Flag("writer-best-effort")) dds_qset_reliability(qos.get(), DDS_RELIABILITY_BEST_EFFORT, 0);
     const comm::OwnedEntity publisher =
         comm::CreatePublisher(participant, {comm::LegPartition(static_cast<int>(*leg))});
     const comm::OwnedEntity writer(

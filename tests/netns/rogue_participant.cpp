@@ -84,8 +84,11 @@ int main(int argc, char** argv) {
   for (auto& v : valves) {
     comm::QosParams q;
     q.ownership_strength = static_cast<int32_t>(*strength);
-    // Default deadline (the nominal 1 ms) and a 10 ms lease: compatible with what the
-    // plant's and the recorder's readers request in either mode, so only security decides.
+    // RELIABLE (the lockstep writer QoS: a reliable offer matches reliable and best-effort
+    // requests), the default deadline (the nominal 1 ms) and a 10 ms lease: compatible with
+    // what the plant's and the recorder's readers request in either mode, so only security
+    // decides.
+    q.lockstep = true;
     try {
       v.writer = std::make_unique<comm::Writer<hexa_msg_ValveCommand>>(
           *participant, valve_topic, q, std::vector<std::string>{comm::LegPartition(v.partition_leg)});
@@ -101,7 +104,9 @@ int main(int argc, char** argv) {
   if (cli.Flag("sensors")) {
     try {
       sensors_topic = std::make_unique<comm::Topic<hexa_msg_LegSensors>>(*participant);
-      sensors = std::make_unique<comm::Writer<hexa_msg_LegSensors>>(*participant, *sensors_topic);
+      comm::QosParams q;
+      q.lockstep = true;  // RELIABLE: matches the readers of either mode (above)
+      sensors = std::make_unique<comm::Writer<hexa_msg_LegSensors>>(*participant, *sensors_topic, q);
       std::printf("rogue: LegSensors writer: created\n");
     } catch (const std::exception& e) {
       std::printf("rogue: LegSensors writer: REFUSED (%s)\n", e.what());

@@ -244,9 +244,18 @@ TEST(RecordingInfo, CountsAndLossOfTheSyntheticRecordingAreExact) {
   // 1 kHz topics: (n - 1) / span. GroundTruth has 1000 samples 999 ms apart.
   EXPECT_NEAR(by_topic["hexa_GroundTruth"]->rate_hz, 1000.0, 1e-9);
   EXPECT_EQ(by_topic["hexa_LegSensors"]->metadata.at(kMetaPeriodS), "0.001");
+  // Loss events: the plant's ticks 50 (ImuSample) and 100-104 (leg 3's LegSensors), leg 2's
+  // ValveCommand of tick 500.
+  EXPECT_EQ(info.loss_events.events.at("plant"), 6u);
+  EXPECT_EQ(info.loss_events.events.at("leg 2"), 1u);
+  EXPECT_EQ(info.loss_events.total_events, 7u);
+  EXPECT_EQ(info.loss_events.total_samples, 7u);
   const std::string text = FormatInfo(info);
   EXPECT_NE(text.find("hexa_LegSensors"), std::string::npos);
   EXPECT_NE(text.find("leg 3"), std::string::npos);
+  EXPECT_NE(text.find("loss events (missing samples per producer and tick, one per lost batch): 7 for 7 samples"),
+            std::string::npos)
+      << text;
 }
 
 // The late ticks of the report come from the plant's GroundTruth.command_age_ticks, per leg.
@@ -481,6 +490,43 @@ TEST(TickLossTracker, AHoleNothingFillsIsCountedAsBefore) {
   EXPECT_EQ(r[0].gaps, 1u);
   EXPECT_EQ(r[0].max_gap_ticks, 11u);
   EXPECT_EQ(r[0].filled_late, 0u);
+}
+
+TEST(TickLossTracker, MissingTicksAreTheCountedHolesLessTheLateOnes) {
+  TickLossTracker t;
+  for (uint64_t k = 0; k <= 100; k += 5) t.Add("-", k);
+  for (uint64_t k = 150; k <= 300; k += 5) t.Add("-", k);
+  t.Add("-", 120);  // fills one tick of the hole 105..145
+  const auto m = t.MissingTicks();
+  ASSERT_EQ(m.count("-"), 1u);
+  EXPECT_EQ(m.at("-"), (std::vector<uint64_t>{105, 110, 115, 125, 130, 135, 140, 145}));
+  EXPECT_EQ(m.at("-").size(), t.Results()[0].missing);
+}
+
+// Loss events: one per producer and tick with anything missing. A lost datagram of the plant
+// carrying a tick's six LegSensors and its GroundTruth is one event of 7 samples; the ValveCommands
+// of two legs lost at the same tick are two events (two processes, two datagrams).
+TEST(LossEvents, GroupMissingSamplesByProducerAndTick) {
+  LossEventCounter c;
+  std::map<std::string, std::vector<uint64_t>> sensors;
+  for (int leg = 1; leg <= 6; ++leg) sensors[LegStreamKey(leg)] = {10, 20};
+  sensors[LegStreamKey(3)].push_back(30);  // tick 30: only leg 3's sample
+  c.AddTopic("hexa_LegSensors", sensors);
+  c.AddTopic("hexa_GroundTruth", {{"", {10, 40}}});
+  c.AddTopic("hexa_ValveCommand", {{LegStreamKey(1), {10}}, {LegStreamKey(2), {10, 11}}});
+  c.AddTopic("hexa_LegSetpoint", {{LegStreamKey(1), {15}}, {LegStreamKey(2), {15}}});
+  c.AddTopic("hexa_PoseReport", {{"", {15, 25}}});
+  const LossEvents e = c.Finish();
+  EXPECT_EQ(e.events.at("plant"), 4u);    // ticks 10, 20, 30, 40
+  EXPECT_EQ(e.samples.at("plant"), 15u);  // 6 + 6 + 1 sensors, 2 truth
+  EXPECT_EQ(e.events.at("leg 1"), 1u);
+  EXPECT_EQ(e.events.at("leg 2"), 2u);
+  EXPECT_EQ(e.events.at("supervisor"), 2u);  // ticks 15 (two setpoints and a pose), 25
+  EXPECT_EQ(e.samples.at("supervisor"), 4u);
+  EXPECT_EQ(e.total_events, 9u);
+  EXPECT_EQ(e.total_samples, 15u + 1u + 2u + 4u);
+  EXPECT_EQ(ProducerOf("hexa_ImuSample", ""), "plant");
+  EXPECT_EQ(ProducerOf("hexa_TrackerPose", ""), "plant");
 }
 
 }  // namespace

@@ -112,6 +112,7 @@ TEST_F(RecorderDds, RecordsEveryPublishedSampleWithLossFromTicks) {
   comm::Topic<hexa_msg_FaultEvent> fault_topic(p);
   comm::QosParams params;
   params.deadline_period_s = std::numeric_limits<double>::infinity();
+  params.lockstep = true;  // reliable writers, as the recorder's default (reliable) QoS needs
   comm::Writer<hexa_msg_LegSensors> sensors(p, sensors_topic, params);
   comm::Writer<hexa_msg_ImuSample> imu(p, imu_topic, params);
   comm::Writer<hexa_msg_FaultEvent> fault(p, fault_topic, params);
@@ -228,6 +229,8 @@ TEST_F(RecorderDds, PlayRepublishesTheSelectedTopicsFieldForField) {
   comm::Topic<hexa_msg_ValveCommand> valve_topic(p);
   comm::QosParams params;
   params.deadline_period_s = std::numeric_limits<double>::infinity();
+  // Timed playback writes with the real-time writer QoS (periodic topics best effort).
+  params.recorder_periodic_best_effort = true;
   comm::Reader<hexa_msg_LegSensors> sensors(p, sensors_topic, comm::EndpointRole::kRecorderReader,
                                             params, 1024);
   comm::Reader<hexa_msg_ValveCommand> valves(p, valve_topic, comm::EndpointRole::kRecorderReader,

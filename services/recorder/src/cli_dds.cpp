@@ -111,6 +111,8 @@ struct TopicRecorderBase {
   bool periodic = false;
   uint64_t received = 0;
   TickLossTracker loss;
+  // Writers this topic's reader could not match (incompatible QoS), as last reported.
+  uint32_t incompatible_reported = 0;
   // Called with each recorded message (play --answers-out watches the answers through it).
   std::function<void(const google::protobuf::Message&)> on_sample;
 };
@@ -204,6 +206,26 @@ dds_domainid_t ParseDomain(const Args& a) {
 
 }  // namespace
 
+// Says on stderr, once per new count, that writers of `t`'s topic do not match the recorder
+// and why (Cyclone's requested-incompatible-QoS status names the last policy): their
+// samples are not recorded. The usual cause: a real-time session's periodic writers offer
+// BEST_EFFORT and the recorder was started without --periodic-reliability best-effort.
+static void ReportIncompatibleWriters(TopicRecorderBase& t, const std::string& periodic_reliability) {
+  // Partition mismatches are by design (the leg partitions' writers; status.hpp) and left out.
+  const comm::StatusSnapshot st = t.Status();
+  if (st.requested_incompatible_qos_not_partition_total <= t.incompatible_reported) return;
+  t.incompatible_reported = st.requested_incompatible_qos_not_partition_total;
+  const std::string policy = comm::QosPolicyName(st.requested_incompatible_qos_last_policy);
+  std::string hint;
+  if (policy == "RELIABILITY" && t.periodic && periodic_reliability == "reliable")
+    hint = " A real-time session's periodic writers offer BEST_EFFORT: record it with "
+           "--periodic-reliability best-effort.";
+  std::fprintf(stderr,
+               "record: error: %s: %u writer(s) so far do not match this recorder (incompatible QoS, "
+               "last policy %s): their samples are NOT recorded.%s\n",
+               t.name.c_str(), st.requested_incompatible_qos_not_partition_total, policy.c_str(), hint.c_str());
+}
+
 int RunRecord(const std::vector<std::string>& argv) {
   const Args a = ParseArgs(argv,
                            {"output", "o", "domain", "topics", "exclude", "duration-s", "flush-ms",
@@ -235,11 +257,15 @@ int RunRecord(const std::vector<std::string>& argv) {
         "control processes run SCHED_FIFO (a SCHED_OTHER recorder beside them is starved);\n"
         "--cpus LIST pins it (e.g. 0): both before DDS starts, so Cyclone's threads inherit.\n"
         "--periodic-reliability best-effort: the periodic topics (1 kHz and 200 Hz) are read\n"
-        "best effort, as the real-time controllers read them: no control writer repairs what\n"
-        "the recorder's link drops (a lossy, slow or cut-off recorder costs the loop nothing);\n"
-        "a dropped sample is missing in the recording and counted per topic. For real-time\n"
-        "sessions (hexa_session and hexa_deploy pass it); default reliable (lockstep: the\n"
-        "plant waits for the recorder and nothing is lost).\n"
+        "best effort, as the real-time controllers read them and as real-time writers offer\n"
+        "them: no control writer repairs what the recorder's link drops (a lossy, slow or\n"
+        "cut-off recorder costs the loop nothing); a dropped sample is missing in the recording\n"
+        "and counted per topic, and per producer and tick as loss events (one per lost batch).\n"
+        "For real-time sessions (hexa_session and hexa_deploy pass it); default reliable\n"
+        "(lockstep: the plant waits for the recorder and nothing is lost). A reliable recorder\n"
+        "does not match a real-time session's periodic writers (they offer BEST_EFFORT): it\n"
+        "says so per topic on stderr (incompatible QoS, policy RELIABILITY) and exits with an\n"
+        "error when a periodic topic recorded nothing for that reason.\n"
         "topics: hexa_LegSensors hexa_ValveCommand hexa_ImuSample hexa_LegSetpoint\n"
         "        hexa_PoseReport hexa_GroundTruth hexa_TrackerPose hexa_OperatorCommand\n"
         "        hexa_NodeStatus hexa_FaultEvent\n"
@@ -295,6 +321,9 @@ int RunRecord(const std::vector<std::string>& argv) {
   if (periodic != "reliable" && periodic != "best-effort")
     throw UsageError("--periodic-reliability must be reliable or best-effort, got '" + periodic + "'");
   params.recorder_periodic_best_effort = periodic == "best-effort";
+  // The writers this recorder matches (their QoS goes into each channel's metadata): the
+  // real-time ones with best-effort, else the lockstep ones.
+  params.lockstep = !params.recorder_periodic_best_effort;
   ForEachTopicType([&](auto pair) {
     using T = typename decltype(pair)::Dds;
     using P = typename decltype(pair)::Proto;
@@ -357,6 +386,7 @@ int RunRecord(const std::vector<std::string>& argv) {
     if (after >= next_flush_ns) {
       writer.mcap().FlushIfDue(static_cast<uint64_t>(after));
       next_flush_ns = after + flush_ns;
+      for (auto& t : topics) ReportIncompatibleWriters(*t, periodic);
     }
     // Let samples accumulate in the readers (keep-all) before the next take: at 1 kHz x 13
     // streams a wake-up per sample costs more CPU than recording the sample.
@@ -379,19 +409,44 @@ int RunRecord(const std::vector<std::string>& argv) {
               " bytes (chunk records %" PRIu64 " bytes, stored %" PRIu64 ", compression %s)\n",
               elapsed_s, out.c_str(), ws.messages, ws.chunks, ws.bytes, ws.chunk_records_bytes,
               ws.chunk_stored_bytes, cfg.compression == McapCompression::kZstd ? "zstd" : "none");
-  std::printf("%-22s %10s %10s %8s %12s %12s\n", "topic", "received", "missing", "gaps",
-              "dds_lost", "dds_rejected");
+  // incompatible: writers refused for their QoS, partition mismatches (by design) left out.
+  std::printf("%-22s %10s %10s %8s %12s %12s %12s\n", "topic", "received", "missing", "gaps",
+              "dds_lost", "dds_rejected", "incompatible");
+  LossEventCounter events;
+  std::vector<std::string> unmatched;  // periodic topics with nothing recorded and a writer refused
   for (const auto& t : topics) {
+    ReportIncompatibleWriters(*t, periodic);
     uint64_t missing = 0, gaps = 0;
     for (const auto& l : t->loss.Results()) {
       missing += l.missing;
       gaps += l.gaps;
     }
+    if (t->periodic) events.AddTopic(t->name, t->loss.MissingTicks());
     const comm::StatusSnapshot st = t->Status();
-    std::printf("%-22s %10" PRIu64 " %10s %8s %12u %12u\n", t->name.c_str(), t->received,
+    std::printf("%-22s %10" PRIu64 " %10s %8s %12u %12u %12u\n", t->name.c_str(), t->received,
                 t->periodic ? std::to_string(missing).c_str() : "-",
                 t->periodic ? std::to_string(gaps).c_str() : "-", st.sample_lost_total,
-                st.sample_rejected_total);
+                st.sample_rejected_total, st.requested_incompatible_qos_not_partition_total);
+    if (t->periodic && t->received == 0 && st.requested_incompatible_qos_not_partition_total > 0)
+      unmatched.push_back(t->name);
+  }
+  // One event per producer and tick with a loss: comparable with the datagrams a link
+  // dropped (one batch of a producer per tick), where a sample count is not.
+  const LossEvents e = events.Finish();
+  std::printf("loss events (producer x tick with samples missing, one per lost batch): %" PRIu64
+              " for %" PRIu64 " missing samples;",
+              e.total_events, e.total_samples);
+  for (const auto& [producer, n] : e.events)
+    std::printf(" %s %" PRIu64 " (%" PRIu64 " samples)", producer.c_str(), n, e.samples.at(producer));
+  std::printf("\n");
+  if (!unmatched.empty()) {
+    std::string names;
+    for (const auto& n : unmatched) names += " " + n;
+    std::fprintf(stderr,
+                 "record: error: nothing recorded on%s: their writers did not match this recorder's "
+                 "QoS (see the messages above)\n",
+                 names.c_str());
+    return kExitError;
   }
   return kExitOk;
 }
@@ -879,6 +934,10 @@ int RunPlay(const std::vector<std::string>& argv) {
   }
   const TopicFilter filter{a.GetAll("topics"), a.GetAll("exclude")};
   comm::QosParams params;
+  // Timed playback writes as a real-time session does (periodic topics best effort: read it
+  // with record --periodic-reliability best-effort); --lockstep as a lockstep one (reliable,
+  // and keep-all: TopicPlayer).
+  params.lockstep = lockstep;
   if (a.Has("deadline-s")) params.deadline_period_s = a.GetDouble("deadline-s", 0.0, /*allow_infinity=*/true);
   params.Validate();
 

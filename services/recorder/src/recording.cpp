@@ -473,6 +473,58 @@ std::vector<StreamLoss> TickLossTracker::Results() const {
   return out;
 }
 
+std::map<std::string, std::vector<uint64_t>> TickLossTracker::MissingTicks() const {
+  std::map<std::string, std::vector<uint64_t>> out;
+  const std::vector<StreamLoss> results = Results();
+  for (const StreamLoss& l : results) {
+    const Stream& s = streams_[index_.at(l.key)];
+    std::vector<uint64_t>& ticks = out[l.key];
+    if (s.overflow) continue;
+    std::vector<uint64_t> late = s.late;
+    std::sort(late.begin(), late.end());
+    const uint64_t step = l.step_ticks;
+    for (const auto& [from, to] : s.jumps) {
+      const uint64_t delta = to - from;
+      if (delta <= step) continue;
+      const uint64_t steps = (delta + step / 2) / step;  // as CountHoles
+      for (uint64_t k = 1; k < steps; ++k) {
+        const uint64_t tick = from + k * step;
+        if (!std::binary_search(late.begin(), late.end(), tick)) ticks.push_back(tick);
+      }
+    }
+  }
+  return out;
+}
+
+std::string ProducerOf(const std::string& topic, const std::string& key) {
+  if (topic == "hexa_LegSensors" || topic == "hexa_GroundTruth" || topic == "hexa_ImuSample" ||
+      topic == "hexa_TrackerPose")
+    return "plant";
+  if (topic == "hexa_LegSetpoint" || topic == "hexa_PoseReport") return "supervisor";
+  if (topic == "hexa_ValveCommand") return key.empty() ? "legs" : key;
+  return topic;
+}
+
+void LossEventCounter::AddTopic(const std::string& topic,
+                                const std::map<std::string, std::vector<uint64_t>>& missing) {
+  for (const auto& [key, ticks] : missing) {
+    auto& all = ticks_[ProducerOf(topic, key)];
+    all.insert(all.end(), ticks.begin(), ticks.end());
+  }
+}
+
+LossEvents LossEventCounter::Finish() const {
+  LossEvents e;
+  for (auto [producer, ticks] : ticks_) {
+    e.samples[producer] = ticks.size();
+    std::sort(ticks.begin(), ticks.end());
+    e.events[producer] = static_cast<uint64_t>(std::unique(ticks.begin(), ticks.end()) - ticks.begin());
+    e.total_samples += e.samples[producer];
+    e.total_events += e.events[producer];
+  }
+  return e;
+}
+
 // ================================================================ info
 
 RecordingInfo Inspect(const std::string& path, const McapScanOptions& options) {
@@ -513,6 +565,7 @@ RecordingInfo Inspect(const std::string& path, const McapScanOptions& options) {
   info.chunk_records_bytes = r.chunk_records_bytes;
   info.chunk_stored_bytes = r.chunk_stored_bytes;
   bool first = true;
+  LossEventCounter events;
   for (const auto& [id, ch] : catalog.channels) {
     ChannelInfo c = channels.count(id) ? channels[id] : ChannelInfo{};
     c.id = id;
@@ -526,6 +579,7 @@ RecordingInfo Inspect(const std::string& path, const McapScanOptions& options) {
     if (trackers.count(id)) {
       c.loss_analysed = true;
       c.streams = trackers[id].Results();
+      events.AddTopic(ch.topic, trackers[id].MissingTicks());
       for (const auto& l : c.streams) c.missing += l.missing;
       // Instances of one topic run on the same ticks: one that starts late or stops early
       // against its siblings is reported (a late-matched writer, a crashed node).
@@ -546,6 +600,7 @@ RecordingInfo Inspect(const std::string& path, const McapScanOptions& options) {
     }
     info.channels.push_back(std::move(c));
   }
+  info.loss_events = events.Finish();
   return info;
 }
 
@@ -594,6 +649,13 @@ std::string FormatInfo(const RecordingInfo& info) {
                   c.id, c.topic.c_str(), c.schema_name.c_str(), c.count, c.rate_hz,
                   static_cast<double>(c.max_log_gap_ns) * 1e-6, missing.c_str(), loss);
     o << line;
+  }
+  if (info.loss_events.total_samples > 0) {
+    o << "\nloss events (missing samples per producer and tick, one per lost batch): "
+      << info.loss_events.total_events << " for " << info.loss_events.total_samples << " samples;";
+    for (const auto& [producer, n] : info.loss_events.events)
+      o << " " << producer << " " << n << " (" << info.loss_events.samples.at(producer) << " samples)";
+    o << "\n";
   }
   o << "\nchannel metadata (QoS of the topic's writers and of the recorder's reader):\n";
   for (const auto& c : info.channels) {

@@ -50,7 +50,8 @@ std::optional<double> NominalPeriod_s(TopicKind kind);
 // Who uses the QoS. Readers differ by purpose: a control reader wants the newest sample with
 // the least latency, the recorder wants every sample.
 enum class EndpointRole : uint8_t {
-  kWriter,
+  kWriter,          // periodic topics: BEST_EFFORT in real time, RELIABLE in lockstep
+                    // (QosParams::lockstep); event topics RELIABLE
   kControlReader,   // leg_ctrl, task_space, plant: newest sample (keep-last 1 per instance)
   kRecorderReader,  // recorder: keep-all, historic data for transient-local topics; reliable
                     // unless QosParams::recorder_periodic_best_effort (real time)
@@ -82,9 +83,12 @@ struct QosParams {
   std::string user_data;
   // ValveCommand writer only: EXCLUSIVE ownership strength (primary 20, standby 10).
   int32_t ownership_strength = kPrimaryOwnershipStrength;
-  // Control readers: lockstep needs every sample (a lost one would stall the tick), so the
-  // reader asks for RELIABLE; in real time BEST_EFFORT avoids head-of-line blocking behind a
-  // repair and the next sample supersedes a lost one 1 ms later.
+  // Writers and control readers of the periodic topics: lockstep needs every sample (a lost
+  // one would stall the tick), so both are RELIABLE; in real time both are BEST_EFFORT: no
+  // head-of-line blocking behind a repair, the next sample supersedes a lost one 1 ms later,
+  // and no writer keeps or resends anything for any reader. A reader that requests RELIABLE
+  // (a lockstep reader, a recorder without recorder_periodic_best_effort) does not match a
+  // real-time periodic writer (REQUESTED_INCOMPATIBLE_QOS, policy RELIABILITY).
   bool lockstep = false;
   // Control readers: keep-last depth per instance. 1 = the newest sample only (real time:
   // an older sample is worthless). A lockstep leg controller asks for more so that a hot
@@ -123,6 +127,11 @@ class Qos {
 
 // The QoS of `kind` for `role`. Validates params (throws std::invalid_argument).
 Qos MakeQos(TopicKind kind, EndpointRole role, const QosParams& params = {});
+
+// Name of a DDS QoS policy id (dds_qos_policy_id_t, e.g. DDS_RELIABILITY_QOS_POLICY_ID ->
+// "RELIABILITY"), for the incompatible-QoS status (StatusSnapshot's last policy); "policy N"
+// for one not named here.
+std::string QosPolicyName(uint32_t policy_id);
 
 // The QoS given to the topic entity itself (role-independent parts).
 Qos MakeTopicQos(TopicKind kind);

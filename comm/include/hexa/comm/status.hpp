@@ -37,6 +37,13 @@ struct StatusSnapshot {
   // Reader side.
   uint32_t requested_deadline_missed_total = 0;
   uint32_t requested_incompatible_qos_total = 0;
+  // The policy that made the latest incompatible writer not match (dds_qos_policy_id_t;
+  // QosPolicyName in qos.hpp names it), 0 = none yet.
+  uint32_t requested_incompatible_qos_last_policy = 0;
+  // Of the total, the writers refused for another policy than PARTITION. A partition
+  // mismatch is by design here (a reader of the default partition and a leg's writer in its
+  // leg partition: comm::LegRoutedWriter), and Cyclone reports it as incompatible QoS too.
+  uint32_t requested_incompatible_qos_not_partition_total = 0;
   uint32_t sample_lost_total = 0;
   uint32_t sample_rejected_total = 0;
   uint32_t liveliness_alive_count = 0;      // writers currently alive
@@ -115,6 +122,8 @@ class StatusCounters {
 
   std::atomic<uint32_t> requested_deadline_missed_total_{0};
   std::atomic<uint32_t> requested_incompatible_qos_total_{0};
+  std::atomic<uint32_t> requested_incompatible_qos_last_policy_{0};
+  std::atomic<uint32_t> requested_incompatible_qos_not_partition_total_{0};
   std::atomic<uint32_t> sample_lost_total_{0};
   std::atomic<uint32_t> sample_rejected_total_{0};
   std::atomic<uint32_t> liveliness_alive_count_{0};

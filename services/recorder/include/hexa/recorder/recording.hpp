@@ -160,6 +160,10 @@ class TickLossTracker {
   std::size_t StreamIndex(const std::string& key);
   void AddAt(std::size_t stream_index, uint64_t tick);
   std::vector<StreamLoss> Results() const;
+  // The ticks each stream misses (the holes Results() counts, less the ones a late sample
+  // filled), key -> ticks ascending. A stream past kMaxKept jumps or late samples is left out
+  // (its holes are only counted).
+  std::map<std::string, std::vector<uint64_t>> MissingTicks() const;
 
  private:
   struct Stream;
@@ -179,6 +183,34 @@ class TickLossTracker {
   };
   std::map<std::string, std::size_t> index_;  // key -> streams_ index (Results in key order)
   std::vector<Stream> streams_;
+};
+
+// Loss events: the missing samples of a recording grouped by the process that wrote them and
+// their tick. A producer writes the samples of one tick together (the plant its six
+// LegSensors, GroundTruth and ImuSample in one write batch, the supervisor its setpoints and
+// pose report, each leg controller its ValveCommand), so one datagram lost on the way costs
+// every sample it carried and counts as one event here: comparable with the packets a lossy
+// link dropped, where the sample count is not (docs/deployment.md, "The lossy recorder link").
+// Samples of one producer and tick that travelled in two datagrams, both lost, count once.
+struct LossEvents {
+  std::map<std::string, uint64_t> events;   // producer -> (producer, tick) pairs with a loss
+  std::map<std::string, uint64_t> samples;  // producer -> samples missing
+  uint64_t total_events = 0, total_samples = 0;
+};
+// The process that writes `topic` ("hexa_LegSensors", ...) for stream `key` (TickLossTracker
+// key: "leg N" or ""): "plant" (LegSensors, GroundTruth, ImuSample, TrackerPose),
+// "supervisor" (LegSetpoint, PoseReport), "leg N" (ValveCommand of leg N; primary or standby:
+// one owner per tick), else the topic name.
+std::string ProducerOf(const std::string& topic, const std::string& key);
+// Adds the missing ticks of one topic (TickLossTracker::MissingTicks) to the producers'
+// events; call once per topic, then Finish().
+class LossEventCounter {
+ public:
+  void AddTopic(const std::string& topic, const std::map<std::string, std::vector<uint64_t>>& missing);
+  LossEvents Finish() const;
+
+ private:
+  std::map<std::string, std::vector<uint64_t>> ticks_;  // producer -> missing ticks (with repeats)
 };
 
 struct ChannelInfo {
@@ -205,6 +237,7 @@ struct RecordingInfo {
   uint64_t chunk_records_bytes = 0, chunk_stored_bytes = 0;  // before / after compression
   uint64_t start_ns = 0, end_ns = 0;
   std::vector<ChannelInfo> channels;
+  LossEvents loss_events;  // over the loss-analysed channels
 };
 
 RecordingInfo Inspect(const std::string& path, const McapScanOptions& options = {});
