@@ -21,15 +21,31 @@ CONFIGS = [("paper-faithful", ["--no-feedforward"]), ("+ feed-forward", []),
            ("+ feed-forward + calibration", ["--calibrate"])]
 
 
+# One row of hexa_sim's table against ground truth: trajectory, X Y Z cm, rot X Y Z deg, and
+# the six legs' RMSE in mm.
+SIM_ROW = re.compile(r"(\w+)\s+true \|\s+([-\d.]+)\s+([-\d.]+)\s+([-\d.]+) \|"
+                     r"\s+([-\d.]+)\s+([-\d.]+)\s+([-\d.]+)(?: \|\s+([-\d. ]+))?")
+
+
+def parse_sim_rows(stdout):
+    """hexa_sim's rows against ground truth: {trajectory: ([X, Y, Z cm, rot X, Y, Z deg],
+    [leg RMSE mm, ...])}."""
+    rows = {}
+    for line in stdout.splitlines():
+        m = SIM_ROW.match(line.strip())
+        if m:
+            legs = [float(v) for v in m.group(8).split()] if m.group(8) else []
+            rows[m.group(1)] = ([float(m.group(k)) for k in range(2, 8)], legs)
+    return rows
+
+
 def run(build, controller, seed, extra):
     cmd = [os.path.join(build, "tools", "hexa_sim"), "--controller", controller, "--seed",
            str(seed)] + extra
     out = subprocess.run(cmd, capture_output=True, text=True)
-    rows, cal = {}, None
+    rows = {t: axes for t, (axes, _) in parse_sim_rows(out.stdout).items()}
+    cal = None
     for line in out.stdout.splitlines():
-        m = re.match(r"(\w+)\s+true \|\s+([-\d.]+)\s+([-\d.]+)\s+([-\d.]+) \|\s+([-\d.]+)\s+([-\d.]+)\s+([-\d.]+)", line)
-        if m:
-            rows[m.group(1)] = [float(m.group(k)) for k in range(2, 8)]
         m = re.search(r"worst residual: joint ([\d.]+) mm, offset ([\d.]+) mm, gain ([\d.]+) ppm", line)
         if m:
             cal = [float(m.group(k)) for k in range(1, 4)]

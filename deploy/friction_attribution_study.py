@@ -21,7 +21,7 @@ trajectory's leg RMSE.
 Usage:
   /usr/bin/python3 deploy/identification_study.py          # writes the two overlays (DDS, ~7 min)
   /usr/bin/python3 deploy/friction_attribution_study.py [--build build] [--seeds 1,2,3]
-      [--truth-overlay F] [--identified-overlay F] [--jobs 2] > table.md
+      [--truth-overlay F] [--identified-overlay F] [--jobs 2] [--out out/friction_attribution] > table.md
 """
 import argparse
 import os
@@ -29,25 +29,23 @@ import re
 import statistics
 import subprocess
 import sys
-import tempfile
 from concurrent.futures import ThreadPoolExecutor
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from accuracy_tables import PAPER9, PAPER10, parse_sim_rows  # noqa: E402
 
 HERE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TRAJ = ["x", "y", "z", "roll", "pitch", "yaw"]
-PAPER9 = [0.782, 0.841, 0.197, 1.012, 1.346, 1.836]
-PAPER10 = [0.845, 1.205, 0.296, 1.193, 1.817, 2.433]
-ROW = re.compile(r"(\w+)\s+true \|\s+([-\d.]+)\s+([-\d.]+)\s+([-\d.]+) \|\s+([-\d.]+)\s+([-\d.]+)\s+([-\d.]+)"
-                 r" \|\s+([-\d. ]+)$")
 
 
-def scaled_rig(rig, scale, tmp):
+def scaled_rig(rig, scale, out_dir):
     """A copy of the rig file whose BS-SMC friction estimate scale is `scale` (a controller
     parameter only: the plant is unchanged)."""
     text = open(rig).read()
     new, n = re.subn(r"(\n\s*friction_estimate_scale:\s*)[-\d.eE+]+", lambda m: m.group(1) + repr(scale), text)
     if n != 1:
         sys.exit(f"{rig}: expected one friction_estimate_scale field, found {n}")
-    path = os.path.join(tmp, f"rig_friction_scale_{scale:.4f}.textproto")
+    path = os.path.join(out_dir, f"rig_friction_scale_{scale:.4f}.textproto")
     with open(path, "w") as f:
         f.write(new)
     return path
@@ -58,12 +56,7 @@ def run(build, seed, args):
     out = subprocess.run(cmd, capture_output=True, text=True)
     if out.returncode != 0:
         sys.exit(f"{' '.join(cmd)}: exit {out.returncode}\n{out.stderr}")
-    rows = {}
-    for line in out.stdout.splitlines():
-        m = ROW.match(line.strip())
-        if m:
-            rows[m.group(1)] = [float(m.group(k)) for k in range(2, 8)] + [
-                statistics.mean(float(v) for v in m.group(8).split())]
+    rows = {t: axes + [statistics.mean(legs)] for t, (axes, legs) in parse_sim_rows(out.stdout).items()}
     missing = [t for t in TRAJ + ["combined"] if t not in rows]
     if missing:
         sys.exit(f"{' '.join(cmd)}: no result for {', '.join(missing)} (HOLD?)\n{out.stdout[-2000:]}")
@@ -79,21 +72,23 @@ def main():
     ap.add_argument("--identified-overlay",
                     default=os.path.join(HERE, "out", "identification", "identified", "identified.textproto"))
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--out", default=os.path.join(HERE, "out", "friction_attribution"),
+                    help="where the scaled rig copies are written (the printed commands use them)")
     a = ap.parse_args()
     for name, path in [("--truth-overlay", a.truth_overlay), ("--identified-overlay", a.identified_overlay)]:
         if not os.path.isfile(path):
             sys.exit(f"{name} {path}: no such file; deploy/identification_study.py writes it")
     seeds = [int(s) for s in a.seeds.split(",")]
-    tmp = tempfile.mkdtemp(prefix="hexa_friction_attr_")
+    os.makedirs(a.out, exist_ok=True)
     cal = ["--calibrate", "--rig"]
     configs = [
         ("nominal model (rig file)", cal + [a.rig]),
         ("identified model (overlay)", cal + [a.rig, "--rig-overlay", a.identified_overlay]),
         ("true model (truth overlay)", cal + [a.rig, "--rig-overlay", a.truth_overlay]),
-        ("true model, friction estimate x 0.95", cal + [scaled_rig(a.rig, 0.95, tmp), "--rig-overlay", a.truth_overlay]),
-        ("true model, friction estimate x 0.90", cal + [scaled_rig(a.rig, 0.90, tmp), "--rig-overlay", a.truth_overlay]),
+        ("true model, friction estimate x 0.95", cal + [scaled_rig(a.rig, 0.95, a.out), "--rig-overlay", a.truth_overlay]),
+        ("true model, friction estimate x 0.90", cal + [scaled_rig(a.rig, 0.90, a.out), "--rig-overlay", a.truth_overlay]),
         ("true model, friction estimate x 1/1.2 (nominal magnitudes)",
-         cal + [scaled_rig(a.rig, 1 / 1.2, tmp), "--rig-overlay", a.truth_overlay]),
+         cal + [scaled_rig(a.rig, 1 / 1.2, a.out), "--rig-overlay", a.truth_overlay]),
         ("ideal profile (plant = nominal model, no noise; no calibration)", ["--rig", a.rig, "--profile", "ideal"]),
     ]
     jobs = [(c, s) for c in range(len(configs)) for s in seeds]
