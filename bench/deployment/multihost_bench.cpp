@@ -54,6 +54,11 @@ std::string Slurp(const std::string& path) {
   return ss.str();
 }
 
+// nflog group of the loss rule's log when --capture-drops (per namespace: no clash between
+// labs), and the capture's name in the session's process group.
+constexpr int kDropLogGroup = 15;
+constexpr const char* kDropCaptureName = "drop-capture";
+
 struct Row {
   std::string scenario;
   bool completed = false;
@@ -278,6 +283,13 @@ Row RunSession(const std::string& scenario, LabSessionOptions o,
   row.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() -
                                              (ready == std::chrono::steady_clock::time_point{} ? t0 : ready))
                    .count();
+  // A drop capture (--capture-drops) stops last: it must see what the loss rule drops until
+  // every process of the session is gone. The others in reverse start order, as StopAll.
+  if (s->group().Running(kDropCaptureName)) {
+    std::vector<std::string> names = s->group().RunningNames();
+    for (auto it = names.rbegin(); it != names.rend(); ++it)
+      if (*it != kDropCaptureName) s->group().Stop(*it, 8000ms);
+  }
   s->StopAll();
   // Once more with every process stopped: the counters of a loss rule then hold everything
   // dropped while the session's processes ran, not only until the last 0.5 s poll.
@@ -303,6 +315,26 @@ Row RunSession(const std::string& scenario, LabSessionOptions o,
   std::smatch m;
   if (std::regex_search(plant, m, std::regex("command faults ([0-9]+)"))) row.note += " plant command faults " + m[1].str() + ";";
   return row;
+}
+
+
+// tcpdump on the loss rule's nflog group in `host`'s namespace, writing
+// <work_dir>/dropped.pcap packet by packet (-U); a child of the session, stopped with it.
+bool StartDropCapture(LabSession& s, const std::string& host, std::string& error) {
+  const std::string log = s.work_dir() + "/drop-capture.log";
+  ChildSpec spec{kDropCaptureName,
+                 s.lab().InHost(host, {"tcpdump", "-i", "nflog:" + std::to_string(kDropLogGroup), "-w",
+                                       s.work_dir() + "/dropped.pcap", "-U", "-q", "-Z", "root"}),
+                 {},
+                 log};
+  if (s.group().Start(spec, error) < 0) return false;
+  // Listening once it says so (a second at most here); the rule goes in after that.
+  for (int i = 0; i < 50; ++i) {
+    if (Slurp(log).find("listening on") != std::string::npos) return true;
+    std::this_thread::sleep_for(20ms);
+  }
+  error = "tcpdump on nflog:" + std::to_string(kDropLogGroup) + " in " + host + " did not start: " + Slurp(log);
+  return false;
 }
 
 // The loop's CPU per simulated second by role, and the costliest threads (>= 2 % of it).
@@ -486,6 +518,10 @@ int main(int argc, char** argv) {
               "with the CPU placement: the primary legs of host legs-b on the first CPU (with the "
               "supervisor and the recorder) instead of beside the plant on the last");
   cli.AddFlag("faults-plain", "run the loss / recorder-loss / partition scenarios without DDS Security");
+  cli.AddFlag("capture-drops",
+              "loss / recorder-loss: capture every packet the loss rule drops (nftables log to an "
+              "nflog group, tcpdump in the lossy host's namespace) to <logs>/dropped.pcap, for "
+              "bench/deployment/dropped_datagrams.py");
   cli.AddOption("deployment", "name|file",
                 "the hosts and processes: five-hosts (default: the built-in five-host layout, the same "
                 "as deploy/deployments/five-hosts.textproto), four-hosts "
@@ -583,11 +619,19 @@ int main(int argc, char** argv) {
         o.supervisor_args = auto_args;
         bool applied = false, failed = false;
         long long dropped = -1, input = -1;
+        const bool capture = cli.Flag("capture-drops");
         Row row = RunSession(std::string(o.secure ? "rt secured " : "rt plain ") + std::to_string(p) + "% loss " + host, o,
                              [&](LabSession& s, double since_ready) {
                                std::string err;
                                if (!applied && !failed && since_ready >= 0) {
-                                 applied = s.lab().SetInputLoss(host, p, err);
+                                 // The capture listens before the rule logs to its group: a
+                                 // packet logged to a group nobody reads is not kept.
+                                 if (capture && !StartDropCapture(s, host, err)) {
+                                   failed = true;
+                                   std::fprintf(stderr, "%s\n", err.c_str());
+                                   return;
+                                 }
+                                 applied = s.lab().SetInputLoss(host, p, err, "", capture ? kDropLogGroup : 0);
                                  failed = !applied;
                                  if (failed) std::fprintf(stderr, "%s\n", err.c_str());
                                }

@@ -18,9 +18,10 @@ std::string Ip() { return access("/usr/sbin/ip", X_OK) == 0 ? "/usr/sbin/ip" : "
 std::string Nft() { return access("/usr/sbin/nft", X_OK) == 0 ? "/usr/sbin/nft" : "/sbin/nft"; }
 
 long long CounterOf(const std::string& listing, const std::string& comment) {
-  // "... counter packets 12 bytes 3456 drop comment "loss"" (nft list output; the "input"
-  // rule has no verdict)
-  const std::regex re("counter packets ([0-9]+) bytes [0-9]+ (?:drop )?comment \"" + comment + "\"");
+  // "... counter packets 12 bytes 3456 [log group 5 queue-threshold 1 ]drop comment "loss""
+  // (nft list output; the "input" rule has no verdict)
+  const std::regex re("counter packets ([0-9]+) bytes [0-9]+ (?:log group [0-9]+ queue-threshold [0-9]+ )?(?:drop )?comment \"" +
+                      comment + "\"");
   std::smatch m;
   return std::regex_search(listing, m, re) ? std::stoll(m[1]) : -1;
 }
@@ -110,7 +111,8 @@ std::vector<std::string> NetnsLab::InHost(const std::string& host,
   return out;
 }
 
-bool NetnsLab::SetInputLoss(const std::string& host, int percent, std::string& error, const std::string& match) {
+bool NetnsLab::SetInputLoss(const std::string& host, int percent, std::string& error, const std::string& match,
+                            int log_group) {
   const LabHost& h = this->host(host);
   const std::string nft = Ip() + " netns exec " + h.ns + " " + Nft();
   std::string out;
@@ -120,13 +122,20 @@ bool NetnsLab::SetInputLoss(const std::string& host, int percent, std::string& e
     error = "loss percent must be 0..100";
     return false;
   }
+  if (log_group < 0 || log_group > 65535) {
+    error = "nflog group must be 0..65535";
+    return false;
+  }
+  // queue-threshold 1: each dropped packet is delivered at once, not batched for up to 1 s.
+  const std::string log =
+      log_group > 0 ? " log group " + std::to_string(log_group) + " queue-threshold 1" : std::string();
   for (const std::string& cmd :
        {nft + " add table inet hexa_lab",
         nft + " add chain inet hexa_lab input '{ type filter hook input priority 0; policy accept; }'",
         nft + " add rule inet hexa_lab input iifname '\"" + h.veth + "\"' " + match +
             " counter comment '\"input\"'",
         nft + " add rule inet hexa_lab input iifname '\"" + h.veth + "\"' " + match +
-            " numgen random mod 100 '<' " + std::to_string(percent) + " counter drop comment '\"loss\"'"}) {
+            " numgen random mod 100 '<' " + std::to_string(percent) + " counter" + log + " drop comment '\"loss\"'"}) {
     if (!RunShell(cmd, &out)) {
       error = "nft (input loss on " + h.ns + ") failed: " + cmd + ": " + out;
       return false;

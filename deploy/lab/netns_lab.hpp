@@ -48,7 +48,11 @@ class NetnsLab {
 
   // Drops `percent` % of the packets arriving at `host` (0 removes the rule); with `match`
   // (an nftables expression, e.g. "udp dport { 7411, 7413 }") only of the packets it matches.
-  bool SetInputLoss(const std::string& host, int percent, std::string& error, const std::string& match = "");
+  // With `log_group` > 0 every dropped packet is also sent to that nflog group (one netlink
+  // message per packet), where `tcpdump -i nflog:<group>` inside the host's namespace can
+  // capture it: the dropped datagrams themselves, for attributing them to writers.
+  bool SetInputLoss(const std::string& host, int percent, std::string& error, const std::string& match = "",
+                    int log_group = 0);
   // Packets dropped so far by the loss rule of `host` (its nftables counter), -1 on error.
   long long DroppedInput(const std::string& host) const;
   // Packets the loss rule of `host` saw so far (dropped or not; its nftables counter), -1 on

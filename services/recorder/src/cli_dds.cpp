@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <set>
@@ -106,6 +107,8 @@ struct TopicRecorderBase {
   virtual dds_entity_t condition() const = 0;
   virtual void Drain(RecordingWriter& w) = 0;
   virtual comm::StatusSnapshot Status() const = 0;
+  // The reader, for its matched writers (NoteMatchedWriters).
+  virtual dds_entity_t reader() const = 0;
   std::string name;
   uint16_t channel = 0;
   bool periodic = false;
@@ -113,6 +116,12 @@ struct TopicRecorderBase {
   TickLossTracker loss;
   // Writers this topic's reader could not match (incompatible QoS), as last reported.
   uint32_t incompatible_reported = 0;
+  // Every writer this topic's reader has matched so far: GUID (32 hex digits, as on the
+  // wire: GUID prefix then entity id) -> "reliable" / "best-effort" and, under exclusive
+  // ownership (ValveCommand), " strength N" (a hot standby's is lower: its samples are not
+  // recorded while the primary lives). Printed at the stop, so that the datagrams a link
+  // dropped can be attributed to topics (bench/deployment/dropped_datagrams.py).
+  std::map<std::string, std::string> matched_writers;
   // Called with each recorded message (play --answers-out watches the answers through it).
   std::function<void(const google::protobuf::Message&)> on_sample;
 };
@@ -147,6 +156,7 @@ class TopicRecorder final : public TopicRecorderBase {
   }
   dds_entity_t condition() const override { return reader_.data_condition(); }
   comm::StatusSnapshot Status() const override { return reader_.Snapshot(); }
+  dds_entity_t reader() const override { return reader_.get(); }
   void Drain(RecordingWriter& w) override {
     for (;;) {
       const int n = reader_.Take();
@@ -210,6 +220,30 @@ dds_domainid_t ParseDomain(const Args& a) {
 // and why (Cyclone's requested-incompatible-QoS status names the last policy): their
 // samples are not recorded. The usual cause: a real-time session's periodic writers offer
 // BEST_EFFORT and the recorder was started without --periodic-reliability best-effort.
+// Adds the writers the topic's reader matches now to t.matched_writers (called every flush;
+// a writer that comes and goes between two flushes is missed, none does in a session).
+static void NoteMatchedWriters(TopicRecorderBase& t) {
+  dds_instance_handle_t handles[64];
+  const dds_return_t n = dds_get_matched_publications(t.reader(), handles, 64);
+  for (dds_return_t i = 0; i < std::min<dds_return_t>(n, 64); ++i) {
+    dds_builtintopic_endpoint_t* e = dds_get_matched_publication_data(t.reader(), handles[i]);
+    if (e == nullptr) continue;
+    char guid[33];
+    for (int b = 0; b < 16; ++b) std::snprintf(guid + 2 * b, 3, "%02x", e->key.v[b]);
+    dds_reliability_kind_t kind = DDS_RELIABILITY_BEST_EFFORT;
+    dds_duration_t blocking = 0;
+    if (e->qos != nullptr) dds_qget_reliability(e->qos, &kind, &blocking);
+    std::string what = kind == DDS_RELIABILITY_RELIABLE ? "reliable" : "best-effort";
+    dds_ownership_kind_t ownership = DDS_OWNERSHIP_SHARED;
+    int32_t strength = 0;
+    if (e->qos != nullptr && dds_qget_ownership(e->qos, &ownership) &&
+        ownership == DDS_OWNERSHIP_EXCLUSIVE && dds_qget_ownership_strength(e->qos, &strength))
+      what += " strength " + std::to_string(strength);
+    t.matched_writers[guid] = what;
+    dds_builtintopic_free_endpoint(e);
+  }
+}
+
 static void ReportIncompatibleWriters(TopicRecorderBase& t, const std::string& periodic_reliability) {
   // Partition mismatches are by design (the leg partitions' writers; status.hpp) and left out.
   const comm::StatusSnapshot st = t.Status();
@@ -386,7 +420,10 @@ int RunRecord(const std::vector<std::string>& argv) {
     if (after >= next_flush_ns) {
       writer.mcap().FlushIfDue(static_cast<uint64_t>(after));
       next_flush_ns = after + flush_ns;
-      for (auto& t : topics) ReportIncompatibleWriters(*t, periodic);
+      for (auto& t : topics) {
+        ReportIncompatibleWriters(*t, periodic);
+        NoteMatchedWriters(*t);
+      }
     }
     // Let samples accumulate in the readers (keep-all) before the next take: at 1 kHz x 13
     // streams a wake-up per sample costs more CPU than recording the sample.
@@ -397,7 +434,10 @@ int RunRecord(const std::vector<std::string>& argv) {
       nanosleep(&pause, nullptr);  // a signal ends it early; the loop then sees the shutdown
     }
   }
-  for (auto& t : topics) t->Drain(writer);  // what arrived before the stop
+  for (auto& t : topics) {
+    t->Drain(writer);  // what arrived before the stop
+    NoteMatchedWriters(*t);
+  }
   status.state = hexa_msg_NODE_STOPPING;
   status_writer.WriteNow(status);
   node::service_manager::Stopping("recording closed");
@@ -439,6 +479,11 @@ int RunRecord(const std::vector<std::string>& argv) {
   for (const auto& [producer, n] : e.events)
     std::printf(" %s %" PRIu64 " (%" PRIu64 " samples)", producer.c_str(), n, e.samples.at(producer));
   std::printf("\n");
+  // The writers each topic matched, by GUID as on the wire: a capture of the datagrams a link
+  // dropped names the writer of each DATA submessage (bench/deployment/dropped_datagrams.py).
+  for (const auto& t : topics)
+    for (const auto& [guid, reliability] : t->matched_writers)
+      std::printf("matched writer %s %s %s\n", t->name.c_str(), guid.c_str(), reliability.c_str());
   if (!unmatched.empty()) {
     std::string names;
     for (const auto& n : unmatched) names += " " + n;
