@@ -9,7 +9,9 @@
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <optional>
@@ -480,6 +482,22 @@ int RunRecord(const std::vector<std::string>& argv) {
   for (const auto& [producer, n] : e.events)
     std::printf(" %s %" PRIu64 " (%" PRIu64 " samples)", producer.c_str(), n, e.samples.at(producer));
   std::printf("\n");
+  // Cyclone counts the samples exclusive ownership discards (a hot standby's while its primary
+  // lives) as lost: say so where a topic has writers of lower strength, so that the column is
+  // not read as loss on the wire (the missing column is).
+  for (const auto& t : topics) {
+    std::map<int, int> strengths;  // strength -> writers
+    for (const auto& [guid, what] : t->matched_writers) {
+      const auto at = what.find(" strength ");
+      if (at != std::string::npos) ++strengths[std::atoi(what.c_str() + at + 10)];
+    }
+    if (strengths.size() < 2) continue;
+    int lower = 0;
+    for (auto it = strengths.begin(); std::next(it) != strengths.end(); ++it) lower += it->second;
+    std::printf("note: %s: dds_lost counts the samples of %d lower-strength writer(s) (hot standbys) that "
+                "exclusive ownership discards while their primary lives: not losses (see missing)\n",
+                t->name.c_str(), lower);
+  }
   // The writers each topic matched, by GUID as on the wire: a capture of the datagrams a link
   // dropped names the writer of each DATA submessage (bench/deployment/dropped_datagrams.py).
   for (const auto& t : topics)
