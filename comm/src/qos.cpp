@@ -212,7 +212,7 @@ Qos MakeQos(TopicKind kind, EndpointRole role, const QosParams& params) {
     dds_qset_deadline(q, DeadlinePeriod_ns(kind, params));
   }
 
-  if (writer && !params.user_data.empty()) {
+  if (!params.user_data.empty()) {
     dds_qset_userdata(q, params.user_data.data(), params.user_data.size());
   }
   // Liveliness of the supervisor's setpoints: a leg controller that waits for a setpoint

@@ -17,13 +17,17 @@ int main(int argc, char** argv) {
                         "Sends an operator command to the supervisor: hexa_operator [options] "
                         "start|stop|reset|home|shutdown\n"
                         "Exit status: 0 sent and acknowledged by every matched reader, 1 no "
-                        "supervisor matched within --wait (or a DDS error), 2 bad arguments, 3 "
-                        "sent but not acknowledged.");
+                        "supervisor (with --to any-reader: no reader) matched within --wait (or a "
+                        "DDS error), 2 bad arguments, 3 sent but not acknowledged.");
   cli.AddOption("domain", "id", "DDS domain id", "0");
   cli.AddOption("dds-config", "file", "Cyclone DDS configuration (default: loopback only)");
   cli.AddOption("trajectory", "name|file.csv", "for start: x y z roll pitch yaw combined or CSV",
                 "combined");
   cli.AddOption("wait", "s", "how long to wait for the supervisor to match", "5");
+  cli.AddChoice("to", {"supervisor", "any-reader"},
+                "write once this reader has matched: the supervisor's command reader (it says so in "
+                "its USER_DATA), or any reader of the topic (a recorder alone: tests of the wire)",
+                "supervisor");
   cli.AddOption("linger", "s",
                 "keep the command's writer this long after it was acknowledged: a reader that "
                 "matched this writer only just before the write answers at the writer's next "
@@ -77,9 +81,17 @@ int main(int argc, char** argv) {
     cmd.sequence = static_cast<uint32_t>(hexa::comm::RealtimeNow_ns() & 0xffffffff);
     hexa::comm::WaitSet ws(participant);
     const int64_t end = hexa::node::MonotonicNow_ns() + static_cast<int64_t>(*wait_s * 1e9);
-    while (writer.Snapshot().publication_matched_current == 0) {
+    // The supervisor's reader, not any: a recorder (or another tool) reading the topic may
+    // match first, and a command written before the supervisor's reader matched never reaches
+    // it (volatile). Between secured hosts each new participant's handshakes with the peers
+    // complete one by one: the recorder's often first (docs/deployment.md).
+    const bool any_reader = cli.Get("to") == "any-reader";
+    while (any_reader ? writer.Snapshot().publication_matched_current == 0
+                      : hexa::comm::CountMatchedReadersWithUserData(writer.get(),
+                                                                     hexa::comm::kSupervisorCommandReader) == 0) {
       if (hexa::node::MonotonicNow_ns() > end) {
-        log->error("no supervisor on domain {} within {} s", *domain, *wait_s);
+        log->error("no supervisor on domain {} within {} s ({} other reader(s) of the command topic matched)",
+                   *domain, *wait_s, writer.Snapshot().publication_matched_current);
         return 1;
       }
       ws.Wait(DDS_MSECS(20));

@@ -64,7 +64,12 @@ SupervisorNode::SupervisorNode(const SupervisorNodeOptions& options,
       imu_reader_(participant_, imu_topic_, comm::EndpointRole::kControlReader,
                   node::QosFor(options.common, comm::TopicKind::kImuSample)),
       operator_reader_(participant_, operator_topic_, comm::EndpointRole::kControlReader,
-                       node::QosFor(options.common, comm::TopicKind::kOperatorCommand)),
+                       [&] {
+                         // Named, so that hexa_operator writes once THIS reader has matched.
+                         comm::QosParams q = node::QosFor(options.common, comm::TopicKind::kOperatorCommand);
+                         q.user_data = comm::kSupervisorCommandReader;
+                         return q;
+                       }()),
       fault_reader_(participant_, fault_topic_, comm::EndpointRole::kControlReader,
                     node::QosFor(options.common, comm::TopicKind::kFaultEvent), 64),
       setpoint_writer_(participant_, setpoint_topic_,

@@ -335,6 +335,28 @@ TEST_F(CommUnit, ReliableReaderOfARealTimePeriodicWriterReportsReliability) {
   EXPECT_EQ(lockstep_writer.Snapshot().publication_matched_current, 3u);
 }
 
+// hexa_operator writes once the supervisor's OperatorCommand reader has matched, not once any
+// reader has: a recorder's reader (no USER_DATA) matching first is not counted; the reader
+// that carries kSupervisorCommandReader is (in process, matching is immediate).
+TEST_F(CommUnit, OperatorWaitsForTheSupervisorsReaderNotAnyReader) {
+  Participant p(kDomainInProcess);
+  QosParams params;
+  Topic<hexa_msg_OperatorCommand> topic(p);
+  Writer<hexa_msg_OperatorCommand> writer(p, topic, params);
+  Reader<hexa_msg_OperatorCommand> recorder(p, topic, EndpointRole::kRecorderReader, params);
+  EXPECT_EQ(writer.Snapshot().publication_matched_current, 1u);
+  EXPECT_EQ(CountMatchedReadersWithUserData(writer.get(), kSupervisorCommandReader), 0);
+  QosParams supervisor_params = params;
+  supervisor_params.user_data = kSupervisorCommandReader;
+  {
+    Reader<hexa_msg_OperatorCommand> supervisor(p, topic, EndpointRole::kControlReader, supervisor_params);
+    EXPECT_EQ(writer.Snapshot().publication_matched_current, 2u);
+    EXPECT_EQ(CountMatchedReadersWithUserData(writer.get(), kSupervisorCommandReader), 1);
+    EXPECT_EQ(CountMatchedReadersWithUserData(writer.get(), "role=other"), 0);
+  }
+  EXPECT_EQ(CountMatchedReadersWithUserData(writer.get(), kSupervisorCommandReader), 0);  // gone
+}
+
 TEST_F(CommUnit, GuardConditionWakesWaitSet) {
   Participant p(kDomainInProcess);
   GuardCondition guard(p);

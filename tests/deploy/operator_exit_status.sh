@@ -1,7 +1,9 @@
 #!/bin/sh
 # hexa_operator's exit status says whether the command arrived (docs/deployment.md):
 #   0  acknowledged by every matched reader;
-#   1  nobody matched within --wait.
+#   1  the supervisor's command reader (or, with --to any-reader, any reader) did not match
+#      within --wait: a recorder alone is not the supervisor (a command written before the
+#      supervisor's reader matched would never reach it).
 # Exit 3 (sent, but a matched reader never acknowledged it; logged at error level, where it
 # used to be an info line with exit 0) is not exercised here: a reader that matches and then
 # never acknowledges cannot be made without a race (a reader stopped with SIGSTOP before the
@@ -15,12 +17,13 @@ fi
 DOMAIN=$((120 + $$ % 20))
 DIR=$(mktemp -d)
 READER=""
+SUPERVISOR=""
 cleanup() {
-  if [ -n "$READER" ]; then
-    kill -CONT "$READER" 2>/dev/null
-    kill -TERM "$READER" 2>/dev/null
-    wait "$READER" 2>/dev/null
-  fi
+  for p in $READER $SUPERVISOR; do
+    kill -CONT "$p" 2>/dev/null
+    kill -TERM "$p" 2>/dev/null
+    wait "$p" 2>/dev/null
+  done
   rm -rf "$DIR"
 }
 trap cleanup EXIT INT TERM
@@ -42,7 +45,15 @@ check 1 "no supervisor on domain $DOMAIN" "nobody listening" -- \
 "$B/services/recorder/hexa_recorder" record --output "$DIR/ops.mcap" --domain "$DOMAIN" \
   --topics hexa_OperatorCommand >"$DIR/recorder.log" 2>&1 &
 READER=$!
-check 0 "matched, acknowledged" "reader running" -- \
+check 1 "no supervisor on domain $DOMAIN within 3 s (1 other reader(s)" "a recorder alone is not the supervisor" -- \
+  "$B/services/task_space/hexa_operator" --domain "$DOMAIN" --wait 3 --linger 0.1 reset
+check 0 "matched, acknowledged" "a recorder alone, --to any-reader" -- \
+  "$B/services/task_space/hexa_operator" --domain "$DOMAIN" --wait 10 --linger 0.1 --to any-reader reset
+
+# A supervisor (lockstep, waiting for its peers: its command reader exists from the start).
+"$B/services/task_space/hexa_task_space" --domain "$DOMAIN" >"$DIR/supervisor.log" 2>&1 &
+SUPERVISOR=$!
+check 0 "(2 reader(s) matched, acknowledged)" "supervisor and recorder running" -- \
   "$B/services/task_space/hexa_operator" --domain "$DOMAIN" --wait 10 --linger 0.1 reset
 
 exit $fail

@@ -66,7 +66,7 @@ Exchange SendMarkedCommand(const std::string& dir, const std::string& dds_config
   EXPECT_GT(g.Start(rec, err), 0) << err;
   ChildSpec op{"operator",
                {HEXA_OPERATOR, "--domain", std::to_string(domain), "--trajectory", "/" + marker + ".csv",
-                "--wait", "30", "start"},
+                "--wait", "30", "--to", "any-reader", "start"},
                env, dir + "/operator.log"};
   op.env["HEXA_IDENTITY"] = "operator";
   EXPECT_GT(g.Start(op, err), 0) << err;

@@ -61,6 +61,9 @@ enum class LivelinessKind : uint8_t { kAutomatic, kManualByTopic };
 
 // Ownership strengths of the hot-standby scheme (docs/design.md "Safety").
 inline constexpr int32_t kPrimaryOwnershipStrength = 20;
+// USER_DATA of the supervisor's OperatorCommand reader: hexa_operator writes once a reader
+// with it has matched (a recorder's reader matching first is not the supervisor's).
+inline constexpr const char* kSupervisorCommandReader = "role=supervisor";
 inline constexpr int32_t kStandbyOwnershipStrength = 10;
 
 struct QosParams {
@@ -78,8 +81,10 @@ struct QosParams {
   // LegSetpoint: AUTOMATIC liveliness lease of the supervisor's writer (infinite = none). A
   // leg controller learns from it that the supervisor's process is gone (docs/faults.md).
   double setpoint_liveliness_lease_s = std::numeric_limits<double>::infinity();
-  // Writer only: USER_DATA QoS, readable by every matched reader (the ValveCommand writers
-  // say which leg they drive: "leg=3 standby=0"; docs/faults.md). Empty = none.
+  // USER_DATA QoS of the endpoint, readable by every matched peer: the ValveCommand writers
+  // say which leg they drive ("leg=3 standby=0"; docs/faults.md), the supervisor's
+  // OperatorCommand reader says it is the supervisor's (kSupervisorCommandReader: hexa_operator
+  // waits for that reader, not for any). Empty = none.
   std::string user_data;
   // ValveCommand writer only: EXCLUSIVE ownership strength (primary 20, standby 10).
   int32_t ownership_strength = kPrimaryOwnershipStrength;

@@ -27,6 +27,10 @@ namespace hexa::comm {
 void EnableWriteBatching();
 bool WriteBatchingEnabled();
 
+// Readers matched by `writer` whose USER_DATA is exactly `user_data` (QosParams::user_data).
+// Allocates: not for the cycle.
+int CountMatchedReadersWithUserData(dds_entity_t writer, const std::string& user_data);
+
 template <typename T>
 concept HasHeader = requires(T t) { t.header.source_time_ns; };
 template <typename T>
