@@ -164,8 +164,11 @@ bool HostHasControlProcess(const Host& host) {
 
 int DefaultPriority(Role role) {
   switch (role) {
-    case deployment::PLANT: return 80;        // the clock master (hexa_plant_sim uses 80)
-    case deployment::LEG: return 70;          // hexa_leg_ctrl
+    // The legs highest: the tightest deadline (10 ms lease) and the shortest work; a plant or
+    // supervisor above them on their CPU made them lapse (docs/deployment.md, "Where the
+    // lapses' milliseconds go"). The same defaults as the services' own.
+    case deployment::PLANT: return 70;        // hexa_plant_sim: late, its schedule slips
+    case deployment::LEG: return 80;          // hexa_leg_ctrl
     case deployment::SUPERVISOR: return 75;   // hexa_task_space
     case deployment::RECORDER: return 50;     // below the loop; starved, it loses samples
     default: return 0;

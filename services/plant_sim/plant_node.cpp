@@ -1008,17 +1008,15 @@ int PlantNode::RunRealtime(std::uint64_t last_tick) {
     if (late_ns > 1'000'000) ++overruns_;
     cycle_times_.Add(static_cast<double>(late_ns) * 1e-9);
     tick_wall_.Add(late_ns);
-    if (late_ns > kSlipAfter_ns) {
+    if (slips_.Record(tick_, late_ns)) {
       // The host stalled this process (and, on one machine, the controllers with it). The
       // simulated rig stops with it: the schedule restarts from now instead of stepping the
       // missed ticks in a burst that no controller could answer (their commands would all
       // look stale: a fault of the simulation, not of the controllers). A real rig does not
-      // stop; docs/performance.md says what this hides and how often it happens.
-      if (slips_ == 0)
-        log_->warn("tick {}: the plant woke {:.1f} ms late: its schedule slips (simulated time "
-                   "pauses with the host; counted, logged once)", tick_, late_ns * 1e-6);
-      ++slips_;
-      slipped_ns_ += late_ns;
+      // stop; docs/performance.md says what this hides and how often it happens. Every slip
+      // is logged with its tick, so that a lapse can be matched to the stall before it.
+      log_->warn("tick {}: the plant woke {:.1f} ms late: its schedule slips (simulated time "
+                 "pauses with the host; slip {})", tick_, late_ns * 1e-6, slips_.count());
       slip_recent_until_tick_ = tick_ + options_.realtime_stale_ticks;
       clock_gettime(CLOCK_MONOTONIC, &next);
     }
@@ -1069,7 +1067,7 @@ void PlantNode::WriteSummary(int exit_code) const {
                exit_code, static_cast<unsigned long long>(tick_),
                static_cast<double>(tick_) * kTickS, valve.requested_deadline_missed_total,
                overruns_, static_cast<unsigned long long>(resent_samples_),
-               static_cast<unsigned long long>(slips_), static_cast<double>(slipped_ns_) * 1e-9,
+               static_cast<unsigned long long>(slips_.count()), static_cast<double>(slips_.total_ns()) * 1e-9,
                static_cast<double>(loop_ended_ns_ - loop_started_ns_) * 1e-9,
                options_.common.mode == node::TimeMode::kRealtime ? "wake_lateness_s" : "tick_wall_s",
                tick_wall_.Quantile_s(0.5), tick_wall_.Quantile_s(0.99), tick_wall_.max_s(),
@@ -1088,7 +1086,15 @@ void PlantNode::WriteSummary(int exit_code) const {
                  compute_[i].max_s(), static_cast<unsigned long long>(compute_[i].over_budget()),
                  static_cast<unsigned long long>(compute_[i].cycles()));
   }
-  std::fprintf(f, "\n  ]\n}\n");
+  // Every slip's tick (the first ScheduleSlips::kKept), to match a fault to the stall before it.
+  std::fprintf(f, "\n  ],\n  \"worst_slip\": {\"tick\": %llu, \"late_s\": %.6f},\n  \"slips\": [",
+               static_cast<unsigned long long>(slips_.worst().tick),
+               static_cast<double>(slips_.worst().late_ns) * 1e-9);
+  for (std::size_t k = 0; k < slips_.kept_count(); ++k)
+    std::fprintf(f, "%s{\"tick\": %llu, \"late_s\": %.6f}", k == 0 ? "" : ", ",
+                 static_cast<unsigned long long>(slips_.kept(k).tick),
+                 static_cast<double>(slips_.kept(k).late_ns) * 1e-9);
+  std::fprintf(f, "]\n}\n");
   std::fclose(f);
 }
 
@@ -1130,9 +1136,19 @@ int PlantNode::Run() {
              tick_, static_cast<double>(tick_) * kTickS, valve.requested_deadline_missed_total,
              overruns_, faults, resent_samples_, barrier_.reasks_total(), supervisor_reasks_,
              sensors_writer_.write_errors_total(), recorder_syncs_, recorder_sync_blocks_,
-             recorder_sync_wait_s_, recorder_syncs_given_up_, slips_,
-             static_cast<double>(slipped_ns_) * 1e-6, host_stalls_, all_lapsed_logged_, lapses_while_fresh_, rejected,
+             recorder_sync_wait_s_, recorder_syncs_given_up_, slips_.count(),
+             static_cast<double>(slips_.total_ns()) * 1e-6, host_stalls_, all_lapsed_logged_, lapses_while_fresh_, rejected,
              writers_.Describe());
+  if (slips_.count() > 0) {
+    std::string ticks;
+    for (std::size_t k = 0; k < slips_.kept_count(); ++k)
+      ticks += fmt::format("{}{} ({:.1f} ms)", k == 0 ? "" : ", ", slips_.kept(k).tick,
+                           static_cast<double>(slips_.kept(k).late_ns) * 1e-6);
+    log_->info("schedule slips (wake-ups more than {:.1f} ms late): {}, worst {:.1f} ms at tick {}; "
+               "ticks{}: {}", static_cast<double>(slips_.threshold_ns()) * 1e-6, slips_.count(),
+               static_cast<double>(slips_.worst().late_ns) * 1e-6, slips_.worst().tick,
+               slips_.count() > slips_.kept_count() ? " (the first ones)" : "", ticks);
+  }
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     if (compute_[i].cycles() == 0) continue;
     log_->info("leg {} compute time: max {:.3f} ms, {} of {} cycles over the {:.3f} ms budget",

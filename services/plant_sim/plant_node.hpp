@@ -28,6 +28,7 @@
 #include "hexa/comm/comm.hpp"
 #include "hexa/core/command_hygiene.hpp"
 #include "hexa/core/lockstep_protocol.hpp"
+#include "hexa/core/schedule_slips.hpp"
 #include "hexa/core/plant_faults.hpp"
 #include "hexa/core/platform_plant.hpp"
 #include "hexa/services/node.hpp"
@@ -225,9 +226,10 @@ class PlantNode {
   bool sync_suspended_ = false;  // a sync was given up: no blocking until a wait succeeds
   std::uint64_t recorder_syncs_given_up_ = 0;
   // Real time: wake-ups later than this restart the schedule (RunRealtime).
+  // Every slip is logged with its tick and kept (count, total, worst, the first 64 ticks) for
+  // the summary: a lapse's tick can be matched to the stall before it.
   static constexpr int64_t kSlipAfter_ns = 2'000'000;
-  std::uint64_t slips_ = 0;
-  int64_t slipped_ns_ = 0;
+  core::ScheduleSlips slips_{kSlipAfter_ns};
   std::uint64_t recorder_syncs_ = 0;      // acknowledgement waits
   std::uint64_t recorder_sync_blocks_ = 0;  // of them, the loop stopped for
   double recorder_sync_wait_s_ = 0.0;     // time the loop stood still for them

@@ -354,8 +354,8 @@ TEST_F(Generated, UnitsAreNotifyWithWatchdogRestartAndRealtimeResources) {
   EXPECT_TRUE(has(u.exec_start, {"--leg", "4"}));
   EXPECT_TRUE(has(u.exec_start, {"--mode", "realtime"}));
   EXPECT_TRUE(has(u.exec_start, {"--valve-readers", "2"}));
-  EXPECT_TRUE(has(u.exec_start, {"--rt-priority", "70"}));
-  EXPECT_EQ(u.Get("Service.CPUSchedulingPriority"), "70");
+  EXPECT_TRUE(has(u.exec_start, {"--rt-priority", "80"}));
+  EXPECT_EQ(u.Get("Service.CPUSchedulingPriority"), "80");
   ASSERT_EQ(u.exec_start_pre.size(), 1u);
   EXPECT_TRUE(has(u.exec_start_pre[0], {"verify-security"}));
   EXPECT_NE(std::find(u.environment.begin(), u.environment.end(),
@@ -372,6 +372,9 @@ TEST_F(Generated, UnitsAreNotifyWithWatchdogRestartAndRealtimeResources) {
   ASSERT_TRUE(ParseUnitFile(Host("io-sup", "lib/systemd/system/hexa-plant.service"), u, err)) << err;
   EXPECT_TRUE(has(u.exec_start, {"--expect-recorder"}));
   EXPECT_EQ(u.Get("Service.CPUAffinity"), "1");
+  // Below the legs that share its CPU (docs/deployment.md, "Where the lapses' milliseconds go").
+  EXPECT_EQ(u.Get("Service.CPUSchedulingPriority"), "70");
+  EXPECT_TRUE(has(u.exec_start, {"--rt-priority", "70"}));
   EXPECT_FALSE(fs::exists(Host("io-sup", "lib/systemd/system/hexa-operator.service")));
 }
 
