@@ -119,6 +119,15 @@ double BsSmcController::DitherForceN(std::uint64_t tick, double desired_velocity
 }
 
 void BsSmcController::Update(const BsSmcInput& in, BsSmcOutput& out) {
+  Begin(in);
+  Complete(in, nullptr, out);
+}
+
+void BsSmcController::Finish(const BsSmcInput& in, const BsSmcFeedback& applied, BsSmcOutput& out) {
+  Complete(in, &applied, out);
+}
+
+BsSmcFeedback BsSmcController::Begin(const BsSmcInput& in) {
   const BsSmcParams& p = config_.params;
   const NominalLegModel& m = config_.model;
   const CylinderParams& cyl = m.cylinder;
@@ -129,7 +138,20 @@ void BsSmcController::Update(const BsSmcInput& in, BsSmcOutput& out) {
   const double v_m_s = velocity_diff_.Update(x_m);  // eq 40 on the measured position
   const double xd_m = in.desired_length_m - mid_m;
   const double e_m = x_m - xd_m;
-  const double edot_m_s = v_m_s - in.desired_velocity_m_s;
+  const bool observer_used = p.feedback_rate_fraction > 0.0 && p.feedback_rate_from_observer;
+  const double observer_force_n = in.has_observer_force
+                                      ? in.observer_force_n
+                                      : in.cap_pressure_pa * cyl.cap_area_m2 -
+                                            in.rod_pressure_pa * cyl.annulus_area_m2 -
+                                            m.air.atmosphere_pressure_pa * cyl.rod_area_m2;
+  bool observer_updated = false;
+  double v_feedback_m_s = v_m_s;
+  if (in.feedback_velocity_from_observer && observer_used) {
+    observer_.Update(x_m, observer_force_n);
+    observer_updated = true;
+    v_feedback_m_s = observer_.velocity_m_s();
+  }
+  const double edot_m_s = v_feedback_m_s - in.desired_velocity_m_s;
   const double s_m_s = edot_m_s + p.lambda_1_s * e_m;  // eq 19
 
   // Load model (eq 14, 18 with M kept): M x_ddot = phi_p - B x_dot + C, where
@@ -165,15 +187,17 @@ void BsSmcController::Update(const BsSmcInput& in, BsSmcOutput& out) {
     }
     integral_force_n_ = std::clamp(integral_force_n_, -p.integral_limit_n, p.integral_limit_n);
   }
-  // eq 45, plus the proportional reaching term -k_s S and the integral term (not in the paper).
-  const double phi = phi_hat - p.switching_gain_n * std::tanh(p.boundary_layer_xi_s_m * s_m_s) -
-                     p.reaching_proportional_n_s_m * s_m_s - integral_force_n_;
   // phi_dot (eq 38): the paper differentiates phi numerically (eq 40). Only its model part
   // is differentiated here: the feedback part (lambda e_dot, K tanh(xi S)) is sensor noise
   // at 1 kHz and its derivative drove a 34 Hz limit cycle (docs/controller.md); beta z
   // corrects what the model part misses.
   const double phi_model = phi_hat + p.effective_mass_kg * p.lambda_1_s * edot_m_s;
-  double phi_dot = force_diff_.Update(phi_model);  // eq 40
+  const double phi_dot_model = force_diff_.Update(phi_model);  // eq 40
+  // This leg's feedback part f (eq 45's feedback terms with k_s S): its rate below; what a
+  // coupled feedback mixes across the legs (Finish).
+  const double feedback_n = -p.effective_mass_kg * p.lambda_1_s * edot_m_s -
+                            p.switching_gain_n * std::tanh(p.boundary_layer_xi_s_m * s_m_s) -
+                            p.reaching_proportional_n_s_m * s_m_s;
   // Optional band-limited rate of the feedback part (issue 14d, deviation from eq 38):
   // dirty derivative s / (tau s + 1) by backward Euler, y_k = (tau y_k-1 + u_k - u_k-1) / (tau + h).
   // Observer variant: the rate is analytic, from the leg observer's acceleration and
@@ -182,9 +206,7 @@ void BsSmcController::Update(const BsSmcInput& in, BsSmcOutput& out) {
     const double tau = p.feedback_rate_time_constant_s;
     const double h = config_.period_s;
     if (p.feedback_rate_from_observer) {
-      observer_.Update(x_m, in.cap_pressure_pa * cyl.cap_area_m2 -
-                                in.rod_pressure_pa * cyl.annulus_area_m2 -
-                                m.air.atmosphere_pressure_pa * cyl.rod_area_m2);
+      if (!observer_updated) observer_.Update(x_m, observer_force_n);
       const double eddot = observer_.acceleration_m_s2() - in.desired_acceleration_m_s2;
       const double sdot = eddot + p.lambda_1_s * (observer_.velocity_m_s() - in.desired_velocity_m_s);
       const double th = std::tanh(p.boundary_layer_xi_s_m * s_m_s);
@@ -193,16 +215,41 @@ void BsSmcController::Update(const BsSmcInput& in, BsSmcOutput& out) {
                            p.reaching_proportional_n_s_m) * sdot;
       if (std::isfinite(rate)) feedback_rate_n_s_ = (tau * feedback_rate_n_s_ + h * rate) / (tau + h);
     } else {
-      const double feedback_n = -p.effective_mass_kg * p.lambda_1_s * edot_m_s -
-                                p.switching_gain_n * std::tanh(p.boundary_layer_xi_s_m * s_m_s) -
-                                p.reaching_proportional_n_s_m * s_m_s;
       if (feedback_primed_ && std::isfinite(feedback_n)) {
         feedback_rate_n_s_ = (tau * feedback_rate_n_s_ + (feedback_n - previous_feedback_n_)) / (tau + h);
       }
       feedback_primed_ = std::isfinite(feedback_n);
       previous_feedback_n_ = feedback_n;
     }
-    phi_dot += FeedbackRateFraction(vd) * feedback_rate_n_s_;
+  }
+  stage_.x_m = x_m;
+  stage_.v_m_s = v_m_s;
+  stage_.s_m_s = s_m_s;
+  stage_.phi_hat_n = phi_hat;
+  stage_.phi_model_n = phi_model;
+  stage_.phi_dot_model_n_s = phi_dot_model;
+  return BsSmcFeedback{feedback_n, feedback_rate_n_s_};
+}
+
+void BsSmcController::Complete(const BsSmcInput& in, const BsSmcFeedback* applied,
+                               BsSmcOutput& out) {
+  const BsSmcParams& p = config_.params;
+  const NominalLegModel& m = config_.model;
+  const CylinderParams& cyl = m.cylinder;
+  const double x_m = stage_.x_m;
+  const double v_m_s = stage_.v_m_s;
+  const double s_m_s = stage_.s_m_s;
+  const double vd = in.desired_velocity_m_s;
+  // eq 45, plus the proportional reaching term -k_s S and the integral term (not in the paper).
+  // Coupled (docs/task_space.md "Coupled leg feedback"): the feedback part is the mix the
+  // caller hands over instead of this leg's own.
+  const double phi =
+      applied ? stage_.phi_model_n + applied->force_n - integral_force_n_
+              : stage_.phi_hat_n - p.switching_gain_n * std::tanh(p.boundary_layer_xi_s_m * s_m_s) -
+                    p.reaching_proportional_n_s_m * s_m_s - integral_force_n_;
+  double phi_dot = stage_.phi_dot_model_n_s;
+  if (p.feedback_rate_fraction > 0.0) {
+    phi_dot += FeedbackRateFraction(vd) * (applied ? applied->rate_n_s : feedback_rate_n_s_);
   }
 
   // Backstepping (eq 35, 38): drive z to zero at rate beta.

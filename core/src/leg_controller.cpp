@@ -174,7 +174,7 @@ LegInputFault LegController::CheckSensors(const LegControllerInput& in, double& 
   return LegInputFault::kNone;
 }
 
-void LegController::Hold(LegControlStatus status, LegControllerOutput& out, LegInputFault fault,
+bool LegController::Hold(LegControlStatus status, LegControllerOutput& out, LegInputFault fault,
                          double value) {
   out.input_fault = fault;
   out.input_fault_value = value;
@@ -187,9 +187,44 @@ void LegController::Hold(LegControlStatus status, LegControllerOutput& out, LegI
   out.status = status;
   out.desired_length_m = last_desired_length_m_;
   ClearLawOutputs(out);
+  return false;
 }
 
 void LegController::Update(const LegControllerInput& raw, LegControllerOutput& out) {
+  if (!Prepare(raw, out)) return;
+  if (config_.kind != LegControllerKind::kPi) {  // BS-SMC, also outside an excitation window
+    BsSmcOutput o;
+    bssmc_.Update(pending_, o);
+    FinishBsSmc(o, out);
+  } else {
+    RunPi(out);
+  }
+}
+
+std::optional<BsSmcFeedback> LegController::BeginCoupled(const LegControllerInput& raw,
+                                                         LegControllerOutput& out,
+                                                         std::optional<double> observer_force_n,
+                                                         bool observer_velocity) {
+  if (!Prepare(raw, out)) return std::nullopt;
+  if (config_.kind == LegControllerKind::kPi) {
+    RunPi(out);
+    return std::nullopt;
+  }
+  if (observer_force_n) {
+    pending_.has_observer_force = true;
+    pending_.observer_force_n = *observer_force_n;
+  }
+  pending_.feedback_velocity_from_observer = observer_velocity;
+  return bssmc_.Begin(pending_);
+}
+
+void LegController::FinishCoupled(const BsSmcFeedback& applied, LegControllerOutput& out) {
+  BsSmcOutput o;
+  bssmc_.Finish(pending_, applied, o);
+  FinishBsSmc(o, out);
+}
+
+bool LegController::Prepare(const LegControllerInput& raw, LegControllerOutput& out) {
   // Kinematic calibration of the potentiometer (rig overlay, issue 14): the reading of piston
   // position x is offset + gain x; the law works on the corrected length.
   LegControllerInput calibrated;
@@ -223,7 +258,7 @@ void LegController::Update(const LegControllerInput& raw, LegControllerOutput& o
     out.guarding = excitation_->guarding();
     out.desired_length_m = in.length_m;
     ClearLawOutputs(out);
-    return;
+    return false;
   }
   if (!in.has_setpoint) return Hold(LegControlStatus::kHoldNoSetpoint, out);
   const double age_s = in.time_s - in.setpoint_time_s;
@@ -269,44 +304,53 @@ void LegController::Update(const LegControllerInput& raw, LegControllerOutput& o
   out.desired_length_m = ld_m;
   out.desired_velocity_m_s = vd_m_s;
   out.feedforward_force_n = ff_n;
-  if (config_.kind != LegControllerKind::kPi) {  // BS-SMC, also outside an excitation window
-    BsSmcInput b;
-    b.length_m = in.length_m;
-    b.cap_pressure_pa = in.cap_pressure_pa;
-    b.rod_pressure_pa = in.rod_pressure_pa;
-    b.supply_pressure_pa = in.supply_pressure_pa;
-    b.desired_length_m = ld_m;
-    b.desired_velocity_m_s = vd_m_s;
-    b.desired_acceleration_m_s2 = ad_m_s2;
-    b.has_feedforward = in.feedforward_valid;
-    b.feedforward_force_n = ff_n;
-    b.tick = in.tick;
-    BsSmcOutput o;
-    bssmc_.Update(b, o);
-    out.valve_v = o.valve_v;
-    out.sliding_surface_m_s = std::isfinite(o.sliding_surface_m_s) ? o.sliding_surface_m_s : 0.0;
-    out.velocity_m_s = std::isfinite(o.velocity_m_s) ? o.velocity_m_s : 0.0;
-    out.desired_force_n = std::isfinite(o.desired_force_n) ? o.desired_force_n : 0.0;
-    out.force_error_n = std::isfinite(o.force_error_n) ? o.force_error_n : 0.0;
-    out.desired_force_rate_n_s = std::isfinite(o.desired_force_rate_n_s) ? o.desired_force_rate_n_s : 0.0;
-  } else {
-    PiInput p;
-    p.length_m = in.length_m;
-    p.desired_length_m = ld_m;
-    p.desired_velocity_m_s = vd_m_s;
-    p.has_feedforward = in.feedforward_valid;
-    p.feedforward_force_n = ff_n;
-    p.cap_pressure_pa = in.cap_pressure_pa;
-    p.rod_pressure_pa = in.rod_pressure_pa;
-    PiOutput o;
-    pi_.Update(p, o);
-    out.valve_v = o.valve_v;
-    out.sliding_surface_m_s = 0.0;
-    out.velocity_m_s = std::isfinite(o.velocity_m_s) ? o.velocity_m_s : 0.0;
-    out.desired_force_n = 0.0;
-    out.force_error_n = 0.0;
-    out.desired_force_rate_n_s = 0.0;
-  }
+  BsSmcInput& b = pending_;
+  b = BsSmcInput{};
+  b.length_m = in.length_m;
+  b.cap_pressure_pa = in.cap_pressure_pa;
+  b.rod_pressure_pa = in.rod_pressure_pa;
+  b.supply_pressure_pa = in.supply_pressure_pa;
+  b.desired_length_m = ld_m;
+  b.desired_velocity_m_s = vd_m_s;
+  b.desired_acceleration_m_s2 = ad_m_s2;
+  b.has_feedforward = in.feedforward_valid;
+  b.feedforward_force_n = ff_n;
+  b.tick = in.tick;
+  return true;
+}
+
+void LegController::FinishBsSmc(const BsSmcOutput& o, LegControllerOutput& out) {
+  out.valve_v = o.valve_v;
+  out.sliding_surface_m_s = std::isfinite(o.sliding_surface_m_s) ? o.sliding_surface_m_s : 0.0;
+  out.velocity_m_s = std::isfinite(o.velocity_m_s) ? o.velocity_m_s : 0.0;
+  out.desired_force_n = std::isfinite(o.desired_force_n) ? o.desired_force_n : 0.0;
+  out.force_error_n = std::isfinite(o.force_error_n) ? o.force_error_n : 0.0;
+  out.desired_force_rate_n_s = std::isfinite(o.desired_force_rate_n_s) ? o.desired_force_rate_n_s : 0.0;
+  Defend(out);
+}
+
+void LegController::RunPi(LegControllerOutput& out) {
+  const BsSmcInput& b = pending_;
+  PiInput p;
+  p.length_m = b.length_m;
+  p.desired_length_m = b.desired_length_m;
+  p.desired_velocity_m_s = b.desired_velocity_m_s;
+  p.has_feedforward = b.has_feedforward;
+  p.feedforward_force_n = b.feedforward_force_n;
+  p.cap_pressure_pa = b.cap_pressure_pa;
+  p.rod_pressure_pa = b.rod_pressure_pa;
+  PiOutput o;
+  pi_.Update(p, o);
+  out.valve_v = o.valve_v;
+  out.sliding_surface_m_s = 0.0;
+  out.velocity_m_s = std::isfinite(o.velocity_m_s) ? o.velocity_m_s : 0.0;
+  out.desired_force_n = 0.0;
+  out.force_error_n = 0.0;
+  out.desired_force_rate_n_s = 0.0;
+  Defend(out);
+}
+
+void LegController::Defend(LegControllerOutput& out) {
   // Last line of defence: never emit a non-finite or out-of-range voltage.
   const ValveParams& v = config_.model.valve;
   if (!std::isfinite(out.valve_v)) {

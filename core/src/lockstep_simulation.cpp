@@ -1,7 +1,11 @@
 #include "hexa/core/lockstep_simulation.hpp"
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -11,6 +15,11 @@ void LockstepConfig::Validate() const {
   if (!(tick_s > 0.0 && tick_s <= 0.01)) {
     throw std::invalid_argument("LockstepConfig.tick_s = " + std::to_string(tick_s) +
                                 " s: must be in (0, 0.01]");
+  }
+  if (!(coupled_reference_mass_kg >= 0.0 && coupled_reference_mass_kg < 1000.0)) {
+    throw std::invalid_argument("LockstepConfig.coupled_reference_mass_kg = " +
+                                std::to_string(coupled_reference_mass_kg) +
+                                " kg: must be in [0, 1000) (0: the BS-SMC's effective mass)");
   }
   if (supervisor_every_ticks < 1) {
     throw std::invalid_argument("LockstepConfig.supervisor_every_ticks = " +
@@ -38,7 +47,16 @@ LockstepSimulation::LockstepSimulation(const LockstepConfig& config) : config_(c
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     LegControllerConfig leg = LegControllerConfig::FromModel(model, i, config_.controller);
     leg.excitation = config_.excitation[i];
+    coupling_mass_kg_[i] = config_.coupled_reference_mass_kg > 0.0
+                               ? config_.coupled_reference_mass_kg
+                               : leg.params.bssmc.effective_mass_kg;
     legs_[i] = std::make_unique<LegController>(leg);
+  }
+  if (config_.coupled_leg_feedback) {
+    Pose home;
+    home.p_BP_B_m = supervisor_->rig().geometry.home_position_m;
+    home.R_BP.setIdentity();
+    UpdateCoupling(home);
   }
   hygiene_ = CommandHygieneParams::FromValve(config_.rig.valve, 0);
   schedule_.supervisor_every_ticks = config_.supervisor_every_ticks;
@@ -67,10 +85,13 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
       setpoints_[i].Add(IssuedSetpoint{tick_, now_s, sup_out_.setpoint[i]});
   }
 
+  if (config_.coupled_leg_feedback && supervisor_ran_ && sup_out_.estimate.status == KinStatus::kOk)
+    UpdateCoupling(sup_out_.estimate.pose);
+
   // Legs: sensor sample of this tick, the setpoint the protocol assigns to it.
-  LegArray<double> valve_v{};
+  LegArray<LegControllerInput> leg_in{};
   for (std::size_t i = 0; i < kNumLegs; ++i) {
-    LegControllerInput in;
+    LegControllerInput& in = leg_in[i];
     in.tick = tick_;
     in.time_s = now_s;
     const LegSensorReading& s = plant_before_.legs[i];
@@ -79,7 +100,14 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
     in.rod_pressure_pa = s.chamber2_pressure_pa;
     in.supply_pressure_pa = s.supply_pressure_pa;
     SetSetpointInput(setpoints_[i].ForTick(tick_, schedule_.supervisor_every_ticks), in);
-    legs_[i]->Update(in, leg_out_[i]);
+  }
+  if (config_.coupled_leg_feedback) {
+    RunLegsCoupled(leg_in);
+  } else {
+    for (std::size_t i = 0; i < kNumLegs; ++i) legs_[i]->Update(leg_in[i], leg_out_[i]);
+  }
+  LegArray<double> valve_v{};
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
     barrier_.Answer(static_cast<int>(i) + 1, leg_out_[i].tick);
     // Command hygiene exactly as the plant service applies it.
     LatestCommand cmd{true, leg_out_[i].tick, leg_out_[i].valve_v};
@@ -97,6 +125,59 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
   const PlantStatus status = plant_->Step(valve_v, config_.tick_s);
   if (status == PlantStatus::kOk) ++tick_;
   return status;
+}
+
+void LockstepSimulation::UpdateCoupling(const Pose& pose) {
+  Matrix6d m_ls;
+  if (LegSpaceMassMatrix(supervisor_->rig().geometry,
+                         PlatformInertialParams::FromRig(supervisor_->rig()), pose,
+                         m_ls) != KinStatus::kOk) {
+    return;  // keep the last matrix
+  }
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    const int ii = static_cast<int>(i);
+    if (config_.coupled_raise_only) {
+      const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(m_ls);
+      const Vector6d raised = eig.eigenvalues().cwiseMax(coupling_mass_kg_[i]);
+      const Matrix6d shaped = eig.eigenvectors() * raised.asDiagonal() * eig.eigenvectors().transpose();
+      coupling_.row(ii) = shaped.row(ii) / coupling_mass_kg_[i];
+    } else {
+      coupling_.row(ii) = m_ls.row(ii) / coupling_mass_kg_[i];
+    }
+  }
+  coupling_inverse_mass_ = m_ls.ldlt().solve(Matrix6d::Identity());
+}
+
+void LockstepSimulation::RunLegsCoupled(const LegArray<LegControllerInput>& in) {
+  // Two passes (docs/task_space.md "Coupled leg feedback"): every leg's own feedback part,
+  // then each running BS-SMC completes with sum_j W_ij f_j over the legs that run it (a
+  // holding leg contributes nothing).
+  // The observers see the legs' accelerations on the coupled platform: m_obs (M_ls^-1 F)_i.
+  Vector6d force_n;
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    const NominalLegModel& m = legs_[i]->config().model;
+    force_n[static_cast<int>(i)] = in[i].cap_pressure_pa * m.cylinder.cap_area_m2 -
+                                   in[i].rod_pressure_pa * m.cylinder.annulus_area_m2 -
+                                   m.air.atmosphere_pressure_pa * m.cylinder.rod_area_m2;
+  }
+  const Vector6d acceleration_m_s2 = coupling_inverse_mass_ * force_n;
+  LegArray<std::optional<BsSmcFeedback>> own{};
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    const double m_obs = legs_[i]->config().params.bssmc.observer_mass_kg;
+    own[i] = legs_[i]->BeginCoupled(in[i], leg_out_[i], m_obs * acceleration_m_s2[static_cast<int>(i)],
+                                    config_.coupled_observer_velocity);
+  }
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    if (!own[i]) continue;
+    BsSmcFeedback mixed;
+    for (std::size_t j = 0; j < kNumLegs; ++j) {
+      if (!own[j]) continue;
+      const double w = coupling_(static_cast<int>(i), static_cast<int>(j));
+      mixed.force_n += w * own[j]->force_n;
+      mixed.rate_n_s += w * own[j]->rate_n_s;
+    }
+    legs_[i]->FinishCoupled(mixed, leg_out_[i]);
+  }
 }
 
 PaperSessionResult RunPaperSession(const LockstepConfig& config, PaperMotion motion,

@@ -78,4 +78,29 @@ KinStatus LegForcesForMotion(const GeometryParams& geometry, const PlatformInert
   return KinStatus::kOk;
 }
 
+KinStatus LegSpaceMassMatrix(const GeometryParams& geometry, const PlatformInertialParams& inertial,
+                             const Pose& pose, Matrix6d& out) {
+  out.setZero();
+  if (!pose.R_BP.allFinite() || !pose.p_BP_B_m.allFinite()) return KinStatus::kInvalidInput;
+  Matrix6d J;
+  LegJacobian(geometry, pose, J);  // eq 48
+  if (!J.allFinite()) return KinStatus::kDegenerate;
+  const Eigen::PartialPivLU<Matrix6d> lu(J);
+  const double rcond = lu.rcond();
+  if (!std::isfinite(rcond) || rcond < 1e-10) return KinStatus::kDegenerate;
+  const Matrix6d j_inv = lu.inverse();
+  Matrix6d mp = Matrix6d::Zero();
+  mp.topLeftCorner<3, 3>() = inertial.platform_mass_kg * Eigen::Matrix3d::Identity();
+  mp.bottomRightCorner<3, 3>() =
+      pose.R_BP * inertial.platform_inertia_P_kg_m2 * pose.R_BP.transpose();
+  out = j_inv.transpose() * mp * j_inv;
+  out.diagonal().array() += inertial.leg_moving_mass_kg;
+  out = 0.5 * (out + out.transpose()).eval();  // exactly symmetric
+  if (!out.allFinite()) {
+    out.setZero();
+    return KinStatus::kDegenerate;
+  }
+  return KinStatus::kOk;
+}
+
 }  // namespace hexa

@@ -50,6 +50,7 @@
 #include "hexa/core/kinematics.hpp"
 #include "hexa/core/feasibility.hpp"
 #include "hexa/core/lockstep_simulation.hpp"
+#include "hexa/core/platform_dynamics.hpp"
 
 namespace {
 
@@ -87,6 +88,11 @@ std::vector<Key> Keys() {
       {"ol_gate", [](auto& c, double v) { c.supervisor.outer_loop.gate_leg_speed_m_s = v; }},
       {"lead", [](auto& c, double v) { c.supervisor.setpoint_lead_s = v; }},
       {"ff", [](auto& c, double v) { c.supervisor.feedforward_enabled = v != 0.0; }},
+      // Coupled leg feedback (LockstepConfig::coupled_leg_feedback, docs/task_space.md).
+      {"coupled", [](auto& c, double v) { c.coupled_leg_feedback = v != 0.0; }},
+      {"coupled_mref", [](auto& c, double v) { c.coupled_reference_mass_kg = v; }},
+      {"coupled_obsv", [](auto& c, double v) { c.coupled_observer_velocity = v != 0.0; }},
+      {"coupled_raise", [](auto& c, double v) { c.coupled_raise_only = v != 0.0; }},
       // Feedback part's rate in phi_dot (issue 14d): fraction alpha and low-pass tau_fb.
       {"fb_alpha", [](auto& c, double v) { c.leg_controller.bssmc.feedback_rate_fraction = v; }},
       {"fb_tau", [](auto& c, double v) { c.leg_controller.bssmc.feedback_rate_time_constant_s = v; }},
@@ -663,12 +669,9 @@ void Modes(const hexa::LockstepConfig& config) {
   home.R_BP.setIdentity();
   hexa::Matrix6d J;
   hexa::LegJacobian(rig.geometry, home, J);
-  hexa::Matrix6d mp = hexa::Matrix6d::Zero();
-  mp.topLeftCorner<3, 3>() = rig.platform.mass_kg * Eigen::Matrix3d::Identity();
-  mp.bottomRightCorner<3, 3>() = rig.platform.inertia_diag_kg_m2.asDiagonal();
   const hexa::Matrix6d j_inv = J.inverse();
-  const hexa::Matrix6d ml = j_inv.transpose() * mp * j_inv +
-                            rig.cylinder.moving_mass_kg * hexa::Matrix6d::Identity();
+  hexa::Matrix6d ml;
+  hexa::LegSpaceMassMatrix(rig.geometry, hexa::PlatformInertialParams::FromRig(rig), home, ml);
   const Eigen::SelfAdjointEigenSolver<hexa::Matrix6d> eig(ml);
   const hexa::BsSmcParams& b = config.leg_controller.bssmc;
   const double c = b.effective_mass_kg * b.lambda_1_s + b.switching_gain_n * b.boundary_layer_xi_s_m +
@@ -691,8 +694,25 @@ void Modes(const hexa::LockstepConfig& config) {
   std::printf("velocity gain c %.1f N s/m, beta %.1f 1/s, lag %.2f ms, feedback rate fraction %.2f, "
               "low-pass %.2f ms\n", c, beta, 1000 * tau, a, 1000 * tf);
   std::printf("mode mass kg | task direction (x y z m, roll pitch yaw rad per unit) | crossover Hz | phase margin deg\n");
+  // Coupled leg feedback (coupled=1): the feedback acts through W = M_ls / M, i.e. with gain
+  // (m_k / M) c on mode k: every mode's loop is that of a single mass M.
+  const double m_ref = config.coupled_reference_mass_kg > 0.0 ? config.coupled_reference_mass_kg
+                                                               : b.effective_mass_kg;
+  if (config.coupled_leg_feedback) {
+    // W at home and the gain of independent, equal noise on the six feedback parts to one
+    // leg's applied feedback: the Euclidean norm of W's row (1 uncoupled).
+    const Eigen::Vector<double, 6> raised =
+        config.coupled_raise_only ? eig.eigenvalues().cwiseMax(m_ref) : eig.eigenvalues();
+    const hexa::Matrix6d w = eig.eigenvectors() * raised.asDiagonal() * eig.eigenvectors().transpose() / m_ref;
+    std::printf("coupled leg feedback: modes %s m_ref = %.3f kg get the loop of that mass; W row 1: "
+                "%.3f %.3f %.3f %.3f %.3f %.3f, noise gain (row norm) %.2f\n",
+                config.coupled_raise_only ? "heavier than" : "all, with", m_ref, w(0, 0), w(0, 1),
+                w(0, 2), w(0, 3), w(0, 4), w(0, 5), w.row(0).norm());
+  }
   for (int k = 0; k < 6; ++k) {
-    const double m = eig.eigenvalues()[k];
+    const double m = !config.coupled_leg_feedback ? eig.eigenvalues()[k]
+                     : config.coupled_raise_only    ? std::min(m_ref, eig.eigenvalues()[k])
+                                                    : m_ref;
     auto gain = [&](double w) { return c / (m * w) * std::abs(path(w)); };
     double lo = 1e-3, hi = 1e5;  // |L| falls monotonically with w (|path| <= 1 + a / (beta tf))
     for (int it = 0; it < 200; ++it) {
@@ -702,7 +722,7 @@ void Modes(const hexa::LockstepConfig& config) {
     const double w = lo;
     const double phase = -0.5 * 3.14159265358979323846 + std::arg(path(w)) - w * tau;
     const hexa::Vector6d dir = j_inv * eig.eigenvectors().col(k);
-    std::printf("%8.3f | %7.3f %7.3f %7.3f %7.3f %7.3f %7.3f | %6.1f | %6.1f\n", m, dir[0], dir[1], dir[2],
+    std::printf("%8.3f | %7.3f %7.3f %7.3f %7.3f %7.3f %7.3f | %6.1f | %6.1f\n", eig.eigenvalues()[k], dir[0], dir[1], dir[2],
                 dir[3], dir[4], dir[5], w / (2 * 3.14159265358979323846),
                 180.0 + phase * 57.29577951308232);
   }

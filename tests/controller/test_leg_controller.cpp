@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -379,6 +380,85 @@ TEST(LegControllerConfig, ValidateNamesTheField) {
   c = MakeConfig(LegControllerKind::kPi);
   c.params.setpoint_timeout_s = 0.0;
   EXPECT_THROW(LegController{c}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace hexa
+
+namespace hexa {
+namespace {
+
+// Coupled leg feedback (docs/task_space.md "Coupled leg feedback"): BeginCoupled +
+// FinishCoupled with the leg's own feedback part is the uncoupled law (to round-off: the
+// coupled path sums phi as model part + feedback part), and a different feedback part moves
+// phi by exactly the difference, its rate phi_dot by the fraction times the difference.
+TEST(LegControllerCoupled, OwnFeedbackReproducesTheUncoupledLawAndAMixMovesPhi) {
+  LegControllerConfig config = MakeConfig(LegControllerKind::kBsSmc);
+  LegController uncoupled(config), own(config), shifted(config);
+  const double mid = config.model.cylinder.mid_stroke_length_m;
+  const double fraction = config.params.bssmc.feedback_rate_fraction;
+  ASSERT_GT(fraction, 0.0);
+  double worst_v = 0.0, worst_phi = 0.0;
+  int moving = 0, unsaturated = 0;
+  for (int k = 0; k < 3000; ++k) {
+    const double t = 0.001 * k;
+    LegControllerInput in;
+    in.tick = static_cast<std::uint64_t>(k);
+    in.time_s = t;
+    in.length_m = mid + 0.03 * std::sin(2.0 * M_PI * t) + 2e-5 * std::sin(7.0 * k);  // noisy
+    in.cap_pressure_pa = 4.0e5 + 0.5e5 * std::sin(2.0 * M_PI * t + 0.3);
+    in.rod_pressure_pa = 4.0e5 - 0.5e5 * std::sin(2.0 * M_PI * t + 0.3);
+    in.supply_pressure_pa = 7.0e5;
+    in.has_setpoint = true;
+    in.setpoint_tick = static_cast<std::uint64_t>(5 * (k / 5));
+    in.setpoint_time_s = 0.001 * in.setpoint_tick;
+    const double ts = in.setpoint_time_s;
+    in.setpoint_length_m = mid + 0.032 * std::sin(2.0 * M_PI * ts);
+    in.setpoint_velocity_m_s = 0.032 * 2.0 * M_PI * std::cos(2.0 * M_PI * ts);
+    in.setpoint_acceleration_m_s2 = -0.032 * 4.0 * M_PI * M_PI * std::sin(2.0 * M_PI * ts);
+    in.feedforward_valid = true;
+    in.feedforward_force_n = 15.0 + 5.0 * std::sin(2.0 * M_PI * ts);
+    LegControllerOutput a, b, c;
+    uncoupled.Update(in, a);
+    const auto fb = own.BeginCoupled(in, b);
+    const auto fb_c = shifted.BeginCoupled(in, c);
+    ASSERT_TRUE(fb && fb_c);
+    EXPECT_EQ(fb->force_n, fb_c->force_n);  // same state, same input
+    own.FinishCoupled(*fb, b);
+    BsSmcFeedback mix = *fb;
+    mix.force_n += 10.0;
+    mix.rate_n_s += 1000.0;
+    shifted.FinishCoupled(mix, c);
+    worst_v = std::max(worst_v, std::abs(a.valve_v - b.valve_v));
+    worst_phi = std::max(worst_phi, std::abs(a.desired_force_n - b.desired_force_n));
+    EXPECT_NEAR(c.desired_force_n - b.desired_force_n, 10.0, 1e-9) << k;
+    const double expected_rate =
+        1000.0 * fraction * (1.0 - std::exp(-std::pow(b.desired_velocity_m_s /
+                                                      config.params.bssmc.feedback_rate_full_speed_m_s, 2)));
+    EXPECT_NEAR(c.desired_force_rate_n_s - b.desired_force_rate_n_s, expected_rate, 1e-6) << k;
+    moving += std::abs(expected_rate) > 100.0 ? 1 : 0;
+    unsaturated += a.valve_v > 0.5 && a.valve_v < 9.5 ? 1 : 0;
+    // `shifted` diverges from the others from here on: give it the others' state back.
+    shifted = own;
+  }
+  EXPECT_LT(worst_v, 1e-9) << "V";
+  EXPECT_LT(worst_phi, 1e-9) << "N";
+  EXPECT_GT(moving, 1000);       // the rate path was exercised at speed
+  EXPECT_GT(unsaturated, 1000);  // and the valve was not pinned at a limit
+  std::printf("own feedback vs uncoupled: worst valve %.2e V, phi %.2e N; %d ticks with rate, %d unsaturated\n",
+              worst_v, worst_phi, moving, unsaturated);
+}
+
+TEST(LegControllerCoupled, HoldingLegReturnsNoFeedbackPart) {
+  LegController c(MakeConfig(LegControllerKind::kBsSmc));
+  LegControllerInput in = RestInput(0.5034, 0.5034);
+  in.has_setpoint = false;
+  LegControllerOutput out;
+  EXPECT_FALSE(c.BeginCoupled(in, out).has_value());
+  EXPECT_EQ(out.status, LegControlStatus::kHoldNoSetpoint);
+  LegController pi(MakeConfig(LegControllerKind::kPi));  // the PI has no feedback part to mix
+  EXPECT_FALSE(pi.BeginCoupled(RestInput(0.5034, 0.5034), out).has_value());
+  EXPECT_EQ(out.status, LegControlStatus::kOk);
 }
 
 }  // namespace

@@ -6,8 +6,10 @@
 #include <cstdio>
 #include <random>
 
+#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
+#include "hexa/core/kinematics.hpp"
 #include "hexa/core/platform_dynamics.hpp"
 #include "hexa/core/platform_plant.hpp"
 
@@ -120,6 +122,82 @@ TEST(PlatformDynamics, HomeAtRestCarriesTheWeight) {
   EXPECT_NEAR(vertical, (6.0 + 6 * 0.25) * 9.81, 1e-9);
   // docs/controller.md: 6 kg / 6 legs / cos(26.64 deg) = 10.97 N + the rod's share.
   EXPECT_NEAR(f.force_n[0], (6.0 + 6 * 0.25) * 9.81 / 6.0 / unit[0].z(), 1e-9);
+}
+
+// Leg-space mass matrix (coupled leg feedback, issue 14): at rest, M_ls applied to leg
+// accelerations equals the leg forces that produce them minus the static (zero-acceleration)
+// forces, the forces computed independently by LegForcesForMotion (J^T f = wrench solved, not
+// J^-T M_p J^-1). And those forces, applied to the plant, give the accelerations.
+TEST(PlatformDynamics, LegSpaceMassMatrixMapsLegAccelerationsToForcesAtRest) {
+  for (const bool realistic : {false, true}) {
+    Bench bench(realistic);
+    const GeometryParams& geometry = bench.plant.true_geometry();
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    double worst_force = 0.0, worst_asym = 0.0, worst_plant = 0.0, min_eig = 1e9;
+    for (int n = 0; n < 200; ++n) {
+      PlatformMotion rest = RandomMotion(rng, 0.0);  // zero twist and twist rate
+      Matrix6d m_ls;
+      ASSERT_EQ(LegSpaceMassMatrix(geometry, bench.inertial, rest.pose, m_ls), KinStatus::kOk);
+      Vector6d l_ddot;
+      for (int k = 0; k < 6; ++k) l_ddot[k] = 5.0 * u(rng);  // m/s^2
+      Matrix6d J;
+      LegJacobian(geometry, rest.pose, J);
+      PlatformMotion moving = rest;
+      moving.twist_rate_B = J.inverse() * l_ddot;  // at rest l_ddot = J t_dot (c = 0)
+      LegForceResult f0, f1;
+      ASSERT_EQ(LegForcesForMotion(geometry, bench.inertial, rest, f0), KinStatus::kOk);
+      ASSERT_EQ(LegForcesForMotion(geometry, bench.inertial, moving, f1), KinStatus::kOk);
+      const Vector6d predicted = m_ls * l_ddot;
+      for (std::size_t i = 0; i < kNumLegs; ++i) {
+        const int ii = static_cast<int>(i);
+        worst_force = std::max(worst_force, std::abs(f1.force_n[i] - f0.force_n[i] - predicted[ii]));
+        EXPECT_NEAR(f1.leg_acceleration_m_s2[i], l_ddot[ii], 1e-9);
+      }
+      worst_asym = std::max(worst_asym, (m_ls - m_ls.transpose()).cwiseAbs().maxCoeff());
+      min_eig = std::min(min_eig, Eigen::SelfAdjointEigenSolver<Matrix6d>(m_ls).eigenvalues()[0]);
+      // The plant, given static + M_ls l_ddot, accelerates the platform by J^-1 l_ddot.
+      LegArray<double> force{};
+      for (std::size_t i = 0; i < kNumLegs; ++i) force[i] = f0.force_n[i] + predicted[static_cast<int>(i)];
+      const Vector6d rate = bench.Apply(rest, force);
+      worst_plant = std::max(worst_plant, (J * rate - l_ddot).cwiseAbs().maxCoeff());
+    }
+    EXPECT_LT(worst_force, 1e-9) << "N";
+    EXPECT_EQ(worst_asym, 0.0);
+    EXPECT_GT(min_eig, 0.0);
+    EXPECT_LT(worst_plant, 1e-9) << "m/s^2";
+    std::printf("%s: worst |f - f0 - M_ls l_ddot| %.2e N, plant leg-acceleration residual %.2e m/s^2, "
+                "smallest modal mass %.3f kg\n", realistic ? "realistic" : "ideal", worst_force,
+                worst_plant, min_eig);
+  }
+}
+
+TEST(PlatformDynamics, LegSpaceMassMatrixModalMassesAtHome) {
+  // docs/task_space.md: eigenvalues 0.877 (x2), 1.502, 2.787, 10.27 (x2) kg on the reference rig.
+  const RigParams rig = MakeReferenceRig();
+  Pose home;
+  home.p_BP_B_m = rig.geometry.home_position_m;
+  Matrix6d m_ls;
+  ASSERT_EQ(LegSpaceMassMatrix(rig.geometry, PlatformInertialParams::FromRig(rig), home, m_ls),
+            KinStatus::kOk);
+  const Vector6d e = Eigen::SelfAdjointEigenSolver<Matrix6d>(m_ls).eigenvalues();
+  const double expected[6] = {0.877, 0.877, 1.502, 2.787, 10.27, 10.27};
+  for (int k = 0; k < 6; ++k) EXPECT_NEAR(e[k], expected[k], 0.006) << k;
+  // z mode: m_p / (6 cos^2 of the leg's angle from vertical) + m_leg.
+  LegArray<double> lengths;
+  LegArray<Eigen::Vector3d> unit;
+  InverseKinematics(rig.geometry, home, lengths, &unit);
+  EXPECT_NEAR(e[2], 6.0 / (6.0 * unit[0].z() * unit[0].z()) + 0.25, 1e-9);
+}
+
+TEST(PlatformDynamics, LegSpaceMassMatrixRejectsNonFinitePose) {
+  const RigParams rig = MakeReferenceRig();
+  Pose pose;
+  pose.p_BP_B_m = Eigen::Vector3d(0.0, std::nan(""), 0.45);
+  Matrix6d m_ls = Matrix6d::Constant(1.0);
+  EXPECT_EQ(LegSpaceMassMatrix(rig.geometry, PlatformInertialParams::FromRig(rig), pose, m_ls),
+            KinStatus::kInvalidInput);
+  EXPECT_EQ(m_ls.cwiseAbs().maxCoeff(), 0.0);
 }
 
 TEST(PlatformDynamics, NonFiniteInputIsRejected) {

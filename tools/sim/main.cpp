@@ -30,6 +30,15 @@ int main(int argc, char** argv) {
   cli.AddFlag("no-outer-loop", "disable the outer loop");
   cli.AddFlag("least-squares", "six-leg least-squares estimator instead of GQFK");
   cli.AddFlag("no-feedforward", "no inverse-dynamics feed-forward (paper-faithful)");
+  cli.AddFlag("coupled-feedback",
+              "study: the BS-SMC feedback mixed across the legs through the leg-space mass "
+              "matrix (in process only; docs/task_space.md \"Coupled leg feedback\")");
+  cli.AddOption("coupled-reference-mass", "kg",
+                "--coupled-feedback: m_ref of W = M_ls / m_ref (0: the BS-SMC's effective mass)", "0");
+  cli.AddFlag("coupled-raise-only",
+              "--coupled-feedback: W = V diag(max(m_k, m_ref)) V^T / m_ref (modes lighter than m_ref keep the uncoupled gain)");
+  cli.AddFlag("coupled-observer-velocity",
+              "--coupled-feedback: the feedback part's velocity from the coupled leg observer");
   cli.AddFlag("calibrate",
               "first run the kinematic calibration procedure (tracker on, Ceres fit) and use the "
               "fitted calibration in the controllers");
@@ -74,6 +83,15 @@ int main(int argc, char** argv) {
   if (cli.Flag("no-outer-loop")) config.supervisor.outer_loop.enabled = false;
   if (cli.Flag("least-squares")) config.supervisor.least_squares_estimator = true;
   if (cli.Flag("no-feedforward")) config.supervisor.feedforward_enabled = false;
+  if (cli.Flag("coupled-feedback")) config.coupled_leg_feedback = true;
+  if (cli.Flag("coupled-raise-only")) config.coupled_raise_only = true;
+  if (cli.Flag("coupled-observer-velocity")) config.coupled_observer_velocity = true;
+  if (const auto m_ref = cli.GetDouble("coupled-reference-mass", 0, 999)) {
+    config.coupled_reference_mass_kg = *m_ref;
+  } else {
+    std::fprintf(stderr, "error: %s\n", cli.error().c_str());
+    return 2;
+  }
   config.plant_friction_model = cli.Get("friction-model") == "static"
                                     ? hexa::LegModelParams::FrictionModel::kStatic
                                     : hexa::LegModelParams::FrictionModel::kLugre;

@@ -65,6 +65,14 @@ struct BsSmcInput {
   // Sensor tick of this period (LegControllerInput::tick): the dither's time base, the same
   // for the six legs.
   std::uint64_t tick = 0;
+  // Coupled leg feedback only (docs/task_space.md "Coupled leg feedback"): the force the leg
+  // observer is driven with in place of this leg's pneumatic force, m_obs (M_ls^-1 F)_i, so
+  // that its acceleration F / m_obs is the leg's acceleration on the coupled platform.
+  bool has_observer_force = false;
+  double observer_force_n = 0.0;
+  // Coupled study variant: the feedback part's velocity (e_dot, S) from the leg observer
+  // instead of the Gaussian derivative (needs feedback_rate_from_observer and a fraction > 0).
+  bool feedback_velocity_from_observer = false;
 };
 
 struct BsSmcOutput {
@@ -79,6 +87,13 @@ struct BsSmcOutput {
   bool saturated = false;             // voltage clipped to the valve range
 };
 
+// The feedback part of phi, f = -M lambda e_dot - K tanh(xi S) - k_s S (eq 45's feedback terms),
+// and its low-passed rate (issue 14d; 0 when the feedback rate is off), before the fraction.
+struct BsSmcFeedback {
+  double force_n = 0.0;
+  double rate_n_s = 0.0;
+};
+
 class BsSmcController {
  public:
   explicit BsSmcController(const BsSmcConfig& config);  // validates (throws)
@@ -89,6 +104,15 @@ class BsSmcController {
   // One control period. Inputs are trusted to be finite and in range (LegController checks
   // them); a non-finite intermediate still yields the null voltage.
   void Update(const BsSmcInput& input, BsSmcOutput& output);
+
+  // Coupled leg feedback (docs/task_space.md "Coupled leg feedback"; off in the system): one
+  // control period in two steps. Begin runs the estimates (velocity, integral, observer) and
+  // returns this leg's own feedback part; Finish completes the law with the feedback part that
+  // is to act on this leg (the caller mixes the six legs' parts through the leg-space mass
+  // matrix) in place of its own. Update(in, out) is Begin then Finish with the leg's own part
+  // (bit for bit the uncoupled law).
+  BsSmcFeedback Begin(const BsSmcInput& input);
+  void Finish(const BsSmcInput& input, const BsSmcFeedback& applied, BsSmcOutput& output);
 
   const BsSmcConfig& config() const { return config_; }
 
@@ -106,6 +130,18 @@ class BsSmcController {
   double FeedbackRateFraction(double desired_velocity_m_s) const;
 
  private:
+  // Finish with `applied` (coupled) or, when null, the leg's own feedback part in the
+  // uncoupled law's arithmetic.
+  void Complete(const BsSmcInput& input, const BsSmcFeedback* applied, BsSmcOutput& output);
+
+  // What Begin computed for Finish (this period only).
+  struct Stage {
+    double x_m = 0.0, v_m_s = 0.0, s_m_s = 0.0;
+    double phi_hat_n = 0.0;          // eq 25's phi_hat (incl. -M lambda e_dot)
+    double phi_model_n = 0.0;        // phi_hat without the feedback part
+    double phi_dot_model_n_s = 0.0;  // eq 40 on phi_model
+  };
+  Stage stage_;
   BsSmcConfig config_;
   OrificeFlowModel orifice_;  // eq 4, 5 with the plant's laminar band (pneumatics.hpp)
   GaussianDifferentiator velocity_diff_;

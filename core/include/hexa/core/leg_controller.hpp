@@ -132,6 +132,19 @@ class LegController {
 
   void Update(const LegControllerInput& input, LegControllerOutput& output);
 
+  // Coupled leg feedback (BsSmcController::Begin / Finish; docs/task_space.md "Coupled leg
+  // feedback"): BeginCoupled does everything Update does up to the BS-SMC's feedback part and
+  // returns it; nothing (the output is then final) when the leg holds, is open loop or runs
+  // the PI. FinishCoupled, only after a BeginCoupled that returned a value, completes the
+  // BS-SMC with the feedback part mixed by the caller.
+  // `observer_force_n`: BsSmcInput::observer_force_n (none: the leg's own pneumatic force);
+  // `observer_velocity`: BsSmcInput::feedback_velocity_from_observer.
+  std::optional<BsSmcFeedback> BeginCoupled(const LegControllerInput& input,
+                                            LegControllerOutput& output,
+                                            std::optional<double> observer_force_n = std::nullopt,
+                                            bool observer_velocity = false);
+  void FinishCoupled(const BsSmcFeedback& applied, LegControllerOutput& output);
+
   // Setpoint at time_s from one at t0 (eq: l + v dt + a dt^2 / 2), for tests and tools.
   static void Interpolate(const LegControllerInput& input, double& length_m, double& velocity_m_s,
                           double& acceleration_m_s2);
@@ -141,8 +154,14 @@ class LegController {
  private:
   LegInputFault CheckSensors(const LegControllerInput& in, double& value) const;
   bool LengthPlausible(double length_m) const;
-  void Hold(LegControlStatus status, LegControllerOutput& out,
+  // Returns false (Prepare's "no law to run").
+  bool Hold(LegControlStatus status, LegControllerOutput& out,
             LegInputFault fault = LegInputFault::kNone, double value = 0.0);
+  // Checks, calibration, interpolation; true when a control law is to run on pending_.
+  bool Prepare(const LegControllerInput& input, LegControllerOutput& out);
+  void FinishBsSmc(const BsSmcOutput& o, LegControllerOutput& out);
+  void RunPi(LegControllerOutput& out);
+  void Defend(LegControllerOutput& out);  // never a non-finite or out-of-range voltage
 
   LegControllerConfig config_;
   BsSmcController bssmc_;
@@ -151,6 +170,7 @@ class LegController {
   bool active_ = false;  // the control law ran last tick (histories valid)
   bool potentiometer_calibrated_ = false;  // config_.potentiometer is not the identity
   double last_desired_length_m_ = 0.0;
+  BsSmcInput pending_;  // the law's input of this period (Prepare)
 };
 
 }  // namespace hexa

@@ -20,6 +20,7 @@
 #include "hexa/core/leg_controller.hpp"
 #include "hexa/core/lockstep_protocol.hpp"
 #include "hexa/core/metrics.hpp"
+#include "hexa/core/platform_dynamics.hpp"
 #include "hexa/core/platform_plant.hpp"
 #include "hexa/core/supervisor.hpp"
 
@@ -42,6 +43,24 @@ struct LockstepConfig {
   // The plant's friction model (PlatformPlantConfig::friction_model).
   LegModelParams::FrictionModel plant_friction_model = LegModelParams::FrictionModel::kLugre;
   FreeFallBenchParams plant_free_fall;  // enabled: the free-fall bench instead of the platform
+  // Coupled leg feedback (issue 14 study, docs/task_space.md "Coupled leg feedback"; false =
+  // the system): every tick the six BS-SMC feedback parts f_j (and their rates) are mixed,
+  // leg i applying sum_j W_ij f_j with W = M_ls(q) / M_i: M_ls the leg-space mass matrix
+  // (platform_dynamics.hpp) of the supervisor's rig at its pose estimate, refreshed every
+  // supervisor tick (home until the first valid estimate), M_i leg i's
+  // bssmc.effective_mass_kg; each leg's observer is driven by m_obs (M_ls^-1 F)_i, F the six
+  // measured pneumatic forces (BsSmcInput::observer_force_n). In process only: the DDS leg controllers do not see each other.
+  bool coupled_leg_feedback = false;
+  // Reference mass of the coupled feedback, W = M_ls / m_ref; 0: each leg's
+  // bssmc.effective_mass_kg (the paper's M of eq 25 replaced by M_ls).
+  double coupled_reference_mass_kg = 0.0;
+  // Coupled variant: the feedback parts' velocity from the (coupled) leg observers
+  // (BsSmcInput::feedback_velocity_from_observer).
+  bool coupled_observer_velocity = false;
+  // Coupled variant: W = V diag(max(m_k, m_ref)) V^T / m_ref
+  // (M_ls = V diag(m_k) V^T): modes heavier than m_ref get the single-mass loop, lighter ones
+  // keep the uncoupled gain.
+  bool coupled_raise_only = false;
   double tick_s = 0.001;
   int supervisor_every_ticks = 5;
   void Validate() const;  // throws std::invalid_argument naming the field and value
@@ -87,6 +106,12 @@ class LockstepSimulation {
   LegArray<double> applied_v_{};
   bool supervisor_ran_ = false;
   SupervisorOutput sup_out_;
+  // Coupled leg feedback: W = M_ls / M per row (config_.coupled_leg_feedback).
+  Matrix6d coupling_ = Matrix6d::Identity();
+  Matrix6d coupling_inverse_mass_ = Matrix6d::Identity();  // M_ls^-1 (the observers' force)
+  LegArray<double> coupling_mass_kg_{};
+  void UpdateCoupling(const Pose& pose);
+  void RunLegsCoupled(const LegArray<LegControllerInput>& in);
 };
 
 // Figures of merit of a session (paper Tables 9, 10), accumulated over the supervisor's

@@ -50,4 +50,12 @@ struct LegForceResult {
 KinStatus LegForcesForMotion(const GeometryParams& geometry, const PlatformInertialParams& inertial,
                              const PlatformMotion& motion, LegForceResult& result);
 
+// Leg-space mass matrix at `pose` (issue 14, coupled leg feedback; docs/task_space.md
+// "Coupled leg feedback"): with the platform at rest (zero twist, so c = 0 above),
+//   f - f(l_ddot = 0) = M_ls l_ddot,   M_ls = J^-T M_p J^-1 + m_leg I,
+// M_p = diag(m I_3, R I_P R^T) about the platform origin, J the eq 48 Jacobian. Symmetric,
+// positive definite. kOk, or kInvalidInput / kDegenerate as above (out is then zero).
+KinStatus LegSpaceMassMatrix(const GeometryParams& geometry, const PlatformInertialParams& inertial,
+                             const Pose& pose, Matrix6d& out);
+
 }  // namespace hexa
