@@ -218,12 +218,9 @@ dds_domainid_t ParseDomain(const Args& a) {
 
 }  // namespace
 
-// Says on stderr, once per new count, that writers of `t`'s topic do not match the recorder
-// and why (Cyclone's requested-incompatible-QoS status names the last policy): their
-// samples are not recorded. The usual cause: a real-time session's periodic writers offer
-// BEST_EFFORT and the recorder was started without --periodic-reliability best-effort.
 // Adds the writers the topic's reader matches now to t.matched_writers (called every flush;
-// a writer that comes and goes between two flushes is missed, none does in a session).
+// a writer that comes and goes between two flushes is missed, none does in a session; at
+// most 64 per topic are read, far above a deployment's 9 ValveCommand writers).
 static void NoteMatchedWriters(TopicRecorderBase& t) {
   dds_instance_handle_t handles[64];
   const dds_return_t n = dds_get_matched_publications(t.reader(), handles, 64);
@@ -246,6 +243,10 @@ static void NoteMatchedWriters(TopicRecorderBase& t) {
   }
 }
 
+// Says on stderr, once per new count, that writers of `t`'s topic do not match the recorder
+// and why (Cyclone's requested-incompatible-QoS status names the last policy): their
+// samples are not recorded. The usual cause: a real-time session's periodic writers offer
+// BEST_EFFORT and the recorder was started without --periodic-reliability best-effort.
 static void ReportIncompatibleWriters(TopicRecorderBase& t, const std::string& periodic_reliability) {
   // Partition mismatches are by design (the leg partitions' writers; status.hpp) and left out.
   const comm::StatusSnapshot st = t.Status();
