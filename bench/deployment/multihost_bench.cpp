@@ -317,7 +317,6 @@ Row RunSession(const std::string& scenario, LabSessionOptions o,
   return row;
 }
 
-
 // tcpdump on the loss rule's nflog group in `host`'s namespace, writing
 // <work_dir>/dropped.pcap packet by packet (-U); a child of the session, stopped with it.
 bool StartDropCapture(LabSession& s, const std::string& host, std::string& error) {
