@@ -21,12 +21,14 @@ comm::QosParams ValveQos(const LegNodeOptions& o) {
   q.ownership_strength = o.standby ? comm::kStandbyOwnershipStrength
                                    : comm::kPrimaryOwnershipStrength;
   // Which leg this writer drives, for the plant's per-leg liveliness (docs/faults.md).
-  q.user_data = "leg=" + std::to_string(o.leg) + " standby=" + (o.standby ? "1" : "0");
+  q.user_data = comm::LegEndpointUserData(o.leg, o.standby);
   return q;
 }
 
 comm::QosParams ControlReaderQos(const LegNodeOptions& o, comm::TopicKind kind) {
   comm::QosParams q = node::QosFor(o.common, kind);
+  // The setpoint reader says whose it is: the supervisor waits for every leg's primary.
+  if (kind == comm::TopicKind::kLegSetpoint) q.user_data = comm::LegEndpointUserData(o.leg, o.standby);
   if (o.common.mode == node::TimeMode::kLockstep) {
     q.control_reader_depth = static_cast<int32_t>(kLockstepQueue);
   }

@@ -99,19 +99,28 @@ bool SupervisorNode::WaitUntilMatched() {
   while (!shutdown_.requested()) {
     const bool sensors = sensors_reader_.Snapshot().subscription_matched_current >= 1;
     const bool imu = imu_reader_.Snapshot().subscription_matched_current >= 1;
-    // Every leg controller reads the setpoints (plus the plant in lockstep).
+    // Every leg's primary controller reads its setpoints (plus the plant in lockstep). Its
+    // reader says so in its USER_DATA: a hot standby's reader alone is not enough, since a
+    // primary without setpoints holds its leg (and its ownership of the valve) while the
+    // others move (docs/deployment.md, "A primary without setpoints").
     bool legs = true;
-    for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg)
-      legs = legs && setpoint_writer_.leg(leg).Snapshot().publication_matched_current >= 1;
+    missing_primaries_.clear();
+    for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
+      if (comm::CountMatchedReadersWithUserData(setpoint_writer_.leg(leg).get(),
+                                                comm::LegEndpointUserData(leg, false)) == 0) {
+        legs = false;
+        missing_primaries_ += (missing_primaries_.empty() ? "" : " ") + std::to_string(leg);
+      }
+    }
     // With a recorder: it must have matched the pose reports before the first one is written.
     const uint32_t pose_readers = pose_writer_.Snapshot().publication_matched_current;
     const bool poses = pose_readers >= static_cast<uint32_t>(options_.pose_readers);
     if (sensors && imu && legs && poses) return true;
     if (node::MonotonicNow_ns() > end) {
-      log_->error("peers not matched after {} s: sensors {}, imu {}, setpoint readers {}, pose "
-                  "readers {} of {}",
+      log_->error("peers not matched after {} s: sensors {}, imu {}, setpoint readers of the "
+                  "legs' primaries {}, pose readers {} of {}",
                   options_.startup_timeout_s, sensors, imu,
-                  legs ? "all" : "not all", pose_readers,
+                  legs ? "all" : "missing for leg(s) " + missing_primaries_, pose_readers,
                   options_.pose_readers);
       return false;
     }

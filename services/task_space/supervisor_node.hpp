@@ -115,6 +115,8 @@ class SupervisorNode {
   SupervisorOutput output_;
   std::optional<StartRequest> pending_start_;
   OperatorCommandKind pending_command_ = OperatorCommandKind::kNone;
+  // Start-up: the legs whose primary's setpoint reader has not matched yet (WaitUntilMatched).
+  std::string missing_primaries_;
   bool autostart_pending_ = false;
   bool left_idle_ = false;
   bool was_initialized_ = false;

@@ -357,6 +357,26 @@ TEST_F(CommUnit, OperatorWaitsForTheSupervisorsReaderNotAnyReader) {
   EXPECT_EQ(CountMatchedReadersWithUserData(writer.get(), kSupervisorCommandReader), 0);  // gone
 }
 
+// The supervisor starts once every leg's PRIMARY reads its setpoints: a hot standby's reader
+// (the same leg, standby=1) does not count for the primary.
+TEST_F(CommUnit, SetpointReadersSayWhichLegAndWhetherStandby) {
+  Participant p(kDomainInProcess);
+  QosParams params;
+  Topic<hexa_msg_LegSetpoint> topic(p);
+  Writer<hexa_msg_LegSetpoint> writer(p, topic, params);
+  EXPECT_EQ(LegEndpointUserData(4, false), "leg=4 standby=0");
+  QosParams standby = params;
+  standby.user_data = LegEndpointUserData(4, true);
+  Reader<hexa_msg_LegSetpoint> standby_reader(p, topic, EndpointRole::kControlReader, standby);
+  EXPECT_EQ(writer.Snapshot().publication_matched_current, 1u);
+  EXPECT_EQ(CountMatchedReadersWithUserData(writer.get(), LegEndpointUserData(4, false)), 0);
+  QosParams primary = params;
+  primary.user_data = LegEndpointUserData(4, false);
+  Reader<hexa_msg_LegSetpoint> primary_reader(p, topic, EndpointRole::kControlReader, primary);
+  EXPECT_EQ(CountMatchedReadersWithUserData(writer.get(), LegEndpointUserData(4, false)), 1);
+  EXPECT_EQ(CountMatchedReadersWithUserData(writer.get(), LegEndpointUserData(5, false)), 0);
+}
+
 TEST_F(CommUnit, GuardConditionWakesWaitSet) {
   Participant p(kDomainInProcess);
   GuardCondition guard(p);

@@ -64,6 +64,12 @@ inline constexpr int32_t kPrimaryOwnershipStrength = 20;
 // USER_DATA of the supervisor's OperatorCommand reader: hexa_operator writes once a reader
 // with it has matched (a recorder's reader matching first is not the supervisor's).
 inline constexpr const char* kSupervisorCommandReader = "role=supervisor";
+// USER_DATA of a leg controller's ValveCommand writer and LegSetpoint reader: which leg, and
+// whether primary or hot standby ("leg=3 standby=0"). The plant reads it on the writers, the
+// supervisor on the readers (it starts only when every leg's primary reads its setpoints).
+inline std::string LegEndpointUserData(int leg, bool standby) {
+  return "leg=" + std::to_string(leg) + " standby=" + (standby ? "1" : "0");
+}
 inline constexpr int32_t kStandbyOwnershipStrength = 10;
 
 struct QosParams {
