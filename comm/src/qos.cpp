@@ -1,6 +1,7 @@
 #include "hexa/comm/qos.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <new>
 #include <stdexcept>
 #include <string>
@@ -161,6 +162,14 @@ Qos MakeTopicQos(TopicKind kind) {
                                                         : DDS_DURABILITY_VOLATILE);
   if (kind == TopicKind::kValveCommand) dds_qset_ownership(qos.get(), DDS_OWNERSHIP_EXCLUSIVE);
   return qos;
+}
+
+bool ParseLegEndpointUserData(const std::string& text, int& leg, bool& standby) {
+  int l = 0, sb = 0;
+  if (std::sscanf(text.c_str(), "leg=%d standby=%d", &l, &sb) != 2 || l < 1) return false;
+  leg = l;
+  standby = sb != 0;
+  return true;
 }
 
 Qos MakeQos(TopicKind kind, EndpointRole role, const QosParams& params) {

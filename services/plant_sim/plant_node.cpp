@@ -65,15 +65,10 @@ LockstepBarrierParams BarrierParams(const PlantNodeOptions& o) {
   return p;
 }
 
-// "leg=3 standby=1" -> leg 3, standby; false for anything else.
+// A leg controller's valve writer says which leg it drives (comm::LegEndpointUserData); false
+// for anything else, a leg beyond the rig's too.
 bool ParseLegUserData(const std::string& text, int& leg, bool& standby) {
-  int l = 0, sb = 0;
-  if (std::sscanf(text.c_str(), "leg=%d standby=%d", &l, &sb) != 2 || l < 1 ||
-      l > static_cast<int>(kNumLegs))
-    return false;
-  leg = l;
-  standby = sb != 0;
-  return true;
+  return comm::ParseLegEndpointUserData(text, leg, standby) && leg <= static_cast<int>(kNumLegs);
 }
 
 std::string LegList(LegMask mask) {

@@ -365,6 +365,13 @@ TEST_F(CommUnit, SetpointReadersSayWhichLegAndWhetherStandby) {
   Topic<hexa_msg_LegSetpoint> topic(p);
   Writer<hexa_msg_LegSetpoint> writer(p, topic, params);
   EXPECT_EQ(LegEndpointUserData(4, false), "leg=4 standby=0");
+  int leg = 0;
+  bool is_standby = false;
+  ASSERT_TRUE(ParseLegEndpointUserData(LegEndpointUserData(6, true), leg, is_standby));
+  EXPECT_EQ(leg, 6);
+  EXPECT_TRUE(is_standby);
+  EXPECT_FALSE(ParseLegEndpointUserData("role=supervisor", leg, is_standby));
+  EXPECT_FALSE(ParseLegEndpointUserData("leg=0 standby=0", leg, is_standby));
   QosParams standby = params;
   standby.user_data = LegEndpointUserData(4, true);
   Reader<hexa_msg_LegSetpoint> standby_reader(p, topic, EndpointRole::kControlReader, standby);

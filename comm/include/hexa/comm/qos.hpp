@@ -70,6 +70,8 @@ inline constexpr const char* kSupervisorCommandReader = "role=supervisor";
 inline std::string LegEndpointUserData(int leg, bool standby) {
   return "leg=" + std::to_string(leg) + " standby=" + (standby ? "1" : "0");
 }
+// The inverse: "leg=3 standby=1" -> leg 3, standby; false for anything else (leg < 1 too).
+bool ParseLegEndpointUserData(const std::string& text, int& leg, bool& standby);
 inline constexpr int32_t kStandbyOwnershipStrength = 10;
 
 struct QosParams {
