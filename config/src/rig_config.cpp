@@ -271,6 +271,10 @@ SystemConfig Translate(const pb::RigFile& f) {
   c.leg_controller.bssmc.dither_amplitude_n = b.dither_amplitude_n();
   c.leg_controller.bssmc.dither_frequency_hz = b.dither_frequency_hz();
   c.leg_controller.bssmc.dither_gate_speed_m_s = b.dither_gate_speed_m_s();
+  c.leg_controller.bssmc.friction_adaptation_rate_1_n_m = b.friction_adaptation_rate_1_n_m();
+  c.leg_controller.bssmc.friction_adaptation_speed_m_s = b.friction_adaptation_speed_m_s();
+  c.leg_controller.bssmc.friction_adaptation_min_scale = b.friction_adaptation_min_scale();
+  c.leg_controller.bssmc.friction_adaptation_max_scale = b.friction_adaptation_max_scale();
   c.leg_controller.pi.proportional_v_m = lc.pi().proportional_v_m();
   c.leg_controller.pi.integral_v_m_s = lc.pi().integral_v_m_s();
   c.leg_controller.pi.integrator_limit_v = lc.pi().integrator_limit_v();
@@ -554,6 +558,10 @@ std::string ToTextFormat(const SystemConfig& c) {
   b->set_dither_amplitude_n(c.leg_controller.bssmc.dither_amplitude_n);
   b->set_dither_frequency_hz(c.leg_controller.bssmc.dither_frequency_hz);
   b->set_dither_gate_speed_m_s(c.leg_controller.bssmc.dither_gate_speed_m_s);
+  b->set_friction_adaptation_rate_1_n_m(c.leg_controller.bssmc.friction_adaptation_rate_1_n_m);
+  b->set_friction_adaptation_speed_m_s(c.leg_controller.bssmc.friction_adaptation_speed_m_s);
+  b->set_friction_adaptation_min_scale(c.leg_controller.bssmc.friction_adaptation_min_scale);
+  b->set_friction_adaptation_max_scale(c.leg_controller.bssmc.friction_adaptation_max_scale);
   lc->mutable_pi()->set_proportional_v_m(c.leg_controller.pi.proportional_v_m);
   lc->mutable_pi()->set_integral_v_m_s(c.leg_controller.pi.integral_v_m_s);
   lc->mutable_pi()->set_integrator_limit_v(c.leg_controller.pi.integrator_limit_v);

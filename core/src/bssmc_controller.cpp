@@ -159,9 +159,25 @@ BsSmcFeedback BsSmcController::Begin(const BsSmcInput& in) {
   // desired velocity (feed-forward, see docs).
   const double vd = in.desired_velocity_m_s;
   const FrictionDirectionParams& fd = vd >= 0.0 ? m.friction.extend : m.friction.retract;
-  const double b_hat = p.viscous_estimate_scale * fd.viscous_n_s_m;  // eq 21
+  double b_hat = p.viscous_estimate_scale * fd.viscous_n_s_m;  // eq 21
   // Friction estimate of eq 14 at v_d, plus the dither (not in the paper; control_params.hpp).
-  const double friction_n = FrictionEstimateN(vd) + DitherForceN(in.tick, vd);
+  double friction_n = FrictionEstimateN(vd);
+  if (p.friction_adaptation_rate_1_n_m > 0.0) {
+    // Friction scale adaptation at speed (not in the paper; control_params.hpp): the regressor
+    // F_r = F_f(v_d) + B_hat v_d, weighted by w(v_d); theta_dot = -gamma w S F_r, projected.
+    const double q = vd / p.friction_adaptation_speed_m_s;
+    const double w = 1.0 - std::exp(-q * q);
+    const double regressor_n = friction_n + b_hat * vd;
+    const double step = -p.friction_adaptation_rate_1_n_m * w * s_m_s * regressor_n * config_.period_s;
+    if (std::isfinite(step)) {
+      friction_scale_ = std::clamp(friction_scale_ + step, p.friction_adaptation_min_scale,
+                                   p.friction_adaptation_max_scale);
+    }
+    const double k = 1.0 + (friction_scale_ - 1.0) * w;
+    friction_n *= k;
+    b_hat *= k;
+  }
+  friction_n += DitherForceN(in.tick, vd);
   double phi_hat = 0.0;
   if (in.has_feedforward) {
     // Known load (issue 14): the platform inverse dynamics takes the place of M x_ddot_d and
@@ -316,6 +332,7 @@ void BsSmcController::Complete(const BsSmcInput& in, const BsSmcFeedback* applie
   out.sliding_surface_m_s = s_m_s;
   out.velocity_m_s = v_m_s;
   out.feedback_rate_n_s = FeedbackRateFraction(vd) * feedback_rate_n_s_;
+  out.friction_scale = friction_scale_;
   out.desired_force_n = phi;
   out.desired_force_rate_n_s = phi_dot;
   out.force_error_n = z_n;

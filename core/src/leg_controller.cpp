@@ -326,6 +326,7 @@ void LegController::FinishBsSmc(const BsSmcOutput& o, LegControllerOutput& out) 
   out.desired_force_n = std::isfinite(o.desired_force_n) ? o.desired_force_n : 0.0;
   out.force_error_n = std::isfinite(o.force_error_n) ? o.force_error_n : 0.0;
   out.desired_force_rate_n_s = std::isfinite(o.desired_force_rate_n_s) ? o.desired_force_rate_n_s : 0.0;
+  out.friction_scale = o.friction_scale;
   Defend(out);
 }
 

@@ -313,6 +313,14 @@ void CheckBsSmcParams(ParamChecker& c, const BsSmcParams& b, const std::string& 
   c.InClosed(p + "dither_frequency_hz", b.dither_frequency_hz, 0.0, 250.0,
              "dither frequency (at least 4 samples per cycle of the 1 ms control period)");
   c.Positive(p + "dither_gate_speed_m_s", b.dither_gate_speed_m_s, "dither gate speed");
+  c.NonNegative(p + "friction_adaptation_rate_1_n_m", b.friction_adaptation_rate_1_n_m,
+                "friction adaptation rate");
+  c.Positive(p + "friction_adaptation_speed_m_s", b.friction_adaptation_speed_m_s,
+             "friction adaptation speed");
+  c.InClosed(p + "friction_adaptation_min_scale", b.friction_adaptation_min_scale, 0.0, 1.0,
+             "lower bound of the adapted friction scale (the nominal 1 must lie inside)");
+  c.InClosed(p + "friction_adaptation_max_scale", b.friction_adaptation_max_scale, 1.0, 5.0,
+             "upper bound of the adapted friction scale (the nominal 1 must lie inside)");
 }
 
 void CheckPiParams(ParamChecker& c, const PiParams& p, const std::string& path) {

@@ -154,6 +154,10 @@ void ExpectLegControllerEq(const hexa::LegControllerParams& a, const hexa::LegCo
   EXPECT_EQ(a.bssmc.dither_amplitude_n, b.bssmc.dither_amplitude_n);
   EXPECT_EQ(a.bssmc.dither_frequency_hz, b.bssmc.dither_frequency_hz);
   EXPECT_EQ(a.bssmc.dither_gate_speed_m_s, b.bssmc.dither_gate_speed_m_s);
+  EXPECT_EQ(a.bssmc.friction_adaptation_rate_1_n_m, b.bssmc.friction_adaptation_rate_1_n_m);
+  EXPECT_EQ(a.bssmc.friction_adaptation_speed_m_s, b.bssmc.friction_adaptation_speed_m_s);
+  EXPECT_EQ(a.bssmc.friction_adaptation_min_scale, b.bssmc.friction_adaptation_min_scale);
+  EXPECT_EQ(a.bssmc.friction_adaptation_max_scale, b.bssmc.friction_adaptation_max_scale);
   EXPECT_EQ(a.pi.proportional_v_m, b.pi.proportional_v_m);
   EXPECT_EQ(a.pi.integral_v_m_s, b.pi.integral_v_m_s);
   EXPECT_EQ(a.pi.integrator_limit_v, b.pi.integrator_limit_v);
@@ -256,9 +260,9 @@ TEST(RigConfigReference, CoreStructsHaveNotGrownPastTheSchema) {
   EXPECT_EQ(sizeof(hexa::SensorNoiseParams), 6 * sizeof(double));  // 5 doubles + int (padded)
   EXPECT_EQ(sizeof(hexa::DisturbanceProfile), 9 * sizeof(double));  // bool (padded) + 8 doubles
   EXPECT_EQ(sizeof(hexa::DifferentiatorParams), 3 * sizeof(double));  // int (padded) + 2 doubles
-  EXPECT_EQ(sizeof(hexa::BsSmcParams), 28 * sizeof(double));  // 27 doubles + feedback_rate_from_observer (padded)
+  EXPECT_EQ(sizeof(hexa::BsSmcParams), 32 * sizeof(double));  // 31 doubles + feedback_rate_from_observer (padded)
   EXPECT_EQ(sizeof(hexa::PiParams), 6 * sizeof(double));
-  EXPECT_EQ(sizeof(hexa::LegControllerParams), 38 * sizeof(double));
+  EXPECT_EQ(sizeof(hexa::LegControllerParams), 42 * sizeof(double));
   EXPECT_EQ(sizeof(hexa::OuterLoopParams), 5 * sizeof(double));
   // + feedforward_enabled (padded), length_consistency_ticks (padded)
   EXPECT_EQ(sizeof(hexa::SupervisorParams), 20 * sizeof(double));

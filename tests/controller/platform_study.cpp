@@ -7,7 +7,8 @@
 //   platform_study trace <traj> [options]      per-tick CSV of the legs (stdout)
 //   platform_study fit <traj> [options]        first-harmonic fit of the tracking window:
 //        per axis and per leg the amplitude ratio true/desired, the phase lag, the mean peak
-//        overshoot and what remains after removing the fitted harmonic (issue 14)
+//        overshoot and what remains after removing the fitted harmonic, that first harmonic
+//        split into its amplitude and timing parts and the rest's RMS by frequency band (issue 14)
 //   platform_study legs <traj> [options]       per-leg lag against the trajectory of NOW (no
 //        setpoint lead) and the force budget along each leg (issue 14c, see Legs below)
 //   platform_study reversals <traj> [options]  where the moving axis' error is made (issue
@@ -113,10 +114,26 @@ std::vector<Key> Keys() {
       // Dither: amplitude N (0 = off, the paper's eq 14), frequency Hz, gate speed m/s.
       {"dither", [](auto& c, double v) { c.leg_controller.bssmc.dither_amplitude_n = v; }},
       {"dither_hz", [](auto& c, double v) { c.leg_controller.bssmc.dither_frequency_hz = v; }},
+      {"fadapt", [](auto& c, double v) { c.leg_controller.bssmc.friction_adaptation_rate_1_n_m = v; }},
+      {"fadapt_speed", [](auto& c, double v) { c.leg_controller.bssmc.friction_adaptation_speed_m_s = v; }},
       {"dither_gate", [](auto& c, double v) { c.leg_controller.bssmc.dither_gate_speed_m_s = v; }},
       // Plant-only changes (diagnosis, issue 14c): the valve spool's time constant (the
       // controllers do not use it), and the plant's friction model (0 LuGre, 1 static eq 3).
       {"pspool", [](auto& c, double v) { c.rig.valve.spool_time_constant_s = v; }},
+      // The plant's friction scale (the disturbance profile's; 1 = the rig file's Table 8
+      // values, the realistic profile 1.2). With fric= and visc= (the controllers' estimate
+      // scales) it gives a rig whose friction the controllers know at any magnitude.
+      {"pfric", [](auto& c, double v) { c.disturbance.friction_scale = v; }},
+      // The rest of the disturbance profile, one factor at a time (the `realistic` values:
+      // pnoise=1, ppoly=1.1, ppay=1.2, pripple=20000 Pa, pjoint=0.002 m, ppot=0.001 m,
+      // ppotgain=0.005; `ideal`: 0, 1, 1, 0, 0, 0, 0).
+      {"pnoise", [](auto& c, double v) { c.disturbance.sensor_noise = v != 0.0; }},
+      {"ppoly", [](auto& c, double v) { c.disturbance.polytropic_scale = v; }},
+      {"ppay", [](auto& c, double v) { c.disturbance.payload_scale = v; }},
+      {"pripple", [](auto& c, double v) { c.disturbance.supply_ripple_amplitude_pa = v; }},
+      {"pjoint", [](auto& c, double v) { c.disturbance.joint_position_error_max_m = v; }},
+      {"ppot", [](auto& c, double v) { c.disturbance.potentiometer_offset_max_m = v; }},
+      {"ppotgain", [](auto& c, double v) { c.disturbance.potentiometer_gain_error_max = v; }},
       // The plant's LuGre bristle damping sigma1 (the controllers do not use it).
       {"psigma1", [](auto& c, double v) { c.rig.friction.bristle_damping_n_s_m = v; }},
       {"pfric_static", [](auto& c, double v) {
@@ -385,6 +402,12 @@ void Fit(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
     if (out.state == hexa::SupervisorState::kHold || (left_idle && out.state == hexa::SupervisorState::kIdle)) break;
     if (out.state != hexa::SupervisorState::kTracking) continue;
     t.push_back(out.trajectory_time_s);
+    // HEXA_FIT_THETA=1: the six legs' adapted friction scales every 0.2 s on stderr.
+    if (std::getenv("HEXA_FIT_THETA") && t.size() % 40 == 1) {
+      std::fprintf(stderr, "t %.2f theta", out.trajectory_time_s);
+      for (int i = 0; i < 6; ++i) std::fprintf(stderr, " %.3f", sim.leg_outputs()[i].friction_scale);
+      std::fprintf(stderr, "\n");
+    }
     const hexa::Vector6d truth = hexa::VectorFromPose(sim.plant_before_step().truth.pose);
     for (int k = 0; k < 6; ++k) {
       des[k].push_back(out.desired_xyz_rpy[k]);
@@ -428,6 +451,52 @@ void Fit(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
                 unit * hd.amplitude(), hd.amplitude() > 1e-9 ? ht.amplitude() / hd.amplitude() : 0.0,
                 lag * 57.29577951308232, 1000.0 * lag / w, unit * over, unit * std::sqrt(se / n),
                 unit * std::sqrt(sr / n));
+  }
+  // Where the residual (error minus its fitted first harmonic) sits in frequency: RMS per band
+  // of its DFT over the window (Parseval; 5 ms samples, so up to 100 Hz). "harmonics" = the
+  // bins within 0.15 Hz of 2, 3, ... 10 x the motion's frequency, "other" the rest of the band.
+  // The first harmonic's own share is split into amplitude (gain - 1) and timing (lag).
+  std::printf("axis   | 1st harmonic: amplitude part, timing part | residual by band: < f | "
+              "harmonics 2f-10f | other f-10 Hz | 10-30 Hz | > 30 Hz\n");
+  for (int k = 0; k < 6; ++k) {
+    const double unit = k < 3 ? 100.0 : 57.29577951308232;
+    const Harmonic hd = FitHarmonic(t, des[k], w), ht = FitHarmonic(t, tru[k], w);
+    const std::size_t n = t.size();
+    std::vector<double> r(n);
+    for (std::size_t s = 0; s < n; ++s) {
+      const double e = tru[k][s] - des[k][s];
+      const double fit_e = (ht.c + ht.a * std::sin(w * t[s]) + ht.b * std::cos(w * t[s])) -
+                           (hd.c + hd.a * std::sin(w * t[s]) + hd.b * std::cos(w * t[s]));
+      r[s] = e - fit_e;
+    }
+    const double dt = (t.back() - t.front()) / static_cast<double>(n - 1);
+    const double span = dt * static_cast<double>(n);
+    double band[5] = {};  // mean square per band
+    for (std::size_t b = 0; b <= n / 2; ++b) {
+      std::complex<double> x = 0.0;
+      const double wb = 2.0 * 3.14159265358979323846 * static_cast<double>(b) / span;
+      for (std::size_t s = 0; s < n; ++s) x += r[s] * std::polar(1.0, -wb * dt * static_cast<double>(s));
+      // One-sided power, so the bins sum to the mean square (Parseval).
+      const double edge = (b == 0 || 2 * b == n) ? 1.0 : 2.0;
+      const double ms = edge * std::norm(x) / static_cast<double>(n * n);
+      const double f = static_cast<double>(b) / span;
+      const double h = f / f_hz;
+      const bool harmonic = h > 1.5 && h < 10.5 && std::abs(h - std::round(h)) * f_hz < 0.15;
+      const int i = f < 0.95 * f_hz ? 0 : harmonic ? 1 : f < 10.0 ? 2 : f < 30.0 ? 3 : 4;
+      band[i] += ms;
+      // HEXA_FIT_BINS=<axis 0-5>: every bin of that axis' residual on stderr (Hz, RMS).
+      if (const char* bins = std::getenv("HEXA_FIT_BINS"); bins && ms > 1e-10 && k == std::atoi(bins)) {
+        std::fprintf(stderr, "bin %.2f Hz rms %.4f\n", f, unit * std::sqrt(ms));
+      }
+    }
+    // First harmonic of the error, split: amplitude error (|true| - |desired|, in phase) and
+    // timing error (the perpendicular part). RMS of a sinusoid = amplitude / sqrt 2.
+    const double amp_part = std::abs(ht.amplitude() - hd.amplitude()) / std::sqrt(2.0);
+    const double lag = WrapPi(hd.phase_rad() - ht.phase_rad());
+    const double time_part = ht.amplitude() * std::abs(std::sin(lag)) / std::sqrt(2.0);
+    std::printf("%-6s | %.4f %.4f | %.4f | %.4f | %.4f | %.4f | %.4f\n", names[k], unit * amp_part,
+                unit * time_part, unit * std::sqrt(band[0]), unit * std::sqrt(band[1]),
+                unit * std::sqrt(band[2]), unit * std::sqrt(band[3]), unit * std::sqrt(band[4]));
   }
   std::printf("leg | desired amp mm | gain true/des | lag ms | correction amp mm (lag ms vs desired)\n");
   for (int i = 0; i < 6; ++i) {

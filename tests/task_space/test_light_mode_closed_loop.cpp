@@ -10,7 +10,10 @@
 // scored as the sum over the six axes of RMSE / (one fifth of the paper's Table 10). Measured
 // when written: 15.55 with the default, 17.07 with 2 samples (ratio 0.911). With the old
 // default both runs are the same configuration and the test fails. With the feedback rate in
-// phi_dot of issue 14d on (defaults): 7.79 vs 8.72 (ratio 0.893).
+// phi_dot of issue 14d on (defaults): 7.79 vs 8.72 (ratio 0.893). The friction adaptation at
+// speed (docs/controller.md, added after) is off in these runs: it moves the ideal plant's
+// friction estimate by a few per cent (theta 0.96-1.05) and with it the score (8.72 vs 9.06,
+// ratio 0.962, measured 2026-11-27); the test is about the velocity estimate's delay alone.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -40,6 +43,7 @@ double CombinedScore(double centre_lag_samples) {
   config.disturbance = MakeIdealDisturbanceProfile();
   config.controller = LegControllerKind::kBsSmc;
   config.leg_controller.differentiator.centre_lag_samples = centre_lag_samples;
+  config.leg_controller.bssmc.friction_adaptation_rate_1_n_m = 0.0;  // see the header
   const PaperSessionResult r = RunPaperSession(config, PaperMotion::kCombined, 0, 60.0);
   EXPECT_TRUE(r.completed) << "centre lag " << centre_lag_samples;
   const auto e = r.metrics.vs_truth.Rmse();

@@ -80,6 +80,7 @@ struct BsSmcOutput {
   double sliding_surface_m_s = 0.0;   // S (eq 19)
   double velocity_m_s = 0.0;          // x_dot estimate (eq 40)
   double feedback_rate_n_s = 0.0;     // the feedback part's rate added to phi_dot (times the fraction)
+  double friction_scale = 1.0;        // adapted friction scale theta (1 when the adaptation is off)
   double desired_force_n = 0.0;       // phi (eq 45)
   double desired_force_rate_n_s = 0.0;  // phi_dot (eq 40 applied to phi)
   double force_error_n = 0.0;         // z (eq 35)
@@ -149,6 +150,9 @@ class BsSmcController {
   LegObserver observer_;  // used only with feedback_rate_from_observer
   double filtered_spool_m_ = 0.0;  // state of the spool command filter
   double integral_force_n_ = 0.0;  // k_i * integral(S dt), clamped
+  // Adapted friction scale theta (BsSmcParams::friction_adaptation_*): a property of the leg,
+  // kept through Reset (a hold does not change the friction); 1 when the adaptation is off.
+  double friction_scale_ = 1.0;
   // Band-limited derivative of phi's feedback part (feedback_rate_* in BsSmcParams).
   bool feedback_primed_ = false;
   double previous_feedback_n_ = 0.0;

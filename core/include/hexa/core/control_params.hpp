@@ -93,6 +93,20 @@ struct BsSmcParams {
   double dither_amplitude_n = 7.5;
   double dither_frequency_hz = 25.0;
   double dither_gate_speed_m_s = 0.12;
+  // Friction scale adaptation (NOT in the paper; issue 14, docs/controller.md "Friction
+  // adaptation at speed"): eq 14's friction and viscous estimates at v_d, F_r = F_f(v_d) +
+  // B_hat v_d, are applied as k F_r with k = 1 + (theta - 1) w(v_d), w = 1 - exp(-(v_d / v_a)^2),
+  // and theta follows the gradient law theta_dot = -gamma w S F_r (the Lyapunov-based update of
+  // an unknown scale on a known regressor), projected on [min, max]. Fast legs adapt and get
+  // the adapted scale; near v_d = 0 (w -> 0) the nominal estimate and the dither act unchanged,
+  // since a friction estimate at full magnitude on a slow, reversing leg drives stick-slip
+  // (docs/results.md). gamma = 0: off (theta stays 1, eq 14 as before). gamma = 0.01 1/(N m)
+  // averages S over ~3 s at the combined motion's S and F_r (~0.05-0.1 m/s, ~80 N): several
+  // periods of a 1 Hz motion, so theta does not follow the limit cycle within a period.
+  double friction_adaptation_rate_1_n_m = 0.01;
+  double friction_adaptation_speed_m_s = 0.12;
+  double friction_adaptation_min_scale = 0.5;
+  double friction_adaptation_max_scale = 2.0;
 };
 
 // PI baseline (paper ref [11]) with anti-windup, plus two terms that are not in ref [11]

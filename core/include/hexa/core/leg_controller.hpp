@@ -120,6 +120,9 @@ struct LegControllerOutput {
   // Diagnostics of the BS-SMC (0 for the PI baseline): z (eq 35) and the phi_dot used (eq 38).
   double force_error_n = 0.0;
   double desired_force_rate_n_s = 0.0;
+  // Adapted friction scale theta of the BS-SMC (BsSmcParams::friction_adaptation_*; 1 when the
+  // adaptation is off, and for the PI baseline). Kept through holds: a leg property.
+  double friction_scale = 1.0;
   // The valve was driven open loop this tick (kExcitation inside its window); the position
   // guard of the excitation was in control when `guarding`.
   bool open_loop = false;
