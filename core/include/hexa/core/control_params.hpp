@@ -180,9 +180,13 @@ struct SupervisorParams {
   // Setpoint preview (issue 14b, NOT in the paper; docs/task_space.md "Setpoint lead"): while
   // a trajectory runs, the legs get the lengths, rates and feed-forward of the desired motion
   // this far ahead (the trajectory is known in advance); the outer loop and the metrics keep
-  // the desired pose of now. Default = the valve chain's two first-order lags, the 2 ms spool
-  // filter + the 3 ms spool (rig valve.spool_time_constant_s). 0 = off.
-  double setpoint_lead_s = 0.005;
+  // the desired pose of now. Default = the legs' measured lag: their mean first-harmonic lag
+  // on the combined motion with no lead, 1.86 ms over the six legs and seeds 1-3 (calibrated,
+  // realistic, with the friction adaptation; `platform_study --rig default --calibrate --seed S
+  // lead=0 legs combined`, docs/task_space.md "Setpoint lead"). Before the friction adaptation
+  // it was 5 ms, the valve chain's two first-order lags (2 ms spool filter + 3 ms spool), when
+  // the legs lagged 8-17 ms. 0 = off.
+  double setpoint_lead_s = 0.002;
 };
 
 }  // namespace hexa
