@@ -4,7 +4,8 @@ that `hexa_recorder report` writes into the output directory:
 
   pose.csv : time_s, desired_{x,y,z}_m, desired_{roll,pitch,yaw}_rad,
              true_{...} (ground truth), measured_{...} (GQFK + IMU estimate)
-  legs.csv : time_s, desired_length_m_{1..6}, measured_length_m_{1..6}, valve_v_{1..6}
+  legs.csv : time_s, desired_length_m_{1..6}, measured_length_m_{1..6}, valve_v_{1..6},
+             friction_scale_{1..6} (BS-SMC theta; not plotted)
 
 Usage: /usr/bin/python3 plot_session.py OUTPUT_DIR [--title TEXT]
 Run with Debian's /usr/bin/python3 (python3-numpy, python3-matplotlib)."""

@@ -107,6 +107,7 @@ LegNode::LegNode(const LegNodeOptions& options, const config::SystemConfig& conf
       options.controller == LegControllerKind::kPi ? hexa_msg_CONTROLLER_PI : hexa_msg_CONTROLLER_BSSMC;
   last_command_.controller = base_controller_;
   last_command_.standby = options.standby;
+  last_command_.friction_scale = 1.0;  // eq 14 nominal until the controller answers
 }
 
 void LegNode::PublishStatus(hexa_msg_NodeState state, const char* detail) {
@@ -296,6 +297,7 @@ void LegNode::Answer(const hexa_msg_LegSensors& s) {
   c.setpoint_tick = output_.setpoint_tick;
   c.desired_length_m = output_.desired_length_m;
   c.sliding_surface_m_s = output_.sliding_surface_m_s;
+  c.friction_scale = output_.friction_scale;
   c.compute_time_s = compute_s;
   // Open loop (identification excitation): no position controller chose this voltage.
   c.controller = output_.open_loop ? hexa_msg_CONTROLLER_NONE : base_controller_;

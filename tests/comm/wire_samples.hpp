@@ -68,6 +68,7 @@ inline hexa_msg_ValveCommand Make(uint64_t seq) {
   s.desired_length_m = V(seq, 2);
   s.sliding_surface_m_s = V(seq, 3);
   s.compute_time_s = V(seq, 4);
+  s.friction_scale = V(seq, 5);
   return s;
 }
 
@@ -228,6 +229,7 @@ inline std::string Diff(const hexa_msg_ValveCommand& g, const hexa_msg_ValveComm
   c.Field("desired_length_m", g.desired_length_m, w.desired_length_m);
   c.Field("sliding_surface_m_s", g.sliding_surface_m_s, w.sliding_surface_m_s);
   c.Field("compute_time_s", g.compute_time_s, w.compute_time_s);
+  c.Field("friction_scale", g.friction_scale, w.friction_scale);
   return c.diff;
 }
 inline std::string Diff(const hexa_msg_ImuSample& g, const hexa_msg_ImuSample& w) {

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -62,15 +63,14 @@ inline SessionRun RunSession(const std::string& name, int domain, std::vector<st
   return run;
 }
 
-// Replays a paper trajectory in the in-process lockstep simulation with the shipped rig
-// file and compares the valve voltages the plant applied at every tick, bit for bit.
-// GroundTruth(n + 1) carries the voltages applied during step n.
-// `rig_overlays`: applied as the services apply them (config::MakeControllerModel).
-inline void ExpectSameAsInProcess(const recorder::SessionReport& report, PaperMotion motion,
-                                  int periods, std::uint64_t seed,
-                                  LegControllerKind controller = LegControllerKind::kBsSmc,
-                                  std::uint64_t up_to_tick = UINT64_MAX,
-                                  const std::vector<std::string>& rig_overlays = {}) {
+// The in-process lockstep simulation of a paper session with the shipped rig file, as
+// hexa_session runs it: tick 0 latches the rest pose, START at tick 5. `rig_overlays` are
+// applied as the services apply them (config::MakeControllerModel). Calls on_step(n, sim)
+// after each step n = 1, 2, ... until it returns false.
+template <typename OnStep>
+inline void RunInProcessSession(PaperMotion motion, int periods, std::uint64_t seed,
+                                LegControllerKind controller,
+                                const std::vector<std::string>& rig_overlays, OnStep on_step) {
   const auto loaded = config::LoadSystemConfig(config::DefaultRigFile(), rig_overlays);
   ASSERT_TRUE(loaded.ok) << loaded.error;
   const config::SystemConfig& cfg = loaded.config;
@@ -85,18 +85,63 @@ inline void ExpectSameAsInProcess(const recorder::SessionReport& report, PaperMo
   LockstepSimulation sim(lc);
   sim.Tick();  // tick 0: the supervisor latches the rest pose, as the service does
   const StartRequest start = sim.supervisor().PreparePaperStart(motion, periods);
-  const auto& applied = report.applied_valve_v;
-  ASSERT_GT(applied.size(), 1000u);
-  for (std::uint64_t n = 1; n + 1 < applied.size() && n < up_to_tick; ++n) {
+  for (std::uint64_t n = 1;; ++n) {
     const bool start_now = n == 5;
     sim.Tick(start_now ? OperatorCommandKind::kStart : OperatorCommandKind::kNone,
              start_now ? &start : nullptr);
-    for (int i = 0; i < 6; ++i) {
-      ASSERT_EQ(applied[n + 1][i], sim.applied_valve_v()[i])
-          << "tick " << n << " leg " << i + 1
-          << ": the DDS session and the in-process simulation diverge";
-    }
+    if (!on_step(n, static_cast<const LockstepSimulation&>(sim))) return;
   }
+}
+
+// Replays a paper trajectory in the in-process lockstep simulation and compares the valve
+// voltages the plant applied at every tick, bit for bit.
+// GroundTruth(n + 1) carries the voltages applied during step n.
+inline void ExpectSameAsInProcess(const recorder::SessionReport& report, PaperMotion motion,
+                                  int periods, std::uint64_t seed,
+                                  LegControllerKind controller = LegControllerKind::kBsSmc,
+                                  std::uint64_t up_to_tick = UINT64_MAX,
+                                  const std::vector<std::string>& rig_overlays = {}) {
+  const auto& applied = report.applied_valve_v;
+  ASSERT_GT(applied.size(), 1000u);
+  RunInProcessSession(motion, periods, seed, controller, rig_overlays,
+                      [&](std::uint64_t n, const LockstepSimulation& sim) {
+                        if (n + 1 >= applied.size() || n >= up_to_tick) return false;
+                        for (int i = 0; i < 6; ++i) {
+                          if (applied[n + 1][i] != sim.applied_valve_v()[i]) {
+                            ADD_FAILURE() << "tick " << n << " leg " << i + 1
+                                          << ": the DDS session and the in-process simulation diverge";
+                            return false;
+                          }
+                        }
+                        return true;
+                      });
+}
+
+// The legs' adapted friction scale theta the session recorded (ValveCommand(n).friction_scale)
+// equals the in-process controllers' LegControllerOutput::friction_scale after step n, bit for
+// bit, at every tick each leg answered (BS-SMC).
+inline void ExpectSameFrictionScaleAsInProcess(const recorder::SessionReport& report,
+                                               PaperMotion motion, int periods,
+                                               std::uint64_t seed) {
+  const auto& theta = report.command_friction_scale;
+  ASSERT_GT(theta.size(), 1000u);
+  std::uint64_t compared = 0;
+  RunInProcessSession(motion, periods, seed, LegControllerKind::kBsSmc, {},
+                      [&](std::uint64_t n, const LockstepSimulation& sim) {
+                        if (n >= theta.size()) return false;
+                        for (int i = 0; i < 6; ++i) {
+                          const double in_process = sim.leg_outputs()[i].friction_scale;
+                          if (std::isnan(theta[n][i])) continue;  // no command of that leg
+                          ++compared;
+                          if (theta[n][i] != in_process) {
+                            ADD_FAILURE() << "tick " << n << " leg " << i + 1 << ": recorded theta "
+                                          << theta[n][i] << ", in process " << in_process;
+                            return false;
+                          }
+                        }
+                        return true;
+                      });
+  EXPECT_GT(compared, 6u * 1000u);
 }
 
 }  // namespace hexa::testing

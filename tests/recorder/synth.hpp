@@ -34,6 +34,16 @@ inline std::array<uint64_t, 7> SynthCommandAges(int leg) {
   if (leg == 4) return {990, 0, 3, 7, 0, 0, 0};
   return {1000, 0, 0, 0, 0, 0, 0};
 }
+// The legs' adapted friction scale theta in the synthetic ValveCommands: a saw per leg with
+// distinct values per leg; ticks 1..4 (before the first TRACKING pose report) read 0.5, outside
+// every leg's range in the tracking window (ticks 5..1000).
+inline double SynthFrictionScale(uint32_t leg, uint64_t tick) {
+  if (tick < 5) return 0.5;
+  return 1.0 + 0.01 * leg + 1e-4 * static_cast<double>((tick + 10 * leg) % 250);
+}
+// Who wrote the synthetic ValveCommands: the BS-SMC (theta as above), the BS-SMC of a recorder
+// before the field existed (no friction_scale), or the PI baseline (theta 1).
+enum class SynthController { kBsSmc, kBsSmcWithoutFrictionScale, kPi };
 inline constexpr uint64_t kSynthStartNs = 1'700'000'000'000'000'000ull;
 
 inline void FillHeader(rec::SampleHeader* h, uint64_t tick) {
@@ -48,7 +58,8 @@ inline void FillHeader(rec::SampleHeader* h, uint64_t tick) {
 // before the sanitiser wrote them when a node published such text).
 inline void WriteSynthRecording(const std::string& path, McapWriterConfig config = {},
                                 double valve_offset_v = 0.0, uint32_t offset_leg = 0,
-                                uint64_t offset_from_tick = 0, bool invalid_utf8_detail = false) {
+                                uint64_t offset_from_tick = 0, bool invalid_utf8_detail = false,
+                                SynthController controller = SynthController::kBsSmc) {
   config.sync = McapSyncMode::kNone;
   RecordingWriter w(config);
   w.Open(path);
@@ -108,12 +119,15 @@ inline void WriteSynthRecording(const std::string& path, McapWriterConfig config
       double valve = 5.0 + 0.001 * static_cast<double>(tick % 100) * leg;
       if (leg == offset_leg && tick >= offset_from_tick) valve += valve_offset_v;
       v.set_valve_v(valve);
-      v.set_controller(rec::CONTROLLER_BSSMC);
+      v.set_controller(controller == SynthController::kPi ? rec::CONTROLLER_PI
+                                                          : rec::CONTROLLER_BSSMC);
       v.set_status(rec::LEGCTRL_OK);
       v.set_setpoint_tick(tick - tick % 5);
       v.set_desired_length_m(0.5);
       v.set_sliding_surface_m_s(-0.01);
       v.set_compute_time_s(2e-5);
+      if (controller == SynthController::kBsSmc) v.set_friction_scale(SynthFrictionScale(leg, tick));
+      if (controller == SynthController::kPi) v.set_friction_scale(1.0);
       put(c_valve, tick, 200'000 + leg * 1000, v);
     }
     rec::GroundTruth g;

@@ -70,6 +70,7 @@ TEST(Convert, ValveCommandBothWays) {
   d.desired_length_m = 0.49;
   d.sliding_surface_m_s = -0.02;
   d.compute_time_s = 3.5e-5;
+  d.friction_scale = 1.2375;
   rec::ValveCommand p;
   ToProto(d, p);
   EXPECT_EQ(p.leg_id(), 2u);
@@ -82,6 +83,8 @@ TEST(Convert, ValveCommandBothWays) {
   EXPECT_EQ(p.desired_length_m(), 0.49);
   EXPECT_EQ(p.sliding_surface_m_s(), -0.02);
   EXPECT_EQ(p.compute_time_s(), 3.5e-5);
+  ASSERT_TRUE(p.has_friction_scale());
+  EXPECT_EQ(p.friction_scale(), 1.2375);
   auto b = Zeroed<hexa_msg_ValveCommand>();
   ASSERT_TRUE(FromProto(p, b));
   EXPECT_EQ(b.leg_id, 2);
@@ -94,6 +97,18 @@ TEST(Convert, ValveCommandBothWays) {
   EXPECT_EQ(b.desired_length_m, 0.49);
   EXPECT_EQ(b.sliding_surface_m_s, -0.02);
   EXPECT_EQ(b.compute_time_s, 3.5e-5);
+  EXPECT_EQ(b.friction_scale, 1.2375);
+  // A recording from before the field: theta reads as eq 14's nominal 1, not 0.
+  p.clear_friction_scale();
+  b.friction_scale = 0.75;
+  ASSERT_TRUE(FromProto(p, b));
+  EXPECT_EQ(b.friction_scale, 1.0);
+  // An explicit 0 is carried (presence, not value, tells an old recording apart).
+  d.friction_scale = 0.0;
+  ToProto(d, p);
+  EXPECT_TRUE(p.has_friction_scale());
+  ASSERT_TRUE(FromProto(p, b));
+  EXPECT_EQ(b.friction_scale, 0.0);
   p.set_status(static_cast<rec::LegCtrlStatus>(99));  // unknown enum value from a newer file
   EXPECT_FALSE(FromProto(p, b));
 }

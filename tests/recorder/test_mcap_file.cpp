@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -269,6 +270,94 @@ TEST(SessionReport, CommandAgesPerLegComeFromTheGroundTruth) {
     const auto expected = test::SynthCommandAges(leg);
     for (int b = 0; b < SessionReport::kAgeBins; ++b)
       EXPECT_EQ(r.command_age[leg - 1][b], expected[b]) << "leg " << leg << " bin " << b;
+  }
+}
+
+// The legs' adapted friction scale theta (ValveCommand.friction_scale): per leg, its value at
+// the leg's last command of the tracking window, min and max over that window only (ticks 1..4
+// read 0.5, before the first TRACKING pose report); in report.md one line per leg, in
+// report.json and legs.csv.
+TEST(SessionReport, FrictionScalePerLegOverTheTrackingWindow) {
+  const fs::path dir = TempDir();
+  const std::string path = dir / "synth_theta.mcap";
+  test::WriteSynthRecording(path);
+  const SessionReport r = ComputeSessionReport(path);
+  ASSERT_TRUE(r.AnyBsSmcLeg());
+  for (uint32_t leg = 1; leg <= 6; ++leg) {
+    SCOPED_TRACE("leg " + std::to_string(leg));
+    const auto& f = r.friction_scale[leg - 1];
+    const uint64_t commands = leg == 2 ? 995 : 996;  // ticks 5..1000; leg 2 misses tick 500
+    EXPECT_EQ(f.bssmc_commands, commands);
+    EXPECT_EQ(f.commands, commands);
+    EXPECT_EQ(f.end, test::SynthFrictionScale(leg, 1000));
+    EXPECT_EQ(f.min, 1.0 + 0.01 * leg);  // (tick + 10 leg) % 250 = 0 at tick 250 - 10 leg
+    EXPECT_EQ(f.max, 1.0 + 0.01 * leg + 1e-4 * 249.0);
+    ASSERT_EQ(r.command_friction_scale.size(), 1001u);
+    for (uint64_t tick : {1ull, 4ull, 5ull, 499ull, 1000ull})
+      EXPECT_EQ(r.command_friction_scale[tick][leg - 1], test::SynthFrictionScale(leg, tick)) << tick;
+  }
+  EXPECT_TRUE(std::isnan(r.command_friction_scale[500][1])) << "leg 2 has no command at tick 500";
+  EXPECT_TRUE(std::isnan(r.command_friction_scale[0][0])) << "no command at tick 0";
+
+  WriteSessionReport(r, dir.string());
+  auto slurp = [&](const char* name) {
+    std::ifstream in(dir / name);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  };
+  const std::string md = slurp("report.md");
+  EXPECT_NE(md.find("## Adapted friction scale theta over the tracking window (BS-SMC)"), std::string::npos) << md;
+  // Leg 3: end 1 + 0.03 + 0.0030, min 1.03, max 1.03 + 0.0249.
+  EXPECT_NE(md.find("| 3 | 1.0330 | 1.0300 | 1.0549 | 996 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| 2 | 1.0220 | 1.0200 | 1.0449 | 995 |"), std::string::npos) << md;
+  const std::string json = slurp("report.json");
+  EXPECT_NE(json.find("\"friction_scale_per_leg\": [{\"bssmc_commands\": 996, \"commands\": 996, "
+                      "\"end\": 1.011, \"min\": 1.01, \"max\": 1.0349}"),
+            std::string::npos)
+      << json;
+  const std::string csv = slurp("legs.csv");
+  EXPECT_NE(csv.find(",valve_v_6,friction_scale_1,friction_scale_2,friction_scale_3,"
+                     "friction_scale_4,friction_scale_5,friction_scale_6\n"),
+            std::string::npos);
+}
+
+// Only a BS-SMC session has the figure: a PI session none; a BS-SMC recording from before the
+// field says "not recorded" instead of a made-up theta.
+TEST(SessionReport, FrictionScaleOnlyForBsSmcAndOnlyWhenRecorded) {
+  const fs::path dir = TempDir();
+  auto slurp = [&](const fs::path& p) {
+    std::ifstream in(p);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  };
+  {
+    const std::string path = dir / "synth_pi.mcap";
+    test::WriteSynthRecording(path, {}, 0.0, 0, 0, false, test::SynthController::kPi);
+    const SessionReport r = ComputeSessionReport(path);
+    EXPECT_FALSE(r.AnyBsSmcLeg());
+    fs::create_directories(dir / "pi");
+    WriteSessionReport(r, (dir / "pi").string());
+    EXPECT_EQ(slurp(dir / "pi" / "report.md").find("friction scale"), std::string::npos);
+    EXPECT_NE(slurp(dir / "pi" / "report.json").find("\"friction_scale_per_leg\": null"),
+              std::string::npos);
+  }
+  {
+    const std::string path = dir / "synth_old.mcap";
+    test::WriteSynthRecording(path, {}, 0.0, 0, 0, false,
+                              test::SynthController::kBsSmcWithoutFrictionScale);
+    const SessionReport r = ComputeSessionReport(path);
+    ASSERT_TRUE(r.AnyBsSmcLeg());
+    for (int i = 0; i < 6; ++i) {
+      EXPECT_GT(r.friction_scale[i].bssmc_commands, 0u);
+      EXPECT_EQ(r.friction_scale[i].commands, 0u);
+      EXPECT_TRUE(std::isnan(r.command_friction_scale[1000][i]));
+    }
+    fs::create_directories(dir / "old");
+    WriteSessionReport(r, (dir / "old").string());
+    EXPECT_NE(slurp(dir / "old" / "report.md").find("| 1 | not recorded | - | - | 996 |"),
+              std::string::npos);
   }
 }
 

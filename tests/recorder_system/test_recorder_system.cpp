@@ -204,7 +204,7 @@ uint64_t PlantSupervisorReasks() {
 }
 
 // Offline oracle: the core LegController run on the recorded sensors and setpoints with the
-// lockstep setpoint rule of leg_ctrl (docs/architecture.md), no DDS. Returns valve_v per tick.
+// lockstep setpoint rule of leg_ctrl (docs/architecture.md), no DDS. Returns its output per tick.
 std::map<uint64_t, hexa::LegControllerOutput> OfflineController(
     const hexa::config::SystemConfig& cfg, uint32_t leg, const Recorded& r) {
   hexa::LegController c(hexa::LegControllerConfig::FromRig(cfg.rig, cfg.leg_controller,
@@ -454,6 +454,8 @@ TEST(RecorderSystem, ReplaySameBuild) {
       ASSERT_EQ(c.setpoint_tick(), n.setpoint_tick()) << leg << " " << tick;
       ASSERT_EQ(c.desired_length_m(), n.desired_length_m()) << leg << " " << tick;
       ASSERT_EQ(c.sliding_surface_m_s(), n.sliding_surface_m_s()) << leg << " " << tick;
+      ASSERT_TRUE(c.has_friction_scale() && n.has_friction_scale()) << leg << " " << tick;
+      ASSERT_EQ(c.friction_scale(), n.friction_scale()) << leg << " " << tick;
       ASSERT_EQ(c.controller(), n.controller());
       ASSERT_EQ(c.header().sim_time_s(), n.header().sim_time_s());
     }
@@ -463,8 +465,13 @@ TEST(RecorderSystem, ReplaySameBuild) {
   const auto cfg = hexa::config::LoadSystemConfigOrThrow(HEXA_RIG_FILE);
   for (uint32_t leg = 1; leg <= kLegs; ++leg) {
     const auto off = OfflineController(cfg, leg, s);
-    for (const auto& [tick, c] : s.commands.at(leg))
+    bool adapted = false;  // theta left 1 at some tick: the comparison below can fail
+    for (const auto& [tick, c] : s.commands.at(leg)) {
       ASSERT_EQ(off.at(tick).valve_v, c.valve_v()) << "leg " << leg << " tick " << tick;
+      ASSERT_EQ(off.at(tick).friction_scale, c.friction_scale()) << "leg " << leg << " tick " << tick;
+      adapted = adapted || c.friction_scale() != 1.0;
+    }
+    EXPECT_TRUE(adapted) << "leg " << leg << ": theta stayed 1 all session";
   }
 }
 

@@ -70,6 +70,7 @@ int Record(LockstepSimulation& sim, const config::SystemConfig& config, const Ex
       c.set_setpoint_tick(out.setpoint_tick);
       c.set_desired_length_m(out.desired_length_m);
       c.set_sliding_surface_m_s(out.sliding_surface_m_s);
+      c.set_friction_scale(out.friction_scale);
       writer.Write(valve_ch, log_ns, log_ns, c);
     }
     if (n % 10000 == 0) {

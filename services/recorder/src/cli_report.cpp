@@ -22,7 +22,8 @@ int RunReport(const std::vector<std::string>& argv) {
         "report.md, report.json (RMSE per axis against ground truth and against the measured\n"
         "pose over the tracking window, relative errors, leg-length RMSE per leg, deadline\n"
         "misses per topic, control round-trip latency median/p99/max, wall and simulated time,\n"
-        "faults), pose.csv and legs.csv, and the PNG plots (deploy/plot_session.py, run with\n"
+        "faults; for a BS-SMC session each leg's adapted friction scale theta at the end of the\n"
+        "tracking window, min and max), pose.csv and legs.csv, and the PNG plots (deploy/plot_session.py, run with\n"
         "/usr/bin/python3). --meta adds session facts (trajectory=combined,controller=bssmc,...);\n"
         "trajectory=<name> adds the paper's Table 9 / 10 figures for comparison.\n",
         stdout);

@@ -100,6 +100,7 @@ void ToProto(const hexa_msg_ValveCommand& in, rec::ValveCommand& out) {
   out.set_setpoint_tick(in.setpoint_tick);
   out.set_desired_length_m(in.desired_length_m);
   out.set_sliding_surface_m_s(in.sliding_surface_m_s);
+  out.set_friction_scale(in.friction_scale);
   out.set_compute_time_s(in.compute_time_s);
 }
 
@@ -209,6 +210,8 @@ bool FromProto(const rec::ValveCommand& in, hexa_msg_ValveCommand& out) {
   out.setpoint_tick = in.setpoint_tick();
   out.desired_length_m = in.desired_length_m();
   out.sliding_surface_m_s = in.sliding_surface_m_s();
+  // A recording from before the field: theta unknown, read as eq 14's nominal 1.
+  out.friction_scale = in.has_friction_scale() ? in.friction_scale() : 1.0;
   out.compute_time_s = in.compute_time_s();
   return OctetFromProto(in.leg_id(), out.leg_id) && FromProto(in.header(), out.header);
 }

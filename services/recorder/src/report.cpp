@@ -59,6 +59,8 @@ struct TickSlot {
   std::array<double, 6> command_desired_m{};
   std::array<double, 6> command_v{};
   std::array<int64_t, 6> command_time_ns{};
+  std::array<bool, 6> command_bssmc{};
+  std::array<double, 6> command_friction_scale{};  // NaN: the field is not in the recording
 };
 
 }  // namespace
@@ -125,6 +127,8 @@ SessionReport ComputeSessionReport(const std::string& path) {
           s.command_desired_m[i] = m.desired_length_m();
           s.command_v[i] = m.valve_v();
           s.command_time_ns[i] = m.header().source_time_ns();
+          s.command_bssmc[i] = m.controller() == rec::CONTROLLER_BSSMC;
+          s.command_friction_scale[i] = m.has_friction_scale() ? m.friction_scale() : std::nan("");
         } else if (ch.topic == "hexa_PoseReport") {
           const auto m = Parse<rec::PoseReport>(view, ch.topic);
           poses.push_back({m.header().tick(), static_cast<int>(m.state()), Six(m.desired_pose()),
@@ -176,9 +180,22 @@ SessionReport ComputeSessionReport(const std::string& path) {
   for (uint64_t tick = 0; tick < ticks.size(); ++tick) {
     while (pose_index < poses.size() && poses[pose_index].tick <= tick) state = poses[pose_index++].state;
     const TickSlot& s = ticks[tick];
-    SessionReport::LegRow row{tick * kTickS, {}, {}, {}};
-    bool any = false;
+    SessionReport::LegRow row{tick * kTickS, {}, {}, {}, {}};
+    bool any = false, any_command = false;
     for (int i = 0; i < 6; ++i) {
+      row.friction_scale[i] = s.command[i] ? s.command_friction_scale[i] : std::nan("");
+      any_command = any_command || s.command[i];
+      if (s.command[i] && s.command_bssmc[i] && state == 2) {
+        SessionReport::FrictionScale& f = r.friction_scale[static_cast<std::size_t>(i)];
+        ++f.bssmc_commands;
+        const double theta = s.command_friction_scale[i];
+        if (!std::isnan(theta)) {
+          f.min = f.commands == 0 ? theta : std::min(f.min, theta);
+          f.max = f.commands == 0 ? theta : std::max(f.max, theta);
+          f.end = theta;
+          ++f.commands;
+        }
+      }
       if (s.command[i] && s.sensor[i]) {
         latencies.push_back(static_cast<double>(s.command_time_ns[i] - s.sensor_time_ns[i]) * 1e-9);
         if (state == 2) legs[i].Add(s.command_desired_m[i], s.sensor_length_m[i]);
@@ -189,6 +206,12 @@ SessionReport ComputeSessionReport(const std::string& path) {
       any = any || s.sensor[i] || s.command[i];
     }
     if (any) r.leg_rows.push_back(row);
+    if (any_command) {
+      std::array<double, 6> none;
+      none.fill(std::nan(""));
+      r.command_friction_scale.resize(tick + 1, none);
+      r.command_friction_scale[tick] = row.friction_scale;
+    }
     if (s.truth && state == 2) {
       for (int i = 0; i < 6; ++i) {
         if (have_prev_v) valve_step_sum[i] += std::abs(s.applied_v[i] - prev_v[i]);
@@ -335,6 +358,24 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
       }
       j << "]";
     }
+    j << ",\n  \"friction_scale_per_leg\": ";
+    if (!r.AnyBsSmcLeg()) j << "null";
+    else {
+      j << "[";
+      for (int i = 0; i < 6; ++i) {
+        const auto& f = r.friction_scale[i];
+        j << (i ? ", " : "");
+        if (f.bssmc_commands == 0) {
+          j << "null";
+          continue;
+        }
+        const bool have = f.commands > 0;
+        j << "{\"bssmc_commands\": " << f.bssmc_commands << ", \"commands\": " << f.commands
+          << ", \"end\": " << (have ? Json(f.end) : "null") << ", \"min\": "
+          << (have ? Json(f.min) : "null") << ", \"max\": " << (have ? Json(f.max) : "null") << "}";
+      }
+      j << "]";
+    }
     j << ",\n  \"missing_samples\": {";
     first = true;
     for (const auto& [k, v] : r.missing) {
@@ -421,7 +462,27 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
     for (double v : r.valve_saturated_fraction) m << " | " << Json(100 * v).substr(0, 5);
     m << " |\n\nValve activity is taken over the tracking window from the voltages the plant "
          "applied: a smooth command moves a few hundredths of a volt per 1 ms tick; chattering "
-         "shows as large steps and time at 0 or 10 V.\n\n## Timing\n\n";
+         "shows as large steps and time at 0 or 10 V.\n\n";
+    if (r.AnyBsSmcLeg()) {
+      m << "## Adapted friction scale theta over the tracking window (BS-SMC)\n\n"
+           "| leg | end | min | max | commands |\n|---|---|---|---|---|\n";
+      for (int i = 0; i < 6; ++i) {
+        const auto& f = r.friction_scale[i];
+        char buf[96];
+        if (f.bssmc_commands == 0)
+          std::snprintf(buf, sizeof buf, "- | - | - | 0 (not BS-SMC)");
+        else if (f.commands == 0)
+          std::snprintf(buf, sizeof buf, "not recorded | - | - | %llu",
+                        static_cast<unsigned long long>(f.bssmc_commands));
+        else
+          std::snprintf(buf, sizeof buf, "%.4f | %.4f | %.4f | %llu", f.end, f.min, f.max,
+                        static_cast<unsigned long long>(f.commands));
+        m << "| " << i + 1 << " | " << buf << " |\n";
+      }
+      m << "\ntheta scales eq 14's friction estimate at speed (1 = nominal); end = the leg's last "
+           "command in the window. 'not recorded': the recording predates the field.\n\n";
+    }
+    m << "## Timing\n\n";
     m << "- control round trip (sensor sample written -> valve command written, same leg and "
          "tick): median "
       << Json(r.latency_s.median * 1e6) << " us, p99 " << Json(r.latency_s.p99 * 1e6) << " us, max "
@@ -471,14 +532,15 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
   {
     std::ofstream l(dir + "/legs.csv");
     l << "time_s";
-    for (const char* w : {"desired_length_m_", "measured_length_m_", "valve_v_"})
+    for (const char* w : {"desired_length_m_", "measured_length_m_", "valve_v_", "friction_scale_"})
       for (int i = 1; i <= 6; ++i) l << "," << w << i;
     l << "\n";
     char buf[32];
     for (const auto& row : r.leg_rows) {
       std::snprintf(buf, sizeof buf, "%.3f", row.time_s);
       l << buf;
-      for (const auto* arr : {&row.desired_length_m, &row.measured_length_m, &row.valve_v})
+      for (const auto* arr : {&row.desired_length_m, &row.measured_length_m, &row.valve_v,
+                              &row.friction_scale})
         for (double v : *arr) l << "," << (std::isnan(v) ? "nan" : Json(v));
       l << "\n";
     }

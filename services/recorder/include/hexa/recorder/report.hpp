@@ -41,6 +41,22 @@ struct SessionReport {
   static constexpr int kAgeBins = 7;
   std::array<std::array<std::uint64_t, kAgeBins>, 6> command_age{};
   bool command_age_recorded = false;  // recordings before the field existed have none
+  // Adapted friction scale theta of the BS-SMC (ValveCommand.friction_scale), per leg over the
+  // tracking window: the value of the leg's last command in it, and the smallest and largest.
+  // Taken from the BS-SMC's commands only (the first recorded one per tick, as the leg-length
+  // figures): `bssmc_commands` = 0 for a PI or open-loop leg, and no figure then. `commands` =
+  // those that carry the field (0 in a recording made before the field existed).
+  struct FrictionScale {
+    std::uint64_t bssmc_commands = 0;
+    std::uint64_t commands = 0;
+    double end = 0.0, min = 0.0, max = 0.0;
+  };
+  std::array<FrictionScale, 6> friction_scale{};
+  bool AnyBsSmcLeg() const {
+    for (const auto& f : friction_scale)
+      if (f.bssmc_commands > 0) return true;
+    return false;
+  }
   std::map<std::string, std::uint64_t> messages;         // per topic
   std::map<std::string, std::uint64_t> missing;          // per periodic topic, from ticks
   std::vector<std::string> faults;                       // FaultEvent lines
@@ -56,12 +72,16 @@ struct SessionReport {
   struct LegRow {
     double time_s;
     std::array<double, 6> desired_length_m, measured_length_m, valve_v;
+    std::array<double, 6> friction_scale;  // NaN: no command, or the field not recorded
   };
   std::vector<PoseRow> pose_rows;
   std::vector<LegRow> leg_rows;
   // Valve voltages the plant applied, per tick (from GroundTruth), for bit-exact comparisons;
   // NaN for a tick whose GroundTruth sample is not in the recording.
   std::vector<std::array<double, 6>> applied_valve_v;
+  // ValveCommand.friction_scale per command tick (the first recorded command of the leg and
+  // tick), for the same comparisons; NaN where there is none or it does not carry the field.
+  std::vector<std::array<double, 6>> command_friction_scale;
 };
 
 // Throws McapError / std::runtime_error with a message naming the file on a bad recording.
