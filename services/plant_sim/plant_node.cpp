@@ -80,11 +80,12 @@ std::string LegList(LegMask mask) {
 
 }  // namespace
 
-void LegWriterTable::Refresh(const comm::LegReaders<hexa_msg_ValveCommand>& readers) {
-  for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) RefreshOne(readers.leg(leg), leg);
+void LegWriterTable::Refresh(const comm::LegReaders<hexa_msg_ValveCommand>& readers, bool may_give_up) {
+  for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) RefreshOne(readers.leg(leg), leg, may_give_up);
 }
 
-void LegWriterTable::RefreshOne(const comm::Reader<hexa_msg_ValveCommand>& reader, int reader_leg) {
+void LegWriterTable::RefreshOne(const comm::Reader<hexa_msg_ValveCommand>& reader, int reader_leg,
+                                bool may_give_up) {
   PerReader& r = readers_[static_cast<std::size_t>(reader_leg - 1)];
   r.counters = &reader.status();
   const auto& slots = r.counters->writers();
@@ -98,8 +99,12 @@ void LegWriterTable::RefreshOne(const comm::Reader<hexa_msg_ValveCommand>& reade
     if (!user_data) {
       // Not (yet) known as a matched publication: discovery may lag the liveliness callback
       // that claimed the slot, so ask again on later refreshes; a writer still unknown after
-      // 100 of them is gone (it cannot count as alive, and no leg can claim it).
-      if (++r.unresolved[k] >= 100) r.leg[k] = -1;
+      // 100 of them is gone (it cannot count as alive, and no leg can claim it). Not while
+      // waiting for the peers: there, a loaded machine's discovery may take longer than 100
+      // refreshes, and giving up left a live leg's writer unresolved for good (the start-up
+      // never completed: "legs with a live writer 5/6").
+      if (r.unresolved[k] < 255) ++r.unresolved[k];
+      if (may_give_up && r.unresolved[k] >= 100) r.leg[k] = -1;
     } else if (ParseLegUserData(*user_data, leg, standby) && leg == reader_leg) {
       r.leg[k] = static_cast<std::int8_t>(leg);
       r.standby[k] = standby;
@@ -135,7 +140,19 @@ std::string LegWriterTable::Describe() const {
     if (r.counters == nullptr) continue;
     const auto& slots = r.counters->writers();
     for (std::size_t k = 0; k < kSlots; ++k) {
-      if (r.leg[k] <= 0) continue;
+      if (slots[k].publication.load(std::memory_order_acquire) == 0) break;
+      if (r.leg[k] == 0) {
+        text += " a writer in leg" + std::to_string(&r - readers_.data() + 1) +
+                "'s partition not resolved yet (" + std::to_string(r.unresolved[k]) + " refreshes);";
+        continue;
+      }
+      if (r.leg[k] < 0) {
+        if (r.unresolved[k] >= 100) {
+          text += " a writer in leg" + std::to_string(&r - readers_.data() + 1) +
+                  "'s partition never resolved (given up);";
+        }
+        continue;
+      }
       const int state = slots[k].state.load(std::memory_order_relaxed);
       text += " leg" + std::to_string(r.leg[k]) + (r.standby[k] ? " standby " : " primary ") +
               kState[std::clamp(state, 0, 3)] + ";";
@@ -291,7 +308,7 @@ bool PlantNode::WaitForPeers() {
     const uint32_t truth_readers = options_.expect_recorder ? 1u : 0u;
     // Every awaited leg's writer known and alive (its liveliness decides whether the leg is
     // dead once ticking: docs/faults.md).
-    writers_.Refresh(valve_readers_);
+    writers_.Refresh(valve_readers_, /*may_give_up=*/false);
     int legs_alive = 0;
     for (int leg = 1; leg <= options_.expected_legs; ++leg)
       legs_alive += writers_.Counts(leg).alive >= static_cast<int>(per_leg) ? 1 : 0;
@@ -311,15 +328,17 @@ bool PlantNode::WaitForPeers() {
       for (const auto& m : missing) names += " " + m;
       log_->error("peers not ready after {} s: not running:{}; sensor readers {}/{}, valve "
                   "writers {}/{} (legs with a live writer {}/{}), IMU readers {}/{}, "
-                  "ground-truth readers {}/{}",
+                  "ground-truth readers {}/{}; writers:{}",
                   options_.startup_timeout_s, names.empty() ? " none" : names, sensors,
                   sensor_readers, valves, valve_writers, legs_alive, options_.expected_legs, imu,
-                  all_legs_readers, truth, truth_readers);
+                  all_legs_readers, truth, truth_readers, writers_.Describe());
       return false;
     }
     if (now > next_log) {
-      log_->info("waiting for peers ({} not running, sensor readers {}/{}, valve writers {}/{})",
-                 missing.size(), sensors, sensor_readers, valves, valve_writers);
+      log_->info("waiting for peers ({} not running, sensor readers {}/{}, valve writers {}/{}, "
+                 "legs with a live writer {}/{}; writers:{})",
+                 missing.size(), sensors, sensor_readers, valves, valve_writers, legs_alive,
+                 options_.expected_legs, writers_.Describe());
       next_log = now + 2'000'000'000;
     }
     // Wakes on NodeStatus data or shutdown; the timeout re-checks the match counts, which

@@ -114,11 +114,17 @@ class DurationHistogram {
 // comm/status.hpp). Only a writer in leg N's partition that names leg N counts for leg N; a
 // writer elsewhere or naming another leg counts for none. Refresh() resolves writers seen for
 // the first time (allocates, but only when a writer appears); Counts() reads atomics only.
+// A writer whose USER_DATA cannot be read yet (discovery lags the liveliness callback that
+// claimed its slot) is asked again on later refreshes; with `may_give_up` (the running loops)
+// it counts as gone after 100 of them, without (the start-up wait, where discovery on a loaded
+// machine can lag by seconds and no real-time loop pays for the retries) it is asked until the
+// wait ends.
 class LegWriterTable {
  public:
-  void Refresh(const comm::LegReaders<hexa_msg_ValveCommand>& readers);
+  void Refresh(const comm::LegReaders<hexa_msg_ValveCommand>& readers, bool may_give_up = true);
   LegWriterCounts Counts(int leg) const;
-  // "leg1: 1 alive (primary) ..." for the log. Allocates.
+  // "leg1: 1 alive (primary) ..." for the log, and the slots not resolved to a leg (yet) or
+  // given up on. Allocates.
   std::string Describe() const;
 
  private:
@@ -129,7 +135,7 @@ class LegWriterTable {
     std::array<bool, kSlots> standby{};
     std::array<std::uint8_t, kSlots> unresolved{};  // refreshes that could not resolve the slot
   };
-  void RefreshOne(const comm::Reader<hexa_msg_ValveCommand>& reader, int reader_leg);
+  void RefreshOne(const comm::Reader<hexa_msg_ValveCommand>& reader, int reader_leg, bool may_give_up);
   LegArray<PerReader> readers_{};
 };
 
