@@ -21,6 +21,13 @@ DifferentiatorConfig DiffConfig(const BsSmcConfig& c) {
   return d;
 }
 
+// 1 - exp(-(v / v_ref)^2): 0 at rest, 1 well above v_ref. The speed schedule of the feedback
+// rate and the speed weight w of the friction adaptation.
+double RisingSpeedWeight(double velocity_m_s, double reference_m_s) {
+  const double r = velocity_m_s / reference_m_s;
+  return 1.0 - std::exp(-r * r);
+}
+
 LegObserverConfig ObserverConfig(const BsSmcConfig& c) {
   LegObserverConfig o;
   o.period_s = c.period_s;
@@ -103,8 +110,7 @@ double BsSmcController::FrictionEstimateN(double velocity_m_s) const {
 double BsSmcController::FeedbackRateFraction(double desired_velocity_m_s) const {
   const BsSmcParams& p = config_.params;
   if (p.feedback_rate_full_speed_m_s <= 0.0) return p.feedback_rate_fraction;
-  const double r = desired_velocity_m_s / p.feedback_rate_full_speed_m_s;
-  return p.feedback_rate_fraction * (1.0 - std::exp(-r * r));
+  return p.feedback_rate_fraction * RisingSpeedWeight(desired_velocity_m_s, p.feedback_rate_full_speed_m_s);
 }
 
 double BsSmcController::DitherForceN(std::uint64_t tick, double desired_velocity_m_s) const {
@@ -165,8 +171,7 @@ BsSmcFeedback BsSmcController::Begin(const BsSmcInput& in) {
   if (p.friction_adaptation_rate_1_n_m > 0.0) {
     // Friction scale adaptation at speed (not in the paper; control_params.hpp): the regressor
     // F_r = F_f(v_d) + B_hat v_d, weighted by w(v_d); theta_dot = -gamma w S F_r, projected.
-    const double q = vd / p.friction_adaptation_speed_m_s;
-    const double w = 1.0 - std::exp(-q * q);
+    const double w = RisingSpeedWeight(vd, p.friction_adaptation_speed_m_s);
     const double regressor_n = friction_n + b_hat * vd;
     const double step = -p.friction_adaptation_rate_1_n_m * w * s_m_s * regressor_n * config_.period_s;
     if (std::isfinite(step)) {

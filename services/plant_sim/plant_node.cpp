@@ -141,15 +141,14 @@ std::string LegWriterTable::Describe() const {
     const auto& slots = r.counters->writers();
     for (std::size_t k = 0; k < kSlots; ++k) {
       if (slots[k].publication.load(std::memory_order_acquire) == 0) break;
-      if (r.leg[k] == 0) {
-        text += " a writer in leg" + std::to_string(&r - readers_.data() + 1) +
-                "'s partition not resolved yet (" + std::to_string(r.unresolved[k]) + " refreshes);";
-        continue;
-      }
-      if (r.leg[k] < 0) {
-        if (r.unresolved[k] >= 100) {
-          text += " a writer in leg" + std::to_string(&r - readers_.data() + 1) +
-                  "'s partition never resolved (given up);";
+      if (r.leg[k] <= 0) {
+        // Unresolved, or given up on; a writer resolved to another leg is not listed.
+        const bool given_up = r.leg[k] < 0 && r.unresolved[k] >= 100;
+        if (r.leg[k] == 0 || given_up) {
+          text += " a writer in leg" + std::to_string(&r - readers_.data() + 1) + "'s partition " +
+                  (given_up ? std::string("never resolved (given up)")
+                            : "not resolved yet (" + std::to_string(r.unresolved[k]) + " refreshes)") +
+                  ";";
         }
         continue;
       }

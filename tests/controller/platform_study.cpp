@@ -32,6 +32,7 @@
 //   flip extend <-> retract reversals of the command per leg and second (u below 3 V counts as
 //        extend, above 7 V as retract; a 25 Hz full-swing limit cycle gives 50)
 // and once per run the same figures at IDLE (3 s of idle hold at home, after 0.5 s settling).
+#include <array>
 #include <cmath>
 #include <complex>
 #include <cstdio>
@@ -418,10 +419,27 @@ void Fit(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
     }
   }
   const char* names[6] = {"x", "y", "z", "roll", "pitch", "yaw"};
+  // Per axis: the first harmonics of desired and true motion, and the residual (the error
+  // minus its fitted first harmonic), used by both tables below.
+  std::array<Harmonic, 6> fit_des, fit_true;
+  std::array<std::vector<double>, 6> residual;
+  for (int k = 0; k < 6; ++k) {
+    const Harmonic hd = FitHarmonic(t, des[k], w), ht = FitHarmonic(t, tru[k], w);
+    fit_des[k] = hd;
+    fit_true[k] = ht;
+    residual[k].resize(t.size());
+    for (std::size_t s = 0; s < t.size(); ++s) {
+      const double e = tru[k][s] - des[k][s];
+      const double fit_e = (ht.c + ht.a * std::sin(w * t[s]) + ht.b * std::cos(w * t[s])) -
+                           (hd.c + hd.a * std::sin(w * t[s]) + hd.b * std::cos(w * t[s]));
+      residual[k][s] = e - fit_e;
+    }
+  }
   std::printf("axis   | desired amp | gain true/des | lag deg  lag ms | peak over | rmse | rmse w/o 1st harmonic\n");
   for (int k = 0; k < 6; ++k) {
     const double unit = k < 3 ? 100.0 : 57.29577951308232;
-    const Harmonic hd = FitHarmonic(t, des[k], w), ht = FitHarmonic(t, tru[k], w);
+    const Harmonic& hd = fit_des[k];
+    const Harmonic& ht = fit_true[k];
     const double lag = WrapPi(hd.phase_rad() - ht.phase_rad());
     // Mean over periods of (max true - max desired) in each period window.
     const double period = 1.0 / f_hz;
@@ -441,10 +459,8 @@ void Fit(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
     double se = 0.0, sr = 0.0;
     for (std::size_t s = 0; s < t.size(); ++s) {
       const double e = tru[k][s] - des[k][s];
-      const double fit_e = (ht.c + ht.a * std::sin(w * t[s]) + ht.b * std::cos(w * t[s])) -
-                           (hd.c + hd.a * std::sin(w * t[s]) + hd.b * std::cos(w * t[s]));
       se += e * e;
-      sr += (e - fit_e) * (e - fit_e);
+      sr += residual[k][s] * residual[k][s];
     }
     const double n = static_cast<double>(t.size());
     std::printf("%-6s | %10.4f | %12.4f | %7.2f %7.2f | %9.4f | %.4f | %.4f\n", names[k],
@@ -460,15 +476,10 @@ void Fit(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
               "harmonics 2f-10f | other f-10 Hz | 10-30 Hz | > 30 Hz\n");
   for (int k = 0; k < 6; ++k) {
     const double unit = k < 3 ? 100.0 : 57.29577951308232;
-    const Harmonic hd = FitHarmonic(t, des[k], w), ht = FitHarmonic(t, tru[k], w);
+    const Harmonic& hd = fit_des[k];
+    const Harmonic& ht = fit_true[k];
     const std::size_t n = t.size();
-    std::vector<double> r(n);
-    for (std::size_t s = 0; s < n; ++s) {
-      const double e = tru[k][s] - des[k][s];
-      const double fit_e = (ht.c + ht.a * std::sin(w * t[s]) + ht.b * std::cos(w * t[s])) -
-                           (hd.c + hd.a * std::sin(w * t[s]) + hd.b * std::cos(w * t[s]));
-      r[s] = e - fit_e;
-    }
+    const std::vector<double>& r = residual[k];
     const double dt = (t.back() - t.front()) / static_cast<double>(n - 1);
     const double span = dt * static_cast<double>(n);
     double band[5] = {};  // mean square per band

@@ -101,8 +101,8 @@ struct BsSmcParams {
   // the adapted scale; near v_d = 0 (w -> 0) the nominal estimate and the dither act unchanged,
   // since a friction estimate at full magnitude on a slow, reversing leg drives stick-slip
   // (docs/results.md). gamma = 0: off (theta stays 1, eq 14 as before). gamma = 0.01 1/(N m)
-  // averages S over ~3 s at the combined motion's S and F_r (~0.05-0.1 m/s, ~80 N): several
-  // periods of a 1 Hz motion, so theta does not follow the limit cycle within a period.
+  // moves theta over seconds on the combined motion (measured: two thirds of its rise in ~3 s),
+  // several periods of a 1 Hz motion, so theta does not follow the limit cycle within a period.
   double friction_adaptation_rate_1_n_m = 0.01;
   double friction_adaptation_speed_m_s = 0.12;
   double friction_adaptation_min_scale = 0.5;
