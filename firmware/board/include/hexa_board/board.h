@@ -23,8 +23,6 @@
 extern "C" {
 #endif
 
-#define HB_STATUS_ESTOP_AT_POWER_UP (1u << 8) /* latched since power-up, never reset */
-
 typedef struct {
   uint16_t safe_dac[HB_NUM_LEGS]; /* each valve's safe value (MPYE: 5 V, spool centred) */
   uint16_t dac_max;               /* largest DAC value; a command above it is refused */

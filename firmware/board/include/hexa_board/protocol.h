@@ -45,6 +45,7 @@ extern "C" {
 #define HB_STATUS_RESET_REFUSED (1u << 5)   /* the last reset came while the loop was open */
 #define HB_STATUS_HOST_SAFE (1u << 6)       /* the host asked for the safe state */
 #define HB_STATUS_NO_COMMAND_YET (1u << 7)  /* no valid command since power-up */
+#define HB_STATUS_ESTOP_AT_POWER_UP (1u << 8) /* latched since power-up, never reset */
 
 /* Command frame flags. */
 #define HB_CMD_RESET_ESTOP (1u << 0) /* acts on its 0 -> 1 edge, only with the loop closed */
