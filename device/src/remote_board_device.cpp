@@ -78,17 +78,22 @@ DeviceStatus RemoteBoardDevice::ReadSensors(DeviceSensors& out) {
 void RemoteBoardDevice::RequestEstopReset() {
   estop_requested_ = false;
   reset_frames_left_ = config_.estop_reset_frames;
+  reset_needs_gap_ = last_reset_bit_;
 }
 
 DeviceStatus RemoteBoardDevice::Send(const LegArray<double>& valve_v, std::uint16_t flags) {
   if (!configured_) return DeviceStatus::kNotConfigured;
   if (estop_requested_) flags |= HB_CMD_ESTOP;
   // The board resets on the reset bit's 0 -> 1 edge: one request is a run of frames with it
-  // (so that a lost datagram does not lose the request), then frames without it.
-  if (reset_frames_left_ > 0) {
+  // (so that a lost datagram does not lose the request), then frames without it; a request
+  // during a run starts after one frame without it.
+  if (reset_needs_gap_) {
+    reset_needs_gap_ = false;
+  } else if (reset_frames_left_ > 0) {
     flags |= HB_CMD_RESET_ESTOP;
     --reset_frames_left_;
   }
+  last_reset_bit_ = (flags & HB_CMD_RESET_ESTOP) != 0;
   const std::size_t n = encoder_.Encode(valve_v, flags, tx_);
   int err = 0;
   if (!socket_.Send(std::span<const std::uint8_t>(tx_.data(), n), board_address_, err)) {

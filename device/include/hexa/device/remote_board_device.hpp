@@ -62,6 +62,8 @@ class RemoteBoardDevice final : public Device {
   bool configured_ = false;
   bool estop_requested_ = false;
   int reset_frames_left_ = 0;
+  bool reset_needs_gap_ = false;  // the last frame carried the reset bit: one without it first
+  bool last_reset_bit_ = false;
   std::uint64_t send_errors_ = 0;
   std::uint64_t receive_errors_ = 0;
   std::array<std::uint8_t, HB_MAX_FRAME_SIZE + 1> rx_{};  // one byte more: oversize is seen
