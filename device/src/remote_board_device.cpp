@@ -49,7 +49,7 @@ bool RemoteBoardDevice::Configure(std::string& error) {
 
 DeviceStatus RemoteBoardDevice::ReadSensors(DeviceSensors& out) {
   if (!configured_) return DeviceStatus::kNotConfigured;
-  bool fresh = false;
+  bool fresh = false, imu_fresh = false;
   for (;;) {
     sockaddr_in from{};
     int err = 0;
@@ -70,8 +70,14 @@ DeviceStatus RemoteBoardDevice::ReadSensors(DeviceSensors& out) {
       continue;
     }
     const std::span<const std::uint8_t> datagram(rx_.data(), static_cast<std::size_t>(n));
-    if (decoder_.Decode(datagram, out) == FrameVerdict::kOk) fresh = true;
+    if (decoder_.Decode(datagram, out) == FrameVerdict::kOk) {
+      fresh = true;
+      imu_fresh = imu_fresh || out.imu.fresh;
+    }
   }
+  // Of several frames read at once the newest is kept; an IMU sample renewed in an older one
+  // is still new to the caller.
+  if (fresh) out.imu.fresh = imu_fresh;
   return fresh ? DeviceStatus::kOk : DeviceStatus::kNoNewData;
 }
 

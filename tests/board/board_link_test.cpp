@@ -369,6 +369,42 @@ TEST(BoardLinkWallClock, WatchdogFiresWhenTheHostFallsSilent) {
   EXPECT_GE(s.safety.watchdog_count, 1u);
 }
 
+TEST(BoardLinkRead, NewestOfSeveralFramesKeepsAnImuSampleRenewedBeforeIt) {
+  hexa::device::UdpSocket board;  // a board of the test's own
+  std::string error;
+  ASSERT_TRUE(board.Open(*hexa::device::ParseIpv4("127.0.0.1", 0), error)) << error;
+  RemoteBoardDevice device(DeviceConfig(ntohs(board.local_address().sin_port)));
+  ASSERT_TRUE(device.Configure(error)) << error;
+  const hexa::BoardCalibration& cal = *Rig().board;
+  auto send = [&](std::uint32_t sequence, std::uint8_t imu_count) {
+    hb_sensor_frame f{};
+    f.sequence = sequence;
+    f.board_time_us = sequence * 1000;
+    for (int i = 0; i < HB_NUM_LEGS; ++i) {
+      f.adc[HB_ADC_POT(i)] = static_cast<std::uint16_t>(cal.legs[0].potentiometer_m.ToCounts(0.5));
+      f.adc[HB_ADC_CHAMBER1(i)] = f.adc[HB_ADC_CHAMBER2(i)] = 20000;
+    }
+    f.adc[HB_ADC_SUPPLY] = 40000;
+    f.imu_quat[0] = 16384;
+    f.imu_count = imu_count;
+    std::vector<std::uint8_t> bytes(HB_SENSOR_FRAME_SIZE);
+    hb_encode_sensor(&f, bytes.data());
+    int err = 0;
+    ASSERT_TRUE(board.Send(bytes, device.local_address(), err));
+  };
+  DeviceSensors s;
+  send(1, 4);
+  ASSERT_TRUE(device.WaitForData(2.0));
+  ASSERT_EQ(device.ReadSensors(s), DeviceStatus::kOk);
+  send(2, 5);  // the IMU renewed here ...
+  send(3, 5);  // ... and not here; on loopback both are queued when send returns
+  ASSERT_TRUE(device.WaitForData(2.0));
+  ASSERT_EQ(device.ReadSensors(s), DeviceStatus::kOk);
+  EXPECT_EQ(device.decoder().last_frame().sequence, 3u);
+  EXPECT_TRUE(s.imu.fresh);
+  EXPECT_NEAR(s.imu.sample_time_s, 0.002, 1e-9);
+}
+
 TEST(BoardLinkConfig, ErrorsNameTheirCause) {
   RemoteBoardDeviceConfig c = DeviceConfig(5005);
   c.board_host = "192.168.1.300";
