@@ -6,10 +6,16 @@
 // Exit codes: 0 stopped (signal, --duration-s, --idle-exit-s), 1 rig file invalid or without
 // a `board` block, 2 usage, 3 the UDP socket cannot be opened (bad --bind address, port in
 // use), 4 the plant stopped (non-finite state).
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <csignal>
+#include <cstdio>
 #include <ctime>
 #include <fstream>
 #include <memory>
+#include <span>
+#include <string>
 
 #include "board_emulator.hpp"
 #include "hexa/config/rig_config.hpp"
@@ -88,6 +94,119 @@ std::timespec Add(std::timespec t, long ns) {
   return t;
 }
 
+// The rig file's plant, profile and board calibration; 0 or the exit code (logged).
+int LoadConfig(const Options& o, spdlog::logger& log, hexa::device::BoardEmulatorConfig& ec, std::string& summary) {
+  const hexa::config::ConfigResult rig = hexa::config::LoadSystemConfig(o.rig);
+  if (!rig.ok) {
+    log.error("{}", rig.error);
+    return 1;
+  }
+  if (!rig.config.board) {
+    log.error("{}: no `board` block: the emulator needs the board's calibration (docs/board_protocol.md)", o.rig);
+    return 1;
+  }
+  const hexa::config::ProfileResult profile = hexa::config::SelectProfile(rig.config, o.profile);
+  if (!profile.ok) {
+    log.error("{}", profile.error);
+    return 1;
+  }
+  ec.plant.rig = rig.config.rig;
+  ec.plant.disturbance = profile.profile;
+  ec.plant.seed = o.seed;
+  ec.calibration = *rig.config.board;
+  ec.valve_null_v = rig.config.rig.valve.null_voltage_v;
+  ec.estop_open = o.estop_open;
+  summary = "rig " + rig.config.rig_name + ", profile " + profile.name + ", seed " + std::to_string(o.seed);
+  return 0;
+}
+
+// The emulated board on its UDP socket: datagrams in, ticks, frames out.
+class Server {
+ public:
+  Server(const hexa::device::BoardEmulatorConfig& config, hexa::device::UdpSocket socket)
+      : emulator_(std::make_unique<hexa::device::BoardEmulator>(config)), socket_(std::move(socket)) {}
+
+  // Step: one tick per received datagram, answered to its sender.
+  void RunStep(const Options& o) {
+    double idle_s = 0.0;
+    while (Running(o)) {
+      if (!socket_.WaitReadable(0.1)) {
+        idle_s += 0.1;
+        if (o.idle_exit_s > 0.0 && idle_s >= o.idle_exit_s) return;
+        continue;
+      }
+      idle_s = 0.0;
+      sockaddr_in from{};
+      while (ReceiveOne(from) && Running(o)) {
+        emulator_->Tick(tx_);
+        SendTo(from);
+      }
+    }
+  }
+
+  // Wall clock: a tick every millisecond, its frame to the sender of the last accepted command.
+  void RunWall(const Options& o) {
+    std::timespec next{};
+    clock_gettime(CLOCK_MONOTONIC, &next);
+    while (Running(o)) {
+      next = Add(next, 1'000'000L);
+      while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr) == EINTR && !g_stop) {
+      }
+      sockaddr_in from{};
+      while (ReceiveOne(from)) {
+      }
+      emulator_->Tick(tx_);
+      if (have_peer_) SendTo(peer_);
+    }
+  }
+
+  bool plant_failed() const { return emulator_->plant().output().status == hexa::PlantStatus::kNonFiniteState; }
+
+  std::string Summary() const {
+    std::string counts;
+    for (int r = 0; r < HB_FRAME_REASON_COUNT; ++r) {
+      if (received_[r] == 0) continue;
+      counts += (counts.empty() ? "" : ", ") + std::string(hb_frame_reason_name(static_cast<hb_frame_reason>(r))) +
+                " " + std::to_string(received_[r]);
+    }
+    return "stopped at board tick " + std::to_string(emulator_->tick()) + ": datagrams received: " +
+           (counts.empty() ? "none" : counts) + "; watchdog fired " +
+           std::to_string(emulator_->board().watchdog_count) + " times; send errors " + std::to_string(send_errors_);
+  }
+
+ private:
+  bool Running(const Options& o) const {
+    const auto duration_ticks = static_cast<std::uint64_t>(o.duration_s * 1000.0);
+    return !g_stop && !plant_failed() && (duration_ticks == 0 || emulator_->tick() < duration_ticks);
+  }
+  bool ReceiveOne(sockaddr_in& from) {
+    int err = 0;
+    const long n = socket_.Receive(rx_, from, err);
+    if (n < 0) return false;
+    const std::size_t size = std::min<std::size_t>(static_cast<std::size_t>(n), rx_.size());
+    const hb_frame_reason r = emulator_->Receive(std::span<const std::uint8_t>(rx_.data(), size));
+    ++received_[r];
+    if (r == HB_FRAME_OK) {
+      peer_ = from;
+      have_peer_ = true;
+    }
+    return true;
+  }
+  void SendTo(const sockaddr_in& to) {
+    int err = 0;
+    if (!socket_.Send(tx_, to, err)) ++send_errors_;
+  }
+
+  std::unique_ptr<hexa::device::BoardEmulator> emulator_;  // the plant is large: on the heap
+  hexa::device::UdpSocket socket_;
+  std::array<std::uint64_t, HB_FRAME_REASON_COUNT> received_{};
+  std::array<std::uint8_t, HB_MAX_FRAME_SIZE + 1> rx_{};
+  std::array<std::uint8_t, HB_SENSOR_FRAME_SIZE> tx_{};
+  sockaddr_in peer_{};
+  bool have_peer_ = false;
+  std::uint64_t send_errors_ = 0;
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -95,29 +214,9 @@ int main(int argc, char** argv) {
   Options o;
   if (const int r = ParseOptions(argc, argv, o); r >= 0) return r;
   auto log = hexa::logging::Init("board_emulator");
-
-  const hexa::config::ConfigResult rig = hexa::config::LoadSystemConfig(o.rig);
-  if (!rig.ok) {
-    log->error("{}", rig.error);
-    return 1;
-  }
-  if (!rig.config.board) {
-    log->error("{}: no `board` block: the emulator needs the board's calibration (docs/board_protocol.md)", o.rig);
-    return 1;
-  }
-  const hexa::config::ProfileResult profile = hexa::config::SelectProfile(rig.config, o.profile);
-  if (!profile.ok) {
-    log->error("{}", profile.error);
-    return 1;
-  }
-  BoardEmulatorConfig ec;
-  ec.plant.rig = rig.config.rig;
-  ec.plant.disturbance = profile.profile;
-  ec.plant.seed = o.seed;
-  ec.calibration = *rig.config.board;
-  ec.valve_null_v = rig.config.rig.valve.null_voltage_v;
-  ec.estop_open = o.estop_open;
-  auto emulator = std::make_unique<BoardEmulator>(ec);
+  BoardEmulatorConfig config;
+  std::string summary;
+  if (const int r = LoadConfig(o, *log, config, summary); r != 0) return r;
 
   const auto local = ParseIpv4(o.bind, static_cast<std::uint16_t>(o.port));
   if (!local) {
@@ -132,76 +231,18 @@ int main(int argc, char** argv) {
   }
   const sockaddr_in bound = socket.local_address();
   if (!o.port_file.empty()) std::ofstream(o.port_file) << ntohs(bound.sin_port) << "\n";
-  log->info("listening on UDP {} ({} clock, rig {}, profile {}, seed {}, watchdog {} ms)", ToString(bound),
-            o.step ? "step" : "wall", rig.config.rig_name, profile.name, o.seed, emulator->board().watchdog_ms);
+  log->info("listening on UDP {} ({} clock, {}, watchdog {} ms)", ToString(bound), o.step ? "step" : "wall", summary,
+            std::lround(config.calibration.watchdog_timeout_s * 1000.0));
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
 
-  std::array<std::uint64_t, HB_FRAME_REASON_COUNT> received{};
-  std::array<std::uint8_t, HB_MAX_FRAME_SIZE + 1> rx{};
-  std::array<std::uint8_t, HB_SENSOR_FRAME_SIZE> tx{};
-  sockaddr_in peer{};
-  bool have_peer = false;
-  std::uint64_t send_errors = 0;
-  const auto duration_ticks = static_cast<std::uint64_t>(o.duration_s * 1000.0);
-  auto receive_one = [&](sockaddr_in& from) {
-    int err = 0;
-    const long n = socket.Receive(rx, from, err);
-    if (n < 0) return false;
-    const std::size_t size = std::min<std::size_t>(static_cast<std::size_t>(n), rx.size());
-    const hb_frame_reason r = emulator->Receive(std::span<const std::uint8_t>(rx.data(), size));
-    ++received[r];
-    if (r == HB_FRAME_OK) {
-      peer = from;
-      have_peer = true;
-    }
-    return true;
-  };
-  auto send_to = [&](const sockaddr_in& to) {
-    int err = 0;
-    if (!socket.Send(tx, to, err)) ++send_errors;
-  };
-
-  int exit_code = 0;
-  std::timespec next{};
-  clock_gettime(CLOCK_MONOTONIC, &next);
-  double idle_s = 0.0;
-  while (!g_stop && (duration_ticks == 0 || emulator->tick() < duration_ticks)) {
-    if (o.step) {
-      if (!socket.WaitReadable(0.1)) {
-        idle_s += 0.1;
-        if (o.idle_exit_s > 0.0 && idle_s >= o.idle_exit_s) break;
-        continue;
-      }
-      idle_s = 0.0;
-      sockaddr_in from{};
-      while (receive_one(from)) {
-        emulator->Tick(tx);
-        send_to(from);
-      }
-    } else {
-      next = Add(next, 1'000'000L);
-      while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr) == EINTR && !g_stop) {
-      }
-      sockaddr_in from{};
-      while (receive_one(from)) {
-      }
-      emulator->Tick(tx);
-      if (have_peer) send_to(peer);
-    }
-    if (emulator->plant().output().status == hexa::PlantStatus::kNonFiniteState) {
-      log->error("plant state not finite at tick {}: stopping", emulator->tick());
-      exit_code = 4;
-      break;
-    }
+  Server server(config, std::move(socket));
+  if (o.step) server.RunStep(o);
+  else server.RunWall(o);
+  log->info("{}", server.Summary());
+  if (server.plant_failed()) {
+    log->error("the plant's state became non-finite: stopped");
+    return 4;
   }
-  std::string counts;
-  for (int r = 0; r < HB_FRAME_REASON_COUNT; ++r) {
-    if (received[r] == 0) continue;
-    counts += (counts.empty() ? "" : ", ") + std::string(hb_frame_reason_name(static_cast<hb_frame_reason>(r))) +
-              " " + std::to_string(received[r]);
-  }
-  log->info("stopped at board tick {}: datagrams received: {}; watchdog fired {} times; send errors {}",
-            emulator->tick(), counts.empty() ? "none" : counts, emulator->board().watchdog_count, send_errors);
-  return exit_code;
+  return 0;
 }
