@@ -15,9 +15,9 @@ RMSE. Rows:
   - the force-loop gain beta_1 of the BS-SMC (rig-file copies) with the nominal and the truth
     overlay.
 
-    /usr/bin/python3 deploy/truth_gap_study.py --truth-overlay out/identification/truth_overlay.textproto
+    /usr/bin/python3 studies/truth_gap_study.py --truth-overlay out/identification/truth_overlay.textproto
 
-(the truth overlay is written by hexa_identify --truth-overlay, deploy/identification_study.py).
+(the truth overlay is written by hexa_identify --truth-overlay, studies/identification_study.py).
 """
 import argparse
 import json
