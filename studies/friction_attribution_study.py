@@ -1,11 +1,11 @@
 #!/usr/bin/python3
 """How much of the Table 9 / 10 error is the controllers' friction model, and what is left
-with an exact model (issue 14, docs/results.md "What limits the cells that miss one fifth").
+with an exact model (issue 14, docs/measurements/results.md "What limits the cells that miss one fifth").
 
 Runs the seven paper trajectories in the in-process lockstep simulation (hexa_sim, BS-SMC,
 feed-forward on, realistic profile, kinematic calibration first: `--calibrate`), seeds 1-3,
 with the controllers and the supervisor given, in turn:
-  - the rig file's nominal model (what docs/results.md's first section reports);
+  - the rig file's nominal model (what docs/measurements/results.md's first section reports);
   - the identified model (the overlay of studies/identification_study.py);
   - the plant's true model (the truth overlay the same study writes: friction, polytropic
     indices, gravity loads of the realistic profile);

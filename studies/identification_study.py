@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Regenerates docs/identification_results.md (docs/identification.md explains the method):
+"""Regenerates docs/measurements/identification_results.md (docs/identification.md explains the method):
 
   0. the kinematic calibration (hexa_session --trajectory calibration --tracker, hexa_calibrate),
      whose overlay hexa_identify uses for the joints and potentiometers;
@@ -16,7 +16,7 @@
 
 Usage (DDS runs: run it inside a private network namespace if others use the machine):
   /usr/bin/python3 studies/identification_study.py [--build build] [--out out/identification]
-      [--excite-duration 120] [--seed 1] [--max-iterations 1000] [--reuse] [--doc docs/identification_results.md]
+      [--excite-duration 120] [--seed 1] [--max-iterations 1000] [--reuse] [--doc docs/measurements/identification_results.md]
 """
 import argparse
 import json
@@ -96,7 +96,7 @@ def main():
     ap.add_argument("--max-iterations", type=int, default=1000)
     ap.add_argument("--domain", type=int, default=151)
     ap.add_argument("--reuse", action="store_true", help="reuse recordings and results found in --out")
-    ap.add_argument("--doc", default="docs/identification_results.md")
+    ap.add_argument("--doc", default="docs/measurements/identification_results.md")
     ap.add_argument("--diagnostics", action="store_true",
                     help="closed loop also with the identified overlay's pneumatic values only and its gravity loads only")
     ap.add_argument("--in-process", action="store_true",

@@ -1,12 +1,12 @@
 #!/usr/bin/python3
-"""Regenerates the section "DDS sessions" of docs/results.md (everything from that heading on;
+"""Regenerates the section "DDS sessions" of docs/measurements/results.md (everything from that heading on;
 the page's first section, studies/accuracy_tables.py's, is kept as it is): runs the whole system (hexa_session: nine processes over
 loopback DDS + recorder) for the paper's seven trajectories with BS-SMC and the PI baseline,
 collects each session's report.json and lays the RMSE out as the paper's Tables 9 and 10,
 next to the paper's figures. Also runs the combined trajectory in real time and compares.
 
 Usage: /usr/bin/python3 studies/paper_tables.py [--build build] [--seed 1] [--out out/tables]
-       [--profile realistic] [--skip-realtime] [--doc docs/results.md]
+       [--profile realistic] [--skip-realtime] [--doc docs/measurements/results.md]
 """
 import argparse
 import json
@@ -57,14 +57,14 @@ def run(build, out_dir, traj, controller, profile, seed, mode, domain, reuse=Fal
 
 def source_commit(repo, out_dir, fresh):
     """The commit the sessions ran on: the checkout's (with -dirty if anything but
-    docs/results.md differs from it), written to OUT/source_commit.txt when a session ran,
+    docs/measurements/results.md differs from it), written to OUT/source_commit.txt when a session ran,
     read back from there when every figure comes from --reuse."""
     path = os.path.join(out_dir, "source_commit.txt")
     if not fresh and os.path.exists(path):
         return open(path).read().strip()
     git = ["git", "-C", repo]
     head = subprocess.run(git + ["rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
-    dirty = subprocess.run(git + ["status", "--porcelain", "--", ".", ":!docs/results.md"],
+    dirty = subprocess.run(git + ["status", "--porcelain", "--", ".", ":!docs/measurements/results.md"],
                            capture_output=True, text=True).stdout.strip()
     commit = (head or "unknown commit") + ("-dirty" if dirty else "")
     with open(path, "w") as f:
@@ -97,7 +97,7 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--profile", default="realistic")
     ap.add_argument("--out", default=os.path.join(here, "out", "tables"))
-    ap.add_argument("--doc", default=os.path.join(here, "docs", "results.md"))
+    ap.add_argument("--doc", default=os.path.join(here, "docs", "measurements", "results.md"))
     ap.add_argument("--skip-realtime", action="store_true")
     ap.add_argument("--realtime-runs", type=int, default=3,
                     help="real-time combined sessions (every one is reported, failures included)")
@@ -193,7 +193,7 @@ def main():
     if pi_wins_comb:
         where.append("on the combined trajectory (" + ", ".join(pi_wins_comb) + ") the BS-SMC's "
                      "valve-command smoothing (linear inversion near null, 2 ms spool filter, "
-                     "docs/tuning.md 'Valve chatter') trades some tracking for valves that do not "
+                     "docs/measurements/tuning.md 'Valve chatter') trades some tracking for valves that do not "
                      "chatter")
     if pi_wins_pure:
         where.append("on pure " + ", ".join(pi_wins_pure) + " the two are within the "

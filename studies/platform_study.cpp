@@ -1,6 +1,6 @@
 // platform_study: tuning and diagnosis of the leg controllers ON THE FULL PLATFORM, in the
 // in-process lockstep simulation (RunPaperSession, same protocol as the DDS system).
-// Not a test. docs/tuning.md gives the grids run with it and the figures.
+// Not a test. docs/measurements/tuning.md gives the grids run with it and the figures.
 //
 //   platform_study [--rig file|default] [--seed N] [--controller bssmc|pi] [--ideal] [--traj all|x,y,...]
 //                  [--periods N] [key=value ...]
@@ -26,7 +26,7 @@
 // RMSE (mm), fraction of ticks with a saturated valve, and the score: the mean over the
 // seven trajectories of (moving-axis RMSE / paper's value for that axis), i.e. 1.0 = the
 // paper's Table 9 / Table 10 accuracy on average.
-// Valve activity (docs/tuning.md "Valve chatter"), over the TRACKING window, all six legs:
+// Valve activity (docs/measurements/tuning.md "Valve chatter"), over the TRACKING window, all six legs:
 //   du   mean |u(k) - u(k-1)| per 1 ms tick, V
 //   sat  fraction of ticks with u < 0.05 V or u > 9.95 V
 //   flip extend <-> retract reversals of the command per leg and second (u below 3 V counts as
@@ -741,7 +741,7 @@ void Reversals(const hexa::LockstepConfig& config, PaperMotion motion, int perio
 // velocity loop c / (m s) * P(s) * exp(-s tau): c = M lambda + K xi + k_s, P(s) = beta / (s + beta)
 // or, with the feedback rate in phi_dot (issue 14d), ((a + beta tf) s + beta) / ((tf s + 1)(s + beta)),
 // tau = spool filter + valve spool + the velocity estimate's group delay. Crossover and phase
-// margin (docs/task_space.md "Per-leg lag and leg 2's overshoot on combined").
+// margin (docs/measurements/control.md "Per-leg lag and leg 2's overshoot on combined").
 void Modes(const hexa::LockstepConfig& config) {
   const hexa::RigParams& rig = config.rig;
   hexa::Pose home;

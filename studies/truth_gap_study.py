@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Why the BS-SMC with the plant's TRUE pneumatic values tracks worse than with the rig
-file's nominal ones (docs/identification.md, "Why the truth rig tracks worse").
+file's nominal ones (docs/measurements/identification.md, "Why the truth rig tracks worse").
 
 In-process closed loop (hexa_sim: the services' controller, supervisor and plant code, no
 DDS), BS-SMC with the default feed-forward, the seven paper trajectories, seeds 1-3; sums over

@@ -394,7 +394,7 @@ std::vector<std::string> CommandLine(const Deployment& d, const ProcessPlan& pla
                         "/session-$(date -u +%Y%m%d-%H%M%S).mcap --domain " + domain +
                         " --dds-config " + dds_config;
       // Real time: the periodic topics best effort, so that no control writer repairs what
-      // the recorder's link drops (docs/deployment.md, "The lossy recorder link").
+      // the recorder's link drops (docs/measurements/deployment.md, "The lossy recorder link").
       if (realtime) cmd += " --rt-priority " + std::to_string(prio) + " --periodic-reliability best-effort";
       for (const auto& a : p.arg()) cmd += " " + a;
       return {"/bin/sh", "-c", cmd};

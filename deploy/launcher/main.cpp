@@ -452,7 +452,7 @@ int main(int argc, char** argv) {
     // beside SCHED_FIFO peers is starved and loses samples.
     if (o.mode == "realtime" && o.rt_sched) r.argv.insert(r.argv.end(), {"--rt-priority", "50"});
     // Real time: the periodic topics best effort, as the controllers read them; no control
-    // writer repairs what the recorder misses (docs/deployment.md, "The lossy recorder link").
+    // writer repairs what the recorder misses (docs/measurements/deployment.md, "The lossy recorder link").
     if (o.mode == "realtime") r.argv.insert(r.argv.end(), {"--periodic-reliability", "best-effort"});
     r.env = env;
     r.env["HEXA_IDENTITY"] = "recorder";

@@ -41,7 +41,7 @@ TEST(Session, CombinedLockstepEndToEnd) {
     EXPECT_TRUE(r.complete_file);
     EXPECT_EQ(r.final_supervisor_state, "IDLE");
     EXPECT_EQ(r.pose_samples_tracking, 200u);  // one 1 s period of eq 49 at 5 ms
-    // A working loop tracks the 8 cm circle to about a centimetre (docs/results.md has the
+    // A working loop tracks the 8 cm circle to about a centimetre (docs/measurements/results.md has the
     // measured figures); a broken one is off by the full amplitude.
     for (int i = 0; i < 3; ++i) EXPECT_LT(r.rmse_vs_truth[i], 0.025) << "axis " << i;
     for (int i = 3; i < 6; ++i) EXPECT_LT(r.rmse_vs_truth[i], 0.06) << "axis " << i;

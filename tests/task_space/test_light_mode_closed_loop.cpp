@@ -62,7 +62,7 @@ TEST(LightModeClosedLoop, DefaultVelocityEstimateDelayTracksCombinedBetterOnTheI
   EXPECT_LT(with_default, 0.95 * with_old);
 }
 
-// Issue 14d (docs/task_space.md "Feedback rate in phi_dot"): the rate of phi's feedback part
+// Issue 14d (docs/measurements/control.md "Feedback rate in phi_dot"): the rate of phi's feedback part
 // in phi_dot, from the leg observer, gives the velocity loop its phase back on the light modes.
 // Measured: the legs' velocity error v_hat - v_d over the tracking window of combined, all six
 // legs, its part above ~10 Hz (minus a centred 100-sample moving average, whose first null is at
