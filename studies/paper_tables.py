@@ -209,7 +209,7 @@ def main():
     cb, cp = res[("combined", "bssmc")]["report"], res[("combined", "pi")]["report"]
     if cb and cp:
         L.append("- On the combined trajectory the PI reaches its figures with its valves at an end "
-                 f"stop {100 * statistics.mean(cp['valve_saturated_fraction']):.0f} % of the time "
+                 f"stop for {100 * statistics.mean(cp['valve_saturated_fraction']):.0f} % of the time "
                  f"({statistics.mean(cp['valve_mean_abs_step_v_per_tick']):.2f} V per 1 ms tick), "
                  f"the BS-SMC {100 * statistics.mean(cb['valve_saturated_fraction']):.0f} % "
                  f"({statistics.mean(cb['valve_mean_abs_step_v_per_tick']):.2f} V per tick).")

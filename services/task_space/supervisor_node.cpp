@@ -175,7 +175,7 @@ bool SupervisorNode::PrepareStart(const std::string& trajectory, int periods) {
   PaperMotion motion;
   StartRequest request;
   if (trajectory == "calibration") {
-    // Kinematic calibration poses (issue 14, core/calibration.hpp), record with --tracker.
+    // Kinematic calibration poses (core/calibration.hpp), record with --tracker.
     request = supervisor_.PrepareStart(MakeCalibrationTrajectory(
         supervisor_.rig(), supervisor_.rest_xyz_rpy(), supervisor_.home_xyz_rpy(),
         supervisor_.timing(), CalibrationProcedureParams{}));

@@ -117,8 +117,8 @@ TEST(Session, RigOverlayReachesTheServicesAsInProcess) {
   EXPECT_TRUE(differs) << "the overlay changed nothing the plant applied";
 }
 
-// The supervisor's first inputs lost on the wire (the CI failure of stop 17: a reader that had
-// matched on one side only; tick 1 was never answered and the plant gave up after 10 s). The
+// The supervisor's first inputs lost on the wire (a reader that had matched on one side only:
+// without the repair tick 1 is never answered and the plant gives up after 10 s). The
 // plant withholds them (fault injection) and must recover them with its re-ask, which also
 // re-publishes the supervisor's inputs of the setpoint tick: the session completes and is
 // still bit-identical to the in-process simulation.

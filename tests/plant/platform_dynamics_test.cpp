@@ -124,7 +124,7 @@ TEST(PlatformDynamics, HomeAtRestCarriesTheWeight) {
   EXPECT_NEAR(f.force_n[0], (6.0 + 6 * 0.25) * 9.81 / 6.0 / unit[0].z(), 1e-9);
 }
 
-// Leg-space mass matrix (coupled leg feedback, issue 14): at rest, M_ls applied to leg
+// Leg-space mass matrix (coupled leg feedback): at rest, M_ls applied to leg
 // accelerations equals the leg forces that produce them minus the static (zero-acceleration)
 // forces, the forces computed independently by LegForcesForMotion (J^T f = wrench solved, not
 // J^-T M_p J^-1). And those forces, applied to the plant, give the accelerations.

@@ -1,4 +1,4 @@
-// Valve activity on the combined trajectory (issue 14 must-show: "no worse than 0.21 V per
+// Valve activity on the combined trajectory (limit: "no worse than 0.21 V per
 // tick mean step, 3 % saturated"), BS-SMC with the feed-forward, realistic profile, seeds
 // 1-3, in the lockstep simulation. Same definition as platform_study (docs/measurements/tuning.md "Valve
 // chatter"): over the TRACKING window, all six legs, mean |u(k) - u(k-1)| per 1 ms tick and

@@ -26,7 +26,7 @@ enum class TopicKind : uint8_t {
   kOperatorCommand,
   kNodeStatus,
   kFaultEvent,
-  kTrackerPose,  // external pose instrument, calibration only (issue 14)
+  kTrackerPose,  // external pose instrument, calibration only
 };
 inline constexpr int kTopicKindCount = 10;
 

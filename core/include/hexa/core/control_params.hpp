@@ -18,7 +18,7 @@ struct BsSmcParams {
   double lambda_1_s = 40.0;             // sliding surface slope (eq 19); platform grid (docs/measurements/tuning.md)
   double switching_gain_n = 90.0;       // K (eq 22, 30), as a force; platform grid (docs/measurements/tuning.md)
   double boundary_layer_xi_s_m = 1.0;   // xi in tanh(xi S) (eq 45); paper: 10; chatter study (docs/measurements/tuning.md)
-  double backstepping_beta_1_s = 90.0;  // beta (eq 38); valve activity (docs/task_space.md, issue 14b)
+  double backstepping_beta_1_s = 90.0;  // beta (eq 38); valve activity (docs/task_space.md)
   double effective_mass_kg = 1.5;       // vertical-motion value; chatter study (docs/measurements/tuning.md)
   double gravity_load_n = 13.2;         // along the leg at home: 6 g/(6 cos) + 0.25 g cos (docs)
   double viscous_estimate_scale = 1.0;  // B_hat = scale * Table 8 B (eq 21)
@@ -55,7 +55,7 @@ struct BsSmcParams {
   // action against static friction otherwise hunts around the setpoint (measured at idle:
   // +-0.7 mm at ~1 Hz without it).
   double integral_deadband_m = 0.0003;
-  // Rate of the feedback part of phi in phi_dot (issue 14d, NOT in the paper's form; a
+  // Rate of the feedback part of phi in phi_dot (NOT in the paper's form; a
   // deviation from eq 38, docs/deviations.md). phi_dot = d/dt(model part) (eq 40) +
   // feedback_rate_fraction * LP(d/dt(feedback part)), the feedback part being
   // -M lambda e_dot - K tanh(xi S) - k_s S, LP a first-order low-pass of time constant
@@ -80,7 +80,7 @@ struct BsSmcParams {
   double observer_length_sigma_m = 0.05e-3;
   double observer_force_sigma_n = 3.0;
   double observer_disturbance_rate_m_s3 = 100.0;
-  // Dither (NOT in the paper; issue 14, docs/controller.md "Dither"): a sinusoidal force
+  // Dither (NOT in the paper, docs/controller.md "Dither"): a sinusoidal force
   // A sin(2 pi f t) exp(-(v_d / v_g)^2) added to eq 14's friction estimate while the setpoint
   // is slow. It is part of the model part of phi, so phi_dot carries its rate and the valve
   // follows it: it keeps the spool off its null, where the chatter band's quadratic area law
@@ -93,7 +93,7 @@ struct BsSmcParams {
   double dither_amplitude_n = 7.5;
   double dither_frequency_hz = 25.0;
   double dither_gate_speed_m_s = 0.12;
-  // Friction scale adaptation (NOT in the paper; issue 14, docs/controller.md "Friction
+  // Friction scale adaptation (NOT in the paper, docs/controller.md "Friction
   // adaptation at speed"): eq 14's friction and viscous estimates at v_d, F_r = F_f(v_d) +
   // B_hat v_d, are applied as k F_r with k = 1 + (theta - 1) w(v_d), w = 1 - exp(-(v_d / v_a)^2),
   // and theta follows the gradient law theta_dot = -gamma w S F_r (the Lyapunov-based update of
@@ -120,11 +120,11 @@ struct PiParams {
   double integrator_limit_v = 2.0;      // anti-windup clamp of the integral term
   double velocity_feedforward_v_s_m = 6.0;  // volts per (m/s) of setpoint velocity
   double rate_damping_v_s_m = 20.0;         // volts per (m/s) of velocity error v_d - v
-  // Force feed-forward (issue 14), used only when the setpoint carries one: volts per newton
+  // Force feed-forward, used only when the setpoint carries one: volts per newton
   // of (feed-forward force - measured pneumatic force P1 A1 - P2 A2 - Pa Ar). The PI's only
   // output is a valve opening, i.e. a rate of force change, so the known load enters as a
   // proportional force loop towards it (docs/controller.md "Feed-forward").
-  double force_feedforward_v_n = 0.001;  // tuned on the seven trajectories (docs/controller.md, issue 14b)
+  double force_feedforward_v_n = 0.001;  // tuned on the seven trajectories (docs/controller.md)
 };
 
 struct LegControllerParams {
@@ -137,14 +137,14 @@ struct LegControllerParams {
 // Outer loop (Sec. 4.1): task-space error -> leg corrections through the Jacobian (eq 48).
 struct OuterLoopParams {
   bool enabled = true;
-  double gain = 0.4;                    // fraction of the mapped error added per 5 ms step (issue 14b: 0.2 -> 0.4 with the speed gate, docs/task_space.md)
+  double gain = 0.4;                    // fraction of the mapped error added per 5 ms step (0.2 -> 0.4 with the speed gate, docs/task_space.md)
   // Scale of the TRANSLATION part of the pose error before the Jacobian mapping (the
   // orientation part always uses `gain`). The position estimate (GQFK with the nominal
   // geometry) is biased by the joint / potentiometer calibration errors it cannot observe,
   // the orientation (IMU) is not: docs/measurements/tuning.md, "Outer loop".
   double translation_gain_scale = 1.0;
   double max_correction_m = 0.005;      // per-leg bound of the accumulated correction
-  // Speed gate of the integration (issue 14b, NOT in the paper; docs/task_space.md "Outer
+  // Speed gate of the integration (NOT in the paper; docs/task_space.md "Outer
   // loop speed gate"): the step's gain is gain / (1 + (v / gate_leg_speed_m_s)^2), v = the
   // largest |desired leg speed| (eq 46) of the step. The loop is for slowly varying errors
   // (calibration bias, friction at 0.1 Hz: legs <= 0.045 m/s, gain >= 0.55 x); on the 1 Hz
@@ -172,12 +172,12 @@ struct SupervisorParams {
   double length_consistency_limit_m = 0.008;
   int length_consistency_ticks = 3;
   OuterLoopParams outer_loop;
-  // Platform inverse-dynamics feed-forward (issue 14, core/platform_dynamics.hpp): every
+  // Platform inverse-dynamics feed-forward (core/platform_dynamics.hpp): every
   // setpoint carries the axial force its leg must deliver for the desired motion (nominal
   // masses, J^-T of eq 48), used by the BS-SMC as the known load of eq 14/15 and by the PI
   // baseline as a force feed-forward. false = the paper's lumped load (paper-faithful).
   bool feedforward_enabled = true;
-  // Setpoint preview (issue 14b, NOT in the paper; docs/measurements/control.md "Setpoint lead"): while
+  // Setpoint preview (NOT in the paper; docs/measurements/control.md "Setpoint lead"): while
   // a trajectory runs, the legs get the lengths, rates and feed-forward of the desired motion
   // this far ahead (the trajectory is known in advance); the outer loop and the metrics keep
   // the desired pose of now. Default = the legs' measured lag: their mean first-harmonic lag

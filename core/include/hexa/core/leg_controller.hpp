@@ -97,7 +97,7 @@ struct LegControllerInput {
   double setpoint_acceleration_m_s2 = 0.0;
   double correction_m = 0.0;  // outer-loop correction (Sec. 4.1), added to the length
   bool hold = false;
-  // Inverse-dynamics feed-forward of the setpoint (issue 14): force at setpoint_time_s and
+  // Inverse-dynamics feed-forward of the setpoint: force at setpoint_time_s and
   // its rate; interpolated like the length. Not valid: the lumped load model (paper).
   bool feedforward_valid = false;
   double feedforward_force_n = 0.0;
