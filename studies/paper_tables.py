@@ -181,7 +181,7 @@ def main():
     L.append("- Pure x and y translations sit at a floor of ~0.3 cm for both controllers: the "
              "`realistic` profile's kinematic calibration errors (joints off by up to 2 mm, "
              "potentiometer offsets and gain errors) are not observable from leg lengths + IMU, so "
-             "neither the leg loops nor the outer loop can remove them (docs/task_space.md)." +
+             "neither the leg loops nor the outer loop can remove them (docs/task_space.md, "Known weaknesses")." +
              meas_text)
     pi_wins_pure, pi_wins_comb = [], []
     for ti, t in enumerate(TRAJ):

@@ -90,7 +90,7 @@ std::vector<Key> Keys() {
       {"ol_gate", [](auto& c, double v) { c.supervisor.outer_loop.gate_leg_speed_m_s = v; }},
       {"lead", [](auto& c, double v) { c.supervisor.setpoint_lead_s = v; }},
       {"ff", [](auto& c, double v) { c.supervisor.feedforward_enabled = v != 0.0; }},
-      // Coupled leg feedback (LockstepConfig::coupled_leg_feedback, docs/task_space.md).
+      // Coupled leg feedback (LockstepConfig::coupled_leg_feedback, docs/measurements/control.md).
       {"coupled", [](auto& c, double v) { c.coupled_leg_feedback = v != 0.0; }},
       {"coupled_mref", [](auto& c, double v) { c.coupled_reference_mass_kg = v; }},
       {"coupled_obsv", [](auto& c, double v) { c.coupled_observer_velocity = v != 0.0; }},

@@ -1,4 +1,4 @@
-// The legs' velocity loop on the platform's light modes (docs/task_space.md "Per-leg
+// The legs' velocity loop on the platform's light modes (docs/measurements/control.md "Per-leg
 // lag and leg 2's overshoot on combined"). Leg-space mass matrix at home J^-T M_p J^-1 + m_leg:
 // two 0.88 kg modes (roll / pitch). The BS-SMC's velocity gain (200 N s/m) through the
 // backstepping loop and ~7 ms of lag has a 20.7 Hz crossover with -20 deg phase margin on them:

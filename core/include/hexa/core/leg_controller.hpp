@@ -135,7 +135,7 @@ class LegController {
 
   void Update(const LegControllerInput& input, LegControllerOutput& output);
 
-  // Coupled leg feedback (BsSmcController::Begin / Finish; docs/task_space.md "Coupled leg
+  // Coupled leg feedback (BsSmcController::Begin / Finish; docs/measurements/control.md "Coupled leg
   // feedback"): BeginCoupled does everything Update does up to the BS-SMC's feedback part and
   // returns it; nothing (the output is then final) when the leg holds, is open loop or runs
   // the PI. FinishCoupled, only after a BeginCoupled that returned a value, completes the
