@@ -265,7 +265,7 @@ def main():
             if rt["exit"] == 0 and all(q is not None for q in ratios):
                 L.append(f"- run {k}: real-time RMSE / lockstep RMSE per axis " +
                          ", ".join(f"{AXES[i]} {q:.2f}" for i, q in enumerate(ratios)) +
-                         " (the loop-speed issue asked for 0.8-1.2).")
+                         " (the target is 0.8-1.2).")
             else:
                 L.append(f"- run {k}: did not complete (exit {rt['exit']}): no ratio.")
         L.append("")

@@ -11,8 +11,8 @@
 //        split into its amplitude and timing parts and the rest's RMS by frequency band
 //   platform_study legs <traj> [options]       per-leg lag against the trajectory of NOW (no
 //        setpoint lead) and the force budget along each leg (see Legs below)
-//   platform_study reversals <traj> [options]  where the moving axis' error is made (issue
-//        14, pure z): share of the squared error within +-N ms of the desired motion's
+//   platform_study reversals <traj> [options]  where the moving axis' error is made (pure
+//        z): share of the squared error within +-N ms of the desired motion's
 //        reversals, bias / first harmonic / rest, the rest's share above 1 Hz, and per leg
 //        the stick-slip (see Reversals below)
 //   platform_study modes [options]             leg-space modal masses at home and the BS-SMC

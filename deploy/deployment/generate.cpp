@@ -24,7 +24,7 @@ std::string Fmt(double v) {
   return os.str();
 }
 
-// What each role may publish and subscribe (the access-control table): only the
+// What each role may publish and subscribe (the access-control table of docs/security.md): only the
 // plant / I/O node publishes sensors, IMU, ground truth and the tracker's poses; only leg N's identities publish
 // ValveCommand, and only in partition LegPartition(N); only the supervisor publishes
 // setpoints and pose reports; only the operator publishes OperatorCommand; the recorder

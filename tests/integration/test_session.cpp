@@ -1,4 +1,4 @@
-// Issue "One command runs a whole session": a short session end to end in lockstep, through
+// One command runs a whole session: a short session end to end in lockstep, through
 // the launcher (nine processes + recorder over DDS), checked against fixed bounds, and
 // checked bit for bit against the in-process lockstep simulation of the same configuration.
 #include <filesystem>
