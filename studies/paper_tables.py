@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Regenerates the section "DDS sessions" of docs/measurements/results.md (everything from that heading on;
-the page's first section, studies/accuracy_tables.py's, is kept as it is): runs the whole system (hexa_session: nine processes over
+the page's first section, studies/accuracy_tables.py's, is kept as it is): runs the whole system (hexa_session: eight control processes over
 loopback DDS + recorder) for the paper's seven trajectories with BS-SMC and the PI baseline,
 collects each session's report.json and lays the RMSE out as the paper's Tables 9 and 10,
 next to the paper's figures. Also runs the combined trajectory in real time and compares.

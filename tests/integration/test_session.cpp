@@ -1,5 +1,5 @@
 // One command runs a whole session: a short session end to end in lockstep, through
-// the launcher (nine processes + recorder over DDS), checked against fixed bounds, and
+// the launcher (eight control processes + recorder over DDS), checked against fixed bounds, and
 // checked bit for bit against the in-process lockstep simulation of the same configuration.
 #include <filesystem>
 #include <regex>
