@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """How much of the closed-loop 'closure' figure is noise, and which identified parameters drive
-the identified rig's distance from the truth rig (docs/identification.md, "What the closure
-figure can and cannot say").
+the identified rig's distance from the truth rig (docs/measurements/identification.md,
+"The closed-loop row: sensitivity floor and attribution").
 
 In-process closed loop (hexa_sim: the services' controller, supervisor and plant code, no DDS),
 `realistic`, BS-SMC, the seven paper trajectories, seeds 1-3, in both modes of

@@ -1,4 +1,4 @@
-// hexa_multihost_bench: the networked deployment's figures (docs/deployment.md, "Measured"):
+// hexa_multihost_bench: the networked deployment's figures (docs/measurements/deployment.md):
 // five hosts in network namespaces, every process from its generated unit, DDS Security on
 // (or off for the side-by-side cost), z trajectory. Scenarios:
 //   lockstep        secured lockstep session: speed, RMSE, round trip, loss, bit-identity

@@ -165,7 +165,7 @@ bool HostHasControlProcess(const Host& host) {
 int DefaultPriority(Role role) {
   switch (role) {
     // The legs highest: the tightest deadline (10 ms lease) and the shortest work; a plant or
-    // supervisor above them on their CPU made them lapse (docs/deployment.md, "Where the
+    // supervisor above them on their CPU made them lapse (docs/measurements/deployment.md, "Where the
     // lapses' milliseconds go"). The same defaults as the services' own.
     case deployment::PLANT: return 70;        // hexa_plant_sim: late, its schedule slips
     case deployment::LEG: return 80;          // hexa_leg_ctrl

@@ -196,7 +196,7 @@ int main(int argc, char** argv) {
   cli.AddOption("bridge-queue-kb", "n", "hexa_bridge --client-queue-kb", "4096");
   cli.AddFlag("secure", "DDS Security for the whole session: a project CA, one identity per "
                         "process, signed governance and permissions, encryption on the wire "
-                        "(files in <out>/security; docs/deployment.md)");
+                        "(files in <out>/security; docs/security.md)");
   cli.AddOption("rt-lease", "s",
                 "real time: liveliness lease of the leg controllers (a leg silent this long is "
                 "dead; docs/faults.md)", "0.01");

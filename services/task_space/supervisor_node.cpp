@@ -102,7 +102,7 @@ bool SupervisorNode::WaitUntilMatched() {
     // Every leg's primary controller reads its setpoints (plus the plant in lockstep). Its
     // reader says so in its USER_DATA: a hot standby's reader alone is not enough, since a
     // primary without setpoints holds its leg (and its ownership of the valve) while the
-    // others move (docs/deployment.md, "A primary without setpoints").
+    // others move (docs/measurements/deployment.md, "A primary without setpoints").
     bool legs = true;
     missing_primaries_.clear();
     for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {

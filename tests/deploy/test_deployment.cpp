@@ -178,7 +178,7 @@ TEST_F(Generated, EveryCycloneConfigHasTheLoopbackConfigsInternalSettings) {
   EXPECT_EQ(Slurp(dir_ + "/plain/hosts/legs-a/etc/hexa/cyclonedds.xml").find("<Security>"), std::string::npos);
 }
 
-// A real-time recorder reads the periodic topics best effort (docs/deployment.md, "The lossy
+// A real-time recorder reads the periodic topics best effort (docs/measurements/deployment.md, "The lossy
 // recorder link": a reliable one made the control writers repair its lossy link on the control
 // CPU); a lockstep one stays reliable (the lockstep plant waits for its acknowledgements).
 TEST_F(Generated, RealTimeRecorderReadsThePeriodicTopicsBestEffort) {
