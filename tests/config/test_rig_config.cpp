@@ -595,7 +595,7 @@ TEST(RigConfigValidate, CoreConstructorsApplyTheSameRuleAsTheRigFile) {
 
 // Four values that once passed validation, as a user would write them: each is rejected on its field with
 // a physical reason; the plant, whose state they made non-finite, rejects the plant ones too.
-TEST(RigConfigValidate, IssueExamplesAreRejectedWithAPhysicalReason) {
+TEST(RigConfigValidate, UnphysicalExamplesAreRejectedWithAPhysicalReason) {
   struct Case {
     const char* field;
     void (*apply)(SystemConfig&);

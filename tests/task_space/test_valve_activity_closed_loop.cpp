@@ -55,7 +55,7 @@ Activity RunCombined(std::uint64_t seed) {
   return a;
 }
 
-TEST(ValveActivityClosedLoop, CombinedWithFeedforwardWithinTheIssueLimits) {
+TEST(ValveActivityClosedLoop, CombinedWithFeedforwardWithinTheValveActivityLimits) {
   std::array<double, 3> steps{};
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     const Activity a = RunCombined(seed);
