@@ -193,4 +193,22 @@ void WashoutFilter::Update(const WashoutInput& input, WashoutOutput& output) noe
   }
 }
 
+WashoutInput BrakingExample(double t_s) {
+  WashoutInput in;
+  const double onset = std::clamp((t_s - 1.0) / 0.5, 0.0, 1.0);
+  const double release = std::clamp((t_s - 3.8) / 0.5, 0.0, 1.0);
+  in.acceleration_m_s2.x() = -6.0 * (onset - release);
+  return in;
+}
+
+WashoutInput LaneChangeExample(double t_s) {
+  WashoutInput in;
+  const double tau = t_s - 1.0;
+  if (tau > 0.0 && tau < 4.0) {
+    in.acceleration_m_s2.y() = 1.5 * std::sin(2.0 * 3.14159265358979323846 * tau / 4.0);
+    in.angular_rate_rad_s.z() = in.acceleration_m_s2.y() / 20.0;
+  }
+  return in;
+}
+
 }  // namespace hexa

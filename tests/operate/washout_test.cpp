@@ -223,31 +223,9 @@ ExampleFigures RunExample(const std::function<WashoutInput(double)>& vehicle, do
   return f;
 }
 
-// docs/operate.md worked example 1: braking from 50 km/h at 6 m/s^2 (jerk 12 m/s^3 onset and
-// release), 2.3 s of full braking, then standing still until 12 s.
-WashoutInput Braking(double t) {
-  WashoutInput in;
-  const double onset = std::min(1.0, std::max(0.0, (t - 1.0) / 0.5));
-  const double release = std::min(1.0, std::max(0.0, (t - 3.8) / 0.5));
-  in.acceleration_m_s2.x() = -6.0 * (onset - release);
-  return in;
-}
-
-// Worked example 2: a lane change at 20 m/s: lateral acceleration 3 sin(2 pi t / 4) m/s^2 for
-// one period (3.6 m of offset), yaw rate a_y / v.
-WashoutInput LaneChange(double t) {
-  WashoutInput in;
-  const double tau = t - 1.0;
-  if (tau > 0 && tau < 4.0) {
-    in.acceleration_m_s2.y() = 3.0 * std::sin(2 * 3.14159265358979323846 * tau / 4.0);
-    in.angular_rate_rad_s.z() = in.acceleration_m_s2.y() / 20.0;
-  }
-  return in;
-}
-
 TEST(Washout, WorkedExamplesStayInsideTheirLimitsAndReturnToNeutral) {
   const WashoutConfig config;
-  const ExampleFigures b = RunExample(Braking, 12.0);
+  const ExampleFigures b = RunExample(BrakingExample, 12.0);
   std::printf("braking: peak surge %.1f mm, peak pitch %.2f deg, tilt rate-limited %.2f s, "
               "peak tilt rate %.3f deg/s, |x| at 12 s %.2f mm\n", b.peak_surge_m * 1e3,
               b.peak_pitch_rad / operate_test::kDeg, b.tilt_limited_s,
@@ -256,7 +234,7 @@ TEST(Washout, WorkedExamplesStayInsideTheirLimitsAndReturnToNeutral) {
   EXPECT_LE(b.peak_tilt_rate, config.tilt.rate_limit_rad_s * (1 + 1e-12));
   EXPECT_GT(b.peak_pitch_rad, 0.01);  // the tilt gave a sustained cue
   EXPECT_LT(b.final_abs_m, 0.002);    // washed out
-  const ExampleFigures l = RunExample(LaneChange, 12.0);
+  const ExampleFigures l = RunExample(LaneChangeExample, 12.0);
   std::printf("lane change: peak sway %.1f mm, peak roll %.2f deg, peak yaw %.2f deg, tilt "
               "rate-limited %.2f s, |y| at 12 s %.2f mm\n", l.peak_sway_m * 1e3,
               l.peak_roll_rad / operate_test::kDeg, l.peak_yaw_rad / operate_test::kDeg,

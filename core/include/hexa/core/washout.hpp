@@ -121,6 +121,14 @@ class WashoutFilter {
   bool first_ = true;
 };
 
+// The worked examples of docs/operate.md, as vehicle motion at time t (s):
+//   braking: 60 km/h to standstill at 6 m/s^2: onset ramp 1.0-1.5 s, full braking to 3.8 s,
+//            release ramp to 4.3 s (12 m/s^3 both), then standing still;
+//   lane change: at 20 m/s, a_y = 1.5 sin(2 pi (t - 1) / 4) m/s^2 for one period from t = 1 s
+//            (3.8 m sideways: A T^2 / (2 pi)), yaw rate a_y / 20 m/s.
+WashoutInput BrakingExample(double t_s);
+WashoutInput LaneChangeExample(double t_s);
+
 // exp(M) of a small square matrix (scaling and squaring of the Taylor series; relative error
 // ~1e-15 for the filter's matrices). Used once per channel at construction.
 Eigen::MatrixXd MatrixExponential(const Eigen::MatrixXd& M);
