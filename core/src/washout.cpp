@@ -69,33 +69,40 @@ Eigen::MatrixXd MatrixExponential(const Eigen::MatrixXd& M) {
   return result;
 }
 
-void WashoutConfig::Validate() const {
-  std::vector<ParamIssue> issues;
-  ParamChecker c(issues);
-  c.InClosed("washout.period_s", period_s, 0.0005, 0.1, "update period");
-  c.InClosed("washout.gravity_m_s2", gravity_m_s2, 9.0, 10.0, "gravity");
+void CheckWashoutConfig(ParamChecker& c, const WashoutConfig& w, const std::string& path) {
+  const auto at = [&path](const std::string& field) {
+    return path.empty() ? field : path + "." + field;
+  };
+  c.InClosed(at("period_s"), w.period_s, 0.0005, 0.1, "update period");
+  c.InClosed(at("gravity_m_s2"), w.gravity_m_s2, 9.0, 10.0, "gravity");
   for (int i = 0; i < 3; ++i) {
-    const std::string p = std::string("washout.translation.") + kTranslationNames[i] + ".";
-    const WashoutTranslationParams& t = translation[i];
+    const std::string p = at(std::string("translation.") + kTranslationNames[i] + ".");
+    const WashoutTranslationParams& t = w.translation[i];
     c.InClosed(p + "scale", t.scale, 0.0, 2.0, "scale");
     c.Positive(p + "input_limit_m_s2", t.input_limit_m_s2, "input limit");
     c.Positive(p + "frequency_rad_s", t.frequency_rad_s, "high-pass frequency");
     c.InClosed(p + "damping", t.damping, 0.1, 5.0, "damping");
     c.Positive(p + "break_frequency_rad_s", t.break_frequency_rad_s, "break frequency");
     c.Positive(p + "displacement_limit_m", t.displacement_limit_m, "displacement limit");
-    const std::string r = std::string("washout.rotation.") + kRotationNames[i] + ".";
-    const WashoutRotationParams& o = rotation[i];
+    const std::string r = at(std::string("rotation.") + kRotationNames[i] + ".");
+    const WashoutRotationParams& o = w.rotation[i];
     c.InClosed(r + "scale", o.scale, 0.0, 2.0, "scale");
     c.Positive(r + "input_limit_rad_s", o.input_limit_rad_s, "input limit");
     c.Positive(r + "frequency_rad_s", o.frequency_rad_s, "high-pass frequency");
     c.InClosed(r + "damping", o.damping, 0.1, 5.0, "damping");
     c.InClosed(r + "angle_limit_rad", o.angle_limit_rad, 1e-4, 0.5, "angle limit");
   }
-  c.InClosed("washout.tilt.scale", tilt.scale, 0.0, 2.0, "scale");
-  c.Positive("washout.tilt.frequency_rad_s", tilt.frequency_rad_s, "low-pass frequency");
-  c.InClosed("washout.tilt.damping", tilt.damping, 0.1, 5.0, "damping");
-  c.InClosed("washout.tilt.rate_limit_rad_s", tilt.rate_limit_rad_s, 1e-4, 1.0, "tilt rate limit");
-  c.InClosed("washout.tilt.angle_limit_rad", tilt.angle_limit_rad, 1e-4, 0.5, "tilt angle limit");
+  c.InClosed(at("tilt.scale"), w.tilt.scale, 0.0, 2.0, "scale");
+  c.Positive(at("tilt.frequency_rad_s"), w.tilt.frequency_rad_s, "low-pass frequency");
+  c.InClosed(at("tilt.damping"), w.tilt.damping, 0.1, 5.0, "damping");
+  c.InClosed(at("tilt.rate_limit_rad_s"), w.tilt.rate_limit_rad_s, 1e-4, 1.0, "tilt rate limit");
+  c.InClosed(at("tilt.angle_limit_rad"), w.tilt.angle_limit_rad, 1e-4, 0.5, "tilt angle limit");
+}
+
+void WashoutConfig::Validate() const {
+  std::vector<ParamIssue> issues;
+  ParamChecker c(issues);
+  CheckWashoutConfig(c, *this, "washout");
   ThrowIfIssues(issues, "washout");
 }
 

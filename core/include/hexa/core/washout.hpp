@@ -25,9 +25,11 @@
 #pragma once
 
 #include <array>
+#include <string>
 
 #include <Eigen/Core>
 
+#include "hexa/core/param_checks.hpp"
 #include "hexa/core/pose.hpp"
 
 namespace hexa {
@@ -70,6 +72,9 @@ struct WashoutConfig {
   // period outside [0.0005, 0.1] s, limits <= 0.
   void Validate() const;
 };
+// The rules of Validate(), as issues on fields under `path` ("washout" -> "washout.tilt.scale";
+// "" -> "tilt.scale", the field paths of the parameter file, config/ washout_file.hpp).
+void CheckWashoutConfig(ParamChecker& c, const WashoutConfig& config, const std::string& path);
 
 struct WashoutInput {
   Eigen::Vector3d acceleration_m_s2 = Eigen::Vector3d::Zero();  // vehicle frame, no gravity
