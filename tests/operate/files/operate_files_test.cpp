@@ -1,13 +1,19 @@
-// Files of the operator modes: the washout parameter file (deploy/cueing/washout.textproto) and
-// the trajectory CSV written from taught rows, read back by the CSV parser.
+// Files of the operator modes: the washout parameter file (deploy/cueing/washout.textproto),
+// the trajectory CSV written from taught rows and read back by the CSV parser, and the washout's
+// worked examples as trajectory CSVs, checked for feasibility.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include <gtest/gtest.h>
 
 #include "hexa/config/csv_trajectory.hpp"
 #include "hexa/config/washout_file.hpp"
+#include "hexa/core/feasibility.hpp"
 #include "hexa/core/teach.hpp"
+#include "hexa/core/user_frames.hpp"
+#include "hexa/core/washout.hpp"
 
 namespace hexa {
 namespace {
@@ -86,6 +92,48 @@ TEST(TeachCsv, TaughtRowsWriteAndReadBackExactly) {
   for (std::size_t i = 0; i < rows.time_s.size(); ++i) {
     EXPECT_EQ(motion->time_s()[i], rows.time_s[i]);
     EXPECT_EQ(motion->xyz_rpy()[i], rows.xyz_rpy[i]);
+  }
+}
+
+}  // namespace
+}  // namespace hexa
+
+namespace hexa {
+namespace {
+
+// The worked examples' cues (as hexa_washout writes them, shipped parameters, pivot 0.3 m above
+// the platform) pass the supervisor's feasibility check on the reference rig: they can be run
+// with --trajectory and recorded.
+TEST(WashoutCue, WorkedExamplesAreFeasibleOnTheReferenceRig) {
+  const config::WashoutFileResult params = config::LoadWashoutFile(kDefaultFile);
+  ASSERT_TRUE(params.ok) << params.error;
+  const RigParams rig = MakeReferenceRig();
+  for (const char* name : {"braking", "lane-change"}) {
+    WashoutFilter filter(params.config);
+    UserFramesConfig frames;
+    frames.p_PC_P_m = Eigen::Vector3d(0, 0, 0.3);
+    Pose neutral;
+    neutral.p_BP_B_m = rig.geometry.home_position_m;
+    std::vector<double> time_s;
+    std::vector<Vector6d> rows;
+    for (int k = 0; k * params.config.period_s <= 12.0; ++k) {
+      const double t = k * params.config.period_s;
+      WashoutOutput out;
+      filter.Update(std::string(name) == "braking" ? BrakingExample(t) : LaneChangeExample(t), out);
+      time_s.push_back(t);
+      rows.push_back(VectorFromPose(PlatformPoseFromDisplacement(neutral, out.displacement, frames)));
+    }
+    const auto motion = config::ParseCsvTrajectory(config::FormatCsvTrajectory(time_s, rows), name);
+    const Vector6d home = HomePoseVector(rig.geometry.home_position_m);
+    const Trajectory trajectory =
+        MakeCsvTrajectory(motion, home, home, TimingFrom(SupervisorParams{}));
+    const FeasibilityReport report = CheckFeasibility(rig, SupervisorParams{}, trajectory);
+    double longest = 0.0;
+    for (double l : report.max_length_m) longest = std::max(longest, l);
+    std::printf("%s cue: feasible %d, longest leg %.4f m (limit %.4f), fastest leg %.3f m/s\n", name,
+                report.feasible, longest, report.envelope.max_length_m,
+                *std::max_element(report.max_abs_speed_m_s.begin(), report.max_abs_speed_m_s.end()));
+    EXPECT_TRUE(report.feasible) << report.message;
   }
 }
 
