@@ -55,6 +55,7 @@ TEST(WashoutFile, AnOutOfRangeValueIsNamedWithItsLine) {
   const config::WashoutFileResult r = config::ParseWashoutFile(text, "w.textproto");
   ASSERT_FALSE(r.ok);
   ASSERT_EQ(r.issues.size(), 1u);
+  std::printf("%s\n", r.error.c_str());
   EXPECT_EQ(r.issues[0].field, "tilt.rate_limit_rad_s");
   EXPECT_EQ(r.issues[0].line, 17);  // the tilt line of the shipped file
   EXPECT_NE(r.error.find("tilt rate limit is out of range"), std::string::npos) << r.error;
