@@ -91,6 +91,7 @@ const char* ToString(JogStatus status) {
     case JogStatus::kMoving: return "moving";
     case JogStatus::kDeadmanStop: return "dead-man stop";
     case JogStatus::kRejected: return "rejected";
+    case JogStatus::kLimitBrake: return "braking for a limit";
   }
   return "unknown";
 }
@@ -126,21 +127,43 @@ void JogProfile::Update(const JogInput& input, JogOutput& output) noexcept {
   const double since = have_command_ ? input.time_s - last_command_time_s_ : 0.0;
   const bool deadman = have_command_ && !(since <= config_.deadman_timeout_s);
   if (deadman || !have_command_) target_.setZero();
+  // The command is kept: once the limit is no longer ahead (the operator reversed), it resumes.
+  const Vector6d target = input.brake ? Vector6d::Zero() : target_;
   const double dt = std::isfinite(input.dt_s) && input.dt_s > 0.0 ? input.dt_s : 0.0;
   for (int k = 0; k < 6; ++k) {
-    StepJerkLimitedVelocity(target_[k], k < 3 ? config_.linear : config_.angular, dt, axis_[k]);
+    StepJerkLimitedVelocity(target[k], k < 3 ? config_.linear : config_.angular, dt, axis_[k]);
     output.twist_C_B[k] = axis_[k].velocity;
     output.acceleration_C_B[k] = axis_[k].acceleration;
   }
-  output.target_C_B = target_;
+  output.target_C_B = target;
   output.since_command_s = since;
   if (rejected) {
     output.status = JogStatus::kRejected;
+  } else if (input.brake && !target_.isZero()) {
+    output.status = JogStatus::kLimitBrake;
   } else if (still() && target_.isZero()) {
     output.status = JogStatus::kStill;
   } else {
     output.status = deadman ? JogStatus::kDeadmanStop : JogStatus::kMoving;
   }
+}
+
+Vector6d JogProfile::StoppingDisplacement() const noexcept {
+  Vector6d d;
+  for (int k = 0; k < 6; ++k) {
+    const AxisLimits& l = k < 3 ? config_.linear : config_.angular;
+    const double v = axis_[k].velocity, a = axis_[k].acceleration, J = l.max_jerk;
+    // Ramp the acceleration to zero: t = |a| / J.
+    const double t = std::abs(a) / J;
+    const double jerk = a > 0.0 ? -J : J;
+    const double d1 = v * t + a * t * t / 2.0 + jerk * t * t * t / 6.0;
+    const double v1 = v + a * t + jerk * t * t / 2.0;
+    // Time-optimal stop from v1 at rest acceleration.
+    const double speed = std::abs(v1), A = l.max_acceleration;
+    const double T = speed >= A * A / J ? speed / A + A / J : 2.0 * std::sqrt(speed / J);
+    d[k] = d1 + v1 * T / 2.0;
+  }
+  return d;
 }
 
 DoubleSProfile PlanDoubleS(double distance, const AxisLimits& limits) noexcept {

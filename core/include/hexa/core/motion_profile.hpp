@@ -56,9 +56,13 @@ struct JogInput {
   Vector6d twist_jog = Vector6d::Zero();   // [v; w] in the jog axes (m/s, rad/s)
   Eigen::Matrix3d R_B_jog = Eigen::Matrix3d::Identity();  // jog axes in B (JogAxes())
   double dt_s = 0.005;                     // time since the last Update
+  // A limit lies within the stopping distance ahead (the caller checks the pose
+  // StoppingDisplacement() away with the soft limits): target zero for this tick, so the jog
+  // slows to a stop before the limit instead of being cut at it.
+  bool brake = false;
 };
 
-enum class JogStatus { kStill, kMoving, kDeadmanStop, kRejected };
+enum class JogStatus { kStill, kMoving, kDeadmanStop, kRejected, kLimitBrake };
 const char* ToString(JogStatus status);
 
 struct JogOutput {
@@ -76,6 +80,11 @@ class JogProfile {
   // Stop at once (mode change while still, reset): state and command cleared.
   void Reset() noexcept;
   bool still() const noexcept;
+  // Where a stop commanded now would end, per axis (m, rad): the acceleration ramped to zero at
+  // J, then the time-optimal jerk-limited stop from the velocity reached (continuous forms).
+  // As a pivot twist over 1 s (IntegratePivotTwist(X, pivot, d, 1.0)) it gives the stopping
+  // pose, which the caller checks against the soft limits to set JogInput::brake.
+  Vector6d StoppingDisplacement() const noexcept;
 
  private:
   JogProfileConfig config_;
