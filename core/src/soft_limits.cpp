@@ -167,10 +167,10 @@ PoseLimitCheck SoftLimits::CheckPose(const Pose& pose) const noexcept {
   return worst;
 }
 
-PoseLimitCheck SoftLimits::CheckStep(const Pose& previous, const LegArray<double>& previous_length_m,
-                                     const Pose& pose, double period_s) const noexcept {
-  PoseLimitCheck worst = CheckPose(pose);
-  if (worst.kind == SoftLimitKind::kNotFinite) return worst;
+PoseLimitCheck SoftLimits::CheckSpeed(const Pose& previous,
+                                      const LegArray<double>& previous_length_m, const Pose& pose,
+                                      double period_s) const noexcept {
+  PoseLimitCheck worst;
   const double linear = (pose.p_BP_B_m - previous.p_BP_B_m).norm() / period_s;
   Consider(worst, SoftLimitKind::kLinearSpeed, 0, linear, config_.max_linear_speed_m_s,
            linear / config_.max_linear_speed_m_s - 1.0);
@@ -208,35 +208,36 @@ void SoftLimits::Update(const SoftLimitsInput& input, SoftLimitsOutput& output) 
   }
   LegArray<double> previous_length_m{};
   InverseKinematics(geometry_, input.previous, previous_length_m);
-  const PoseLimitCheck at_candidate =
-      CheckStep(input.previous, previous_length_m, input.candidate, input.period_s);
-  if (at_candidate.kind == SoftLimitKind::kNone) {
-    output.setpoint = input.candidate;
-    return;
-  }
+  // Previous setpoint outside (limits tightened at run time, or the first setpoint): a step is
+  // allowed if it keeps the speed limits and does not make the static violation worse, so the
+  // operator can move back in.
   const PoseLimitCheck at_previous = CheckPose(input.previous);
-  if (at_previous.kind != SoftLimitKind::kNone) {
-    // Limits tightened (or the first setpoint) with the platform outside: any step that does
-    // not make the static violation worse is allowed, so the operator can move back in.
-    const PoseLimitCheck candidate_static = CheckPose(input.candidate);
-    const bool better = candidate_static.excess <= at_previous.excess;
-    output.result = better ? SoftLimitsResult::kRecovering : SoftLimitsResult::kHeld;
-    if (better) output.setpoint = input.candidate;
-    output.fraction = better ? 1.0 : 0.0;
-    output.active = candidate_static.kind;
-    output.index = candidate_static.index;
-    output.value = candidate_static.value;
-    output.limit = candidate_static.limit;
+  const bool recovering = at_previous.kind != SoftLimitKind::kNone;
+  // The first limit a pose X breaks on the step previous -> X (kNone: X may be sent).
+  const auto broken = [&](const Pose& X) {
+    const PoseLimitCheck speed = CheckSpeed(input.previous, previous_length_m, X, input.period_s);
+    if (speed.kind != SoftLimitKind::kNone) return speed;
+    PoseLimitCheck statics = CheckPose(X);
+    if (recovering && statics.excess <= at_previous.excess) statics.kind = SoftLimitKind::kNone;
+    return statics;
+  };
+  PoseLimitCheck outside = broken(input.candidate);
+  if (outside.kind == SoftLimitKind::kNone) {
+    output.setpoint = input.candidate;
+    output.result = recovering ? SoftLimitsResult::kRecovering : SoftLimitsResult::kInside;
+    if (recovering) {
+      output.active = at_previous.kind;
+      output.index = at_previous.index;
+      output.value = at_previous.value;
+      output.limit = at_previous.limit;
+    }
     return;
   }
-  // Largest s with X(s) inside: bisection between an inside s_lo and an outside s_hi.
+  // Largest s with X(s) allowed: bisection between an allowed s_lo and a refused s_hi.
   double s_lo = 0.0, s_hi = 1.0;
-  PoseLimitCheck outside = at_candidate;
   for (int step = 0; step < kBisectionSteps; ++step) {
     const double s = 0.5 * (s_lo + s_hi);
-    const PoseLimitCheck check = CheckStep(input.previous, previous_length_m,
-                                           InterpolatePose(input.previous, input.candidate, s),
-                                           input.period_s);
+    const PoseLimitCheck check = broken(InterpolatePose(input.previous, input.candidate, s));
     if (check.kind == SoftLimitKind::kNone) {
       s_lo = s;
     } else {
@@ -246,7 +247,8 @@ void SoftLimits::Update(const SoftLimitsInput& input, SoftLimitsOutput& output) 
   }
   output.setpoint = InterpolatePose(input.previous, input.candidate, s_lo);
   output.fraction = s_lo;
-  output.result = SoftLimitsResult::kClamped;
+  output.result = recovering ? (s_lo > 0.0 ? SoftLimitsResult::kRecovering : SoftLimitsResult::kHeld)
+                             : SoftLimitsResult::kClamped;
   output.active = outside.kind;
   output.index = outside.index;
   output.value = outside.value;

@@ -250,6 +250,13 @@ TEST(SoftLimits, OutsideAfterTighteningOnlyMovesBackIn) {
   limits.Update(in, out);
   EXPECT_EQ(out.result, SoftLimitsResult::kRecovering);
   EXPECT_EQ(out.setpoint.p_BP_B_m.x(), 0.109);
+  // Moving back in still keeps the speed limits: a jump to 5 cm (12 m/s) is cut to 0.8 m/s.
+  in.period_s = kPeriod_s;
+  in.candidate.p_BP_B_m.x() = 0.05;
+  limits.Update(in, out);
+  EXPECT_EQ(out.result, SoftLimitsResult::kRecovering);
+  EXPECT_EQ(out.active, SoftLimitKind::kLinearSpeed);
+  EXPECT_NEAR(out.setpoint.p_BP_B_m.x(), 0.11 - 0.8 * kPeriod_s, 1e-7);
 }
 
 // 50,000 random steps from random poses inside the limits: every output is inside every

@@ -67,8 +67,9 @@ struct SoftLimitsInput {
 enum class SoftLimitsResult {
   kInside,    // candidate inside every limit: passed unchanged
   kClamped,   // stopped at a limit along the motion (fraction < 1)
-  kRecovering,  // previous outside (limits tightened): candidate accepted, it violates less
-  kHeld,      // previous outside and the candidate no better, or not finite: previous kept
+  kRecovering,  // previous outside (limits tightened): a step that violates no more, within
+                //   the speed limits (possibly a fraction of the candidate's)
+  kHeld,      // previous outside and no step allowed, or a non-finite candidate: previous kept
 };
 const char* ToString(SoftLimitsResult result);
 
@@ -122,9 +123,9 @@ class SoftLimits {
                    LegArray<double>& platform_rad) const noexcept;
 
  private:
-  // Static and speed limits of the step previous -> pose.
-  PoseLimitCheck CheckStep(const Pose& previous, const LegArray<double>& previous_length_m,
-                           const Pose& pose, double period_s) const noexcept;
+  // Speed limits of the step previous -> pose.
+  PoseLimitCheck CheckSpeed(const Pose& previous, const LegArray<double>& previous_length_m,
+                            const Pose& pose, double period_s) const noexcept;
 
   GeometryParams geometry_;
   SoftLimitsConfig config_;
