@@ -34,10 +34,12 @@ int main(int argc, char** argv) {
                         "replay it with --trajectory FILE.csv; it blends in from the current pose.");
   cli.AllowPositional("recording.mcap", 1);
   cli.AddOption("output", "file.csv", "the trajectory CSV to write");
-  cli.AddChoice("source", {"estimated", "desired", "truth"},
-                "estimated: the supervisor's estimate (PoseReport, 200 Hz); desired: its setpoints "
-                "(a jog session as commanded); truth: the plant's ground truth (simulation, 1 kHz)",
-                "estimated");
+  cli.AddChoice("source", {"desired", "estimated", "truth"},
+                "desired: the supervisor's setpoints (PoseReport, 200 Hz: a jog session as "
+                "commanded); estimated: its pose estimate; truth: the plant's ground truth "
+                "(simulation, 1 kHz). A measured pose carries the closed loop's own oscillation, "
+                "which a replay excites again (docs/operate.md \"Teach and replay\")",
+                "desired");
   cli.AddOption("from-s", "s", "first sample time (simulated time of the recording)", "0");
   cli.AddOption("to-s", "s", "last sample time (-1: the end)", "-1");
   cli.AddOption("row-period-s", "s", "time between CSV rows", "0.02");
