@@ -4,10 +4,13 @@
 // commands and fault events), through best-effort keep-last readers: an idle bridge costs
 // the control loop nothing, a watched one one more datagram per watched sample, and a slow
 // client only its own drops (ws_server.hpp).
+#include <sys/resource.h>
 #include <time.h>
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
+#include <cstring>
 #include <cinttypes>
 #include <memory>
 #include <optional>
@@ -28,6 +31,7 @@
 #include "hexa/recorder/scene.hpp"
 #include "hexa/services/cli.hpp"
 #include "hexa/services/logging.hpp"
+#include "hexa/services/scheduling.hpp"
 #include "ws_server.hpp"
 
 namespace {
@@ -151,6 +155,20 @@ class Source final : public SourceBase {
   P msg_;
 };
 
+// CPU affinity and niceness for the whole process, logged; a refusal leaves it as it was.
+void SchedulePolitely(const std::vector<int>& cpus, int nice, spdlog::logger& log) {
+  std::string message;
+  if (!cpus.empty()) {
+    const bool ok = hexa::sched::SetCpuAffinity(cpus, message);
+    if (ok) log.info("{}", message);
+    else log.warn("{}", message);
+  }
+  if (nice > 0 && setpriority(PRIO_PROCESS, 0, nice) != 0)
+    log.warn("niceness {} not applied: {}", nice, std::strerror(errno));
+  else if (nice > 0)
+    log.info("niceness {}", nice);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -164,8 +182,20 @@ int main(int argc, char** argv) {
                 "control network's address to let other hosts connect", "127.0.0.1");
   cli.AddOption("port", "n", "TCP port (0 = any free port, printed at start)", "8765");
   cli.AddOption("client-queue-kb", "n",
-                "per client: KiB of messages waiting for its socket before messages are "
-                "dropped for that client (and counted)", "4096");
+                "per client: KiB of messages waiting for its socket (counted with their "
+                "allocation overhead) before messages are dropped for that client (and counted)",
+                "4096");
+  cli.AddOption("max-clients", "n",
+                "clients served at once; more connections are refused with HTTP 503 (logged)",
+                "32");
+  cli.AddOption("total-queue-mb", "n",
+                "MiB of messages waiting for all clients together: each client's queue is "
+                "capped at min(--client-queue-kb, this / --max-clients)", "128");
+  cli.AddOption("cpus", "list|auto|none",
+                "pin the bridge (every thread) to these CPUs; auto: off the CPU a session's "
+                "control loop takes by default (hexa_session --cpus-control auto)", "auto");
+  cli.AddOption("nice", "n", "scheduling niceness of every thread (0 = normal, 19 = lowest)",
+                "10");
   cli.AddOption("stats-s", "s", "log every client's sent / dropped counts this often (0 = only "
                 "when a client leaves)", "5");
   cli.AddOption("rig", "file", "rig file whose joints the 3-D scene draws",
@@ -179,15 +209,29 @@ int main(int argc, char** argv) {
   const auto domain = cli.GetInt("domain", 0, 232);
   const auto port = cli.GetInt("port", 0, 65535);
   const auto queue_kb = cli.GetInt("client-queue-kb", 1, 1 << 20);
+  const auto max_clients = cli.GetInt("max-clients", 1, 4096);
+  const auto total_queue_mb = cli.GetInt("total-queue-mb", 1, 1 << 16);
+  const auto nice = cli.GetInt("nice", 0, 19);
   const auto stats_s = cli.GetDouble("stats-s", 0, 3600);
   const auto scene_hz = cli.GetDouble("scene-hz", 1, 1000);
   std::optional<long long> seed;
   if (cli.Has("seed")) seed = cli.GetInt("seed", 0, 1LL << 62);
-  if (!domain || !port || !queue_kb || !stats_s || !scene_hz || (cli.Has("seed") && !seed)) {
+  std::vector<int> cpus;
+  if (cli.Get("cpus") == "auto") {
+    cpus = hexa::sched::AutoCpuSplit().others;
+  } else if (cli.Get("cpus") != "none" && !hexa::sched::ParseCpuList(cli.Get("cpus"), cpus)) {
+    std::fprintf(stderr, "hexa_bridge: error: --cpus '%s': expected CPU numbers such as 1, 0,1 "
+                 "or 0-1, auto or none\n", cli.Get("cpus").c_str());
+    return 2;
+  }
+  if (!domain || !port || !queue_kb || !max_clients || !total_queue_mb || !nice || !stats_s ||
+      !scene_hz || (cli.Has("seed") && !seed)) {
     std::fprintf(stderr, "hexa_bridge: error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
   auto log = hexa::logging::Init("bridge", cli.Has("log-file") ? cli.Get("log-file") : "");
+  // Before any thread exists (Cyclone's, the WebSocket I/O thread): they inherit both.
+  SchedulePolitely(cpus, static_cast<int>(*nice), *log);
   try {
     std::optional<std::string> dds_config;
     if (cli.Has("dds-config")) dds_config = cli.Get("dds-config");
@@ -234,12 +278,17 @@ int main(int argc, char** argv) {
     sc.listen_address = cli.Get("listen");
     sc.port = static_cast<uint16_t>(*port);
     sc.client_queue_bytes = static_cast<std::size_t>(*queue_kb) * 1024;
+    sc.max_clients = static_cast<std::size_t>(*max_clients);
+    sc.total_queue_bytes = static_cast<std::size_t>(*total_queue_mb) << 20;
     Server server(sc, channels, log);
     server.OnDemandChange([&demand] { demand.Set(true); });
     server.Start();
     log->info("serving {} channels on ws://{}:{} (Foxglove WebSocket protocol), DDS domain {}; "
               "scene joints: {}", channels.size(), sc.listen_address, server.port(), *domain,
               scene_options.geometry_note);
+    log->info("at most {} clients, each queue capped at {} KiB (charged with allocation "
+              "overhead), {} MiB for all together", sc.max_clients,
+              sc.EffectiveClientQueueBytes() >> 10, sc.total_queue_bytes >> 20);
     if (sc.listen_address != "127.0.0.1" && sc.listen_address != "::1")
       log->warn("--listen {}: other hosts can connect (no authentication)", sc.listen_address);
 
@@ -273,10 +322,16 @@ int main(int argc, char** argv) {
       const int64_t now = comm::RealtimeNow_ns();
       if (stats_ns > 0 && now >= next_stats) {
         next_stats = now + stats_ns;
-        for (const auto& c : server.Stats())
+        const auto stats = server.Stats();
+        for (const auto& c : stats)
           log->info("client {} ({}): {} subscriptions, sent {} messages ({} bytes), dropped {} "
-                    "(queue full), {} bytes queued", c.id, c.remote, c.subscriptions, c.sent,
-                    c.sent_bytes, c.dropped, c.queued_bytes);
+                    "(queue full), {} messages ({} bytes) queued", c.id, c.remote,
+                    c.subscriptions, c.sent, c.sent_bytes, c.dropped, c.queued_messages,
+                    c.queued_bytes);
+        if (!stats.empty() || server.refused_connections() > 0)
+          log->info("{} clients, {} bytes queued for all (peak {}), {} connections refused",
+                    stats.size(), server.queued_bytes(), server.queued_peak_bytes(),
+                    server.refused_connections());
         if (server.inbox_drops() > 0)
           log->warn("{} messages dropped before reaching any client (inbox full)",
                     server.inbox_drops());

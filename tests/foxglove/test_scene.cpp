@@ -12,6 +12,7 @@
 #include "hexa/core/scene.hpp"
 #include "hexa/recorder/scene.hpp"
 #include "protocol.hpp"
+#include "ws_server.hpp"
 #include "recording.pb.h"
 
 namespace hexa {
@@ -240,3 +241,28 @@ TEST(BridgeProtocol, ServerMessagesFollowTheSpec) {
 
 }  // namespace
 }  // namespace hexa
+
+TEST(BridgeConfig, EveryClientQueueIsAFairShareOfTheTotal) {
+  hexa::bridge::ServerConfig c;
+  c.client_queue_bytes = 4u << 20;
+  c.total_queue_bytes = 128u << 20;
+  c.max_clients = 32;
+  EXPECT_NO_THROW(c.Validate());
+  EXPECT_EQ(c.EffectiveClientQueueBytes(), 4u << 20);  // 128 MiB / 32 = 4 MiB
+  c.max_clients = 200;
+  EXPECT_EQ(c.EffectiveClientQueueBytes(), (128u << 20) / 200);
+  EXPECT_LE(c.EffectiveClientQueueBytes() * c.max_clients, c.total_queue_bytes);
+  // A queued message is charged beyond its frame for the allocations around it.
+  EXPECT_EQ(hexa::bridge::QueuedMessageCost(100), 13 + 100 + hexa::bridge::kQueuedMessageBytes);
+  c.max_clients = 0;
+  EXPECT_THROW(c.Validate(), std::invalid_argument);
+  c.max_clients = 4097;
+  EXPECT_THROW(c.Validate(), std::invalid_argument);
+  c.max_clients = 4096;  // 32 KiB each: below the 64 KiB a client needs
+  try {
+    c.Validate();
+    ADD_FAILURE() << "accepted 32 KiB per client";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("4096 clients"), std::string::npos) << e.what();
+  }
+}
