@@ -61,6 +61,7 @@ struct Options {
        feedforward = true, tracker = false, secure = false;
   std::string cpus_control, cpus_recorder, cpus_standby, cpus_supervisor, cpus_bridge;
   std::string bridge_listen, bridge_port, bridge_queue_kb, bridge_max_clients;
+  bool bridge_operator_input = false;
   int fault_leg = 0;           // 1..6; 0 none
   bool fault_supervisor = false;  // --fault supervisor:crash:T
   std::string fault_kind, fault_at;
@@ -191,6 +192,13 @@ int main(int argc, char** argv) {
                 "8765");
   cli.AddOption("bridge-queue-kb", "n", "hexa_bridge --client-queue-kb", "4096");
   cli.AddOption("bridge-max-clients", "n", "hexa_bridge --max-clients", "32");
+  cli.AddFlag("wait-for-operator",
+              "the supervisor holds the home pose until an operator start (hexa_operator start, "
+              "or Foxglove with --bridge-operator-input) instead of starting the trajectory "
+              "itself; the session ends when the trajectory has finished or was stopped");
+  cli.AddFlag("bridge-operator-input",
+              "hexa_bridge --operator-input: Foxglove clients may start, stop, reset and home "
+              "the platform (docs/foxglove.md)");
   cli.AddFlag("secure", "DDS Security for the whole session: a project CA, one identity per "
                         "process, signed governance and permissions, encryption on the wire "
                         "(files in <out>/security; docs/deployment.md)");
@@ -272,6 +280,14 @@ int main(int argc, char** argv) {
   o.bridge_port = cli.Get("bridge-port");
   o.bridge_queue_kb = cli.Get("bridge-queue-kb");
   o.bridge_max_clients = cli.Get("bridge-max-clients");
+  o.bridge_operator_input = cli.Flag("bridge-operator-input");
+  if (o.bridge_operator_input && (!o.bridge || o.secure)) {
+    std::fprintf(stderr, "error: --bridge-operator-input %s\n",
+                 !o.bridge ? "needs --bridge"
+                           : "cannot be combined with --secure: the bridge's DDS permissions "
+                             "allow it to read only (docs/foxglove.md)");
+    return 2;
+  }
   o.feedforward = !cli.Flag("no-feedforward");
   o.tracker = cli.Flag("tracker");
   auto seed = cli.GetInt("seed", 0, (1LL << 62));
@@ -477,6 +493,7 @@ int main(int argc, char** argv) {
               o.cpus_bridge.empty() ? "none" : o.cpus_bridge, "--rig", o.rig,
               "--profile", o.profile, "--seed", std::to_string(o.seed), "--log-file",
               o.out_dir + "/bridge.log"};
+    if (o.bridge_operator_input) b.argv.push_back("--operator-input");
     b.env = env;
     b.env["HEXA_IDENTITY"] = "bridge";  // --secure: reads every topic, publishes nothing
     b.log_path = o.out_dir + "/bridge.console.log";
@@ -526,8 +543,9 @@ int main(int argc, char** argv) {
       specs.push_back(sb);
     }
   }
-  std::vector<std::string> sup_args{"--trajectory", o.trajectory, "--autostart",
-                                    "--exit-when-done", "--periods", std::to_string(o.periods)};
+  std::vector<std::string> sup_args{"--trajectory", o.trajectory, "--exit-when-done",
+                                    "--periods", std::to_string(o.periods)};
+  if (!cli.Flag("wait-for-operator")) sup_args.push_back("--autostart");
   // Identification: the supervisor only holds home (no trajectory); its outer loop would
   // fight the excited leg, which moves the platform. The free-fall bench has no platform, but
   // lockstep legs answer a tick only with its setpoint: the supervisor runs (holding, outer

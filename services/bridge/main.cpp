@@ -32,6 +32,7 @@
 #include "hexa/services/cli.hpp"
 #include "hexa/services/logging.hpp"
 #include "hexa/services/scheduling.hpp"
+#include "operator_forward.hpp"
 #include "ws_server.hpp"
 
 namespace {
@@ -198,6 +199,14 @@ int main(int argc, char** argv) {
                 "10");
   cli.AddOption("stats-s", "s", "log every client's sent / dropped counts this often (0 = only "
                 "when a client leaves)", "5");
+  cli.AddFlag("operator-input",
+              "accept the operator's commands (start stop reset home) from Foxglove clients on "
+              "topic hexa_OperatorInput and forward them to the supervisor: whoever can connect "
+              "can then move the platform (docs/foxglove.md, \"Operator input\")");
+  cli.AddOption("operator-input-rate-hz", "hz",
+                "per client: operator inputs a second beyond which they are refused", "10");
+  cli.AddFlag("operator-input-any-host",
+              "allow --operator-input with a --listen address other than loopback");
   cli.AddOption("rig", "file", "rig file whose joints the 3-D scene draws",
                 hexa::config::DefaultRigFile());
   cli.AddOption("profile", "name", "disturbance profile of the simulated plant (with --seed)");
@@ -212,6 +221,7 @@ int main(int argc, char** argv) {
   const auto max_clients = cli.GetInt("max-clients", 1, 4096);
   const auto total_queue_mb = cli.GetInt("total-queue-mb", 1, 1 << 16);
   const auto nice = cli.GetInt("nice", 0, 19);
+  const auto operator_rate_hz = cli.GetDouble("operator-input-rate-hz", 0.1, 100);
   const auto stats_s = cli.GetDouble("stats-s", 0, 3600);
   const auto scene_hz = cli.GetDouble("scene-hz", 1, 1000);
   std::optional<long long> seed;
@@ -225,8 +235,16 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (!domain || !port || !queue_kb || !max_clients || !total_queue_mb || !nice || !stats_s ||
-      !scene_hz || (cli.Has("seed") && !seed)) {
+      !scene_hz || !operator_rate_hz || (cli.Has("seed") && !seed)) {
     std::fprintf(stderr, "hexa_bridge: error: %s\n(see --help)\n", cli.error().c_str());
+    return 2;
+  }
+  const bool operator_input = cli.Flag("operator-input");
+  const bool loopback = cli.Get("listen").rfind("127.", 0) == 0 || cli.Get("listen") == "::1";
+  if (operator_input && !loopback && !cli.Flag("operator-input-any-host")) {
+    std::fprintf(stderr, "hexa_bridge: error: --operator-input with --listen %s: every host that "
+                 "can reach it could move the platform; add --operator-input-any-host to mean "
+                 "it (docs/foxglove.md)\n", cli.Get("listen").c_str());
     return 2;
   }
   auto log = hexa::logging::Init("bridge", cli.Has("log-file") ? cli.Get("log-file") : "");
@@ -249,6 +267,13 @@ int main(int argc, char** argv) {
     comm::WaitSet waitset(participant, 16);
     waitset.Attach(shutdown.guard_condition(), 0);
     waitset.Attach(demand.get(), 1);
+    constexpr dds_attach_t kOperatorToken = 100;
+    comm::GuardCondition operator_wake(participant);
+    std::unique_ptr<hexa::bridge::OperatorForwarder> forwarder;
+    if (operator_input) {
+      forwarder = std::make_unique<hexa::bridge::OperatorForwarder>(participant, operator_wake, log);
+      waitset.Attach(operator_wake.get(), kOperatorToken);
+    }
 
     std::vector<std::unique_ptr<SourceBase>> sources;
     sources.push_back(std::make_unique<Source<hexa_msg_LegSensors, rec::LegSensors>>(participant));
@@ -280,8 +305,17 @@ int main(int argc, char** argv) {
     sc.client_queue_bytes = static_cast<std::size_t>(*queue_kb) * 1024;
     sc.max_clients = static_cast<std::size_t>(*max_clients);
     sc.total_queue_bytes = static_cast<std::size_t>(*total_queue_mb) << 20;
+    sc.operator_input = operator_input;
+    sc.operator_input_rate_hz = *operator_rate_hz;
+    sc.operator_input_burst = std::max(1.0, *operator_rate_hz);
     Server server(sc, channels, log);
     server.OnDemandChange([&demand] { demand.Set(true); });
+    if (forwarder) {
+      server.OnOperatorInput([&forwarder](uint64_t id, const std::string& remote,
+                                          const hexa::bridge::OperatorInput& input) {
+        return forwarder->Submit(id, remote, input);
+      });
+    }
     server.Start();
     log->info("serving {} channels on ws://{}:{} (Foxglove WebSocket protocol), DDS domain {}; "
               "scene joints: {}", channels.size(), sc.listen_address, server.port(), *domain,
@@ -289,8 +323,13 @@ int main(int argc, char** argv) {
     log->info("at most {} clients, each queue capped at {} KiB (charged with allocation "
               "overhead), {} MiB for all together", sc.max_clients,
               sc.EffectiveClientQueueBytes() >> 10, sc.total_queue_bytes >> 20);
-    if (sc.listen_address != "127.0.0.1" && sc.listen_address != "::1")
+    if (!loopback)
       log->warn("--listen {}: other hosts can connect (no authentication)", sc.listen_address);
+    if (operator_input)
+      log->warn("operator input ON: any client that can connect to ws://{}:{} can start, stop, "
+                "reset and home the platform (topic {}, at most {} a second per client)",
+                sc.listen_address, server.port(), hexa::bridge::kOperatorInputTopic,
+                *operator_rate_hz);
 
     Context ctx;
     ctx.server = &server;
@@ -317,6 +356,10 @@ int main(int argc, char** argv) {
       if (waitset.Triggered(1)) {
         demand.Set(false);
         update_readers();
+      }
+      if (forwarder) {
+        if (waitset.Triggered(kOperatorToken)) operator_wake.Set(false);
+        forwarder->WritePending();
       }
       for (auto& s : sources) s->Drain(ctx);
       const int64_t now = comm::RealtimeNow_ns();

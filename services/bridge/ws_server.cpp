@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <map>
 #include <stdexcept>
+#include <tuple>
 
 namespace hexa::bridge {
 
@@ -52,6 +53,11 @@ std::size_t ResidentBytes() {
   std::fclose(f);
   return n == 2 ? resident * static_cast<std::size_t>(sysconf(_SC_PAGESIZE)) : 0;
 }
+int64_t SteadyNow_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
 }  // namespace
 
 struct Server::Impl {
@@ -64,6 +70,10 @@ struct Server::Impl {
     std::map<uint32_t, uint32_t> subscription_channel;  // subscription id -> channel id
     std::map<uint32_t, uint32_t> channel_subscription;  // channel id -> subscription id
     std::deque<Queued> queue;
+    std::map<uint32_t, ClientChannel> advertised;  // the client's operator input channels
+    RateLimiter operator_limiter{10, 10};
+    uint64_t rate_refused = 0;            // operator inputs over the rate, not yet reported
+    int64_t rate_reported_ns = -(int64_t{1} << 62);  // last status about them
   };
   WsServer ws;
   mutable std::mutex clients_mutex;  // clients: written on the I/O thread, read by Stats()
@@ -143,6 +153,7 @@ void Server::Start() {
     }
     con->select_subprotocol(kSubprotocol);
     Impl::Client& c = impl_->clients[hdl];
+    c.operator_limiter = RateLimiter(config_.operator_input_rate_hz, config_.operator_input_burst);
     c.stats.id = impl_->next_client_id++;
     c.stats.remote = con->get_remote_endpoint();
     return true;
@@ -163,7 +174,7 @@ void Server::Start() {
     log_->info("client {} connected from {} ({} of at most {})", c.id, c.remote, connected,
                config_.max_clients);
     websocketpp::lib::error_code ec;
-    impl_->ws.send(hdl, ServerInfoJson(config_.name, std::to_string(bound_port_)),
+    impl_->ws.send(hdl, ServerInfoJson(config_.name, std::to_string(bound_port_), config_.operator_input),
                    websocketpp::frame::opcode::text, ec);
     if (!ec)
       impl_->ws.send(hdl, AdvertiseJson(channels_), websocketpp::frame::opcode::text, ec);
@@ -209,12 +220,25 @@ void Server::Start() {
                       why.substr(0, 120), ec);
     };
     if (msg->get_opcode() != websocketpp::frame::opcode::text) {
-      protocol_error("binary messages from clients are not accepted (no clientPublish capability)");
+      if (!config_.operator_input) {
+        protocol_error("binary messages from clients are not accepted (no clientPublish capability)");
+        return;
+      }
+      const ClientMessageData data = ParseClientBinary(msg->get_payload());
+      if (!data.ok) {
+        protocol_error(data.error);
+        return;
+      }
+      OnClientBinary(hdl, msg->get_payload());
       return;
     }
-    const ClientRequest req = ParseClientText(msg->get_payload());
+    const ClientRequest req = ParseClientText(msg->get_payload(), config_.operator_input);
     if (req.kind == ClientRequest::Kind::kError) {
       protocol_error(req.error);
+      return;
+    }
+    if (req.kind == ClientRequest::Kind::kAdvertise || req.kind == ClientRequest::Kind::kUnadvertise) {
+      OnClientChannels(hdl, req);
       return;
     }
     std::string warning;
@@ -307,6 +331,133 @@ void Server::Stop() {
     timer->async_wait([this, timer](const asio::error_code&) { impl_->ws.stop(); });
   });
   io_thread_.join();
+}
+
+void Server::SendStatus(const std::weak_ptr<void>& hdl, StatusLevel level,
+                        const std::string& message) {
+  websocketpp::lib::error_code ec;
+  WsServer::connection_ptr con = impl_->ws.get_con_from_hdl(hdl, ec);
+  if (ec || con->get_state() != websocketpp::session::state::open) return;
+  if (con->get_buffered_amount() > (64u << 10)) return;  // a client that does not read
+  con->send(StatusJson(level, message), websocketpp::frame::opcode::text);
+}
+
+// I/O thread: a client advertises (or withdraws) the channels it will publish on. Only the
+// operator input topic, JSON-encoded, is accepted; anything else is refused with a status.
+void Server::OnClientChannels(const std::weak_ptr<void>& hdl, const ClientRequest& req) {
+  std::string refused, accepted;
+  uint64_t id = 0;
+  {
+    std::lock_guard<std::mutex> lock(impl_->clients_mutex);
+    auto it = impl_->clients.find(hdl);
+    if (it == impl_->clients.end()) return;
+    Impl::Client& c = it->second;
+    id = c.stats.id;
+    for (const ClientChannel& ch : req.channels) {
+      if (ch.topic != kOperatorInputTopic) {
+        refused += "channel " + std::to_string(ch.id) + ": topic '" + ch.topic.substr(0, 60) +
+                   "' is not accepted (only " + kOperatorInputTopic + "); ";
+      } else if (ch.encoding != kOperatorInputEncoding) {
+        refused += "channel " + std::to_string(ch.id) + ": encoding '" + ch.encoding.substr(0, 20) +
+                   "' is not accepted (only json); ";
+      } else if (c.advertised.count(ch.id) != 0) {
+        refused += "channel " + std::to_string(ch.id) + " is already advertised; ";
+      } else {
+        c.advertised[ch.id] = ch;
+        accepted += " " + std::to_string(ch.id);
+      }
+    }
+    for (uint32_t ch : req.unadvertise_ids) {
+      if (c.advertised.erase(ch) == 0)
+        refused += "no advertised channel " + std::to_string(ch) + "; ";
+    }
+  }
+  if (!accepted.empty())
+    log_->info("client {}: operator input channel{} advertised", id, accepted);
+  if (!refused.empty()) {
+    ++operator_inputs_refused_;
+    log_->warn("client {}: {}", id, refused);
+    SendStatus(hdl, StatusLevel::kError, refused);
+  }
+}
+
+// I/O thread: one Client Message Data frame (well-formed: ParseClientBinary). Checked for its
+// channel, the client's rate and its content, then handed to the operator input handler; the
+// client is told the outcome by a status (errors level 2), except that refusals for rate are
+// summed up once a second.
+void Server::OnClientBinary(const std::weak_ptr<void>& hdl, const std::string& frame) {
+  const ClientMessageData data = ParseClientBinary(frame);
+  const int64_t now_ns = SteadyNow_ns();
+  uint64_t id = 0;
+  std::string remote, refusal;
+  uint64_t rate_refused = 0;
+  {
+    std::lock_guard<std::mutex> lock(impl_->clients_mutex);
+    auto it = impl_->clients.find(hdl);
+    if (it == impl_->clients.end()) return;
+    Impl::Client& c = it->second;
+    id = c.stats.id;
+    remote = c.stats.remote;
+    if (c.advertised.count(data.channel_id) == 0) {
+      refusal = "message on channel " + std::to_string(data.channel_id) +
+                ", which this client has not advertised (advertise " + kOperatorInputTopic +
+                " first)";
+    } else if (!c.operator_limiter.Allow(now_ns)) {
+      ++c.rate_refused;
+      ++operator_inputs_refused_;
+      if (now_ns - c.rate_reported_ns < 1'000'000'000) return;
+      c.rate_reported_ns = now_ns;
+      rate_refused = c.rate_refused;
+      c.rate_refused = 0;
+    }
+  }
+  if (rate_refused > 0) {
+    ReportRateRefusals(hdl, id, remote, rate_refused);
+    return;
+  }
+  OperatorInputResult parsed;
+  if (refusal.empty()) {
+    parsed = ParseOperatorInput(data.payload);
+    if (!parsed.ok) refusal = parsed.error;
+  }
+  std::string answer;
+  if (refusal.empty()) {
+    answer = on_operator_input_ ? on_operator_input_(id, remote, parsed.input) : "";
+    if (answer.empty()) refusal = "operator input is not forwarded (see the bridge's log)";
+  }
+  if (!refusal.empty()) {
+    ++operator_inputs_refused_;
+    log_->warn("client {} ({}): operator input refused: {}", id, remote, refusal);
+    SendStatus(hdl, StatusLevel::kError, "refused: " + refusal);
+    return;
+  }
+  SendStatus(hdl, StatusLevel::kInfo, answer);
+}
+
+void Server::ReportRateRefusals(const std::weak_ptr<void>& hdl, uint64_t id,
+                                const std::string& remote, uint64_t count) {
+  char rate[32];
+  std::snprintf(rate, sizeof rate, "%g", config_.operator_input_rate_hz);
+  const std::string why = std::to_string(count) + " operator input(s) refused: more than " +
+                          rate + " a second from this client (rate limit)";
+  log_->warn("client {} ({}): {}", id, remote, why);
+  SendStatus(hdl, StatusLevel::kError, why);
+}
+
+// I/O thread: refusals for rate not yet reported (at most one report a second per client).
+void Server::ReportPendingRateRefusals() {
+  const int64_t now_ns = SteadyNow_ns();
+  std::vector<std::tuple<Hdl, uint64_t, std::string, uint64_t>> due;
+  {
+    std::lock_guard<std::mutex> lock(impl_->clients_mutex);
+    for (auto& [hdl, c] : impl_->clients) {
+      if (c.rate_refused == 0 || now_ns - c.rate_reported_ns < 1'000'000'000) continue;
+      due.emplace_back(hdl, c.stats.id, c.stats.remote, c.rate_refused);
+      c.rate_refused = 0;
+      c.rate_reported_ns = now_ns;
+    }
+  }
+  for (const auto& [hdl, id, remote, count] : due) ReportRateRefusals(hdl, id, remote, count);
 }
 
 void Server::Publish(uint32_t channel_id, uint64_t timestamp_ns, std::string payload) {
@@ -405,6 +556,7 @@ void Server::ScheduleTick() {
     if (ec) return;  // cancelled: the server stops
     Pump();
     ReturnFreedMemory();
+    if (config_.operator_input) ReportPendingRateRefusals();
     ScheduleTick();
   });
 }

@@ -29,6 +29,7 @@
 
 #include <spdlog/logger.h>
 
+#include "operator_input.hpp"
 #include "protocol.hpp"
 
 namespace hexa::bridge {
@@ -51,6 +52,10 @@ struct ServerConfig {
   std::size_t inbox_bytes = 16u << 20;       // the same, charged like a client queue
   std::size_t max_client_message_bytes = 64u << 10;  // a larger client message is refused
   std::string name = "hexa_bridge";
+  // Operator input (clientPublish on kOperatorInputTopic only); off unless enabled.
+  bool operator_input = false;
+  double operator_input_rate_hz = 10;  // per client, sustained
+  double operator_input_burst = 10;    // per client, at once
   void Validate() const;  // throws std::invalid_argument naming the field
   // What each client's queue may hold: min(client_queue_bytes, total_queue_bytes / max_clients).
   std::size_t EffectiveClientQueueBytes() const;
@@ -93,6 +98,12 @@ class Server {
   bool Watched(uint32_t channel_id) const;
   // Called on the I/O thread whenever the set of watched channels changes.
   void OnDemandChange(std::function<void()> fn) { on_demand_ = std::move(fn); }
+  // Called on the I/O thread with each operator input that passed every check; returns what
+  // the client is told (an empty string: refused, the reason was logged). Must not block.
+  using OperatorInputHandler =
+      std::function<std::string(uint64_t client_id, const std::string& remote, const OperatorInput&)>;
+  void OnOperatorInput(OperatorInputHandler fn) { on_operator_input_ = std::move(fn); }
+  uint64_t operator_inputs_refused() const { return operator_inputs_refused_.load(); }
 
   std::vector<ClientStats> Stats() const;  // any thread
   uint64_t inbox_drops() const { return inbox_drops_.load(); }
@@ -114,12 +125,22 @@ class Server {
   void Pump();  // hands each client's queue to its socket, a little at a time
   void ScheduleTick();
   void ReturnFreedMemory();
+  // I/O thread: a client's binary message (operator input) and a status to one client that is
+  // dropped when the client does not read (its socket holds 64 KiB already).
+  void OnClientBinary(const std::weak_ptr<void>& hdl, const std::string& frame);
+  void OnClientChannels(const std::weak_ptr<void>& hdl, const ClientRequest& req);
+  void SendStatus(const std::weak_ptr<void>& hdl, StatusLevel level, const std::string& message);
+  void ReportRateRefusals(const std::weak_ptr<void>& hdl, uint64_t id, const std::string& remote,
+                          uint64_t count);
+  void ReportPendingRateRefusals();
   std::unique_ptr<Impl> impl_;
   ServerConfig config_;
   std::vector<ChannelInfo> channels_;
   std::shared_ptr<spdlog::logger> log_;
   std::vector<std::unique_ptr<std::atomic<int>>> watchers_;  // by channel id
   std::function<void()> on_demand_;
+  OperatorInputHandler on_operator_input_;
+  std::atomic<uint64_t> operator_inputs_refused_{0};
   std::mutex inbox_mutex_;
   std::deque<std::shared_ptr<const Pending>> inbox_;
   std::size_t inbox_charge_ = 0;

@@ -29,10 +29,10 @@ for (let i = 0; i < n; i += 1) {
 }
 function done() {
   const got = clients.map((c) => c.received);
-  console.log(`received ${Math.min(...got)}..${Math.max(...got)} messages per client, ` +
-              `${got.reduce((a, b) => a + b, 0)} in all`);
   for (const c of clients) c.client.close();
-  process.exit(0);
+  // Written to a pipe, stdout is asynchronous: exit once the line is out.
+  process.stdout.write(`received ${Math.min(...got)}..${Math.max(...got)} messages per client, ` +
+                       `${got.reduce((a, b) => a + b, 0)} in all\n`, () => process.exit(0));
 }
 process.on("SIGTERM", done);
 process.on("SIGINT", done);
