@@ -38,6 +38,9 @@ void AddCommonOptions(cli::Parser& p) {
               "heartbeats): normal keeps its per-millisecond wake-ups off the loop's priority "
               "(docs/performance.md)", "normal");
   p.AddOption("cpus", "list", "pin every thread to these CPUs, e.g. 1 or 0,1 or 0-1");
+  p.AddRepeatable("peer-pid", "name=pid",
+                  "another process of the session on this host (the launcher gives them): one "
+                  "that ended is dead at once (docs/faults.md)");
 }
 
 bool ReadCommonOptions(cli::Parser& p, CommonOptions& o) {
@@ -70,6 +73,7 @@ bool ReadCommonOptions(cli::Parser& p, CommonOptions& o) {
     if (!prio) return false;
     o.realtime_priority = static_cast<int>(*prio);
   }
+  o.peer_pids = p.GetAll("peer-pid");
   if (p.Has("cpus") && !sched::ParseCpuList(p.Get("cpus"), o.cpus)) {
     return p.Fail("--cpus '" + p.Get("cpus") + "': expected CPU numbers such as 1, 0,1 or 0-1");
   }
@@ -219,17 +223,26 @@ void PeerTracker::Poll() {
       const auto& s = reader_.sample(i);
       const std::string name = s.node_name;
       auto it = std::find_if(states_.begin(), states_.end(),
-                             [&](const auto& e) { return e.first == name; });
-      if (it == states_.end()) states_.emplace_back(name, s.state);
-      else it->second = s.state;
+                             [&](const Peer& e) { return e.name == name; });
+      if (it == states_.end()) states_.push_back(Peer{name, s.state, s.detail});
+      else {
+        it->state = s.state;
+        it->detail = s.detail;
+      }
     }
   }
 }
 
 std::optional<hexa_msg_NodeState> PeerTracker::StateOf(const std::string& name) const {
-  for (const auto& [n, s] : states_)
-    if (n == name) return s;
+  for (const Peer& p : states_)
+    if (p.name == name) return p.state;
   return std::nullopt;
+}
+
+std::string PeerTracker::DetailOf(const std::string& name) const {
+  for (const Peer& p : states_)
+    if (p.name == name) return p.detail;
+  return {};
 }
 
 std::vector<std::string> PeerTracker::NotRunning(const std::vector<std::string>& expected) const {
