@@ -37,20 +37,23 @@ def load():
 
 
 def children(pid):
-    """Child pids of `pid` with their command lines."""
+    """Child pids of `pid` with their command lines (/proc/PID/task/*/children: no scan)."""
     out = []
-    for d in os.listdir("/proc"):
-        if not d.isdigit():
-            continue
+    try:
+        tids = os.listdir("/proc/%d/task" % pid)
+    except OSError:
+        return out
+    for tid in tids:
         try:
-            stat = open("/proc/%s/stat" % d).read()
-            ppid = int(stat[stat.rindex(")") + 2:].split()[1])
-            if ppid != pid:
-                continue
-            cmd = open("/proc/%s/cmdline" % d, "rb").read().split(b"\0")
-            out.append((int(d), [c.decode() for c in cmd if c]))
-        except (OSError, ValueError, IndexError):
+            kids = open("/proc/%d/task/%s/children" % (pid, tid)).read().split()
+        except OSError:
             continue
+        for k in kids:
+            try:
+                cmd = open("/proc/%s/cmdline" % k, "rb").read().split(b"\0")
+                out.append((int(k), [c.decode() for c in cmd if c]))
+            except OSError:
+                continue
     return out
 
 
@@ -155,7 +158,7 @@ def run_one(args, out_dir, domain, stop):
         while pid is None and time.time() < deadline and proc.poll() is None:
             pid = find_process(proc.pid, args.stop)
             if pid is None:
-                time.sleep(0.005)
+                time.sleep(0.001)
         if pid is not None and args.at == "midrun":
             plant_log = os.path.join(out_dir, "plant.log")
             while time.time() < deadline + 60 and proc.poll() is None:
