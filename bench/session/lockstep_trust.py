@@ -15,7 +15,8 @@ times) as exported by `hexa_recorder export`: the same simulated run, bit for bi
 
 --stop NAME stops that process of the session (leg1..leg6, leg3_standby, supervisor, recorder,
 plant) with SIGSTOP for --stop-s seconds, then SIGCONT: --at startup as soon as the process
-exists (during discovery and matching), --at midrun 0.5 s after the plant logged that it ticks.
+exists, --at running as soon as it logs that it runs (its DDS entities exist and have matched;
+the plant may not tick yet), --at midrun 0.5 s after the plant logged that it ticks.
 Each run reports the exit code, wall time, time to the first tick, whether it is identical,
 and for a session that did not complete the plant's and the launcher's error lines.
 Run it inside a network namespace of its own (/work/nsrun NAME ...), or as root.
@@ -77,6 +78,13 @@ def find_process(session_pid, name):
     return None
 
 
+def running_line(out_dir, name):
+    """The log file and the line by which process `name` says it runs."""
+    if name == "recorder":
+        return os.path.join(out_dir, "recorder.console.log"), "record: domain"
+    return os.path.join(out_dir, name + ".log"), name + " running"
+
+
 def fingerprint(build, out_dir):
     """One sha256 per recorded GroundTruth tick (times and sequence numbers left out), in tick
     order; None if there is no recording."""
@@ -121,7 +129,7 @@ def error_lines(out_dir):
         path = os.path.join(out_dir, name)
         if os.path.exists(path):
             lines += [l.rstrip() for l in open(path, errors="replace")
-                      if "[error]" in l or "[critical]" in l]
+                      if re.search(r"\] (error|critical) ", l)]
     return lines[:6]
 
 
@@ -159,6 +167,14 @@ def run_one(args, out_dir, domain, stop):
             pid = find_process(proc.pid, args.stop)
             if pid is None:
                 time.sleep(0.001)
+        if pid is not None and args.at == "running":
+            # The process has its DDS entities and says it runs (a leg: matched; the plant may
+            # or may not tick yet): a lease started now lapses before the writer's first write.
+            log, needle = running_line(out_dir, args.stop)
+            while time.time() < deadline and proc.poll() is None:
+                if os.path.exists(log) and needle in open(log, errors="replace").read():
+                    break
+                time.sleep(0.001)
         if pid is not None and args.at == "midrun":
             plant_log = os.path.join(out_dir, "plant.log")
             while time.time() < deadline + 60 and proc.poll() is None:
@@ -191,7 +207,7 @@ def main():
     ap.add_argument("--secure", action="store_true", help="hexa_session --secure")
     ap.add_argument("--stop", default="", help="process to stop (leg3, supervisor, recorder, ...)")
     ap.add_argument("--stop-s", type=float, default=0.6)
-    ap.add_argument("--at", choices=["startup", "midrun"], default="midrun")
+    ap.add_argument("--at", choices=["startup", "running", "midrun"], default="midrun")
     ap.add_argument("--reference", default="", help="session directory to compare with")
     ap.add_argument("--session-arg", action="append", default=[],
                     help="one more argument for hexa_session (repeatable)")

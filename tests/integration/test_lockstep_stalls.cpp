@@ -60,11 +60,13 @@ pid_t FindChild(pid_t session, const std::string& name) {
   return -1;
 }
 
-enum class When { kStartUp, kMidRun };
+enum class When { kStartUp, kRunning, kMidRun };
 
 // Runs hexa_session with `args`; stops its child `process` with SIGSTOP for `stop_s` (at
-// start-up: as soon as it exists; mid-run: 0.5 s after the plant logged its first tick), then
-// continues it, and waits for the session. `stopped` says whether the stop happened.
+// start-up: as soon as it exists; running: as soon as it logs "<process> running", its DDS
+// entities matched and the plant perhaps not ticking yet; mid-run: 0.5 s after the plant
+// logged its first tick), then continues it, and waits for the session. `stopped` says
+// whether the stop happened.
 hexa::testing::SessionRun RunWithStop(const std::string& name, int domain,
                                       std::vector<std::string> args, const std::string& process,
                                       When when, double stop_s, bool& stopped) {
@@ -88,6 +90,11 @@ hexa::testing::SessionRun RunWithStop(const std::string& name, int domain,
   while (pid < 0 && Clock::now() < deadline && group.Running("session")) {
     pid = FindChild(session, process);
     if (pid < 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  if (pid > 0 && when == When::kRunning) {
+    while (Clock::now() < deadline && Slurp(run.dir + "/" + process + ".log")
+                                              .find(process + " running") == std::string::npos)
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   if (pid > 0 && when == When::kMidRun) {
     while (Clock::now() < deadline &&
@@ -154,12 +161,14 @@ TEST(LockstepStalls, SupervisorStoppedMidRunIsWaitedForAndTheRunIsBitIdentical) 
   ExpectCompletedBitIdentical(run, 4);
 }
 
-// A leg controller stopped for 3 s as soon as it exists (during discovery): the session starts
-// when it runs again. Before, a writer whose lease lapsed before its first write was never
-// seen alive again and the plant gave up after 30 s ("peers not ready", exit 4).
+// A leg controller stopped for 3 s as soon as it says it runs (its writer exists, it has not
+// written yet; the plant may still be waiting for the others): the session starts, or goes on,
+// when it runs again. Before, a writer whose lease lapsed before its first write was never seen
+// alive again: the plant gave up after 30 s ("peers not ready", exit 4), or, if it was ticking
+// already, dropped the leg (FAULT_LIVELINESS_LOST at tick 0).
 TEST(LockstepStalls, LegStoppedDuringStartUpStartsAndTheRunIsBitIdentical) {
   bool stopped = false;
-  const auto run = RunWithStop("stall_leg_startup", 95, kCombined, "leg2", When::kStartUp, 3.0, stopped);
+  const auto run = RunWithStop("stall_leg_startup", 95, kCombined, "leg2", When::kRunning, 3.0, stopped);
   ASSERT_TRUE(stopped);
   ExpectCompletedBitIdentical(run, 4);
 }
