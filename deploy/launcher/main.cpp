@@ -200,8 +200,9 @@ int main(int argc, char** argv) {
                 "real time: liveliness lease of the leg controllers (a leg silent this long is "
                 "dead; docs/faults.md)", "0.01");
   cli.AddOption("lockstep-lease", "s",
-                "lockstep: liveliness lease of the leg controllers and the supervisor "
-                "(docs/faults.md)", "0.2");
+                "lockstep: liveliness lease of the leg controllers and the supervisor: how soon "
+                "a hot standby takes over; a lapse alone is no fault in lockstep, which waits "
+                "for a slow or stopped process (docs/faults.md)", "0.2");
   cli.AddOption("fault", "leg:kind:time_s",
                 "inject a fault into one primary leg controller, e.g. 3:crash:2.0 "
                 "(kinds: crash hang slow garbage silence), or supervisor:crash:time_s "

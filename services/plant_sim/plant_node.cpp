@@ -270,18 +270,20 @@ void PlantNode::PublishStatus(hexa_msg_NodeState state, const char* detail) {
 
 bool PlantNode::SyncGiveUpDue(std::int64_t blocked_ns) const {
   // The readers the sync waits for: the supervisor's and the recorder's (all-legs partition,
-  // ground truth). One whose process ended never acknowledges: give up at once. Processes
-  // that exist (perhaps stopped: a SIGSTOP, a loaded machine) are waited for: giving up would
-  // let the loop run past the writers' history and the recorder lose samples. Processes not
-  // known here (another host): after recorder_sync_give_up_s, as discovery is slow to drop
-  // a dead one (10 s).
-  bool known = false;
+  // ground truth). Processes that exist (perhaps stopped: a SIGSTOP, a loaded machine) are
+  // waited for: giving up would let the loop run past the writers' history and the recorder
+  // lose samples. One whose process ended never acknowledges (until discovery drops it,
+  // 10 s): given up after recorder_sync_give_up_s, as when the processes are not known here
+  // (another host). Not at once: a supervisor that died ends the session 2 s later (the
+  // launcher), and a loop let free at once outran the recorder in that time (21680 samples
+  // lost in one run) where a 1 s pause keeps it within the history.
+  bool known = false, ended = false;
   for (const char* name : {"recorder", "supervisor"}) {
     const node::PeerProcessState state = peer_processes_.State(name);
-    if (state == node::PeerProcessState::kEnded) return true;
+    ended = ended || state == node::PeerProcessState::kEnded;
     known = known || state != node::PeerProcessState::kUnknown;
   }
-  if (known) return false;
+  if (known && !ended) return false;
   return blocked_ns > static_cast<std::int64_t>(options_.recorder_sync_give_up_s * 1e9);
 }
 

@@ -159,10 +159,9 @@ class PlantNode {
   std::string DescribeMissing(const std::vector<std::string>& missing) const;
   // Lockstep: what leg `leg`'s controllers show (writers, processes ended or stuck).
   SilentLegFacts LegFacts(int leg);
-  // Lockstep, recorder sync: may a sync that has stood still `blocked_ns` be given up? At once
-  // when a reader's process (supervisor, recorder) ended; never while they exist (a stopped
-  // recorder is waited for: the lockstep timeout remains); after recorder_sync_give_up_s when
-  // their processes are not known (another host).
+  // Lockstep, recorder sync: may a sync that has stood still `blocked_ns` be given up? Never
+  // while the readers' processes (supervisor, recorder) exist (a stopped recorder is waited
+  // for); after recorder_sync_give_up_s when one ended or they are not known (another host).
   bool SyncGiveUpDue(std::int64_t blocked_ns) const;
   int RunLockstep(std::uint64_t last_tick);
   int RunRealtime(std::uint64_t last_tick);

@@ -22,7 +22,8 @@ void AddCommonOptions(cli::Parser& p) {
   p.AddOption("lockstep-timeout", "s", "lockstep: a peer silent this long is a fault", "10");
   p.AddOption("lockstep-lease", "s",
               "lockstep: liveliness lease of the leg controllers' valve commands (asserted by "
-              "the control loop) and of the supervisor's setpoints; docs/faults.md", "0.2");
+              "the control loop) and of the supervisor's setpoints: how soon a hot standby "
+              "takes over; a lapse alone is no fault in lockstep (docs/faults.md)", "0.2");
   p.AddOption("rt-lease", "s",
               "real time: liveliness lease of the leg controllers' valve commands", "0.01");
   p.AddOption("rt-deadline-1ms", "s", "real time: deadline of the 1 ms topics", "0.001");
