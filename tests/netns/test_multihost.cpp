@@ -229,7 +229,7 @@ TEST_F(SecuredFourHosts, LockstepSessionFromTheFourHostFileIsLosslessAndBitIdent
 // valid leg-3 identity writing leg 4's ValveCommand (in leg 4's partition, and in its own)
 // and LegSensors. None of its samples reaches the plant: the session stays bit-identical to
 // the in-process simulation, the plant applied no rogue value (GroundTruth), and every
-// attempt is logged (the rogue's own log, the plant's REJECTED lines, Cyclone's refusals).
+// attempt is logged (the rogue's own log, the plant's FAULT_COMMAND_REFUSED, Cyclone's refusals).
 TEST_F(SecuredFiveHosts, RogueParticipantsReachNothing) {
   std::string err;
   auto o = Options("rg");
@@ -340,11 +340,13 @@ TEST_F(SecuredFiveHosts, RogueParticipantsReachNothing) {
       << leg3;
   EXPECT_GE(std::stoi(m[1]), 1) << "the stolen identity's writer in its own partition matched no reader";
   EXPECT_GT(std::stoll(m[2]), 1000);
-  // ... by the plant (samples of leg 4 from leg 3's partition: refused, counted) ...
+  // ... by the plant (samples of leg 4 from leg 3's partition, by a participant without the
+  // deployment's session key: refused, reported, counted) ...
   const std::string plant = Slurp(s->units().LogOf("hexa-plant"));
-  EXPECT_NE(plant.find("REJECTED valve command for leg 4 (tick"), std::string::npos) << plant;
-  EXPECT_NE(plant.find("from a writer in partition hexa.leg3"), std::string::npos) << plant;
-  ASSERT_TRUE(std::regex_search(plant, m, std::regex("rejected commands ([0-9]+)"))) << plant;
+  EXPECT_NE(plant.find("FAULT_COMMAND_REFUSED: ValveCommand for leg 3 from a writer not of this session"),
+            std::string::npos) << plant;
+  EXPECT_NE(plant.find("partition 'hexa.leg3'"), std::string::npos) << plant;
+  ASSERT_TRUE(std::regex_search(plant, m, std::regex("refused commands ([0-9]+)"))) << plant;
   EXPECT_GT(std::stoll(m[1]), 0);
   // ... and by Cyclone DDS in the secured processes: the foreign CA's handshake refused (in
   // every process log), the unauthenticated participant's endpoints refused (in the audit
