@@ -168,7 +168,8 @@ void LegNode::TakeSetpoints() {
       const comm::CommandTrust trust = setpoint_reader_.Authenticate(k);
       if (!comm::Trusted(trust)) {
         refusals_.Refuse(setpoint_reader_.get(), info, trust, "LegSetpoint",
-                         static_cast<std::uint8_t>(options_.leg), s.header.tick, faults_, *log_);
+                         static_cast<std::uint8_t>(options_.leg), last_command_.header.tick, faults_,
+                         *log_);
         continue;
       }
       if (s.leg_id != options_.leg) continue;

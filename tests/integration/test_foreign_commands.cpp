@@ -101,6 +101,22 @@ TEST(ForeignCommands, LockstepValveIntruderIsRefusedReportedAndTrackingIsBitIden
   for (const auto& v : run.report.applied_valve_v) ASSERT_NE(v[2], 9.88);
 }
 
+// The same intruder against a session without the key (--insecure-commands): its commands
+// are applied. This is what the tests above would see without the check (the intruder is
+// effective; their assertions can fail).
+TEST(ForeignCommands, WithoutTheSessionKeyTheIntruderDrivesTheValve) {
+  std::vector<std::string> args = LockstepArgs();
+  args.push_back("--insecure-commands");
+  const auto run = RunWithIntruder("foreign_valve_nokey", 95, args,
+                                   {"--topic", "valve", "--leg", "3", "--strength", "1000",
+                                    "--user-data", "leg=3 standby=0", "--value", "9.88"});
+  ASSERT_TRUE(run.has_report) << Slurp(run.dir + "/session.log");
+  std::size_t hijacked = 0;
+  for (const auto& v : run.report.applied_valve_v) hijacked += v[2] == 9.88 ? 1 : 0;
+  EXPECT_GT(hijacked, 0u) << "the intruder's 9.88 V never reached leg 3's valve";
+  EXPECT_TRUE(FaultsWith(run.report, "", "FAULT_COMMAND_REFUSED").empty()) << Faults(run.report);
+}
+
 // A replay: the intruder reads leg 3's real commands (tag included) and writes them back
 // from its own participant, faster than the plant re-asks. The tag binds the writer's
 // participant: refused all the same.

@@ -179,15 +179,12 @@ TEST_F(SecuredFiveHosts, LockstepSessionFromGeneratedUnitsIsLosslessAndBitIdenti
   ASSERT_FALSE(mcap.empty()) << "no recording in " << s->work_dir() << "/rec";
   ExpectLosslessAndSameAsInProcess(mcap);
   // The recorder matched the six primaries' and three standbys' ValveCommand writers (reliable:
-  // lockstep) and says that its dds_lost column counts the samples exclusive ownership
-  // discards (the standbys').
+  // lockstep; SHARED ownership: the standbys' commands are recorded too) and refused nothing.
   const std::string rec_log = Slurp(s->units().LogOf("hexa-recorder"));
-  const std::regex valve_writer("\nmatched writer hexa_ValveCommand [0-9a-f]{32} reliable strength [0-9]+");
+  const std::regex valve_writer("\nmatched writer hexa_ValveCommand [0-9a-f]{32} reliable\n");
   EXPECT_EQ(std::distance(std::sregex_iterator(rec_log.begin(), rec_log.end(), valve_writer), std::sregex_iterator()), 9)
       << rec_log;
-  EXPECT_NE(rec_log.find("note: hexa_ValveCommand: dds_lost counts the samples of 3 lower-strength writer(s)"),
-            std::string::npos)
-      << rec_log;
+  EXPECT_EQ(rec_log.find("refused hexa_ValveCommand"), std::string::npos) << rec_log;
   std::printf("secured five-host lockstep session: %.1f s wall, recording %s\n", wall_s, mcap.c_str());
 }
 

@@ -17,8 +17,8 @@ void CommandRefusals::Refuse(dds_entity_t reader, const dds_sample_info_t& info,
   const bool known = reported < reported_.size() && reported_[reported] == writer;
   if (known || (reported == reported_.size() && writer == last_unreported_)) {
     if (samples_ % 1000 == 0)
-      log.warn("{} refused {} samples of {} from {} writer(s) not of this session", topic,
-               samples_, topic, writers_);
+      log.warn("{}: {} samples refused so far, from {} writer(s) not of this session", topic,
+               samples_, writers_);
     return;
   }
   ++writers_;
