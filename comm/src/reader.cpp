@@ -51,7 +51,9 @@ std::string DescribeWriterIdentity(dds_entity_t reader, dds_instance_handle_t pu
     }
     dds_free(names);
   }
-  text += "' user_data '";
+  int32_t strength = -1;
+  if (ep->qos != nullptr) (void)dds_qget_ownership_strength(ep->qos, &strength);
+  text += "' strength " + std::to_string(strength) + " user_data '";
   void* value = nullptr;
   size_t size = 0;
   if (ep->qos != nullptr && dds_qget_userdata(ep->qos, &value, &size) && value != nullptr) {
@@ -62,9 +64,7 @@ std::string DescribeWriterIdentity(dds_entity_t reader, dds_instance_handle_t pu
     }
     dds_free(value);
   }
-  int32_t strength = -1;
-  if (ep->qos != nullptr) (void)dds_qget_ownership_strength(ep->qos, &strength);
-  text += "' strength " + std::to_string(strength);
+  text += "'";
   dds_builtintopic_free_endpoint(ep);
   return text;
 }

@@ -30,8 +30,9 @@ void CommandRefusals::Refuse(dds_entity_t reader, const dds_sample_info_t& info,
   try {
     const std::string who = comm::DescribeWriterIdentity(reader, writer);
     char detail[160];
-    std::snprintf(detail, sizeof detail, "refused %s from a writer not of this session (%s): %s",
-                  topic, comm::ToString(trust), who.c_str());
+    // The reason says why (FAULT_COMMAND_REFUSED); the detail names the writer, within the
+    // wire's 160 characters.
+    std::snprintf(detail, sizeof detail, "foreign %s writer refused: %s", topic, who.c_str());
     faults.Publish(leg, tick, hexa_msg_FAULT_COMMAND_REFUSED, detail);
     log.error("tick {}: FAULT_COMMAND_REFUSED: {} for leg {} from a writer not of this session "
               "({}): {}; its samples are refused (writer {} refused here{})", tick, topic,

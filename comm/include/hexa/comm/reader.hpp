@@ -28,8 +28,8 @@ namespace hexa::comm {
 // Describes a matched writer seen by `reader`: "guid=... participant=... strength=N";
 // empty if it is no longer matched. Allocates: not for the cycle.
 std::string DescribeMatchedWriter(dds_entity_t reader, dds_instance_handle_t publication);
-// Who a matched writer is, for a refused command: "guid G partition 'P' user_data 'U'
-// strength N" (USER_DATA's printable bytes only). Allocates: not for the cycle.
+// Who a matched writer is, for a refused command: "guid G partition 'P' strength N
+// user_data 'U'" (USER_DATA's printable bytes only, at most 64). Allocates: not for the cycle.
 std::string DescribeWriterIdentity(dds_entity_t reader, dds_instance_handle_t publication);
 // Ownership strength of a matched writer, -1 if unknown.
 int32_t MatchedWriterStrength(dds_entity_t reader, dds_instance_handle_t publication);
