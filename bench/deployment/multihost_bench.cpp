@@ -407,7 +407,10 @@ void Partition(const LabSessionOptions& base, double partition_ms, const std::st
   }
   const std::string config = s->DdsConfigOf("io-sup");
   auto op = [&](const std::string& what) {
-    std::map<std::string, std::string> env{{"HEXA_IDENTITY", "operator"}};
+    // The deployment's session key lies beside its DDS configuration (hexa_deploy generate).
+    std::map<std::string, std::string> env{
+        {"HEXA_IDENTITY", "operator"},
+        {"HEXA_SESSION_KEY", config.substr(0, config.rfind('/')) + "/session.key"}};
     const int rc = RunToCompletion(s->group(), "operator-" + what,
                                    s->lab().InHost("io-sup", {operator_bin, "--domain", std::to_string(o.domain),
                                                               "--dds-config", config, "--trajectory", "z",

@@ -160,7 +160,6 @@ Qos MakeTopicQos(TopicKind kind) {
   dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
   dds_qset_durability(qos.get(), IsTransientLocal(kind) ? DDS_DURABILITY_TRANSIENT_LOCAL
                                                         : DDS_DURABILITY_VOLATILE);
-  if (kind == TopicKind::kValveCommand) dds_qset_ownership(qos.get(), DDS_OWNERSHIP_EXCLUSIVE);
   return qos;
 }
 
@@ -255,9 +254,12 @@ Qos MakeQos(TopicKind kind, EndpointRole role, const QosParams& params) {
     } else {
       dds_qset_liveliness(q, DDS_LIVELINESS_AUTOMATIC, lease);
     }
-    // Every endpoint must agree on EXCLUSIVE, the recorder too (it then records what the
-    // plant applies: the owning writer's commands).
-    dds_qset_ownership(q, DDS_OWNERSHIP_EXCLUSIVE);
+    // SHARED: every writer's samples reach every reader, and the plant chooses which leg
+    // controller it applies (core/command_source.hpp) among the writers whose samples are
+    // authenticated (command_auth.hpp). With EXCLUSIVE ownership a foreign writer of higher
+    // strength would own the instance and hide the real controller's samples. The strength
+    // stays in the writer's QoS as a description (primary 20, standby 10); it decides nothing.
+    dds_qset_ownership(q, DDS_OWNERSHIP_SHARED);
   }
   return qos;
 }

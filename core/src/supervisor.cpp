@@ -51,6 +51,7 @@ const char* ToString(FaultReason reason) {
     case FaultReason::kSupplyPressureLow: return "FAULT_SUPPLY_PRESSURE_LOW";
     case FaultReason::kSensorInconsistent: return "FAULT_SENSOR_INCONSISTENT";
     case FaultReason::kImuLost: return "FAULT_IMU_LOST";
+    case FaultReason::kCommandRefused: return "FAULT_COMMAND_REFUSED";
   }
   return "?";
 }

@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include "hexa/comm/command_auth.hpp"
 #include "hexa/comm/partition.hpp"
 #include "hexa/comm/qos.hpp"
 
@@ -489,7 +490,9 @@ std::string UnitFileText(const Deployment& d, const ProcessPlan& plan, const Hos
      << "User=hexa\n"
      << "Group=hexa\n"
      << "Environment=HEXA_IDENTITY=" << plan.node << "\n"
-     << "Environment=CYCLONEDDS_URI=file://" << paths.config_dir << "/cyclonedds.xml\n";
+     << "Environment=CYCLONEDDS_URI=file://" << paths.config_dir << "/cyclonedds.xml\n"
+     // The session key that authenticates commands (docs/faults.md, "Foreign commands").
+     << "Environment=" << comm::kSessionKeyEnvironment << "=" << paths.config_dir << "/session.key\n";
   if (d.security().enabled()) {
     // Clear errors before the service starts (missing, expired or foreign-CA files); the
     // service itself would fail to create its participant anyway: never an open fallback.
@@ -579,6 +582,21 @@ GenerateResult Generate(const Deployment& d, const std::string& source_text,
   const std::time_t now = options.now != 0 ? options.now : std::time(nullptr);
   const fs::path out = fs::absolute(out_dir);
   const auto plans = PlanProcesses(d);
+  // One new session key for every host of the deployment (commands are authenticated in any
+  // mode, secured or not: docs/faults.md, "Foreign commands"): OUT/session.key for the
+  // operator's machine, etc/hexa/session.key on each host, readable by its owner and group.
+  std::string key_text;
+  {
+    const fs::path key = out / "session.key";
+    std::error_code ec;
+    fs::create_directories(out, ec);
+    fs::remove(key, ec);
+    if (!comm::WriteNewSessionKey(key.string(), result.error)) return result;
+    std::ifstream in(key);
+    std::getline(in, key_text);
+    key_text += "\n";
+    result.files.push_back(key.string());
+  }
   for (const Host& host : d.host()) {
     const fs::path root = out / "hosts" / host.name();
     HostPaths paths;
@@ -586,6 +604,9 @@ GenerateResult Generate(const Deployment& d, const std::string& source_text,
     const fs::path conf = root / d.config_dir().substr(1);
     if (!WriteFile(conf / "cyclonedds.xml", CycloneXml(d, host, paths), result)) return result;
     if (!WriteFile(conf / "deployment.textproto", source_text, result)) return result;
+    if (!WriteFile(conf / "session.key", key_text, result,
+                   fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read))
+      return result;
     const fs::path units = root / "lib/systemd/system";
     for (const auto& plan : plans) {
       if (plan.host != host.name() || !plan.has_unit) continue;

@@ -31,6 +31,7 @@
 #include "hexa/services/scheduling.hpp"
 #include "process_group.hpp"
 #include "domain_probe.hpp"
+#include "hexa/comm/command_auth.hpp"
 #include "secure_session.hpp"
 
 namespace fs = std::filesystem;
@@ -60,7 +61,7 @@ struct Options {
   std::string trajectory, controller, profile, mode, out_dir, rig, dds_config;
   long long seed = 1, domain = 0, periods = 0, stale_ticks = 15;
   bool recorder = true, standby = false, outer_loop = true, rt_sched = true, bridge = false,
-       feedforward = true, tracker = false, secure = false;
+       feedforward = true, tracker = false, secure = false, command_auth = true;
   std::string cpus_control, cpus_recorder, cpus_standby, cpus_supervisor, cpus_bridge;
   std::string bridge_listen, bridge_port, bridge_queue_kb, bridge_max_clients;
   bool bridge_operator_input = false;
@@ -209,6 +210,10 @@ int main(int argc, char** argv) {
   cli.AddFlag("secure", "DDS Security for the whole session: a project CA, one identity per "
                         "process, signed governance and permissions, encryption on the wire "
                         "(files in <out>/security; docs/security.md)");
+  cli.AddFlag("insecure-commands",
+              "no session key: commands are not authenticated and ANY process on the domain can "
+              "command the session (only to measure what the check costs; docs/faults.md, "
+              "\"Foreign commands\")");
   cli.AddOption("rt-lease", "s",
                 "real time: liveliness lease of the leg controllers (a leg silent this long is "
                 "dead; docs/faults.md)", "0.01");
@@ -240,6 +245,7 @@ int main(int argc, char** argv) {
   o.recorder = !cli.Flag("no-recorder");
   o.standby = cli.Flag("standby");
   o.secure = cli.Flag("secure");
+  o.command_auth = !cli.Flag("insecure-commands");
   if (o.secure && cli.Get("dds-config") != HEXA_DEFAULT_CYCLONE_CONFIG) {
     std::fprintf(stderr, "error: --secure makes its own DDS configuration (loopback, secured); "
                  "it cannot be combined with --dds-config\n");
@@ -474,6 +480,25 @@ int main(int argc, char** argv) {
     env["CYCLONEDDS_URI"] = "file://" + o.dds_config;
     log->info("DDS Security on: {} identities signed by {}/security/ca, configuration {}",
               identities.size(), o.out_dir, o.dds_config);
+  }
+  if (!o.command_auth) {
+    log->warn("--insecure-commands: no session key; commands are NOT authenticated and any "
+              "process on domain {} can command this session", o.domain);
+  } else {
+    // Command authentication, every session, secured or not (docs/faults.md, "Foreign
+    // commands"): a new key, readable by this user only; every child reads it through
+    // HEXA_SESSION_KEY, and `hexa_operator --session-key` sends commands into the session.
+    const std::string key_path = o.out_dir + "/session.key";
+    std::error_code ignored;
+    fs::remove(key_path, ignored);  // a previous session's in a reused --out
+    std::string error;
+    if (!hexa::comm::WriteNewSessionKey(key_path, error)) {
+      log->error("{}", error);
+      return 1;
+    }
+    env[hexa::comm::kSessionKeyEnvironment] = key_path;
+    log->info("commands authenticated with the session key {} (operator: hexa_operator "
+              "--domain {} --session-key {} ...)", key_path, o.domain, key_path);
   }
   std::vector<std::string> common{"--rig", o.rig, "--domain", std::to_string(o.domain),
                                   "--mode", o.mode, "--rt-lease", cli.Get("rt-lease"),
@@ -847,6 +872,7 @@ int main(int argc, char** argv) {
               "--meta", std::string("outer_loop=") + (o.outer_loop ? "on" : "off"),
               "--meta", std::string("feedforward=") + (o.feedforward ? "on" : "off"),
               "--meta", std::string("dds_security=") + (o.secure ? "on" : "off"),
+              "--meta", std::string("command_auth=") + (o.command_auth ? "on" : "off"),
               "--meta", std::string("completed=") + (completed ? "yes" : "NO")};
     if (!o.rig_overlays.empty()) {
       std::string list;

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdlib>
 #include <cerrno>
 #include <cstring>
 #include <cinttypes>
@@ -254,6 +255,20 @@ int main(int argc, char** argv) {
     std::optional<std::string> dds_config;
     if (cli.Has("dds-config")) dds_config = cli.Get("dds-config");
     comm::EnsureDdsConfig(dds_config);
+    // The session key (HEXA_SESSION_KEY, set by hexa_session): the operator commands this
+    // bridge forwards are signed with it, or the supervisor refuses them (docs/faults.md).
+    if (const char* key_path = std::getenv(comm::kSessionKeyEnvironment); key_path != nullptr && *key_path) {
+      std::string error;
+      const auto key = comm::ReadSessionKey(key_path, error);
+      if (!key) {
+        log->error("{} ({})", error, comm::kSessionKeyEnvironment);
+        return 2;
+      }
+      comm::InstallSessionKey(*key);
+    } else if (operator_input) {
+      log->warn("no session key ($HEXA_SESSION_KEY): forwarded operator commands are not signed "
+                "and a supervisor with a key refuses them");
+    }
 
     recorder::SceneOptions scene_options = recorder::SceneOptionsFromRig(
         cli.Get("rig"), cli.Has("profile") ? cli.Get("profile") : "",

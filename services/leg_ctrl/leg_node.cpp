@@ -4,6 +4,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -154,18 +155,35 @@ bool LegNode::WaitUntilMatched() {
 void LegNode::TakeSetpoints() {
   while (setpoint_reader_.Take() > 0) {
     for (std::size_t k = 0; k < setpoint_reader_.count(); ++k) {
-      if (!setpoint_reader_.info(k).valid_data) {
+      const dds_sample_info_t& info = setpoint_reader_.info(k);
+      if (!info.valid_data) {
         // The supervisor disposed its setpoint: an orderly end of the session (a crashed
-        // supervisor never disposes; its lease lapses instead).
-        if (setpoint_reader_.info(k).instance_state == DDS_IST_NOT_ALIVE_DISPOSED &&
-            !supervisor_finished_) {
+        // supervisor never disposes; its lease lapses instead). A dispose carries no tag: it
+        // counts only from a writer whose setpoints were authenticated.
+        if (info.instance_state == DDS_IST_NOT_ALIVE_DISPOSED && !supervisor_finished_ &&
+            std::find(trusted_setpoint_writers_.begin(), trusted_setpoint_writers_.end(),
+                      info.publication_handle) != trusted_setpoint_writers_.end()) {
           supervisor_finished_ = true;
           log_->info("{}: the supervisor withdrew its setpoints (orderly end)", name_);
         }
         continue;
       }
       const auto& s = setpoint_reader_.sample(k);
+      // Only the session's supervisor sets this leg's course (docs/faults.md, "Foreign
+      // commands"): an unauthenticated setpoint is refused and its writer reported.
+      const comm::CommandTrust trust = setpoint_reader_.Authenticate(k);
+      if (!comm::Trusted(trust)) {
+        refusals_.Refuse(setpoint_reader_.get(), info, trust, "LegSetpoint",
+                         static_cast<std::uint8_t>(options_.leg), last_command_.header.tick, faults_,
+                         *log_);
+        continue;
+      }
       if (s.leg_id != options_.leg) continue;
+      if (std::find(trusted_setpoint_writers_.begin(), trusted_setpoint_writers_.end(),
+                    info.publication_handle) == trusted_setpoint_writers_.end()) {
+        trusted_setpoint_writers_[trusted_next_] = info.publication_handle;
+        trusted_next_ = (trusted_next_ + 1) % trusted_setpoint_writers_.size();
+      }
       IssuedSetpoint issued;
       issued.tick = s.header.tick;
       issued.time_s = s.header.sim_time_s;

@@ -25,6 +25,7 @@
 #include "hexa/comm/comm.hpp"
 #include "hexa/core/leg_controller.hpp"
 #include "hexa/core/lockstep_protocol.hpp"
+#include "hexa/services/command_refusal.hpp"
 #include "hexa/services/node.hpp"
 #include "hexa/services/peer_processes.hpp"
 
@@ -147,6 +148,11 @@ class LegNode {
   std::uint64_t resent_ = 0;
   bool fault_active_ = false;
   hexa_msg_ControllerKind base_controller_ = hexa_msg_CONTROLLER_BSSMC;
+  // Setpoints from writers not of this session are refused (docs/faults.md); the writers
+  // whose setpoints were authenticated (a dispose counts only from one of them).
+  node::CommandRefusals refusals_;
+  std::array<dds_instance_handle_t, 4> trusted_setpoint_writers_{};
+  std::size_t trusted_next_ = 0;
 };
 
 }  // namespace hexa::leg_ctrl

@@ -64,6 +64,7 @@ int main(int argc, char** argv) {
   auto log = hexa::logging::Init(name, o.common.log_file, o.common.log_level);
   try {
     hexa::comm::EnsureDdsConfig(o.common.dds_config);
+    if (!hexa::node::InstallSessionKey(o.common.session_key_path, *log)) return 2;
     auto config = hexa::node::LoadConfig(o.common, *log);
     if (!config) return 1;
     // Before the participant exists: Cyclone's threads inherit the policy (docs/platform_notes.md).

@@ -113,6 +113,7 @@ int main(int argc, char** argv) {
   auto log = hexa::logging::Init("plant", o.common.log_file, o.common.log_level);
   try {
     hexa::comm::EnsureDdsConfig(o.common.dds_config);
+    if (!hexa::node::InstallSessionKey(o.common.session_key_path, *log)) return 2;
     auto config = hexa::node::LoadConfig(o.common.rig_path, *log);
     if (!config) return 1;
     for (const auto& overlay : o.common.rig_overlays) {

@@ -65,6 +65,25 @@ bool ParseLegUserData(const std::string& text, int& leg, bool& standby) {
   return comm::ParseLegEndpointUserData(text, leg, standby) && leg <= static_cast<int>(kNumLegs);
 }
 
+// The valve readers keep 64 samples per leg: with SHARED ownership a standby's samples (and
+// a foreign writer's) share leg N's instance with the primary's, and a keep-last-1 history
+// would let one displace the other before the plant takes it.
+comm::QosParams ValveReaderQos(const node::CommonOptions& o) {
+  comm::QosParams q = node::QosFor(o, comm::TopicKind::kValveCommand);
+  q.control_reader_depth = 64;
+  return q;
+}
+
+SourceLiveliness SourceLivelinessOf(comm::WriterLiveliness l) {
+  switch (l) {
+    case comm::WriterLiveliness::kAlive: return SourceLiveliness::kAlive;
+    case comm::WriterLiveliness::kNotAlive: return SourceLiveliness::kNotAlive;
+    case comm::WriterLiveliness::kGone: return SourceLiveliness::kGone;
+    case comm::WriterLiveliness::kUnknown: break;
+  }
+  return SourceLiveliness::kUnknown;
+}
+
 std::string LegList(LegMask mask) {
   std::string text;
   for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg)
@@ -222,7 +241,7 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
       tracker_writer_(participant_, tracker_topic_,
                       node::QosFor(options.common, comm::TopicKind::kTrackerPose)),
       valve_readers_(participant_, valve_topic_, comm::EndpointRole::kControlReader,
-                     node::QosFor(options.common, comm::TopicKind::kValveCommand), 64),
+                     ValveReaderQos(options.common), 64),
       status_(participant_, "plant"),
       faults_(participant_, "plant"),
       peers_(participant_),
@@ -526,13 +545,31 @@ void PlantNode::TakeCommands(bool feed_barrier) {
       for (std::size_t k = 0; k < reader.count(); ++k) {
         if (!reader.info(k).valid_data) continue;
         const auto& c = reader.sample(k);
-        if (c.leg_id != leg) {  // a writer of leg `leg`'s partition wrote another leg's key
-          RejectCommand(leg, c, reader.info(k));
+        const dds_sample_info_t& info = reader.info(k);
+        // Only the session's own controllers command a valve (docs/faults.md, "Foreign
+        // commands"): an unauthenticated sample is refused and its writer reported.
+        const comm::CommandTrust trust = reader.Authenticate(k);
+        if (!comm::Trusted(trust)) {
+          refusals_.Refuse(reader.get(), info, trust, "ValveCommand", static_cast<uint8_t>(leg),
+                           tick_, faults_, *log_);
           continue;
         }
-        // Every writer's compute time, older answers included: a slow primary's answers are
-        // older than its standby's, and they are what shows it is slow.
-        MonitorCompute(c, reader.info(k).publication_handle);
+        if (c.leg_id != leg) {  // a writer of leg `leg`'s partition wrote another leg's key
+          RejectCommand(leg, c, info);
+          continue;
+        }
+        // The reader's ownership: the live primary's samples, else the live standby's.
+        const comm::StatusCounters& status = reader.status();
+        const auto liveliness = [&status](std::uint64_t writer) {
+          return SourceLivelinessOf(status.LivelinessOf(writer));
+        };
+        if (sources_[static_cast<std::size_t>(leg - 1)].Offer(info.publication_handle, c.standby,
+                                                              liveliness) !=
+            CommandSourceSelector::Verdict::kApply)
+          continue;
+        // The applying writer's compute time, older answers included: a slow primary's answers
+        // are older than its standby's, and they are what shows it is slow.
+        MonitorCompute(c, info.publication_handle);
         LatestCommand& latest = latest_[c.leg_id - 1];
         if (latest.received && c.header.tick < latest.answered_tick) continue;  // older
         latest = LatestCommand{true, c.header.tick, c.valve_v};
@@ -1129,6 +1166,8 @@ void PlantNode::WriteSummary(int exit_code) const {
                    {"lockstep_resends", resent_samples_},
                    {"schedule_slips", slips_.count()},
                    {"slipped_s", static_cast<double>(slips_.total_ns()) * 1e-9},
+                   {"refused_commands", refusals_.samples()},
+                   {"refused_writers", refusals_.writers()},
                    {"loop_wall_s", static_cast<double>(loop_ended_ns_ - loop_started_ns_) * 1e-9}};
   j[realtime ? "wake_lateness_s" : "tick_wall_s"] = {{"median", tick_wall_.Quantile_s(0.5)},
                                                      {"p99", tick_wall_.Quantile_s(0.99)},
@@ -1204,13 +1243,14 @@ int PlantNode::Run() {
              "failed writes {}, recorder syncs {} (the loop stood still for {} of them, "
              "{:.3f} s; {} given up), schedule slips {} ({:.1f} ms), lockstep lease lapses "
              "waited through {}, real-time lease lapses with fresh commands {}, "
-             "rejected commands {}; writers:{}",
+             "rejected commands {}, refused commands {} (from {} writers not of this session); "
+             "writers:{}",
              tick_, static_cast<double>(tick_) * kTickS, valve.requested_deadline_missed_total,
              overruns_, faults, resent_samples_, barrier_.reasks_total(), supervisor_reasks_,
              sensors_writer_.write_errors_total(), recorder_syncs_, recorder_sync_blocks_,
              recorder_sync_wait_s_, recorder_syncs_given_up_, slips_.count(),
              static_cast<double>(slips_.total_ns()) * 1e-6, lapses_waited_, lapses_while_fresh_, rejected,
-             writers_.Describe());
+             refusals_.samples(), refusals_.writers(), writers_.Describe());
   if (slips_.count() > 0) {
     std::string ticks;
     for (std::size_t k = 0; k < slips_.kept_count(); ++k)

@@ -30,10 +30,12 @@
 
 #include "hexa/comm/comm.hpp"
 #include "hexa/core/command_hygiene.hpp"
+#include "hexa/core/command_source.hpp"
 #include "hexa/core/lockstep_protocol.hpp"
 #include "hexa/core/schedule_slips.hpp"
 #include "hexa/core/plant_faults.hpp"
 #include "hexa/core/platform_plant.hpp"
+#include "hexa/services/command_refusal.hpp"
 #include "hexa/services/node.hpp"
 #include "hexa/services/peer_processes.hpp"
 
@@ -290,6 +292,10 @@ class PlantNode {
   std::uint64_t supervisor_reasks_ = 0;
   bool supervisor_inputs_lost_ = false;  // --lose-supervisor-inputs done
   LegArray<std::uint64_t> rejected_per_leg_{};  // samples of another leg's key, per partition
+  // Command reception (docs/faults.md, "Foreign commands"): unauthenticated samples refused
+  // and reported; per leg, which authenticated writer (primary or standby) is applied.
+  node::CommandRefusals refusals_;
+  LegArray<CommandSourceSelector> sources_{};
 };
 
 }  // namespace hexa::plant_sim

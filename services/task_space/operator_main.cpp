@@ -33,6 +33,9 @@ int main(int argc, char** argv) {
                 "matched this writer only just before the write answers at the writer's next "
                 "heartbeat, and Cyclone's wait for acknowledgements does not seem to count it yet "
                 "(commands were lost between hosts: docs/measurements/deployment.md)", "0.5");
+  cli.AddOption("session-key", "file",
+                "the session's key (default: $HEXA_SESSION_KEY): without it the supervisor "
+                "refuses the command (docs/faults.md, \"Foreign commands\")");
   cli.AllowPositional("start|stop|reset|home|shutdown", 1);
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
@@ -71,6 +74,8 @@ int main(int argc, char** argv) {
     std::optional<std::string> dds;
     if (cli.Has("dds-config")) dds = cli.Get("dds-config");
     hexa::comm::EnsureDdsConfig(dds);
+    if (!hexa::node::InstallSessionKey(cli.Has("session-key") ? cli.Get("session-key") : "", *log))
+      return 2;
     hexa::comm::Participant participant(static_cast<dds_domainid_t>(*domain));
     hexa::comm::Topic<hexa_msg_OperatorCommand> topic(participant);
     hexa::comm::Writer<hexa_msg_OperatorCommand> writer(participant, topic);

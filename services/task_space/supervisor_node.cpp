@@ -208,6 +208,16 @@ void SupervisorNode::TakeOperatorCommands() {
     for (std::size_t k = 0; k < operator_reader_.count(); ++k) {
       if (!operator_reader_.info(k).valid_data) continue;
       const auto& c = operator_reader_.sample(k);
+      // Only the session's operator tools command the supervisor (docs/faults.md, "Foreign
+      // commands"): an unauthenticated command is refused and its writer reported.
+      const comm::CommandTrust trust = operator_reader_.Authenticate(k);
+      if (!comm::Trusted(trust)) {
+        log_->warn("operator command #{} (kind {}) REFUSED: {}", c.sequence, static_cast<int>(c.kind),
+                   comm::ToString(trust));
+        refusals_.Refuse(operator_reader_.get(), operator_reader_.info(k), trust,
+                         "OperatorCommand", 0, last_run_tick_, faults_, *log_);
+        continue;
+      }
       log_->info("operator command #{}: kind {} trajectory '{}'", c.sequence,
                  static_cast<int>(c.kind), c.trajectory);
       switch (c.kind) {
@@ -241,6 +251,9 @@ void SupervisorNode::TakeFaults() {
       if (std::strcmp(f.source_node, "supervisor") == 0) continue;  // our own
       log_->warn("fault from {}: leg {} tick {} reason {}: {}", f.source_node, f.leg_id, f.tick,
                  ToString(FromWire(f.reason)), f.detail);
+      // A refused command changed nothing: the legs follow their own controllers and the
+      // supervisor its operator. Reported, not a reason to hold.
+      if (f.reason == hexa_msg_FAULT_COMMAND_REFUSED) continue;
       if (f.leg_id >= 1 && f.leg_id <= kNumLegs) {
         leg_fault_[f.leg_id - 1] = FromWire(f.reason);
       } else if (f.reason != hexa_msg_FAULT_NONE) {

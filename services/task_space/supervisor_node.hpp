@@ -18,6 +18,7 @@
 
 #include "hexa/comm/comm.hpp"
 #include "hexa/core/supervisor.hpp"
+#include "hexa/services/command_refusal.hpp"
 #include "hexa/services/node.hpp"
 
 namespace hexa::task_space {
@@ -103,6 +104,7 @@ class SupervisorNode {
   hexa_msg_ImuSample imu_{};
   bool imu_seen_ = false;
   std::uint64_t last_run_tick_ = 0;
+  node::CommandRefusals refusals_;  // operator commands from writers not of this session
   std::array<hexa_msg_LegSetpoint, kNumLegs> last_setpoints_{};
   std::uint64_t setpoint_republishes_ = 0;
   bool ran_once_ = false;

@@ -101,4 +101,47 @@ TEST(CommAlloc, SteadyStateTakeAndWaitDoNotAllocate) {
   EXPECT_EQ(out.header.tick, 1099u);
 }
 
+// Command topics: signing in the writer, and Take + Authenticate in the reader, allocate
+// nothing once the writer's GUID prefix is known (its first sample).
+TEST(CommAlloc, SigningAndAuthenticatingCommandsDoNotAllocate) {
+  EnsureDdsConfig();
+  SessionKey key;
+  key.bytes.fill(0x5a);
+  InstallSessionKey(key);
+  Participant p(47);
+  QosParams params;
+  params.deadline_period_s = std::numeric_limits<double>::infinity();
+  params.control_reader_depth = 64;
+  Topic<hexa_msg_ValveCommand> topic(p);
+  Writer<hexa_msg_ValveCommand> writer(p, topic, params);
+  Reader<hexa_msg_ValveCommand> reader(p, topic, EndpointRole::kControlReader, params, 64);
+  WaitSet ws(p);
+  ws.Attach(reader.data_condition(), 1);
+  const CommandMac& mac = *InstalledCommandMac();
+  ParticipantPrefix prefix{};
+  hexa_msg_ValveCommand c{};
+  c.leg_id = 2;
+  std::uint64_t authenticated = 0;
+  auto cycle = [&](uint64_t tick, std::uint64_t* reader_allocs, std::uint64_t* mac_allocs) {
+    FillHeader(c.header, tick, tick * 1e-3, RealtimeNow_ns());
+    ASSERT_EQ(writer.Write(c, c.header.source_time_ns), DDS_RETCODE_OK);
+    CountAllocations r;
+    ASSERT_EQ(ws.Wait(DDS_SECS(1)), 1);
+    ASSERT_GT(reader.Take(), 0);
+    for (std::size_t i = 0; i < reader.count(); ++i)
+      authenticated += reader.info(i).valid_data && reader.Authenticate(i) == CommandTrust::kAuthenticated;
+    if (reader_allocs) *reader_allocs += r.count();
+    CountAllocations m;
+    SignCommand(mac, prefix, c);
+    ASSERT_TRUE(VerifyCommand(mac, prefix, c));
+    if (mac_allocs) *mac_allocs += m.count();
+  };
+  for (uint64_t tick = 0; tick < 100; ++tick) cycle(tick, nullptr, nullptr);  // warm up
+  std::uint64_t reader_allocs = 0, mac_allocs = 0;
+  for (uint64_t tick = 100; tick < 1100; ++tick) cycle(tick, &reader_allocs, &mac_allocs);
+  EXPECT_EQ(authenticated, 1100u) << "every sample signed by the writer verifies";
+  EXPECT_EQ(reader_allocs, 0u);
+  EXPECT_EQ(mac_allocs, 0u);
+}
+
 }  // namespace

@@ -76,14 +76,15 @@ TEST_F(CommUnit, QosProfilesMatchTheTopicTable) {
                  std::invalid_argument);
   }
   {
-    // Valve command: exclusive, strength, liveliness lease, no auto-dispose.
+    // Valve command: shared (the reader picks primary or standby), strength (descriptive),
+    // liveliness lease, no auto-dispose.
     QosParams standby;
     standby.ownership_strength = kStandbyOwnershipStrength;
     standby.valve_liveliness = LivelinessKind::kManualByTopic;
     const Qos q = MakeQos(TopicKind::kValveCommand, EndpointRole::kWriter, standby);
     dds_ownership_kind_t own;
     ASSERT_TRUE(dds_qget_ownership(q.get(), &own));
-    EXPECT_EQ(own, DDS_OWNERSHIP_EXCLUSIVE);
+    EXPECT_EQ(own, DDS_OWNERSHIP_SHARED);
     int32_t strength = 0;
     ASSERT_TRUE(dds_qget_ownership_strength(q.get(), &strength));
     EXPECT_EQ(strength, 10);
@@ -105,7 +106,7 @@ TEST_F(CommUnit, QosProfilesMatchTheTopicTable) {
     EXPECT_EQ(lease, DDS_INFINITY);
     dds_ownership_kind_t own;
     ASSERT_TRUE(dds_qget_ownership(q.get(), &own));
-    EXPECT_EQ(own, DDS_OWNERSHIP_EXCLUSIVE);
+    EXPECT_EQ(own, DDS_OWNERSHIP_SHARED);
   }
   {
     const Qos q = MakeQos(TopicKind::kNodeStatus, EndpointRole::kControlReader);

@@ -179,15 +179,12 @@ TEST_F(SecuredFiveHosts, LockstepSessionFromGeneratedUnitsIsLosslessAndBitIdenti
   ASSERT_FALSE(mcap.empty()) << "no recording in " << s->work_dir() << "/rec";
   ExpectLosslessAndSameAsInProcess(mcap);
   // The recorder matched the six primaries' and three standbys' ValveCommand writers (reliable:
-  // lockstep) and says that its dds_lost column counts the samples exclusive ownership
-  // discards (the standbys').
+  // lockstep; SHARED ownership: the standbys' commands are recorded too) and refused nothing.
   const std::string rec_log = Slurp(s->units().LogOf("hexa-recorder"));
-  const std::regex valve_writer("\nmatched writer hexa_ValveCommand [0-9a-f]{32} reliable strength [0-9]+");
+  const std::regex valve_writer("\nmatched writer hexa_ValveCommand [0-9a-f]{32} reliable\n");
   EXPECT_EQ(std::distance(std::sregex_iterator(rec_log.begin(), rec_log.end(), valve_writer), std::sregex_iterator()), 9)
       << rec_log;
-  EXPECT_NE(rec_log.find("note: hexa_ValveCommand: dds_lost counts the samples of 3 lower-strength writer(s)"),
-            std::string::npos)
-      << rec_log;
+  EXPECT_EQ(rec_log.find("refused hexa_ValveCommand"), std::string::npos) << rec_log;
   std::printf("secured five-host lockstep session: %.1f s wall, recording %s\n", wall_s, mcap.c_str());
 }
 
@@ -229,7 +226,7 @@ TEST_F(SecuredFourHosts, LockstepSessionFromTheFourHostFileIsLosslessAndBitIdent
 // valid leg-3 identity writing leg 4's ValveCommand (in leg 4's partition, and in its own)
 // and LegSensors. None of its samples reaches the plant: the session stays bit-identical to
 // the in-process simulation, the plant applied no rogue value (GroundTruth), and every
-// attempt is logged (the rogue's own log, the plant's REJECTED lines, Cyclone's refusals).
+// attempt is logged (the rogue's own log, the plant's FAULT_COMMAND_REFUSED, Cyclone's refusals).
 TEST_F(SecuredFiveHosts, RogueParticipantsReachNothing) {
   std::string err;
   auto o = Options("rg");
@@ -340,11 +337,13 @@ TEST_F(SecuredFiveHosts, RogueParticipantsReachNothing) {
       << leg3;
   EXPECT_GE(std::stoi(m[1]), 1) << "the stolen identity's writer in its own partition matched no reader";
   EXPECT_GT(std::stoll(m[2]), 1000);
-  // ... by the plant (samples of leg 4 from leg 3's partition: refused, counted) ...
+  // ... by the plant (samples of leg 4 from leg 3's partition, by a participant without the
+  // deployment's session key: refused, reported, counted) ...
   const std::string plant = Slurp(s->units().LogOf("hexa-plant"));
-  EXPECT_NE(plant.find("REJECTED valve command for leg 4 (tick"), std::string::npos) << plant;
-  EXPECT_NE(plant.find("from a writer in partition hexa.leg3"), std::string::npos) << plant;
-  ASSERT_TRUE(std::regex_search(plant, m, std::regex("rejected commands ([0-9]+)"))) << plant;
+  EXPECT_NE(plant.find("FAULT_COMMAND_REFUSED: ValveCommand for leg 3 from a writer not of this session"),
+            std::string::npos) << plant;
+  EXPECT_NE(plant.find("partition 'hexa.leg3'"), std::string::npos) << plant;
+  ASSERT_TRUE(std::regex_search(plant, m, std::regex("refused commands ([0-9]+)"))) << plant;
   EXPECT_GT(std::stoll(m[1]), 0);
   // ... and by Cyclone DDS in the secured processes: the foreign CA's handshake refused (in
   // every process log), the unauthenticated participant's endpoints refused (in the audit

@@ -1,6 +1,7 @@
 #include "hexa/services/node.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <ctime>
 #include <limits>
 
@@ -42,6 +43,9 @@ void AddCommonOptions(cli::Parser& p) {
   p.AddRepeatable("peer-pid", "name=pid",
                   "another process of the session on this host (the launcher gives them): one "
                   "that ended is dead at once (docs/faults.md)");
+  p.AddOption("session-key", "file",
+              "the session key that authenticates commands (default: $HEXA_SESSION_KEY; "
+              "hexa_session and hexa_deploy make it; docs/faults.md, \"Foreign commands\")");
 }
 
 bool ReadCommonOptions(cli::Parser& p, CommonOptions& o) {
@@ -63,6 +67,7 @@ bool ReadCommonOptions(cli::Parser& p, CommonOptions& o) {
   o.mode = p.Get("mode") == "realtime" ? TimeMode::kRealtime : TimeMode::kLockstep;
   if (p.Has("dds-config")) o.dds_config = p.Get("dds-config");
   o.log_file = p.Get("log-file");
+  if (p.Has("session-key")) o.session_key_path = p.Get("session-key");
   o.log_level = p.Get("log-level");
   o.try_realtime_scheduling = !p.Flag("no-rt-sched");
   o.realtime_dds_event_thread_normal = p.Get("rt-dds-event-thread") == "normal";
@@ -279,6 +284,32 @@ std::int64_t MonotonicNow_ns() {
   timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+
+bool InstallSessionKey(const std::string& path_option, spdlog::logger& log) {
+  std::string path = path_option;
+  const char* from = "--session-key";
+  if (path.empty()) {
+    const char* env = std::getenv(comm::kSessionKeyEnvironment);
+    if (env != nullptr && *env != '\0') path = env;
+    from = comm::kSessionKeyEnvironment;
+  }
+  if (path.empty()) {
+    log.warn("no session key (--session-key or ${}): commands are NOT authenticated; any "
+             "process on this DDS domain can command this one (docs/faults.md, \"Foreign "
+             "commands\")", comm::kSessionKeyEnvironment);
+    return true;
+  }
+  std::string error;
+  const auto key = comm::ReadSessionKey(path, error);
+  if (!key) {
+    log.error("{} ({})", error, from);
+    return false;
+  }
+  comm::InstallSessionKey(*key);
+  log.info("commands authenticated with the session key {} ({})", path, from);
+  return true;
 }
 
 }  // namespace hexa::node

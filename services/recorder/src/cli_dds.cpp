@@ -115,13 +115,13 @@ struct TopicRecorderBase {
   uint16_t channel = 0;
   bool periodic = false;
   uint64_t received = 0;
+  uint64_t refused = 0;  // command samples not authenticated with the session key
   TickLossTracker loss;
   // Writers this topic's reader could not match (incompatible QoS), as last reported.
   uint32_t incompatible_reported = 0;
   // Every writer this topic's reader has matched so far: GUID (32 hex digits, as on the
   // wire: GUID prefix then entity id) -> "reliable" / "best-effort" and, under exclusive
-  // ownership (ValveCommand), " strength N" (a hot standby's is lower: its samples are not
-  // recorded while the primary lives). Printed at the stop, so that the datagrams a link
+  // ownership, " strength N". Printed at the stop, so that the datagrams a link
   // dropped can be attributed to topics (bench/deployment/dropped_datagrams.py).
   std::map<std::string, std::string> matched_writers;
   // Called with each recorded message (play --answers-out watches the answers through it).
@@ -168,6 +168,14 @@ class TopicRecorder final : public TopicRecorderBase {
       const uint64_t log_ns = static_cast<uint64_t>(comm::RealtimeNow_ns());
       for (int i = 0; i < n; ++i) {
         if (!reader_.info(i).valid_data) continue;  // dispose / unregister: no sample
+        // A command from a writer not of this session is not part of it (docs/faults.md,
+        // "Foreign commands"): the plant and the legs refuse it, the recording leaves it out.
+        if constexpr (comm::CommandType<T>) {
+          if (!comm::Trusted(reader_.Authenticate(static_cast<std::size_t>(i)))) {
+            ++refused;
+            continue;
+          }
+        }
         const T& s = reader_.sample(i);
         ToProto(s, msg_);
         w.Write(channel, log_ns, static_cast<uint64_t>(SourceTime_ns(s)), msg_);
@@ -349,6 +357,14 @@ int RunRecord(const std::vector<std::string>& argv) {
   std::optional<std::string> dds_config;
   if (a.Has("dds-config")) dds_config = a.Get("dds-config", "");
   comm::EnsureDdsConfig(dds_config);
+  // The session key (HEXA_SESSION_KEY, set by hexa_session and the generated units): command
+  // samples of writers without it are not recorded. Without a key every sample is.
+  if (const char* key_path = std::getenv(comm::kSessionKeyEnvironment); key_path != nullptr && *key_path) {
+    std::string error;
+    const auto key = comm::ReadSessionKey(key_path, error);
+    if (!key) throw std::runtime_error(error + " (" + comm::kSessionKeyEnvironment + ")");
+    comm::InstallSessionKey(*key);
+  }
   comm::Participant participant(ParseDomain(a));
   comm::ShutdownGuard shutdown(participant);
   RecordingWriter writer(cfg);
@@ -483,22 +499,11 @@ int RunRecord(const std::vector<std::string>& argv) {
   for (const auto& [producer, n] : e.events)
     std::printf(" %s %" PRIu64 " (%" PRIu64 " samples)", producer.c_str(), n, e.samples.at(producer));
   std::printf("\n");
-  // Cyclone counts the samples exclusive ownership discards (a hot standby's while its primary
-  // lives) as lost: say so where a topic has writers of lower strength, so that the column is
-  // not read as loss on the wire (the missing column is).
-  for (const auto& t : topics) {
-    std::map<int, int> strengths;  // strength -> writers
-    for (const auto& [guid, what] : t->matched_writers) {
-      const auto at = what.find(" strength ");
-      if (at != std::string::npos) ++strengths[std::atoi(what.c_str() + at + 10)];
-    }
-    if (strengths.size() < 2) continue;
-    int lower = 0;
-    for (auto it = strengths.begin(); std::next(it) != strengths.end(); ++it) lower += it->second;
-    std::printf("note: %s: dds_lost counts the samples of %d lower-strength writer(s) (hot standbys) that "
-                "exclusive ownership discards while their primary lives: not losses (see missing)\n",
-                t->name.c_str(), lower);
-  }
+  // Command samples of writers not of this session: not recorded (docs/faults.md).
+  for (const auto& t : topics)
+    if (t->refused > 0)
+      std::printf("refused %s: %" PRIu64 " samples from writers not of this session (not recorded)\n",
+                  t->name.c_str(), t->refused);
   // The writers each topic matched, by GUID as on the wire: a capture of the datagrams a link
   // dropped names the writer of each DATA submessage (bench/deployment/dropped_datagrams.py).
   for (const auto& t : topics)

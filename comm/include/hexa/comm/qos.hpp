@@ -59,7 +59,8 @@ enum class EndpointRole : uint8_t {
 
 enum class LivelinessKind : uint8_t { kAutomatic, kManualByTopic };
 
-// Ownership strengths of the hot-standby scheme (docs/design.md "Safety").
+// Ownership strengths of the hot-standby scheme, offered for description only: ValveCommand is
+// SHARED and the plant picks the primary or the standby itself (core/command_source.hpp).
 inline constexpr int32_t kPrimaryOwnershipStrength = 20;
 // USER_DATA of the supervisor's OperatorCommand reader: hexa_operator writes once a reader
 // with it has matched (a recorder's reader matching first is not the supervisor's).
@@ -94,7 +95,7 @@ struct QosParams {
   // OperatorCommand reader says it is the supervisor's (kSupervisorCommandReader: hexa_operator
   // waits for that reader, not for any). Empty = none.
   std::string user_data;
-  // ValveCommand writer only: EXCLUSIVE ownership strength (primary 20, standby 10).
+  // ValveCommand writer only: ownership strength (primary 20, standby 10), descriptive.
   int32_t ownership_strength = kPrimaryOwnershipStrength;
   // Writers and control readers of the periodic topics: lockstep needs every sample (a lost
   // one would stall the tick), so both are RELIABLE; in real time both are BEST_EFFORT: no

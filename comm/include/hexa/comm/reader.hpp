@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "hexa/comm/command_auth.hpp"
 #include "hexa/comm/error.hpp"
 #include "hexa/comm/participant.hpp"
 #include "hexa/comm/partition.hpp"
@@ -27,6 +28,9 @@ namespace hexa::comm {
 // Describes a matched writer seen by `reader`: "guid=... participant=... strength=N";
 // empty if it is no longer matched. Allocates: not for the cycle.
 std::string DescribeMatchedWriter(dds_entity_t reader, dds_instance_handle_t publication);
+// Who a matched writer is, for a refused command: "guid G partition 'P' strength N
+// user_data 'U'" (USER_DATA's printable bytes only, at most 64). Allocates: not for the cycle.
+std::string DescribeWriterIdentity(dds_entity_t reader, dds_instance_handle_t publication);
 // Ownership strength of a matched writer, -1 if unknown.
 int32_t MatchedWriterStrength(dds_entity_t reader, dds_instance_handle_t publication);
 // USER_DATA of a matched writer (QosParams::user_data); nullopt when it is no longer matched.
@@ -90,6 +94,20 @@ class Reader {
   // Like Take() but leaves the samples in the reader (marked read).
   int Read() { return Store(dds_read(entity_.get(), buffers_.data(), infos_.data(),
                                      buffers_.size(), static_cast<uint32_t>(buffers_.size()))); }
+
+  // Command topics: whether sample i of the last Take()/Read() comes from one of the
+  // session's processes (command_auth.hpp). No allocation except the first sample of a writer
+  // not seen before (its GUID prefix is looked up).
+  CommandTrust Authenticate(std::size_t i)
+    requires CommandType<T>
+  {
+    if (mac_ == nullptr) return CommandTrust::kUnchecked;
+    ParticipantPrefix writer{};
+    if (!prefixes_.Find(entity_.get(), infos_[i].publication_handle, writer))
+      return CommandTrust::kUnknownWriter;
+    return VerifyCommand(*mac_, writer, storage_[i]) ? CommandTrust::kAuthenticated
+                                                     : CommandTrust::kBadTag;
+  }
 
   std::size_t count() const { return count_; }
   const T& sample(std::size_t i) const { return storage_[i]; }
@@ -197,6 +215,8 @@ class Reader {
   std::array<dds_instance_handle_t, kMaxLegs> leg_handles_{};
   std::array<uint8_t, kMaxLegs> leg_ids_{};
   std::array<int16_t, StatusCounters::kMaxInstances> resolved_leg_{};
+  const CommandMac* mac_ = InstalledCommandMac();  // command topics: verifies when set
+  PublicationPrefixCache prefixes_;
   OwnedEntity entity_;
   OwnedEntity data_condition_;
 };

@@ -97,6 +97,16 @@ class StatusCounters {
   }
   const std::array<InstanceSlot, kMaxInstances>& instances() const { return instances_; }
   const std::array<WriterSlot, kMaxWriters>& writers() const { return writers_; }
+  // The liveliness this reader last saw of writer `publication` (kUnknown: no change seen yet,
+  // or past the slots). Reads atomics only.
+  WriterLiveliness LivelinessOf(dds_instance_handle_t publication) const {
+    for (const WriterSlot& slot : writers_) {
+      const dds_instance_handle_t h = slot.publication.load(std::memory_order_acquire);
+      if (h == 0) break;  // slots are claimed in order
+      if (h == publication) return static_cast<WriterLiveliness>(slot.state.load(std::memory_order_relaxed));
+    }
+    return WriterLiveliness::kUnknown;
+  }
 
   // Callback bodies (public for the C trampolines; also usable in tests).
   void OnRequestedDeadlineMissed(const dds_requested_deadline_missed_status_t& s);

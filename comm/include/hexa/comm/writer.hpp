@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "hexa/comm/command_auth.hpp"
 #include "hexa/comm/error.hpp"
 #include "hexa/comm/participant.hpp"
 #include "hexa/comm/partition.hpp"
@@ -53,6 +54,13 @@ class Writer {
     const dds_entity_t w = dds_create_writer(parent, topic.get(), qos.get(), listener);
     dds_delete_listener(listener);
     entity_ = OwnedEntity(CheckDds(w, "cannot create writer on " + std::string(TopicName(kKind))));
+    if constexpr (CommandType<T>) {
+      // Command topics: every sample is signed with the session key (command_auth.hpp).
+      mac_ = InstalledCommandMac();
+      dds_guid_t guid{};
+      if (mac_ != nullptr) CheckDds(dds_get_guid(entity_.get(), &guid), "cannot get a writer's GUID");
+      prefix_ = PrefixOf(guid);
+    }
   }
 
   // Publishes `sample` with source timestamp `source_time_ns` (CLOCK_REALTIME ns). Never
@@ -65,8 +73,16 @@ class Writer {
   // With write batching on (EnableWriteBatching), queues the sample in this writer's packet
   // until Flush(): the samples written between two flushes reach each reader in one
   // datagram. Without batching it is Write(). A failed write is counted (status()).
+  // A command sample is written with its auth_tag set (a copy: the caller's is unchanged).
   dds_return_t WriteDeferred(const T& sample, int64_t source_time_ns) {
-    const dds_return_t rc = dds_write_ts(entity_.get(), &sample, source_time_ns);
+    dds_return_t rc;
+    if constexpr (CommandType<T>) {
+      T signed_sample = sample;
+      if (mac_ != nullptr) SignCommand(*mac_, prefix_, signed_sample);
+      rc = dds_write_ts(entity_.get(), &signed_sample, source_time_ns);
+    } else {
+      rc = dds_write_ts(entity_.get(), &sample, source_time_ns);
+    }
     if (rc != DDS_RETCODE_OK) counters_->CountWriteError(rc);
     return rc;
   }
@@ -117,6 +133,8 @@ class Writer {
   std::unique_ptr<StatusCounters> counters_;
   OwnedEntity publisher_;  // only with partitions; deleted after the writer
   OwnedEntity entity_;
+  const CommandMac* mac_ = nullptr;  // command topics with a session key: signs
+  ParticipantPrefix prefix_{};
 };
 
 // A leg-keyed topic (LegSensors, LegSetpoint) written for two kinds of reader at once:

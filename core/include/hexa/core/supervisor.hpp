@@ -55,6 +55,7 @@ enum class FaultReason {
   kSupplyPressureLow,   // supply pressure below what the legs need
   kSensorInconsistent,  // a leg length disagrees with the other legs and the IMU
   kImuLost,             // the IMU stopped delivering samples
+  kCommandRefused,      // a command from a writer not of this session was refused
 };
 const char* ToString(FaultReason reason);  // "FAULT_NONE", ...
 

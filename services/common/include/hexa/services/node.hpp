@@ -56,6 +56,7 @@ struct CommonOptions {
   // --peer-pid NAME=PID (repeatable): the session's other processes on this host, as the
   // launcher started them (peer_processes.hpp): a peer that ended is dead at once.
   std::vector<std::string> peer_pids;
+  std::string session_key_path;  // --session-key; empty: $HEXA_SESSION_KEY, else none
 };
 
 // Adds --rig --rig-overlay --domain --mode --dds-config --log-file --log-level
@@ -64,6 +65,12 @@ struct CommonOptions {
 void AddCommonOptions(cli::Parser& parser);
 // Reads them back; false with parser.error() set on a bad value.
 bool ReadCommonOptions(cli::Parser& parser, CommonOptions& options);
+
+// The session key that authenticates commands (comm/command_auth.hpp): `path_option`
+// (--session-key), else $HEXA_SESSION_KEY. Installed before the first participant exists and
+// its file logged; with neither, a warning says that commands are not authenticated. False,
+// logged with the file and what is wrong with it, on a bad key file.
+bool InstallSessionKey(const std::string& path_option, spdlog::logger& log);
 
 // QoS parameters for a topic in this mode: lockstep readers are reliable and the deadline
 // is the lockstep timeout (a stall detector); real time uses the nominal rates.
