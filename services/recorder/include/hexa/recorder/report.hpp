@@ -60,6 +60,15 @@ struct SessionReport {
   std::map<std::string, std::uint64_t> messages;         // per topic
   std::map<std::string, std::uint64_t> missing;          // per periodic topic, from ticks
   std::vector<std::string> faults;                       // FaultEvent lines
+  // Hot-standby take-overs: one line per leg whose standby's commands follow the primary's
+  // last (the recorder reads ValveCommand with exclusive ownership, as the plant does, so a
+  // standby's commands appear only once it owns the valve). No FaultEvent says this.
+  std::vector<std::string> takeovers;
+  // Samples the recording lacks in the plant's streams (LegSensors, GroundTruth, ImuSample:
+  // one per tick or per IMU period whatever the controllers do), from their tick numbers:
+  // samples the recorder lost. `expected`: what those streams should hold.
+  std::uint64_t recording_lost_samples = 0;
+  std::uint64_t recording_expected_samples = 0;
   std::vector<std::string> warnings;  // what the reader repaired (invalid UTF-8), per channel
   double wall_time_s = 0.0;   // first to last log time
   double sim_time_s = 0.0;    // last ground-truth tick
