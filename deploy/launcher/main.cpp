@@ -13,6 +13,7 @@
 #include <csignal>
 #include <map>
 #include <optional>
+#include <regex>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
@@ -889,7 +890,22 @@ int main(int argc, char** argv) {
   if (!experiment && o.recorder && std::filesystem::exists(recording)) {
     ChildSpec r;
     r.name = "report";
-    r.argv = {executable("/services/recorder/hexa_recorder"), "report", recording, "--out", o.out_dir,
+    // A split recording: every part still on disk, oldest first, then the last one.
+    std::vector<std::string> parts;
+    if (o.split_recording) {
+      static const std::regex kPart(R"(session-[0-9]{4,}\.mcap)");
+      std::error_code ignored;
+      for (const auto& e : fs::directory_iterator(o.out_dir, ignored))
+        if (std::regex_match(e.path().filename().string(), kPart)) parts.push_back(e.path().string());
+      // session-0009 before session-0010, and session-9999 before session-10000.
+      std::sort(parts.begin(), parts.end(), [](const std::string& a, const std::string& b) {
+        return a.size() != b.size() ? a.size() < b.size() : a < b;
+      });
+    }
+    parts.push_back(recording);
+    r.argv = {executable("/services/recorder/hexa_recorder"), "report"};
+    r.argv.insert(r.argv.end(), parts.begin(), parts.end());
+    r.argv.insert(r.argv.end(), {"--out", o.out_dir,
               "--meta", "trajectory=" + o.trajectory, "--meta", "controller=" + o.controller,
               "--meta", "profile=" + o.profile, "--meta", "mode=" + o.mode,
               "--meta", "seed=" + std::to_string(o.seed),
@@ -898,7 +914,9 @@ int main(int argc, char** argv) {
               "--meta", std::string("dds_security=") + (o.secure ? "on" : "off"),
               "--meta", std::string("completed=") +
                             (completed ? "yes" : "NO" + (ended_because.empty() ? std::string()
-                                                                               : ": " + ended_because))};
+                                                                               : ": " + ended_because))});
+    // hexa_recorder splits --meta values at commas.
+    std::replace(r.argv.back().begin(), r.argv.back().end(), ',', ';');
     if (!o.rig_overlays.empty()) {
       std::string list;
       for (const auto& overlay : o.rig_overlays) list += (list.empty() ? "" : " ") + overlay;
@@ -914,8 +932,10 @@ int main(int argc, char** argv) {
     }
     if (recording != mcap) r.argv.insert(r.argv.end(), {"--meta", "recording=recovered"});
     if (o.split_recording)
-      r.argv.insert(r.argv.end(), {"--meta", "recording_split=this report covers the last part "
-                                             "of the recording only (--record-split-*)"});
+      r.argv.insert(r.argv.end(), {"--meta", "recording_parts=" + std::to_string(parts.size()) +
+                                                 " files still on disk (--record-split-*; older "
+                                                 "parts deleted by --record-keep-files are not in "
+                                                 "the figures)"});
     if (!o.plant_faults.empty())
       r.argv.insert(r.argv.end(), {"--meta", "plant_fault=" + o.plant_faults});
     r.env = env;

@@ -16,9 +16,10 @@ int RunReport(const std::vector<std::string>& argv) {
   const Args a = ParseArgs(argv, {"out", "meta", "title", "python"}, {"no-plots"});
   if (a.help) {
     std::fputs(
-        "usage: hexa_recorder report RECORDING.mcap --out DIR [--meta key=value,..] "
+        "usage: hexa_recorder report RECORDING.mcap [PART.mcap..] --out DIR [--meta key=value,..] "
         "[--title TEXT] [--no-plots] [--python /abs/path/python3]\n"
-        "Computes the session figures from the recording alone and writes into DIR:\n"
+        "Computes the session figures from the recording alone and writes into DIR (a recording\n"
+        "split into parts, record --split-*: every part, oldest first, as one recording):\n"
         "report.md, report.json (RMSE per axis against ground truth and against the measured\n"
         "pose over the tracking window, relative errors, leg-length RMSE per leg, deadline\n"
         "misses per topic, control round-trip latency median/p99/max, wall and simulated time,\n"
@@ -30,7 +31,7 @@ int RunReport(const std::vector<std::string>& argv) {
         stdout);
     return kExitOk;
   }
-  if (a.positional.size() != 1) throw UsageError("exactly one recording is required");
+  if (a.positional.empty()) throw UsageError("a recording is required");
   const std::string out = a.Get("out", "");
   if (out.empty()) throw UsageError("--out DIR is required");
   // The interpreter by its absolute path, also as argv[0]: Python finds its prefix (and with
@@ -40,7 +41,7 @@ int RunReport(const std::vector<std::string>& argv) {
   if (python.empty() || python[0] != '/')
     throw UsageError("--python wants an absolute path, got '" + python + "'");
   std::filesystem::create_directories(out);
-  SessionReport report = ComputeSessionReport(a.positional[0]);
+  SessionReport report = ComputeSessionReport(a.positional);
   for (const auto& kv : a.GetAll("meta")) {
     const auto eq = kv.find('=');
     if (eq == std::string::npos) throw UsageError("--meta wants key=value, got '" + kv + "'");

@@ -72,8 +72,14 @@ struct TickSlot {
 }  // namespace
 
 SessionReport ComputeSessionReport(const std::string& path) {
+  return ComputeSessionReport(std::vector<std::string>{path});
+}
+
+SessionReport ComputeSessionReport(const std::vector<std::string>& parts) {
+  if (parts.empty()) throw std::invalid_argument("ComputeSessionReport: no recording");
   SessionReport r;
-  r.recording = path;
+  const std::string& path = parts.back();  // named in messages
+  for (const auto& part : parts) r.recording += (r.recording.empty() ? "" : " ") + part;
   std::vector<TickSlot> ticks;
   auto slot = [&](uint64_t tick) -> TickSlot& {
     if (tick > 50'000'000) throw std::runtime_error(path + ": tick " + std::to_string(tick) + " is implausible");
@@ -93,8 +99,8 @@ SessionReport ComputeSessionReport(const std::string& path) {
   std::array<bool, 6> any_primary{};
   first_standby_tick.fill(UINT64_MAX);
 
-  const McapScanResult scan = ReadRecording(
-      path, [&](const McapChannel& ch, const McapMessageView& view, const google::protobuf::Message&) {
+  const auto on_message = [&](const McapChannel& ch, const McapMessageView& view,
+                              const google::protobuf::Message&) {
         first_log = std::min(first_log, view.log_time_ns);
         last_log = std::max(last_log, view.log_time_ns);
         ++r.messages[ch.topic];
@@ -161,9 +167,13 @@ SessionReport ComputeSessionReport(const std::string& path) {
              << rec::FaultReason_Name(m.reason()) << ": " << m.detail();
           r.faults.push_back(os.str());
         }
-      });
-  r.complete_file = scan.complete;
-  r.warnings = scan.problems;
+      };
+  r.complete_file = true;
+  for (const auto& part : parts) {
+    const McapScanResult scan = ReadRecording(part, on_message);
+    r.complete_file = r.complete_file && scan.complete;
+    r.warnings.insert(r.warnings.end(), scan.problems.begin(), scan.problems.end());
+  }
   if (first_log <= last_log) r.wall_time_s = static_cast<double>(last_log - first_log) * 1e-9;
 
   // Task space over the TRACKING window, at the supervisor ticks.
@@ -268,16 +278,19 @@ SessionReport ComputeSessionReport(const std::string& path) {
     else continue;
     r.deadline_misses[topic] += st.deadline_missed_total();
   }
-  const RecordingInfo info = Inspect(path, McapScanOptions{true, true});
-  for (const auto& ch : info.channels) {
-    if (!ch.loss_analysed) continue;
-    r.missing[ch.topic] = ch.missing;
-    // The plant's streams: a gap in them is the recorder's loss. (A leg controller may skip
-    // ticks in real time and the supervisor may run late, so their gaps are not.)
-    if (ch.topic == "hexa_LegSensors" || ch.topic == "hexa_GroundTruth" ||
-        ch.topic == "hexa_ImuSample") {
-      r.recording_lost_samples += ch.missing;
-      for (const auto& l : ch.streams) r.recording_expected_samples += l.expected;
+  // Per part (a gap across two parts' boundary is not counted).
+  for (const auto& part : parts) {
+    const RecordingInfo info = Inspect(part, McapScanOptions{true, true});
+    for (const auto& ch : info.channels) {
+      if (!ch.loss_analysed) continue;
+      r.missing[ch.topic] += ch.missing;
+      // The plant's streams: a gap in them is the recorder's loss. (A leg controller may skip
+      // ticks in real time and the supervisor may run late, so their gaps are not.)
+      if (ch.topic == "hexa_LegSensors" || ch.topic == "hexa_GroundTruth" ||
+          ch.topic == "hexa_ImuSample") {
+        r.recording_lost_samples += ch.missing;
+        for (const auto& l : ch.streams) r.recording_expected_samples += l.expected;
+      }
     }
   }
   // A standby whose commands all come after the primary's last one took the valve over (a

@@ -95,6 +95,9 @@ struct SessionReport {
 
 // Throws McapError / std::runtime_error with a message naming the file on a bad recording.
 SessionReport ComputeSessionReport(const std::string& recording_path);
+// A recording split into parts (hexa_recorder record --split-*), oldest first: one report
+// over all of them, as if they were one file.
+SessionReport ComputeSessionReport(const std::vector<std::string>& parts);
 
 // Writes report.json, report.md, pose.csv, legs.csv into `out_dir`.
 void WriteSessionReport(const SessionReport& report, const std::string& out_dir);
