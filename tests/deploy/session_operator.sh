@@ -11,6 +11,10 @@
 #   4. the console's pipe closed at once: the session runs to its end (was killed by SIGPIPE,
 #      exit 141, silently).
 #   5. two --fault options for two legs: both injected.
+#   6. a recorder stopped for 3 s in real time: the trajectory completes, but the recording
+#      lost samples: exit 7 and report.md "completed: NO" (was exit 0, "completed: yes").
+#      On a machine too loaded for real time the session may hold first: then part 6 says so
+#      and checks only that it did not exit 0.
 # The fault of 1 and 2 is a FaultEvent from a node outside the loop (fault_event_writer):
 # unlike the injected controller faults, its cause goes away, so that a reset can resume.
 # Usage: session_operator.sh BUILD_DIR FAULT_EVENT_WRITER
@@ -145,5 +149,25 @@ if grep -q "fault injection: leg 2 primary controller, 'hang' at t = 900 s" "$DI
   ok "5: both faults injected"
 else
   bad "5: $(grep "fault injection" "$DIR/two/session.log")"
+fi
+# ---- 6. the recorder stopped for 3 s in real time.
+"$B/deploy/hexa_session" --mode realtime --trajectory x --periods 1 --domain "$D" --out "$DIR/lost" \
+  --timeout 300 >"$DIR/lost.console" 2>&1 &
+SESSION=$!
+wait_for "$DIR/lost/supervisor.log" "trajectory 'x' accepted" 180 || bad "6: the trajectory never started"
+sleep 1
+REC=$(pgrep -f "hexa_recorder record --output $DIR/lost/session.mcap")
+kill -STOP $REC; sleep 3; kill -CONT $REC
+session_rc
+if grep -q "trajectory finished" "$DIR/lost/supervisor.log"; then
+  if [ "$rc" -eq 7 ] && grep -q "^- completed: NO: the trajectory ran to its end, but the recording lost [0-9]* of" "$DIR/lost/report.md"; then
+    ok "6: exit 7: $(grep '^- completed' "$DIR/lost/report.md")"
+  else
+    bad "6: exit $rc: $(grep '^- completed' "$DIR/lost/report.md")"
+  fi
+elif [ "$rc" -ne 0 ]; then
+  echo "note: 6: the real-time session did not finish its trajectory on this machine (exit $rc): only checked that it did not exit 0"
+else
+  bad "6: exit 0 without finishing the trajectory"
 fi
 exit $fail
