@@ -9,7 +9,6 @@
 #include <cmath>
 #include <cstring>
 
-#include "command_answer.hpp"
 #include "hexa/config/csv_trajectory.hpp"
 #include "hexa/services/service_manager.hpp"
 
@@ -230,12 +229,12 @@ bool SupervisorNode::PrepareStart(const std::string& trajectory, int periods) {
   return pending_start_->feasibility.feasible;
 }
 
-void SupervisorNode::AnswerCommand(std::uint32_t sequence, const char* kind, int answer,
-                                   const char* why) {
+void SupervisorNode::AnswerCommand(std::uint32_t sequence, const char* kind,
+                                   CommandAnswer answer, const char* why) {
   char (&detail)[sizeof last_answer_] = last_answer_;
-  FormatCommandAnswer(detail, sequence, kind, static_cast<CommandAnswer>(answer), why);
+  FormatCommandAnswer(detail, sequence, kind, answer, why);
   last_answer_cycle_ = cycles_;
-  (answer == static_cast<int>(CommandAnswer::kAccepted) ? log_->info("{}", detail)
+  (answer == CommandAnswer::kAccepted ? log_->info("{}", detail)
                                                         : log_->warn("{}", detail));
   PublishStatus(output_.state == SupervisorState::kHold ? hexa_msg_NODE_HOLD : hexa_msg_NODE_RUNNING,
                 detail);
@@ -256,7 +255,7 @@ void SupervisorNode::TakeOperatorCommands() {
       switch (c.kind) {
         case hexa_msg_OPERATOR_START: {
           if (!supervisor_.initialized()) {
-            AnswerCommand(c.sequence, "start", static_cast<int>(CommandAnswer::kRefused),
+            AnswerCommand(c.sequence, "start", CommandAnswer::kRefused,
                           "no pose estimate yet");
             continue;
           }
@@ -272,11 +271,11 @@ void SupervisorNode::TakeOperatorCommands() {
           break;
         case hexa_msg_OPERATOR_HOME: pending_command_ = OperatorCommandKind::kHome; break;
         case hexa_msg_OPERATOR_SHUTDOWN:
-          AnswerCommand(c.sequence, "shutdown", static_cast<int>(CommandAnswer::kAccepted), "");
+          AnswerCommand(c.sequence, "shutdown", CommandAnswer::kAccepted, "");
           shutdown_.RequestShutdown();
           continue;
         default:
-          AnswerCommand(c.sequence, CommandName(c.kind), static_cast<int>(CommandAnswer::kRefused),
+          AnswerCommand(c.sequence, CommandName(c.kind), CommandAnswer::kRefused,
                         "unknown command");
           continue;
       }
@@ -285,7 +284,7 @@ void SupervisorNode::TakeOperatorCommands() {
         std::snprintf(why, sizeof why, "replaced by command #%u before it was applied",
                       static_cast<unsigned>(c.sequence));
         AnswerCommand(replaced_sequence, ToString(replaced),
-                      static_cast<int>(CommandAnswer::kRefused), why);
+                      CommandAnswer::kRefused, why);
       }
       pending_from_operator_ = true;
       pending_sequence_ = c.sequence;
@@ -350,7 +349,7 @@ void SupervisorNode::FinishCommand(SupervisorState before, std::uint64_t tick, d
   const CommandAnswer answer = accepted                               ? CommandAnswer::kAccepted
                                : result == CommandResult::kRejected ? CommandAnswer::kRejected
                                                                       : CommandAnswer::kRefused;
-  AnswerCommand(pending_sequence_, ToString(cmd), static_cast<int>(answer), why);
+  AnswerCommand(pending_sequence_, ToString(cmd), answer, why);
 }
 
 void SupervisorNode::ReportHold(double time_s) {

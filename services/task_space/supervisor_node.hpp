@@ -16,6 +16,7 @@
 #include <optional>
 #include <string>
 
+#include "command_answer.hpp"
 #include "hexa/comm/comm.hpp"
 #include "hexa/core/supervisor.hpp"
 #include "hexa/services/node.hpp"
@@ -74,7 +75,7 @@ class SupervisorNode {
   void RepublishSetpoints();
   bool PrepareStart(const std::string& trajectory, int periods);
   // Publishes the answer to an operator command in the NodeStatus detail (command_answer.hpp).
-  void AnswerCommand(std::uint32_t sequence, const char* kind, int answer, const char* why);
+  void AnswerCommand(std::uint32_t sequence, const char* kind, CommandAnswer answer, const char* why);
   // After the core ran a pending operator command: answer it, and the session's part of it
   // (a stop that ends the motion, a reset that resumes).
   void FinishCommand(SupervisorState before, std::uint64_t tick, double time_s);
