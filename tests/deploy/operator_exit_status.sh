@@ -1,5 +1,5 @@
 #!/bin/sh
-# hexa_operator's exit status says whether the command arrived (docs/faults.md, "Exit codes"):
+# hexa_operator's exit status says whether the command arrived (docs/exit_codes.md):
 #   0  the supervisor accepted it (--to any-reader: acknowledged by every matched reader);
 #   1  the supervisor's command reader (or, with --to any-reader, any reader) did not match
 #      within --wait: a recorder alone is not the supervisor (a command written before the
