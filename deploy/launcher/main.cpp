@@ -162,7 +162,7 @@ int main(int argc, char** argv) {
   hexa::cli::Parser cli("hexa_session",
                         "Runs a complete closed-loop session: plant, six leg controllers, "
                         "supervisor and recorder as separate processes over loopback DDS.\n"
-                        "Exit status (docs/faults.md): 0 completed; 1 a process failed or the "
+                        "Exit status (docs/exit_codes.md): 0 completed; 1 a process failed or the "
                         "session was stopped (signal, --timeout); 2 bad arguments; 3 held after a "
                         "fault and not reset within --hold-timeout; 4 the plant stopped; 5 the "
                         "supervisor was lost; 6 stopped by the operator (hexa_operator stop) "
@@ -204,8 +204,8 @@ int main(int argc, char** argv) {
   cli.AddOption("record-split-mb", "MB",
                 "split the recording into files of this size (10^6 bytes; 0 = one file): "
                 "session.mcap is the open part, the closed ones session-0001.mcap, ... (a "
-                "real-time session records about 4.6 GB an hour); the report then covers the "
-                "last part only", "0");
+                "real-time session records about 4.6 GB an hour); the report covers the parts "
+                "still on disk", "0");
   cli.AddOption("record-split-s", "s", "split the recording every s seconds (0 = never)", "0");
   cli.AddOption("record-keep-files", "N",
                 "with a split: keep at most N recording files, deleting the oldest parts (0 = all)",
@@ -667,7 +667,7 @@ int main(int argc, char** argv) {
 
   bool completed = false;
   bool failed = false;
-  // Exit code when not completed (docs/faults.md): 1 a process failed or the session was
+  // Exit code when not completed (docs/exit_codes.md): 1 a process failed or the session was
   // stopped; 3 the supervisor held the platform after a fault; 4 the plant stopped (lockstep
   // deadlock, non-finite state); 5 the supervisor was lost (the legs hold their valves); 6 the
   // operator stopped the motion. 7 (below): completed, but the recording lost samples.

@@ -1,7 +1,7 @@
 // The supervisor's answer to an operator command, carried in its NodeStatus detail (reliable,
 // transient-local): "command #<sequence> <kind>: accepted", "... refused: <why>" or
 // "... rejected: <why>". hexa_operator waits for the answer to its own sequence number and
-// exits with it (docs/faults.md, "Exit codes"). One place for the format: the supervisor
+// exits with it (docs/exit_codes.md). One place for the format: the supervisor
 // writes it, the operator reads it.
 #pragma once
 

@@ -13,7 +13,7 @@ int main(int argc, char** argv) {
                         "Exit status: 0 the trajectory finished (--exit-when-done) or shutdown, "
                         "1 error, 2 bad arguments, 3 peers not matched at start-up, 5 held and not "
                         "reset within --hold-timeout, 6 the operator's stop ended the motion "
-                        "before the trajectory's end (docs/faults.md).");
+                        "before the trajectory's end (docs/exit_codes.md).");
   hexa::node::AddCommonOptions(cli);
   cli.AddOption("trajectory", "name|file.csv",
                 "trajectory for --autostart: x y z roll pitch yaw combined, or a CSV file",

@@ -24,7 +24,7 @@ int main(int argc, char** argv) {
                         "acknowledge it or the supervisor did not answer within --answer-wait, "
                         "4 the supervisor refused the command (not allowed in its state, e.g. "
                         "anything but reset in HOLD) or rejected it (an infeasible trajectory); "
-                        "the reason is logged (docs/faults.md).");
+                        "the reason is logged (docs/exit_codes.md).");
   cli.AddOption("domain", "id", "DDS domain id", "0");
   cli.AddOption("dds-config", "file", "Cyclone DDS configuration (default: loopback only)");
   cli.AddOption("trajectory", "name|file.csv", "for start: x y z roll pitch yaw combined or CSV",

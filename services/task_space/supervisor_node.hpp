@@ -24,7 +24,7 @@
 namespace hexa::task_space {
 
 // Exit codes of hexa_task_space besides 0 (trajectory finished, or shutdown), 1 (error) and
-// 2 (usage): docs/faults.md, "Exit codes".
+// 2 (usage): docs/exit_codes.md.
 inline constexpr int kExitPeersNotMatched = 3;
 inline constexpr int kExitHeld = 5;                // --exit-when-done: HOLD, no reset in time
 inline constexpr int kExitStoppedByOperator = 6;   // --exit-when-done: `stop` ended the motion
