@@ -331,12 +331,11 @@ void SupervisorNode::FinishCommand(SupervisorState before, std::uint64_t tick, d
   if (accepted && cmd == OperatorCommandKind::kReset && before == SupervisorState::kHold) {
     hold_exit_tick_ = 0;
     if (!options_.hold_report_path.empty()) std::remove(options_.hold_report_path.c_str());
-    // Resume: with --autostart the trajectory starts again from where the platform was held.
+    // Resume: with --autostart the trajectory starts again from where the platform was held;
+    // without, the operator's next start does. Either way the session has not finished.
     const bool restart = options_.exit_when_done && options_.autostart;
-    if (restart) {
-      autostart_pending_ = true;
-      left_idle_ = false;
-    }
+    if (restart) autostart_pending_ = true;
+    left_idle_ = false;
     log_->warn("reset by the operator at t = {:.3f} s (tick {}): HOLD left{}", time_s, tick,
                restart ? "; the trajectory starts again from the held pose" : "");
   }
