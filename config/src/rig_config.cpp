@@ -19,6 +19,7 @@
 #include <sstream>
 
 #include "hexa/config/rig_config.hpp"
+#include "bounded_file.hpp"
 #include "internal.hpp"
 #include "rig.pb.h"
 #include "text_format.hpp"
@@ -492,14 +493,10 @@ ConfigResult ParseSystemConfig(const std::string& text, const std::string& displ
 }
 
 ConfigResult LoadSystemConfig(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    return Fail({{path, 0, 0, "", "cannot open rig file", "", ""}});
-  }
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) return Fail({{path, 0, 0, "", "cannot read rig file", "", ""}});
-  return ParseSystemConfig(text.str(), path);
+  std::string text, error;
+  if (!internal::ReadBoundedFile(path, "rig file", internal::kMaxRigFileBytes, text, error))
+    return Fail({{path, 0, 0, "", error, "", ""}});
+  return ParseSystemConfig(text, path);
 }
 
 SystemConfig LoadSystemConfigOrThrow(const std::string& path) {

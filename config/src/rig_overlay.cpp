@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "hexa/config/rig_config.hpp"
+#include "bounded_file.hpp"
 #include "internal.hpp"
 #include "rig_overlay.pb.h"
 #include "text_format.hpp"
@@ -363,29 +364,10 @@ OverlayResult ParseRigOverlay(const std::string& text, const std::string& displa
   }
 }
 
-namespace {
-
-bool ReadText(const std::string& path, std::string& text, std::string& error) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    error = "cannot open rig overlay";
-    return false;
-  }
-  std::ostringstream s;
-  s << in.rdbuf();
-  if (in.bad()) {
-    error = "cannot read rig overlay";
-    return false;
-  }
-  text = s.str();
-  return true;
-}
-
-}  // namespace
-
 OverlayResult LoadRigOverlay(const std::string& path) {
   std::string text, error;
-  if (!ReadText(path, text, error)) return FailOverlay({{path, 0, 0, "", error, "", ""}});
+  if (!internal::ReadBoundedFile(path, "rig overlay", internal::kMaxRigFileBytes, text, error))
+    return FailOverlay({{path, 0, 0, "", error, "", ""}});
   return ParseRigOverlay(text, path);
 }
 
@@ -445,7 +427,8 @@ ConfigResult LoadSystemConfig(const std::string& path, const std::vector<std::st
   for (const std::string& overlay_path : overlay_paths) {
     if (!result.ok) return result;
     std::string text, error;
-    if (!ReadText(overlay_path, text, error)) {
+    if (!internal::ReadBoundedFile(overlay_path, "rig overlay", internal::kMaxRigFileBytes, text,
+                                   error)) {
       ConfigResult failed;
       failed.issues = {{overlay_path, 0, 0, "", error, "", ""}};
       failed.error = failed.issues[0].ToString();

@@ -181,7 +181,8 @@ void Validate(const Deployment& d, Checker& c) {
       int prefix = 0;
       if (!ParseIpv4Cidr(ifc.address(), a, prefix)) {
         c.Error(line, iw, "address '" + ifc.address() +
-                              "' is not an IPv4 address with prefix length (e.g. 10.10.0.3/24)");
+                              "' is not an IPv4 address with prefix length (e.g. 10.10.0.3/24; decimal "
+                              "numbers without leading zeros)");
         continue;
       }
       const unsigned mask = prefix == 0 ? 0u : ~0u << (32 - prefix);
@@ -213,6 +214,13 @@ void Validate(const Deployment& d, Checker& c) {
       const std::string pw = where + " process[" + std::to_string(p) + "]";
       if (pr.role() == deployment::ROLE_UNSPECIFIED) {
         c.Error(line, pw, "role is not set (PLANT SUPERVISOR LEG RECORDER OPERATOR BRIDGE)");
+        continue;
+      }
+      // The text format takes any number for an open enum: a role without a unit template
+      // would become a unit with an empty ExecStart=.
+      if (!deployment::Role_IsValid(pr.role())) {
+        c.Error(line, pw, "role " + std::to_string(static_cast<int>(pr.role())) +
+                              " is not one of PLANT SUPERVISOR LEG RECORDER OPERATOR BRIDGE (1..6)");
         continue;
       }
       if (pr.role() == deployment::LEG) {
@@ -413,17 +421,39 @@ std::string SubjectOf(const Deployment& d, const std::string& node) {
   return "CN=" + node + ",O=HexaTaar,OU=" + d.name();
 }
 
+namespace {
+
+// A decimal number of 1..max_digits digits without a leading zero ("0" itself is fine): glibc
+// reads "010" as octal 8, so a leading zero would mean one address here and another in the
+// generated configuration.
+bool ParseDecimal(const std::string& text, std::size_t& at, int max_digits, unsigned& value) {
+  const std::size_t start = at;
+  value = 0;
+  while (at < text.size() && text[at] >= '0' && text[at] <= '9' &&
+         at - start < static_cast<std::size_t>(max_digits)) {
+    value = value * 10 + static_cast<unsigned>(text[at] - '0');
+    ++at;
+  }
+  const std::size_t digits = at - start;
+  if (digits == 0) return false;
+  if (at < text.size() && text[at] >= '0' && text[at] <= '9') return false;  // too many digits
+  return !(digits > 1 && text[start] == '0');
+}
+
+}  // namespace
+
 bool ParseIpv4Cidr(const std::string& text, unsigned& address, int& prefix) {
   unsigned b[4];
-  int pre = -1;
-  char tail = 0;
-  if (std::sscanf(text.c_str(), "%u.%u.%u.%u/%d%c", &b[0], &b[1], &b[2], &b[3], &pre, &tail) != 5)
-    return false;
-  for (unsigned x : b)
-    if (x > 255) return false;
-  if (pre < 0 || pre > 32) return false;
+  std::size_t at = 0;
+  for (int k = 0; k < 4; ++k) {
+    if (!ParseDecimal(text, at, 3, b[k]) || b[k] > 255) return false;
+    if (at >= text.size() || text[at] != (k < 3 ? '.' : '/')) return false;
+    ++at;
+  }
+  unsigned pre = 0;
+  if (!ParseDecimal(text, at, 2, pre) || at != text.size() || pre > 32) return false;
   address = (b[0] << 24) | (b[1] << 16) | (b[2] << 8) | b[3];
-  prefix = pre;
+  prefix = static_cast<int>(pre);
   return true;
 }
 

@@ -57,7 +57,8 @@ std::string NodeName(const deployment::Process& p);
 // Certificate subject of an identity: "CN=leg3,O=HexaTaar,OU=<deployment>".
 std::string SubjectOf(const deployment::Deployment& d, const std::string& node);
 
-// "10.10.0.3/24" -> address and prefix; false when malformed.
+// "10.10.0.3/24" -> address and prefix; false when malformed (decimal numbers only, no
+// leading zeros: glibc reads "010" as octal).
 bool ParseIpv4Cidr(const std::string& text, unsigned& address, int& prefix);
 // Address part of "10.10.0.3/24".
 std::string AddressOf(const std::string& cidr);

@@ -4,13 +4,16 @@
 // the report, and exits 0 only if the session completed. Ctrl-C or the death of any
 // process stops all of them; children die with this process even if it is SIGKILLed.
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <map>
 #include <optional>
+#include <regex>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
@@ -65,11 +68,21 @@ struct Options {
   std::string cpus_control, cpus_recorder, cpus_standby, cpus_supervisor, cpus_bridge;
   std::string bridge_listen, bridge_port, bridge_queue_kb, bridge_max_clients;
   bool bridge_operator_input = false;
-  int fault_leg = 0;           // 1..6; 0 none
-  bool fault_supervisor = false;  // --fault supervisor:crash:T
-  std::string fault_kind, fault_at;
+  // --fault, repeatable: at most one per process (leg 1..6 primary, or the supervisor).
+  struct InjectedFault {
+    int leg = 0;  // 1..6; 0: the supervisor (crash)
+    std::string kind, at;
+  };
+  std::vector<InjectedFault> faults;
+  const InjectedFault* FaultOfLeg(int leg) const {
+    for (const auto& f : faults)
+      if (f.leg == leg) return &f;
+    return nullptr;
+  }
+  bool fault_supervisor() const { return FaultOfLeg(0) != nullptr; }
   std::string plant_faults;     // --plant-fault, passed to the plant's --fault
   double timeout_s = 0;
+  bool split_recording = false;  // --record-split-mb / --record-split-s
   std::vector<std::string> rig_overlays;  // absolute paths, for the legs and the supervisor
   std::vector<std::string> plant_extra_args;  // --plant-arg, passed on as given
   std::string experiment = "none";        // "identify": docs/identification.md
@@ -123,12 +136,41 @@ void WriteProcessTable(const std::string& out_dir, const std::vector<hexa::deplo
                      : std::string());
 }
 
+// The samples the recording lost, as the report counted them (report.json,
+// "recording_lost_samples"); 0 when there is no report.
+long long ReadReportLostSamples(const std::string& out_dir) {
+  std::ifstream in(out_dir + "/report.json");
+  const hexa::json::Value report = hexa::json::Value::parse(in, nullptr, false);
+  if (!report.is_object() || !report.contains("recording_lost_samples") ||
+      !report["recording_lost_samples"].is_number())
+    return 0;
+  return report["recording_lost_samples"].get<long long>();
+}
+
+// "N MB free of M MB on the file system of DIR", for messages about write errors.
+std::string FreeSpaceOf(const std::string& dir) {
+  struct statvfs st {};
+  if (statvfs(dir.c_str(), &st) != 0) return "free space of " + dir + " unknown";
+  const double unit = static_cast<double>(st.f_frsize);
+  char text[160];
+  std::snprintf(text, sizeof text, "%.1f MB free of %.1f MB on the file system of ",
+                static_cast<double>(st.f_bavail) * unit * 1e-6,
+                static_cast<double>(st.f_blocks) * unit * 1e-6);
+  return text + dir;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   hexa::cli::Parser cli("hexa_session",
                         "Runs a complete closed-loop session: plant, six leg controllers, "
-                        "supervisor and recorder as separate processes over loopback DDS.");
+                        "supervisor and recorder as separate processes over loopback DDS.\n"
+                        "Exit status (docs/exit_codes.md): 0 completed; 1 a process failed or the "
+                        "session was stopped (signal, --timeout); 2 bad arguments; 3 held after a "
+                        "fault and not reset within --hold-timeout; 4 the plant stopped; 5 the "
+                        "supervisor was lost; 6 stopped by the operator (hexa_operator stop) "
+                        "before the trajectory's end; 7 the trajectory completed but the recording "
+                        "lost samples.");
   cli.AddOption("trajectory", "name|file.csv",
                 "x y z roll pitch yaw (pure motions, Table 9), combined (eq 49, Table 10), "
                 "calibration (kinematic calibration poses, with --tracker; docs/calibration.md), "
@@ -158,7 +200,21 @@ int main(int argc, char** argv) {
                 "another session uses it); a domain with other participants on it is refused");
   cli.AddOption("periods", "N", "trajectory periods to track (0 = the trajectory's default)", "0");
   cli.AddOption("timeout", "s", "wall-clock limit of the session (0 = none)", "0");
+  cli.AddOption("hold-timeout", "s",
+                "after a fault the platform is held and the session waits this long (simulated "
+                "time: wall time in real time, the machine's pace in lockstep) for an operator "
+                "reset (hexa_operator --domain D reset), which resumes the trajectory from the "
+                "held pose; without one the session ends held (exit 3)", "30");
   cli.AddFlag("no-recorder", "do not record (no report)");
+  cli.AddOption("record-split-mb", "MB",
+                "split the recording into files of this size (10^6 bytes; 0 = one file): "
+                "session.mcap is the open part, the closed ones session-0001.mcap, ... (a "
+                "real-time session records about 4.6 GB an hour); the report covers the parts "
+                "still on disk", "0");
+  cli.AddOption("record-split-s", "s", "split the recording every s seconds (0 = never)", "0");
+  cli.AddOption("record-keep-files", "N",
+                "with a split: keep at most N recording files, deleting the oldest parts (0 = all)",
+                "0");
   cli.AddFlag("no-outer-loop", "disable the task-space outer loop");
   cli.AddFlag("no-feedforward",
               "no platform inverse-dynamics feed-forward on the leg setpoints (paper-faithful)");
@@ -221,10 +277,10 @@ int main(int argc, char** argv) {
                 "lockstep: liveliness lease of the leg controllers and the supervisor: how soon "
                 "a hot standby takes over; a lapse alone is no fault in lockstep, which waits "
                 "for a slow or stopped process (docs/faults.md)", "0.2");
-  cli.AddOption("fault", "leg:kind:time_s",
-                "inject a fault into one primary leg controller, e.g. 3:crash:2.0 "
-                "(kinds: crash hang slow garbage silence), or supervisor:crash:time_s "
-                "(docs/faults.md)");
+  cli.AddRepeatable("fault", "leg:kind:time_s",
+                    "inject a fault into a primary leg controller, e.g. 3:crash:2.0 (kinds: crash "
+                    "hang slow garbage silence), or supervisor:crash:time_s; repeatable, one fault "
+                    "per process (docs/faults.md)");
   cli.AddOption("plant-fault", "kind:leg:time_s[,...]",
                 "inject rig faults into the plant: pot-stuck, pot-drift, pressure-dead (leg "
                 "1..6), imu-dropout, supply-loss (leg 0); e.g. pot-stuck:3:1.5 (docs/faults.md)");
@@ -316,12 +372,26 @@ int main(int argc, char** argv) {
   const auto free_fall_load = cli.GetDouble("free-fall-load-kg", 0, 1000);
   const auto cpu_latency =
       cli.GetIntOrWord("cpu-latency-us", "none", -1, 0, hexa::sched::kMaxCpuLatencyUs);
+  // Checked here, not only by the bridge: a bridge that refuses its port dies alone and the
+  // session would go on without it.
+  const auto bridge_port = cli.GetInt("bridge-port", 0, 65535);
+  const auto hold_timeout = cli.GetDouble("hold-timeout", 0.001, 1e6);
+  const auto split_mb = cli.GetDouble("record-split-mb", 0, 1e7);
+  const auto split_s = cli.GetDouble("record-split-s", 0, 1e7);
+  const auto keep_files = cli.GetInt("record-keep-files", 0, 1000000);
   if (!seed || !periods || !timeout || !domain || !stale_ticks || !excite_duration ||
-      !free_fall_load || !rt_lease || !lockstep_lease || !cpu_latency) {
+      !free_fall_load || !rt_lease || !lockstep_lease || !cpu_latency || !bridge_port ||
+      !hold_timeout || !split_mb || !split_s || !keep_files) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
   o.seed = *seed;
+  o.split_recording = *split_mb > 0 || *split_s > 0;
+  if (*keep_files > 0 && !o.split_recording) {
+    std::fprintf(stderr, "error: --record-keep-files needs --record-split-mb or --record-split-s\n");
+    return 2;
+  }
+  o.bridge_port = std::to_string(*bridge_port);
   o.periods = *periods;
   o.timeout_s = *timeout;
   o.stale_ticks = *stale_ticks;
@@ -365,18 +435,18 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if (cli.Has("fault")) {
-    const std::string f = cli.Get("fault");
+  for (const std::string& f : cli.GetAll("fault")) {
     const auto a = f.find(':'), b = f.find(':', a == std::string::npos ? a : a + 1);
     static const std::vector<std::string> kKinds{"crash", "hang", "slow", "garbage", "silence"};
     const std::string leg = a == std::string::npos ? "" : f.substr(0, a);
-    o.fault_kind = b == std::string::npos ? "" : f.substr(a + 1, b - a - 1);
-    o.fault_at = b == std::string::npos ? "" : f.substr(b + 1);
+    Options::InjectedFault fault;
+    fault.kind = b == std::string::npos ? "" : f.substr(a + 1, b - a - 1);
+    fault.at = b == std::string::npos ? "" : f.substr(b + 1);
     char* end = nullptr;
-    const double at = o.fault_at.empty() ? -1 : std::strtod(o.fault_at.c_str(), &end);
-    const bool supervisor = leg == "supervisor" && o.fault_kind == "crash";
+    const double at = fault.at.empty() ? -1 : std::strtod(fault.at.c_str(), &end);
+    const bool supervisor = leg == "supervisor" && fault.kind == "crash";
     if ((!supervisor && (leg.size() != 1 || leg[0] < '1' || leg[0] > '6' ||
-                         std::find(kKinds.begin(), kKinds.end(), o.fault_kind) == kKinds.end())) ||
+                         std::find(kKinds.begin(), kKinds.end(), fault.kind) == kKinds.end())) ||
         end == nullptr || *end != '\0' || !(at >= 0) || !std::isfinite(at)) {
       std::fprintf(stderr, "error: --fault '%s': expected leg:kind:time_s with leg 1..6, kind "
                    "one of crash hang slow garbage silence, or supervisor:crash:time_s; "
@@ -384,8 +454,16 @@ int main(int argc, char** argv) {
                    f.c_str());
       return 2;
     }
-    if (supervisor) o.fault_supervisor = true;
-    else o.fault_leg = leg[0] - '0';
+    fault.leg = supervisor ? 0 : leg[0] - '0';
+    if (o.FaultOfLeg(fault.leg) != nullptr) {
+      const Options::InjectedFault& first = *o.FaultOfLeg(fault.leg);
+      std::fprintf(stderr, "error: --fault '%s': %s already has a fault (--fault %s:%s:%s); one "
+                   "fault per process\n", f.c_str(),
+                   supervisor ? "the supervisor" : ("leg " + leg).c_str(), leg.c_str(),
+                   first.kind.c_str(), first.at.c_str());
+      return 2;
+    }
+    o.faults.push_back(fault);
   }
   if (cli.Has("plant-fault")) {
     std::vector<hexa::PlantFault> faults;
@@ -407,6 +485,9 @@ int main(int argc, char** argv) {
   o.out_dir = fs::absolute(o.out_dir).string();
 
   ProcessGroup group;  // blocks SIGINT/SIGTERM/SIGCHLD before any thread exists
+  // A closed console (the terminal or the pipe reading this process's output went away) must
+  // not kill the session half-way: the console lines are lost, session.log keeps everything.
+  std::signal(SIGPIPE, SIG_IGN);
   auto log = hexa::logging::Init("session", o.out_dir + "/session.log");
   {
     // Another session (or a process left of one) on the domain would read and command this
@@ -533,6 +614,10 @@ int main(int argc, char** argv) {
               std::to_string(o.domain), "--rig", o.rig, "--profile", o.profile, "--seed",
               std::to_string(o.seed)};
     if (!o.cpus_recorder.empty()) r.argv.insert(r.argv.end(), {"--cpus", o.cpus_recorder});
+    if (o.split_recording)
+      r.argv.insert(r.argv.end(), {"--split-size-mb", cli.Get("record-split-mb"), "--split-duration-s",
+                                   cli.Get("record-split-s"), "--keep-files",
+                                   cli.Get("record-keep-files")});
     // Real time: SCHED_FIFO below the control processes (70-80). A SCHED_OTHER recorder
     // beside SCHED_FIFO peers is starved and loses samples.
     if (o.mode == "realtime" && o.rt_sched) r.argv.insert(r.argv.end(), {"--rt-priority", "50"});
@@ -583,10 +668,10 @@ int main(int argc, char** argv) {
     // With a recorder, a leg runs only once the recorder has matched its valve commands too:
     // otherwise a recorder that discovers a leg late misses its first ticks.
     if (o.recorder) leg_args.insert(leg_args.end(), {"--valve-readers", "2"});
-    if (leg == o.fault_leg) {
-      leg_args.insert(leg_args.end(), {"--fault", o.fault_kind, "--fault-at", o.fault_at});
+    if (const auto* fault = o.FaultOfLeg(leg)) {
+      leg_args.insert(leg_args.end(), {"--fault", fault->kind, "--fault-at", fault->at});
       log->warn("fault injection: leg {} primary controller, '{}' at t = {} s", leg,
-                o.fault_kind, o.fault_at);
+                fault->kind, fault->at);
     }
     specs.push_back(spec("leg" + std::to_string(leg), "/services/leg_ctrl/hexa_leg_ctrl", leg_args,
                          o.cpus_control));
@@ -603,8 +688,11 @@ int main(int argc, char** argv) {
       specs.push_back(sb);
     }
   }
+  const std::string hold_report = o.out_dir + "/hold.txt";
   std::vector<std::string> sup_args{"--trajectory", o.trajectory, "--exit-when-done",
-                                    "--periods", std::to_string(o.periods)};
+                                    "--periods", std::to_string(o.periods),
+                                    "--hold-timeout", cli.Get("hold-timeout"),
+                                    "--hold-report", hold_report};
   if (!cli.Flag("wait-for-operator")) sup_args.push_back("--autostart");
   // Identification: the supervisor only holds home (no trajectory); its outer loop would
   // fight the excited leg, which moves the platform. The free-fall bench has no platform, but
@@ -614,9 +702,9 @@ int main(int argc, char** argv) {
   // wander, docs/task_space.md), so it is off.
   if (experiment) sup_args = {"--no-outer-loop"};
   else if (!o.outer_loop || o.trajectory == "calibration") sup_args.push_back("--no-outer-loop");
-  if (o.fault_supervisor) {
-    sup_args.insert(sup_args.end(), {"--fault", "crash", "--fault-at", o.fault_at});
-    log->warn("fault injection: supervisor crash (SIGKILL) at t = {} s", o.fault_at);
+  if (o.fault_supervisor()) {
+    sup_args.insert(sup_args.end(), {"--fault", "crash", "--fault-at", o.FaultOfLeg(0)->at});
+    log->warn("fault injection: supervisor crash (SIGKILL) at t = {} s", o.FaultOfLeg(0)->at);
   }
   if (!o.feedforward) sup_args.push_back("--no-feedforward");
   sup_args.insert(sup_args.end(), overlay_args.begin(), overlay_args.end());
@@ -679,10 +767,29 @@ int main(int argc, char** argv) {
 
   bool completed = false;
   bool failed = false;
-  // Exit code when not completed (docs/faults.md): 1 a process failed or the session was
+  // Exit code when not completed (docs/exit_codes.md): 1 a process failed or the session was
   // stopped; 3 the supervisor held the platform after a fault; 4 the plant stopped (lockstep
-  // deadlock, non-finite state); 5 the supervisor was lost (the legs hold their valves).
+  // deadlock, non-finite state); 5 the supervisor was lost (the legs hold their valves); 6 the
+  // operator stopped the motion. 7 (below): completed, but the recording lost samples.
   int outcome = 1;
+  std::string ended_because;  // one line for the console and report.md when not completed
+  // The supervisor's one-line hold description (--hold-report): shown on the console when it
+  // appears, again when a reset removes it.
+  std::string hold_line;
+  auto watch_hold = [&] {
+    std::ifstream in(hold_report);
+    std::string line;
+    if (in && std::getline(in, line) && !line.empty()) {
+      if (line != hold_line)
+        log->error("platform HOLD: {}; waiting up to {} s for an operator reset "
+                   "(hexa_operator --domain {} reset), then the session ends held (exit 3)",
+                   line, cli.Get("hold-timeout"), o.domain);
+      hold_line = line;
+    } else if (!in && !hold_line.empty()) {
+      log->warn("the operator's reset left HOLD ({}): the session resumes", hold_line);
+      hold_line.clear();
+    }
+  };
   double supervisor_lost_at_s = -1;  // the supervisor died: watch the legs hold for 2 s
   std::vector<hexa::deploy::ChildExit> exits;  // every child's exit, with its CPU time
   bool recorder_clean = false;  // the recorder exited 0 after closing its file
@@ -690,14 +797,17 @@ int main(int argc, char** argv) {
     auto ev = group.WaitEvent(std::chrono::milliseconds(supervisor_lost_at_s >= 0 ? 100 : 1000));
     const double elapsed_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    watch_hold();
     if (supervisor_lost_at_s >= 0 && elapsed_s > supervisor_lost_at_s + 2.0) {
       log->error("the supervisor was lost {:.1f} s ago: stopping (exit 5)",
                  elapsed_s - supervisor_lost_at_s);
+      ended_because = "the supervisor was lost (its process died; the legs held their valves)";
       outcome = 5;
       failed = true;
     }
     if (ev.kind == ProcessGroup::Event::kInterrupted) {
       log->warn("interrupted by signal {}: stopping every process", ev.signal);
+      ended_because = "interrupted by signal " + std::to_string(ev.signal);
       failed = true;
     } else if (ev.kind == ProcessGroup::Event::kChildExited) {
       const auto& e = ev.exit;
@@ -709,18 +819,28 @@ int main(int argc, char** argv) {
         log->info("supervisor finished the trajectory after {:.1f} s wall", elapsed_s);
         completed = true;
       } else if (e.name == "supervisor" && e.signal == 0 && e.exit_code == 5) {
-        log->error("the supervisor held the platform after a fault and left (exit 3)");
+        watch_hold();
+        ended_because = "held after a fault, no operator reset within --hold-timeout " +
+                        cli.Get("hold-timeout") + " s" +
+                        (hold_line.empty() ? std::string() : ": " + hold_line);
+        log->error("the supervisor left HOLD unreset (exit 3): {}", ended_because);
         outcome = 3;
         failed = true;
-      } else if (e.name == "supervisor" && (o.fault_supervisor || e.signal != 0)) {
+      } else if (e.name == "supervisor" && e.signal == 0 && e.exit_code == 6) {
+        ended_because = "stopped by the operator before the trajectory's end";
+        log->warn("the motion was {} ({:.1f} s wall; exit 6)", ended_because, elapsed_s);
+        outcome = 6;
+        failed = true;
+      } else if (e.name == "supervisor" && (o.fault_supervisor() || e.signal != 0)) {
         // The legs see its setpoint writer's lease lapse and hold (docs/faults.md): watch
         // that for 2 s, then stop the session with exit 5.
         log->warn("{}{}: watching the legs hold for 2 s", e.Describe(),
-                  o.fault_supervisor ? " (injected fault)" : "");
+                  o.fault_supervisor() ? " (injected fault)" : "");
         supervisor_lost_at_s = elapsed_s;
       } else if (e.name == "plant" && e.signal == 0 && (e.exit_code == 3 || e.exit_code == 4)) {
         log->error("{}: the plant stopped (exit 4); its last log lines:\n{}", e.Describe(),
                    TailOf(o.out_dir + "/plant.console.log", 15));
+        ended_because = "the plant stopped (" + e.Describe() + "; plant.log says why)";
         outcome = 4;
         failed = true;
       } else if (o.standby && e.name.rfind("leg", 0) == 0 &&
@@ -731,17 +851,20 @@ int main(int argc, char** argv) {
         // A viewer, not part of the control loop: the session goes on without it.
         log->error("{}; the session goes on without the Foxglove bridge; its last log "
                    "lines:\n{}", e.Describe(), TailOf(o.out_dir + "/bridge.console.log", 15));
-      } else if (o.fault_leg != 0 && e.name == "leg" + std::to_string(o.fault_leg)) {
+      } else if (e.name.size() == 4 && e.name.rfind("leg", 0) == 0 &&
+                 o.FaultOfLeg(e.name[3] - '0') != nullptr) {
         // The death was injected on purpose: let the plant and the supervisor handle it.
         log->warn("{} (injected fault): watching the plant and the supervisor react",
                   e.Describe());
       } else {
         log->error("{} before the session completed; its last log lines:\n{}", e.Describe(),
                    TailOf(o.out_dir + "/" + e.name + ".console.log", 15));
+        ended_because = e.Describe();
         failed = true;
       }
     } else if (o.timeout_s > 0 && elapsed_s > o.timeout_s) {
       log->error("session exceeded --timeout {} s", o.timeout_s);
+      ended_because = "exceeded --timeout " + cli.Get("timeout") + " s";
       failed = true;
     }
   }
@@ -815,8 +938,15 @@ int main(int argc, char** argv) {
                 TailOf(rc.log_path, 15));
       recording = recovered;
     } else {
-      log->error("the recorder did not close {} and recovering it failed{}:\n{}", mcap,
-                 e ? ": " + e->Describe() : std::string(), TailOf(rc.log_path, 15));
+      // Say why even when the tool could not write its own console log (a full disk), and
+      // leave no partial copy that could pass for a recovered recording.
+      std::string why = TailOf(rc.log_path, 15);
+      if (why.empty()) why = "    (" + rc.log_path + " is empty)\n";
+      why += "    " + FreeSpaceOf(o.out_dir);
+      std::error_code ignored;
+      if (fs::remove(recovered, ignored)) why += "; the partial " + recovered + " was removed";
+      log->error("the recorder did not close {} and recovering it failed: {}:\n{}", mcap,
+                 e ? e->Describe() : std::string("recover did not run"), why);
       clean = false;
     }
   }
@@ -865,7 +995,22 @@ int main(int argc, char** argv) {
   if (!experiment && o.recorder && std::filesystem::exists(recording)) {
     ChildSpec r;
     r.name = "report";
-    r.argv = {executable("/services/recorder/hexa_recorder"), "report", recording, "--out", o.out_dir,
+    // A split recording: every part still on disk, oldest first, then the last one.
+    std::vector<std::string> parts;
+    if (o.split_recording) {
+      static const std::regex kPart(R"(session-[0-9]{4,}\.mcap)");
+      std::error_code ignored;
+      for (const auto& e : fs::directory_iterator(o.out_dir, ignored))
+        if (std::regex_match(e.path().filename().string(), kPart)) parts.push_back(e.path().string());
+      // session-0009 before session-0010, and session-9999 before session-10000.
+      std::sort(parts.begin(), parts.end(), [](const std::string& a, const std::string& b) {
+        return a.size() != b.size() ? a.size() < b.size() : a < b;
+      });
+    }
+    parts.push_back(recording);
+    r.argv = {executable("/services/recorder/hexa_recorder"), "report"};
+    r.argv.insert(r.argv.end(), parts.begin(), parts.end());
+    r.argv.insert(r.argv.end(), {"--out", o.out_dir,
               "--meta", "trajectory=" + o.trajectory, "--meta", "controller=" + o.controller,
               "--meta", "profile=" + o.profile, "--meta", "mode=" + o.mode,
               "--meta", "seed=" + std::to_string(o.seed),
@@ -873,18 +1018,30 @@ int main(int argc, char** argv) {
               "--meta", std::string("feedforward=") + (o.feedforward ? "on" : "off"),
               "--meta", std::string("dds_security=") + (o.secure ? "on" : "off"),
               "--meta", std::string("command_auth=") + (o.command_auth ? "on" : "off"),
-              "--meta", std::string("completed=") + (completed ? "yes" : "NO")};
+              "--meta", std::string("completed=") +
+                            (completed ? "yes" : "NO" + (ended_because.empty() ? std::string()
+                                                                               : ": " + ended_because))});
+    // hexa_recorder splits --meta values at commas.
+    std::replace(r.argv.back().begin(), r.argv.back().end(), ',', ';');
     if (!o.rig_overlays.empty()) {
       std::string list;
       for (const auto& overlay : o.rig_overlays) list += (list.empty() ? "" : " ") + overlay;
       r.argv.insert(r.argv.end(), {"--meta", "rig_overlays=" + list});
     }
-    if (o.fault_leg != 0)
-      r.argv.insert(r.argv.end(), {"--meta", "fault=leg " + std::to_string(o.fault_leg) + " " +
-                                                 o.fault_kind + " at " + o.fault_at + " s"});
+    if (!o.faults.empty()) {
+      std::string list;
+      for (const auto& f : o.faults)
+        list += (list.empty() ? "" : "; ") +
+                (f.leg == 0 ? std::string("supervisor") : "leg " + std::to_string(f.leg)) + " " +
+                f.kind + " at " + f.at + " s";
+      r.argv.insert(r.argv.end(), {"--meta", "fault=" + list});
+    }
     if (recording != mcap) r.argv.insert(r.argv.end(), {"--meta", "recording=recovered"});
-    if (o.fault_supervisor)
-      r.argv.insert(r.argv.end(), {"--meta", "fault=supervisor crash at " + o.fault_at + " s"});
+    if (o.split_recording)
+      r.argv.insert(r.argv.end(), {"--meta", "recording_parts=" + std::to_string(parts.size()) +
+                                                 " files still on disk (--record-split-*; older "
+                                                 "parts deleted by --record-keep-files are not in "
+                                                 "the figures)"});
     if (!o.plant_faults.empty())
       r.argv.insert(r.argv.end(), {"--meta", "plant_fault=" + o.plant_faults});
     r.env = env;
@@ -901,11 +1058,19 @@ int main(int argc, char** argv) {
       if (md) std::printf("\n%s\n", std::string(std::istreambuf_iterator<char>(md), {}).c_str());
     }
   }
+  // A recording that lost samples is not a completed session: its figures miss them.
+  const long long lost = o.recorder && !experiment ? ReadReportLostSamples(o.out_dir) : 0;
+  if (completed && clean && lost > 0) {
+    log->error("session did NOT complete (exit 7): the trajectory ran to its end, but the "
+               "recording lost {} samples (report.md, \"Recording\"); logs in {}", lost, o.out_dir);
+    return 7;
+  }
   if (completed && clean) {
     log->info("session completed; outputs in {}", o.out_dir);
     return 0;
   }
   if (completed) outcome = 1;  // completed but a process did not stop cleanly
-  log->error("session did NOT complete (exit {}); logs in {}", outcome, o.out_dir);
+  log->error("session did NOT complete (exit {}){}{}; logs in {}", outcome,
+             ended_because.empty() ? "" : ": ", ended_because, o.out_dir);
   return outcome;
 }

@@ -98,6 +98,10 @@ pid_t ProcessGroup::Start(const ChildSpec& spec, std::string& error) {
     sigset_t empty;
     sigemptyset(&empty);
     sigprocmask(SIG_SETMASK, &empty, nullptr);
+    // An ignored SIGPIPE (the launcher ignores it) would be inherited across execve.
+    struct sigaction default_action {};
+    default_action.sa_handler = SIG_DFL;
+    sigaction(SIGPIPE, &default_action, nullptr);
     if (log_fd >= 0) {
       dup2(log_fd, STDOUT_FILENO);
       dup2(log_fd, STDERR_FILENO);

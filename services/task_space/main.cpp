@@ -9,14 +9,27 @@
 int main(int argc, char** argv) {
   hexa::cli::Parser cli("hexa_task_space",
                         "Task-space supervisor: trajectories, pose estimate (IMU + GQFK, eq 47), "
-                        "Jacobian outer loop (eq 48), safety state machine; 5 ms.");
+                        "Jacobian outer loop (eq 48), safety state machine; 5 ms.\n"
+                        "Exit status: 0 the trajectory finished (--exit-when-done) or shutdown, "
+                        "1 error, 2 bad arguments, 3 peers not matched at start-up, 5 held and not "
+                        "reset within --hold-timeout, 6 the operator's stop ended the motion "
+                        "before the trajectory's end (docs/exit_codes.md).");
   hexa::node::AddCommonOptions(cli);
   cli.AddOption("trajectory", "name|file.csv",
                 "trajectory for --autostart: x y z roll pitch yaw combined, or a CSV file",
                 "combined");
   cli.AddOption("periods", "N", "periods to track (0 = the trajectory's default)", "0");
   cli.AddFlag("autostart", "start the trajectory as soon as the pose is known");
-  cli.AddFlag("exit-when-done", "exit 0 when the trajectory has finished (5 after 1 s in HOLD)");
+  cli.AddFlag("exit-when-done",
+              "exit 0 when the trajectory has finished; 6 when an operator's stop ended it; in "
+              "HOLD wait --hold-timeout for an operator reset, then exit 5");
+  cli.AddOption("hold-timeout", "s",
+                "--exit-when-done: simulated seconds to wait in HOLD for an operator reset "
+                "(real time: wall seconds; lockstep: at the machine's pace); a reset resumes "
+                "(with --autostart the trajectory starts again from the held pose)", "30");
+  cli.AddOption("hold-report", "file",
+                "write one line naming the fault and its cause here when the platform is held "
+                "(removed on reset)");
   cli.AddFlag("no-outer-loop", "disable the task-space outer loop");
   cli.AddFlag("no-feedforward",
               "no platform inverse-dynamics feed-forward on the leg setpoints (paper-faithful)");
@@ -35,8 +48,9 @@ int main(int argc, char** argv) {
   const auto startup = cli.GetDouble("startup-timeout", 0.1, 3600);
   const auto pose_readers = cli.GetInt("pose-readers", 0, 16);
   const auto fault_at = cli.GetDouble("fault-at", 0, 1e7);
+  const auto hold_timeout = cli.GetDouble("hold-timeout", 0.001, 1e6);
   if (!hexa::node::ReadCommonOptions(cli, o.common) || !periods || !startup || !pose_readers ||
-      !fault_at) {
+      !fault_at || !hold_timeout) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
@@ -48,6 +62,8 @@ int main(int argc, char** argv) {
   o.least_squares = cli.Flag("least-squares");
   o.feedforward = !cli.Flag("no-feedforward");
   o.startup_timeout_s = *startup;
+  o.hold_timeout_s = *hold_timeout;
+  if (cli.Has("hold-report")) o.hold_report_path = cli.Get("hold-report");
   o.pose_readers = static_cast<int>(*pose_readers);
   if (cli.Get("fault") == "crash") o.crash_at_s = *fault_at;
 

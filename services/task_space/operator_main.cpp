@@ -6,6 +6,7 @@
 #include <exception>
 #include <string>
 
+#include "command_answer.hpp"
 #include "hexa/comm/comm.hpp"
 #include "hexa/services/cli.hpp"
 #include "hexa/services/logging.hpp"
@@ -16,9 +17,14 @@ int main(int argc, char** argv) {
   hexa::cli::Parser cli("hexa_operator",
                         "Sends an operator command to the supervisor: hexa_operator [options] "
                         "start|stop|reset|home|shutdown\n"
-                        "Exit status: 0 sent and acknowledged by every matched reader, 1 no "
-                        "supervisor (with --to any-reader: no reader) matched within --wait (or a "
-                        "DDS error), 2 bad arguments, 3 sent but not acknowledged.");
+                        "Exit status: 0 the supervisor accepted the command (with --to any-reader: "
+                        "acknowledged by every matched reader), 1 no supervisor (with --to "
+                        "any-reader: no reader) matched within --wait (or a DDS error), 2 bad "
+                        "arguments, 3 not acknowledged: sent, but a matched reader did not "
+                        "acknowledge it or the supervisor did not answer within --answer-wait, "
+                        "4 the supervisor refused the command (not allowed in its state, e.g. "
+                        "anything but reset in HOLD) or rejected it (an infeasible trajectory); "
+                        "the reason is logged (docs/exit_codes.md).");
   cli.AddOption("domain", "id", "DDS domain id", "0");
   cli.AddOption("dds-config", "file", "Cyclone DDS configuration (default: loopback only)");
   cli.AddOption("trajectory", "name|file.csv", "for start: x y z roll pitch yaw combined or CSV",
@@ -36,13 +42,17 @@ int main(int argc, char** argv) {
   cli.AddOption("session-key", "file",
                 "the session's key (default: $HEXA_SESSION_KEY): without it the supervisor "
                 "refuses the command (docs/faults.md, \"Foreign commands\")");
+  cli.AddOption("answer-wait", "s",
+                "how long to wait for the supervisor's answer (accepted / refused) after the "
+                "command was acknowledged; it answers at its next 5 ms tick", "2");
   cli.AllowPositional("start|stop|reset|home|shutdown", 1);
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
   const auto domain = cli.GetInt("domain", 0, 230);
   const auto wait_s = cli.GetDouble("wait", 0, 600);
   const auto linger_s = cli.GetDouble("linger", 0, 60);
-  if (!domain || !wait_s || !linger_s || cli.positional().size() != 1) {
+  const auto answer_wait_s = cli.GetDouble("answer-wait", 0, 600);
+  if (!domain || !wait_s || !linger_s || !answer_wait_s || cli.positional().size() != 1) {
     std::fprintf(stderr, "error: %s\n(see --help)\n",
                  cli.error().empty() ? "exactly one command is required" : cli.error().c_str());
     return 2;
@@ -79,6 +89,14 @@ int main(int argc, char** argv) {
     hexa::comm::Participant participant(static_cast<dds_domainid_t>(*domain));
     hexa::comm::Topic<hexa_msg_OperatorCommand> topic(participant);
     hexa::comm::Writer<hexa_msg_OperatorCommand> writer(participant, topic);
+    // The supervisor answers in its NodeStatus (command_answer.hpp). Created before the write
+    // so that the answer cannot come before this reader exists; deep enough that status
+    // samples of other nodes cannot push the answer out before it is taken.
+    hexa::comm::Topic<hexa_msg_NodeStatus> status_topic(participant);
+    hexa::comm::QosParams status_qos;
+    status_qos.control_reader_depth = 64;
+    hexa::comm::Reader<hexa_msg_NodeStatus> status_reader(
+        participant, status_topic, hexa::comm::EndpointRole::kControlReader, status_qos, 64);
     const bool is_named = traj == "x" || traj == "y" || traj == "z" || traj == "roll" ||
                           traj == "pitch" || traj == "yaw" || traj == "combined";
     hexa::node::CopyBounded(cmd.trajectory, is_named ? traj.c_str() : "csv");
@@ -117,8 +135,41 @@ int main(int argc, char** argv) {
                  what, *domain, matched, *linger_s);
       return 3;
     }
-    log->info("sent {} to domain {} ({} reader(s) matched, acknowledged)", what, *domain, matched);
-    return 0;
+    if (any_reader) {
+      log->info("sent {} to domain {} ({} reader(s) matched, acknowledged)", what, *domain, matched);
+      return 0;
+    }
+    // The supervisor's answer to this command (its sequence number).
+    using hexa::task_space::CommandAnswer;
+    hexa::comm::WaitSet answer_ws(participant);
+    answer_ws.Attach(status_reader.data_condition(), 1);
+    const int64_t answer_end =
+        hexa::node::MonotonicNow_ns() + static_cast<int64_t>(*answer_wait_s * 1e9);
+    for (;;) {
+      while (status_reader.Take() > 0) {
+        for (std::size_t k = 0; k < status_reader.count(); ++k) {
+          if (!status_reader.info(k).valid_data) continue;
+          const auto& st = status_reader.sample(k);
+          if (std::strcmp(st.node_name, "supervisor") != 0) continue;
+          const std::string detail = st.detail;
+          const CommandAnswer answer = hexa::task_space::ParseCommandAnswer(detail, cmd.sequence);
+          if (answer == CommandAnswer::kAccepted) {
+            log->info("sent {} to domain {}: the supervisor {}", what, *domain, detail);
+            return 0;
+          }
+          if (answer != CommandAnswer::kNone) {
+            log->error("sent {} to domain {}: the supervisor {} (exit 4)", what, *domain, detail);
+            return 4;
+          }
+        }
+      }
+      if (hexa::node::MonotonicNow_ns() > answer_end) break;
+      answer_ws.Wait(DDS_MSECS(20));
+    }
+    log->error("sent {} to domain {} and it was acknowledged, but the supervisor did not answer "
+               "within {} s (--answer-wait; it answers once it runs, at its next tick): it may "
+               "not have acted on it (exit 3)", what, *domain, *answer_wait_s);
+    return 3;
   } catch (const std::exception& e) {
     log->error("{}", e.what());
     return 1;

@@ -40,6 +40,32 @@ FaultReason FromWire(hexa_msg_FaultReason r) {
   return static_cast<FaultReason>(static_cast<int>(r));
 }
 
+const char* CommandName(hexa_msg_OperatorCommandKind kind) {
+  switch (kind) {
+    case hexa_msg_OPERATOR_START: return "start";
+    case hexa_msg_OPERATOR_STOP: return "stop";
+    case hexa_msg_OPERATOR_RESET: return "reset";
+    case hexa_msg_OPERATOR_HOME: return "home";
+    case hexa_msg_OPERATOR_SHUTDOWN: return "shutdown";
+  }
+  return "unknown";
+}
+
+// Why the core refused `cmd` in state `before` (core Supervisor::HandleCommand's rules).
+void WhyRefused(OperatorCommandKind cmd, SupervisorState before, bool initialized,
+                char (&why)[160]) {
+  if (before == SupervisorState::kHold)
+    std::snprintf(why, sizeof why, "the platform is held (%s): only reset leaves HOLD",
+                  ToString(before));
+  else if (cmd == OperatorCommandKind::kReset)
+    std::snprintf(why, sizeof why, "reset only leaves HOLD (state %s)", ToString(before));
+  else if (!initialized)
+    std::snprintf(why, sizeof why, "no pose estimate yet");
+  else
+    std::snprintf(why, sizeof why, "%s only from SUPERVISOR_IDLE (state %s)", ToString(cmd),
+                  ToString(before));
+}
+
 }  // namespace
 
 SupervisorNode::SupervisorNode(const SupervisorNodeOptions& options,
@@ -203,6 +229,17 @@ bool SupervisorNode::PrepareStart(const std::string& trajectory, int periods) {
   return pending_start_->feasibility.feasible;
 }
 
+void SupervisorNode::AnswerCommand(std::uint32_t sequence, const char* kind,
+                                   CommandAnswer answer, const char* why) {
+  char (&detail)[sizeof last_answer_] = last_answer_;
+  FormatCommandAnswer(detail, sequence, kind, answer, why);
+  last_answer_cycle_ = cycles_;
+  (answer == CommandAnswer::kAccepted ? log_->info("{}", detail)
+                                                        : log_->warn("{}", detail));
+  PublishStatus(output_.state == SupervisorState::kHold ? hexa_msg_NODE_HOLD : hexa_msg_NODE_RUNNING,
+                detail);
+}
+
 void SupervisorNode::TakeOperatorCommands() {
   while (operator_reader_.Take() > 0) {
     for (std::size_t k = 0; k < operator_reader_.count(); ++k) {
@@ -220,11 +257,17 @@ void SupervisorNode::TakeOperatorCommands() {
       }
       log_->info("operator command #{}: kind {} trajectory '{}'", c.sequence,
                  static_cast<int>(c.kind), c.trajectory);
+      // Commands take effect at the next tick; one that a newer one replaces before then is
+      // answered below, so that no operator waits for it in vain.
+      const OperatorCommandKind replaced =
+          pending_from_operator_ ? pending_command_ : OperatorCommandKind::kNone;
+      const std::uint32_t replaced_sequence = pending_sequence_;
       switch (c.kind) {
         case hexa_msg_OPERATOR_START: {
           if (!supervisor_.initialized()) {
-            log_->warn("start refused: no pose estimate yet");
-            break;
+            AnswerCommand(c.sequence, "start", CommandAnswer::kRefused,
+                          "no pose estimate yet");
+            continue;
           }
           const std::string traj = std::strcmp(c.trajectory, "csv") == 0 ? c.csv_path : c.trajectory;
           PrepareStart(traj, options_.periods);
@@ -237,8 +280,24 @@ void SupervisorNode::TakeOperatorCommands() {
           system_fault_ = FaultReason::kNone;
           break;
         case hexa_msg_OPERATOR_HOME: pending_command_ = OperatorCommandKind::kHome; break;
-        case hexa_msg_OPERATOR_SHUTDOWN: shutdown_.RequestShutdown(); break;
+        case hexa_msg_OPERATOR_SHUTDOWN:
+          AnswerCommand(c.sequence, "shutdown", CommandAnswer::kAccepted, "");
+          shutdown_.RequestShutdown();
+          continue;
+        default:
+          AnswerCommand(c.sequence, CommandName(c.kind), CommandAnswer::kRefused,
+                        "unknown command");
+          continue;
       }
+      if (replaced != OperatorCommandKind::kNone) {
+        char why[64];
+        std::snprintf(why, sizeof why, "replaced by command #%u before it was applied",
+                      static_cast<unsigned>(c.sequence));
+        AnswerCommand(replaced_sequence, ToString(replaced),
+                      CommandAnswer::kRefused, why);
+      }
+      pending_from_operator_ = true;
+      pending_sequence_ = c.sequence;
     }
   }
 }
@@ -259,8 +318,71 @@ void SupervisorNode::TakeFaults() {
       } else if (f.reason != hexa_msg_FAULT_NONE) {
         system_fault_ = FromWire(f.reason);  // the host or the plant itself
       }
+      if (f.reason != hexa_msg_FAULT_NONE) {
+        ReportedFault& r = reported_[f.leg_id >= 1 && f.leg_id <= kNumLegs ? f.leg_id - 1 : kNumLegs];
+        r.reason = FromWire(f.reason);
+        std::snprintf(r.source.data(), r.source.size(), "%s", f.source_node);
+        std::snprintf(r.detail.data(), r.detail.size(), "%s", f.detail);
+      }
       if (f.reason == hexa_msg_FAULT_IMU_LOST) imu_lost_ = true;
     }
+  }
+}
+
+void SupervisorNode::FinishCommand(SupervisorState before, std::uint64_t tick, double time_s) {
+  const OperatorCommandKind cmd = pending_command_;
+  pending_command_ = OperatorCommandKind::kNone;
+  const CommandResult result = output_.command_result;
+  log_->info("command {}: {}", ToString(cmd), ToString(result));
+  const bool accepted = result == CommandResult::kAccepted;
+  if (accepted && cmd == OperatorCommandKind::kStop &&
+      (before == SupervisorState::kBlending || before == SupervisorState::kTracking)) {
+    stopped_by_operator_ = true;
+    log_->warn("stopped by the operator at t = {:.3f} s (trajectory time {:.3f} s)", time_s,
+               output_.trajectory_time_s);
+  }
+  if (accepted && cmd == OperatorCommandKind::kReset && before == SupervisorState::kHold) {
+    hold_exit_tick_ = 0;
+    if (!options_.hold_report_path.empty()) std::remove(options_.hold_report_path.c_str());
+    // Resume: with --autostart the trajectory starts again from where the platform was held;
+    // without, the operator's next start does. Either way the session has not finished.
+    const bool restart = options_.exit_when_done && options_.autostart;
+    if (restart) autostart_pending_ = true;
+    left_idle_ = false;
+    log_->warn("reset by the operator at t = {:.3f} s (tick {}): HOLD left{}", time_s, tick,
+               restart ? "; the trajectory starts again from the held pose" : "");
+  }
+  if (!pending_from_operator_) return;
+  pending_from_operator_ = false;
+  char why[160] = "";
+  if (result == CommandResult::kRefused) WhyRefused(cmd, before, supervisor_.initialized(), why);
+  if (result == CommandResult::kRejected)
+    std::snprintf(why, sizeof why, "%s", output_.fault_detail.data());
+  const CommandAnswer answer = accepted                               ? CommandAnswer::kAccepted
+                               : result == CommandResult::kRejected ? CommandAnswer::kRejected
+                                                                      : CommandAnswer::kRefused;
+  AnswerCommand(pending_sequence_, ToString(cmd), answer, why);
+}
+
+void SupervisorNode::ReportHold(double time_s) {
+  // The cause as reported (a leg's or the plant's FaultEvent), else the supervisor's own.
+  const int leg = output_.fault_leg;
+  const ReportedFault& r = reported_[leg >= 1 && leg <= static_cast<int>(kNumLegs)
+                                         ? static_cast<std::size_t>(leg - 1)
+                                         : kNumLegs];
+  const bool reported = r.reason == output_.fault && r.reason != FaultReason::kNone;
+  char line[512];
+  std::snprintf(line, sizeof line, "held at t = %.3f s: %s%s%s, %s %s: %s", time_s,
+                ToString(output_.fault), leg > 0 ? ", leg " : "",
+                leg > 0 ? std::to_string(leg).c_str() : "",
+                reported ? "reported by" : "detected by", reported ? r.source.data() : "supervisor",
+                reported ? r.detail.data() : output_.fault_detail.data());
+  log_->error("{}", line);
+  if (options_.hold_report_path.empty()) return;
+  const std::string tmp = options_.hold_report_path + ".tmp";
+  if (FILE* f = std::fopen(tmp.c_str(), "w")) {
+    const bool ok = std::fprintf(f, "%s\n", line) > 0;
+    if (std::fclose(f) == 0 && ok) std::rename(tmp.c_str(), options_.hold_report_path.c_str());
   }
 }
 
@@ -295,11 +417,9 @@ void SupervisorNode::RunTick(std::uint64_t tick, double time_s) {
   // legs' 1 kHz commands are not sent to one more process (docs/performance.md).
   input_.command = pending_command_;
   input_.start = pending_start_ ? &*pending_start_ : nullptr;
+  const SupervisorState state_before = output_.state;
   supervisor_.Update(input_, output_);
-  if (pending_command_ != OperatorCommandKind::kNone) {
-    log_->info("command {}: {}", ToString(pending_command_), ToString(output_.command_result));
-    pending_command_ = OperatorCommandKind::kNone;
-  }
+  if (pending_command_ != OperatorCommandKind::kNone) FinishCommand(state_before, tick, time_s);
   cycle_times_.Add(static_cast<double>(node::MonotonicNow_ns() - t0) * 1e-9);
   ++cycles_;
   ran_once_ = true;
@@ -313,13 +433,20 @@ void SupervisorNode::RunTick(std::uint64_t tick, double time_s) {
                     static_cast<hexa_msg_FaultReason>(static_cast<int>(output_.fault)),
                     output_.fault_detail.data());
     PublishStatus(hexa_msg_NODE_HOLD, output_.fault_detail.data());
-    // With --exit-when-done the session ends in HOLD, but only after holding for a while,
-    // so that the recording shows what the platform did after the fault.
-    if (options_.exit_when_done && hold_exit_tick_ == 0) hold_exit_tick_ = tick + 1000;
+    ReportHold(time_s);
+    // With --exit-when-done the session waits in HOLD for an operator reset, then ends held.
+    if (options_.exit_when_done && hold_exit_tick_ == 0) {
+      hold_exit_tick_ = tick + std::max<std::uint64_t>(
+                                   1, static_cast<std::uint64_t>(std::llround(options_.hold_timeout_s * 1000.0)));
+      log_->warn("waiting up to {} s (simulated) in HOLD for an operator reset (hexa_operator "
+                 "--domain {} reset); without one the service leaves held (exit {})",
+                 options_.hold_timeout_s, options_.common.domain_id, kExitHeld);
+    }
   }
   if (hold_exit_tick_ != 0 && tick >= hold_exit_tick_ && exit_code_ < 0) {
-    log_->error("leaving after 1 s in HOLD (exit 5): {}", output_.fault_detail.data());
-    exit_code_ = 5;
+    log_->error("no operator reset within {} s in HOLD: leaving held (exit {}): {}",
+                options_.hold_timeout_s, kExitHeld, output_.fault_detail.data());
+    exit_code_ = kExitHeld;
   }
   if (!was_initialized_ && supervisor_.initialized()) {
     was_initialized_ = true;
@@ -340,16 +467,25 @@ void SupervisorNode::RunTick(std::uint64_t tick, double time_s) {
     // A rejected trajectory is passed on all the same: the core goes to HOLD with the
     // rejection message at the next tick (and the service exits with --exit-when-done).
     PrepareStart(options_.trajectory, options_.periods);
+    pending_from_operator_ = false;
   }
   if (output_.state != SupervisorState::kIdle) left_idle_ = true;
   if (options_.exit_when_done && left_idle_ && output_.state == SupervisorState::kIdle &&
       exit_code_ < 0) {
-    log_->info("trajectory finished at t = {:.3f} s", time_s);
-    exit_code_ = 0;
+    if (stopped_by_operator_) {
+      log_->warn("motion ended at t = {:.3f} s by the operator's stop, before the trajectory's "
+                 "end (exit {})", time_s, kExitStoppedByOperator);
+      exit_code_ = kExitStoppedByOperator;
+    } else {
+      log_->info("trajectory finished at t = {:.3f} s", time_s);
+      exit_code_ = 0;
+    }
   }
+  // The last command's answer is repeated for 1 s (200 cycles), then the state is the detail.
+  const bool repeat_answer = last_answer_[0] != '\0' && cycles_ - last_answer_cycle_ <= 200;
   if (cycles_ % 20 == 0) PublishStatus(output_.state == SupervisorState::kHold ? hexa_msg_NODE_HOLD
                                                                              : hexa_msg_NODE_RUNNING,
-                                       ToString(output_.state));
+                                       repeat_answer ? last_answer_ : ToString(output_.state));
 }
 
 void SupervisorNode::Publish(std::uint64_t tick, double time_s) {

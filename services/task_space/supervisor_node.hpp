@@ -16,12 +16,19 @@
 #include <optional>
 #include <string>
 
+#include "command_answer.hpp"
 #include "hexa/comm/comm.hpp"
 #include "hexa/core/supervisor.hpp"
 #include "hexa/services/command_refusal.hpp"
 #include "hexa/services/node.hpp"
 
 namespace hexa::task_space {
+
+// Exit codes of hexa_task_space besides 0 (trajectory finished, or shutdown), 1 (error) and
+// 2 (usage): docs/exit_codes.md.
+inline constexpr int kExitPeersNotMatched = 3;
+inline constexpr int kExitHeld = 5;                // --exit-when-done: HOLD, no reset in time
+inline constexpr int kExitStoppedByOperator = 6;   // --exit-when-done: `stop` ended the motion
 
 struct SupervisorNodeOptions {
   node::CommonOptions common;
@@ -33,6 +40,14 @@ struct SupervisorNodeOptions {
   bool least_squares = false;
   bool feedforward = true;  // false: no inverse-dynamics feed-forward (whatever the rig file says)
   double startup_timeout_s = 30.0;
+  // --exit-when-done: simulated time to wait in HOLD for an operator reset before leaving with
+  // kExitHeld. A reset within it resumes: the platform leaves HOLD and, with autostart, the
+  // trajectory starts again from where it was held.
+  double hold_timeout_s = 30.0;
+  // When not empty: one line naming the fault and its cause is written here (atomically) when
+  // the platform is held, and the file is removed when a reset leaves HOLD (the launcher shows
+  // it on its console).
+  std::string hold_report_path;
   int pose_readers = 0;  // matched PoseReport readers required before RUNNING (the recorder)
   // Fault injection (docs/faults.md): kill this process with SIGKILL at this simulated time
   // (< 0: never).
@@ -60,6 +75,14 @@ class SupervisorNode {
   // Lockstep re-ask of tick last_run_tick_: its setpoints again (a leg may have lost them).
   void RepublishSetpoints();
   bool PrepareStart(const std::string& trajectory, int periods);
+  // Publishes the answer to an operator command in the NodeStatus detail (command_answer.hpp).
+  void AnswerCommand(std::uint32_t sequence, const char* kind, CommandAnswer answer, const char* why);
+  // After the core ran a pending operator command: answer it, and the session's part of it
+  // (a stop that ends the motion, a reset that resumes).
+  void FinishCommand(SupervisorState before, std::uint64_t tick, double time_s);
+  // The one-line description of the hold (fault, leg, who reported it and why) to the log and,
+  // with --hold-report, to that file.
+  void ReportHold(double time_s);
   void PublishStatus(hexa_msg_NodeState state, const char* detail);
 
   SupervisorNodeOptions options_;
@@ -117,6 +140,22 @@ class SupervisorNode {
   SupervisorOutput output_;
   std::optional<StartRequest> pending_start_;
   OperatorCommandKind pending_command_ = OperatorCommandKind::kNone;
+  bool pending_from_operator_ = false;  // false: autostart (no one waits for an answer)
+  std::uint32_t pending_sequence_ = 0;
+  bool stopped_by_operator_ = false;    // a `stop` ended the motion before its end
+  // The last answer, repeated in the periodic NodeStatus for a while: the status writer keeps
+  // only its newest sample, so a periodic status written right after the answer could
+  // otherwise replace it before a slow operator's reader has it.
+  char last_answer_[160] = {};
+  std::uint64_t last_answer_cycle_ = 0;
+  // The last FaultEvent of each leg (index leg - 1) and of no leg (index kNumLegs): who
+  // reported it and why, for the hold's one-line description.
+  struct ReportedFault {
+    FaultReason reason = FaultReason::kNone;
+    std::array<char, sizeof(hexa_msg_FaultEvent{}.source_node)> source{};
+    std::array<char, sizeof(hexa_msg_FaultEvent{}.detail)> detail{};
+  };
+  std::array<ReportedFault, kNumLegs + 1> reported_{};
   // Start-up: the legs whose primary's setpoint reader has not matched yet (WaitUntilMatched).
   std::string missing_primaries_;
   bool autostart_pending_ = false;

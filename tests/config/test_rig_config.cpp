@@ -2,6 +2,7 @@
 // generic properties of the line mapping (every numeric field, made NaN or removed, is
 // reported at its own line / its block's line).
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include <cstdio>
@@ -462,10 +463,11 @@ struct RunResult {
   std::string err;
 };
 
-RunResult RunCheckConfig(const std::string& args, const std::string& tag) {
+RunResult RunCheckConfig(const std::string& args, const std::string& tag,
+                         const std::string& prefix = "") {
   const std::string out_path = kTmpDir + "/cli_" + tag + ".out";
   const std::string err_path = kTmpDir + "/cli_" + tag + ".err";
-  const std::string cmd = std::string("'") + HEXA_CHECK_CONFIG_BIN + "' " + args + " >'" + out_path + "' 2>'" +
+  const std::string cmd = prefix + "'" + HEXA_CHECK_CONFIG_BIN + "' " + args + " >'" + out_path + "' 2>'" +
                           err_path + "'";
   const int status = std::system(cmd.c_str());
   RunResult r;
@@ -502,6 +504,40 @@ TEST(RigConfigCli, ReferenceOkAndUnknownProfileOption) {
   EXPECT_NE(bad.err.find("unknown disturbance profile requested"), std::string::npos) << bad.err;
   const RunResult usage = RunCheckConfig("--frobnicate", "usage");
   EXPECT_EQ(usage.exit_code, 2);
+}
+
+// A rig file is read whole: a device, a FIFO or a huge file is refused before reading, so that
+// `hexa_check_config /dev/zero` answers at once instead of reading for ever.
+TEST(RigConfigCli, DevicesFifosAndHugeFilesAreRefusedAtOnce) {
+  // `timeout`: a reader without the limit would read /dev/zero until memory runs out (124).
+  const RunResult zero = RunCheckConfig("/dev/zero", "devzero", "timeout 20 ");
+  EXPECT_EQ(zero.exit_code, 1) << zero.err;
+  EXPECT_NE(zero.err.find("/dev/zero"), std::string::npos) << zero.err;
+  EXPECT_NE(zero.err.find("rig file is not a regular file"), std::string::npos) << zero.err;
+
+  const std::string fifo = kTmpDir + "/rig_fifo";
+  std::remove(fifo.c_str());
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  const ConfigResult from_fifo = hexa::config::LoadSystemConfig(fifo);  // no writer: no wait
+  std::remove(fifo.c_str());
+  EXPECT_FALSE(from_fifo.ok);
+  EXPECT_NE(from_fifo.error.find("not a regular file"), std::string::npos) << from_fifo.error;
+
+  // The reference rig file followed by comments up to 2 MiB: valid text, but over the limit.
+  const std::string huge = kTmpDir + "/rig_huge.textproto";
+  {
+    std::ofstream out(huge);
+    out << ReadFile(hexa::config::DefaultRigFile());
+    const std::string comment = "# " + std::string(97, 'x') + "\n";
+    for (int i = 0; i < 2 * 1024 * 1024 / 100; ++i) out << comment;
+  }
+  const ConfigResult big = hexa::config::LoadSystemConfig(huge);
+  const ConfigResult big_overlay = hexa::config::LoadSystemConfig(hexa::config::DefaultRigFile(), {huge});
+  std::remove(huge.c_str());
+  EXPECT_FALSE(big.ok);
+  EXPECT_NE(big.error.find("more than the limit of 1048576 bytes"), std::string::npos) << big.error;
+  EXPECT_FALSE(big_overlay.ok);
+  EXPECT_NE(big_overlay.error.find("rig overlay is"), std::string::npos) << big_overlay.error;
 }
 
 // ---------------------------------------------------------------- every field's line

@@ -19,6 +19,12 @@ expect "unexpected argument 'x'" "$B/deploy/hexa_session" x
 expect "time_s a finite number" "$B/deploy/hexa_session" --fault 1:crash:inf
 expect "time_s a finite number" "$B/deploy/hexa_session" --fault 1:crash:nan
 expect "time_s a finite number" "$B/deploy/hexa_session" --fault 1:crash:-1
+expect "leg 3 already has a fault (--fault 3:crash:1); one fault per process" "$B/deploy/hexa_session" --fault 3:crash:1 --fault 3:hang:2
+expect "the supervisor already has a fault" "$B/deploy/hexa_session" --fault supervisor:crash:1 --fault supervisor:crash:2
+expect "bridge-port.*70000" "$B/deploy/hexa_session" --bridge --bridge-port 70000
+expect "bridge-port" "$B/deploy/hexa_session" --bridge-port -1
+expect "record-keep-files needs --record-split-mb or --record-split-s" "$B/deploy/hexa_session" --record-keep-files 3
+expect "hold-timeout" "$B/deploy/hexa_session" --hold-timeout 0
 expect "unknown option '-leg'" "$B/services/leg_ctrl/hexa_leg_ctrl" -leg 1
 expect "fault-at.*not a finite number" "$B/services/leg_ctrl/hexa_leg_ctrl" --leg 1 --fault crash --fault-at inf
 expect "unknown option '-trajectory'" "$B/services/task_space/hexa_task_space" -trajectory x

@@ -1,13 +1,15 @@
 #!/bin/sh
 # hexa_operator's exit status says whether the command arrived (docs/exit_codes.md):
-#   0  acknowledged by every matched reader;
+#   0  the supervisor accepted it (--to any-reader: acknowledged by every matched reader);
 #   1  the supervisor's command reader (or, with --to any-reader, any reader) did not match
 #      within --wait: a recorder alone is not the supervisor (a command written before the
 #      supervisor's reader matched would never reach it).
-# Exit 3 (sent, but a matched reader never acknowledged it; logged at error level, where it
-# used to be an info line with exit 0) is not exercised here: a reader that matches and then
-# never acknowledges cannot be made without a race (a reader stopped with SIGSTOP before the
-# write is never matched, since discovery needs it too).
+#   3  not acknowledged: here a supervisor still waiting for its peers, which takes no command
+#      yet, so it never answers (exit 0 used to say "acknowledged" although nothing acted on it).
+# Exit 3 for a matched reader that never acknowledges is not exercised here: such a reader
+# cannot be made without a race (a reader stopped with SIGSTOP before the write is never
+# matched, since discovery needs it too). Exit 4 (refused) and 0 from a running supervisor:
+# session_operator.sh.
 # Usage: operator_exit_status.sh BUILD_DIR
 B="$1"
 if [ -z "$HEXA_OPERATOR_TEST_NETNS" ] && unshare -n true 2>/dev/null; then
@@ -53,7 +55,7 @@ check 0 "matched, acknowledged" "a recorder alone, --to any-reader" -- \
 # A supervisor (lockstep, waiting for its peers: its command reader exists from the start).
 "$B/services/task_space/hexa_task_space" --domain "$DOMAIN" >"$DIR/supervisor.log" 2>&1 &
 SUPERVISOR=$!
-check 0 "(2 reader(s) matched, acknowledged)" "supervisor and recorder running" -- \
-  "$B/services/task_space/hexa_operator" --domain "$DOMAIN" --wait 10 --linger 0.1 reset
+check 3 "but the supervisor did not answer within 1 s" "supervisor waiting for its peers" -- \
+  "$B/services/task_space/hexa_operator" --domain "$DOMAIN" --wait 10 --linger 0.1 --answer-wait 1 reset
 
 exit $fail

@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -36,12 +37,15 @@ struct SessionRun {
   recorder::SessionReport report;
 };
 
-// Runs hexa_session with `args` (+ --domain, --out) and waits for it.
+// Runs hexa_session with `args` (+ --domain, --out) and waits for it. A held session ends
+// after 1 s in HOLD (--hold-timeout 1, unless `args` set it): no operator resets it here.
 inline SessionRun RunSession(const std::string& name, int domain, std::vector<std::string> args) {
   SessionRun run;
   run.dir = ScratchDir(name);
   deploy::ProcessGroup group;
   deploy::ChildSpec s{"session", {HEXA_SESSION}, {}, run.dir + "/launcher.console.log"};
+  if (std::find(args.begin(), args.end(), "--hold-timeout") == args.end())
+    args.insert(args.end(), {"--hold-timeout", "1"});
   s.argv.insert(s.argv.end(), args.begin(), args.end());
   s.argv.insert(s.argv.end(), {"--domain", std::to_string(domain), "--out", run.dir,
                                "--timeout", "240"});

@@ -82,6 +82,12 @@ TEST(Faults, HotStandbyTakesOverACrashedPrimaryWithoutAFault) {
   const auto& r = run.report;
   EXPECT_EQ(r.final_supervisor_state, "IDLE");
   EXPECT_TRUE(r.faults.empty()) << Faults(r);
+  // No FaultEvent names the take-over, but the report does.
+  ASSERT_EQ(r.takeovers.size(), 1u);
+  EXPECT_EQ(r.takeovers[0].rfind("leg 2: the hot standby drives the valve from tick ", 0), 0u)
+      << r.takeovers[0];
+  EXPECT_NE(Slurp(run.dir + "/report.md").find("- take-over (no FaultEvent): leg 2: "),
+            std::string::npos);
   EXPECT_EQ(r.pose_samples_tracking, 200u);
   for (int i = 0; i < 3; ++i) EXPECT_LT(r.rmse_vs_truth[i], 0.025) << "axis " << i;
   for (int i = 0; i < 6; ++i) EXPECT_LT(r.leg_length_rmse_m[i], 0.03) << "leg " << i + 1;

@@ -38,6 +38,11 @@ TEST(BadInputs, RandomBytesCsvIsRejectedAndTheRecordingStaysReadable) {
   std::filesystem::remove(csv);
   EXPECT_NE(run.exit_code, 0) << "a rejected trajectory is not a completed session";
   ASSERT_TRUE(run.has_report) << Slurp(run.dir + "/session.log");
+  // Nothing was tracked: the report says so instead of an RMSE of 0.000 in every cell.
+  const std::string md = Slurp(run.dir + "/report.md");
+  EXPECT_NE(md.find("Not tracked: the supervisor never reached TRACKING (final state HOLD)"),
+            std::string::npos) << md.substr(0, 1500);
+  EXPECT_EQ(md.find("| RMSE vs ground truth"), std::string::npos);
   const auto& r = run.report;
   EXPECT_TRUE(r.warnings.empty()) << "the recorder wrote strings that needed repair: "
                                   << r.warnings.front();

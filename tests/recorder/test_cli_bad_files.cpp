@@ -59,9 +59,10 @@ class CliTest : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  CliResult Run(const std::string& args) {
+  // `prefix`: shell text before the command (environment, ulimit).
+  CliResult Run(const std::string& args, const std::string& prefix = "") {
     const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string cmd = std::string("'") + HEXA_RECORDER_BIN + "' " + args + " >'" +
+    const std::string cmd = prefix + "'" + HEXA_RECORDER_BIN + "' " + args + " >'" +
                             out.string() + "' 2>'" + err.string() + "'";
     const int status = std::system(cmd.c_str());
     CliResult r;
@@ -329,6 +330,45 @@ TEST_F(CliTest, ExportLeavesNoPartialCsvOnError) {
   std::vector<std::string> left;
   for (const auto& e : fs::directory_iterator(csv)) left.push_back(e.path().filename().string());
   EXPECT_TRUE(left.empty()) << left.size() << " file(s) left, e.g. " << left.front();
+}
+
+// The plots run on the system's Python whatever comes first on PATH: a virtual environment's
+// python3 without matplotlib first on PATH made Python started as "python3" take that
+// environment's prefix (it finds its prefix from argv[0] on PATH) and the plots failed.
+TEST_F(CliTest, ReportPlotsWithTheSystemPythonWhateverIsFirstOnPath) {
+  if (std::system("/usr/bin/python3 -c 'import matplotlib' >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "matplotlib is not installed for /usr/bin/python3";
+  const fs::path venv = dir_ / "venv";
+  fs::create_directories(venv / "bin");
+  fs::create_symlink("/usr/bin/python3", venv / "bin" / "python3");
+  Spit(venv / "pyvenv.cfg", "home = /nonexistent\ninclude-system-site-packages = false\n");
+  const fs::path out = dir_ / "report";
+  const CliResult rep = Run("report '" + good_.string() + "' --out '" + out.string() + "'",
+                            "PATH='" + (venv / "bin").string() + "':\"$PATH\" ");
+  EXPECT_EQ(rep.code, 0) << rep.err;
+  int plots = 0;
+  for (const auto& e : fs::directory_iterator(out)) plots += e.path().extension() == ".png";
+  EXPECT_GT(plots, 0) << rep.err;
+  const CliResult relative = Run("report '" + good_.string() + "' --out '" + out.string() +
+                                 "' --python python3");
+  EXPECT_EQ(relative.code, 2) << relative.err;
+  EXPECT_NE(relative.err.find("--python wants an absolute path"), std::string::npos) << relative.err;
+}
+
+// A full disk while recovering (here a file-size limit: writes fail with EFBIG, as they fail
+// with ENOSPC on a full disk): the error names the file and the cause, and no partial or
+// empty output is left that could pass for a recovered recording.
+TEST_F(CliTest, RecoverOnAFullDiskSaysWhyAndLeavesNoOutput) {
+  const fs::path damaged = dir_ / "damaged.mcap", fixed = dir_ / "fixed.mcap";
+  Spit(damaged, bytes_.substr(0, bytes_.size() - 200));  // no footer: as after a kill -9
+  // 64 blocks of 512 bytes (sh's ulimit -f unit): far less than the recovered file.
+  const CliResult rec = Run("recover '" + damaged.string() + "' --output '" + fixed.string() + "'",
+                            "trap '' XFSZ; ulimit -f 64; ");
+  EXPECT_TRUE(rec.exited);
+  EXPECT_NE(rec.code, 0) << rec.out;
+  EXPECT_NE(rec.err.find(fixed.string()), std::string::npos) << "stderr: '" << rec.err << "'";
+  EXPECT_NE(rec.err.find("File too large"), std::string::npos) << "stderr: '" << rec.err << "'";
+  EXPECT_FALSE(fs::exists(fixed)) << fs::file_size(fixed) << " bytes left";
 }
 
 }  // namespace

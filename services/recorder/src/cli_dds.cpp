@@ -31,6 +31,7 @@
 #include "hexa/core/lockstep_protocol.hpp"
 #include "hexa/recorder/convert.hpp"
 #include "hexa/recorder/recording.hpp"
+#include "hexa/recorder/rotation.hpp"
 #include "hexa/recorder/scene.hpp"
 #include "hexa/services/scheduling.hpp"
 #include "hexa/services/service_manager.hpp"
@@ -276,7 +277,8 @@ int RunRecord(const std::vector<std::string>& argv) {
                            {"output", "o", "domain", "topics", "exclude", "duration-s", "flush-ms",
                             "batch-ms", "sync", "dds-config", "rt-priority", "cpus",
                             "compression", "zstd-level", "rig", "profile", "seed", "scene-hz",
-                            "periodic-reliability"},
+                            "periodic-reliability", "split-size-mb", "split-duration-s",
+                            "keep-files"},
                            {"quiet", "no-scene"});
   if (a.help) {
     std::fputs(
@@ -286,6 +288,7 @@ int RunRecord(const std::vector<std::string>& argv) {
         "                            [--dds-config FILE.xml] [--rt-priority N] [--cpus LIST]\n"
         "                            [--compression none|zstd]\n"
         "                            [--periodic-reliability reliable|best-effort]\n"
+        "                            [--split-size-mb MB] [--split-duration-s S] [--keep-files N]\n"
         "Subscribes to every topic of the system (reliable, keep-all recorder QoS) or the ones\n"
         "matching --topics, and writes each sample as protobuf to one MCAP channel per topic\n"
         "(log time = when taken from DDS, within --batch-ms of receipt; publish time = the\n"
@@ -315,6 +318,11 @@ int RunRecord(const std::vector<std::string>& argv) {
         "topics: hexa_LegSensors hexa_ValveCommand hexa_ImuSample hexa_LegSetpoint\n"
         "        hexa_PoseReport hexa_GroundTruth hexa_TrackerPose hexa_OperatorCommand\n"
         "        hexa_NodeStatus hexa_FaultEvent\n"
+        "--split-size-mb MB / --split-duration-s S: close the file when it reaches MB megabytes\n"
+        "(10^6 bytes) or S seconds and go on in a new one; the open file keeps the --output\n"
+        "name, the closed parts become NAME-0001.mcap, NAME-0002.mcap, ... (each a complete\n"
+        "MCAP file). --keep-files N: keep at most N files in all (the open one included),\n"
+        "deleting the oldest parts (default: all).\n"
         "  --no-scene          do not add the 3-D scene\n",
         stdout);
     std::fputs(kSceneOptionsHelp, stdout);
@@ -348,6 +356,19 @@ int RunRecord(const std::vector<std::string>& argv) {
     sched::SetRealtime(static_cast<int>(rt_priority), sched_message);
     if (!quiet) std::fprintf(stderr, "record: %s\n", sched_message.c_str());
   }
+
+  RotationConfig rotation_config;
+  const double split_mb = a.GetDouble("split-size-mb", 0.0);
+  const double split_s = a.GetDouble("split-duration-s", 0.0);
+  const long long keep_files = a.GetInt("keep-files", 0);
+  if (!(split_mb >= 0.0 && split_mb <= 1e7)) throw UsageError("--split-size-mb must be in [0, 1e7]");
+  if (!(split_s >= 0.0 && split_s <= 1e7)) throw UsageError("--split-duration-s must be in [0, 1e7]");
+  if (keep_files < 0 || keep_files > 1000000) throw UsageError("--keep-files must be in [0, 1000000]");
+  rotation_config.split_bytes = static_cast<uint64_t>(split_mb * 1e6);
+  rotation_config.split_ns = static_cast<uint64_t>(split_s * 1e9);
+  rotation_config.keep_files = static_cast<uint32_t>(keep_files);
+  if (keep_files > 0 && !rotation_config.enabled())
+    throw UsageError("--keep-files needs --split-size-mb or --split-duration-s");
 
   McapWriterConfig cfg;
   cfg.chunk_max_span_ns = static_cast<uint64_t>(flush_ms * 1e6);
@@ -420,6 +441,7 @@ int RunRecord(const std::vector<std::string>& argv) {
                  static_cast<int>(participant.domain_id()), topics.size(), out.c_str(), periodic.c_str());
 
   const int64_t start_ns = comm::RealtimeNow_ns();
+  RecordingRotation rotation(rotation_config, out, static_cast<uint64_t>(start_ns));
   const int64_t end_ns =
       duration_s > 0 ? start_ns + static_cast<int64_t>(duration_s * 1e9) : INT64_MAX;
   const int64_t flush_ns = static_cast<int64_t>(flush_ms * 1e6);
@@ -440,6 +462,17 @@ int RunRecord(const std::vector<std::string>& argv) {
     if (after >= next_flush_ns) {
       writer.mcap().FlushIfDue(static_cast<uint64_t>(after));
       next_flush_ns = after + flush_ns;
+      if (rotation_config.enabled() && rotation.Due(writer.mcap(), static_cast<uint64_t>(after))) {
+        const std::size_t deleted_before = rotation.deleted().size();
+        rotation.Rotate(writer.mcap(), static_cast<uint64_t>(after));
+        if (!quiet) {
+          std::fprintf(stderr, "record: closed %s, recording on in %s\n",
+                       rotation.parts().back().c_str(), out.c_str());
+          for (std::size_t k = deleted_before; k < rotation.deleted().size(); ++k)
+            std::fprintf(stderr, "record: deleted %s (--keep-files %lld)\n",
+                         rotation.deleted()[k].c_str(), keep_files);
+        }
+      }
       for (auto& t : topics) {
         ReportIncompatibleWriters(*t, periodic);
         NoteMatchedWriters(*t);
@@ -469,6 +502,9 @@ int RunRecord(const std::vector<std::string>& argv) {
               " bytes (chunk records %" PRIu64 " bytes, stored %" PRIu64 ", compression %s)\n",
               elapsed_s, out.c_str(), ws.messages, ws.chunks, ws.bytes, ws.chunk_records_bytes,
               ws.chunk_stored_bytes, cfg.compression == McapCompression::kZstd ? "zstd" : "none");
+  if (rotation_config.enabled())
+    std::printf("split into parts: %zu closed part(s) kept beside %s, %zu deleted (--keep-files)\n",
+                rotation.parts().size(), out.c_str(), rotation.deleted().size());
   // incompatible: writers refused for their QoS, partition mismatches (by design) left out.
   std::printf("%-22s %10s %10s %8s %12s %12s %12s\n", "topic", "received", "missing", "gaps",
               "dds_lost", "dds_rejected", "incompatible");

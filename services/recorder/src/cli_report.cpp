@@ -13,27 +13,35 @@
 namespace hexa::recorder::cli {
 
 int RunReport(const std::vector<std::string>& argv) {
-  const Args a = ParseArgs(argv, {"out", "meta", "title"}, {"no-plots"});
+  const Args a = ParseArgs(argv, {"out", "meta", "title", "python"}, {"no-plots"});
   if (a.help) {
     std::fputs(
-        "usage: hexa_recorder report RECORDING.mcap --out DIR [--meta key=value,..] "
-        "[--title TEXT] [--no-plots]\n"
-        "Computes the session figures from the recording alone and writes into DIR:\n"
+        "usage: hexa_recorder report RECORDING.mcap [PART.mcap..] --out DIR [--meta key=value,..] "
+        "[--title TEXT] [--no-plots] [--python /abs/path/python3]\n"
+        "Computes the session figures from the recording alone and writes into DIR (a recording\n"
+        "split into parts, record --split-*: every part, oldest first, as one recording):\n"
         "report.md, report.json (RMSE per axis against ground truth and against the measured\n"
         "pose over the tracking window, relative errors, leg-length RMSE per leg, deadline\n"
         "misses per topic, control round-trip latency median/p99/max, wall and simulated time,\n"
         "faults; for a BS-SMC session each leg's adapted friction scale theta at the end of the\n"
         "tracking window, min and max), pose.csv and legs.csv, and the PNG plots (deploy/plot_session.py, run with\n"
-        "/usr/bin/python3). --meta adds session facts (trajectory=combined,controller=bssmc,...);\n"
+        "/usr/bin/python3, or the absolute path given with --python; never looked up on PATH).\n"
+        "--meta adds session facts (trajectory=combined,controller=bssmc,...);\n"
         "trajectory=<name> adds the paper's Table 9 / 10 figures for comparison.\n",
         stdout);
     return kExitOk;
   }
-  if (a.positional.size() != 1) throw UsageError("exactly one recording is required");
+  if (a.positional.empty()) throw UsageError("a recording is required");
   const std::string out = a.Get("out", "");
   if (out.empty()) throw UsageError("--out DIR is required");
+  // The interpreter by its absolute path, also as argv[0]: Python finds its prefix (and with
+  // it the site-packages holding matplotlib) from argv[0], and a bare "python3" is looked up
+  // on PATH, where a virtual environment's python3 may come first.
+  const std::string python = a.Get("python", "/usr/bin/python3");
+  if (python.empty() || python[0] != '/')
+    throw UsageError("--python wants an absolute path, got '" + python + "'");
   std::filesystem::create_directories(out);
-  SessionReport report = ComputeSessionReport(a.positional[0]);
+  SessionReport report = ComputeSessionReport(a.positional);
   for (const auto& kv : a.GetAll("meta")) {
     const auto eq = kv.find('=');
     if (eq == std::string::npos) throw UsageError("--meta wants key=value, got '" + kv + "'");
@@ -54,14 +62,14 @@ int RunReport(const std::vector<std::string>& argv) {
   }
   const pid_t pid = fork();
   if (pid == 0) {
-    execl("/usr/bin/python3", "python3", script.c_str(), out.c_str(), "--title", title.c_str(),
+    execl(python.c_str(), python.c_str(), script.c_str(), out.c_str(), "--title", title.c_str(),
           static_cast<char*>(nullptr));
     _exit(127);
   }
   int status = 0;
   if (pid < 0 || waitpid(pid, &status, 0) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    std::fprintf(stderr, "hexa_recorder report: the plots failed (/usr/bin/python3 %s); the "
-                 "figures in report.md / report.json are complete\n", script.c_str());
+    std::fprintf(stderr, "hexa_recorder report: the plots failed (%s %s); the "
+                 "figures in report.md / report.json are complete\n", python.c_str(), script.c_str());
     return kExitError;
   }
   return kExitOk;

@@ -309,11 +309,23 @@ void McapWriter::Open(const std::string& path) {
   offset_ = 0;
   data_crc_ = 0;
   in_data_section_ = true;
+  file_messages_ = 0;
+  chunk_indexes_.clear();
+  std::fill(channel_counts_.begin(), channel_counts_.end(), 0);
   WriteBytes(kMcapMagic, sizeof kMcapMagic);
   std::string body;
   PutStr(body, config_.profile);
   PutStr(body, config_.library);
   WriteRecord(McapOpcode::kHeader, body);
+}
+
+void McapWriter::Rotate(const std::string& path) {
+  if (file_ == nullptr) throw McapError("McapWriter::Rotate: no open file");
+  Close();
+  Open(path);
+  // The same ids as before: the caller's channel ids stay valid, and each file reads alone.
+  for (const auto& s : schemas_) WriteRecord(McapOpcode::kSchema, SchemaBody(s));
+  for (const auto& ch : channels_) WriteRecord(McapOpcode::kChannel, ChannelBody(ch));
 }
 
 uint16_t McapWriter::AddSchema(std::string name, std::string encoding, std::string data) {
@@ -371,7 +383,7 @@ void McapWriter::WriteWithSequence(uint16_t channel_id, uint32_t sequence, uint6
     chunk_start_ns_ = std::min(chunk_start_ns_, log_time_ns);
     chunk_end_ns_ = std::max(chunk_end_ns_, log_time_ns);
   }
-  if (stats_.messages == 0) {
+  if (file_messages_ == 0) {
     message_start_ns_ = message_end_ns_ = log_time_ns;
   } else {
     message_start_ns_ = std::min(message_start_ns_, log_time_ns);
@@ -379,6 +391,7 @@ void McapWriter::WriteWithSequence(uint16_t channel_id, uint32_t sequence, uint6
   }
   ++chunk_messages_;
   ++stats_.messages;
+  ++file_messages_;
   ++channel_counts_[channel_id];
   next_sequence_[channel_id] = sequence + 1;
   if (chunk_records_.size() >= config_.chunk_max_bytes ||
@@ -507,14 +520,14 @@ void McapWriter::Close() {
   });
   group(McapOpcode::kStatistics, [&] {
     std::string b, map;
-    PutU64(b, stats_.messages);
+    PutU64(b, file_messages_);
     PutU16(b, static_cast<uint16_t>(schemas_.size()));
     PutU32(b, static_cast<uint32_t>(channels_.size()));
     PutU32(b, 0);  // attachments
     PutU32(b, 0);  // metadata
     PutU32(b, static_cast<uint32_t>(chunk_indexes_.size()));
-    PutU64(b, stats_.messages ? message_start_ns_ : 0);
-    PutU64(b, stats_.messages ? message_end_ns_ : 0);
+    PutU64(b, file_messages_ ? message_start_ns_ : 0);
+    PutU64(b, file_messages_ ? message_end_ns_ : 0);
     for (size_t ch = 0; ch < channel_counts_.size(); ++ch) {
       PutU16(map, static_cast<uint16_t>(ch));
       PutU64(map, channel_counts_[ch]);

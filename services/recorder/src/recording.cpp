@@ -1016,8 +1016,15 @@ RecoverResult Recover(const std::string& in_path, const std::string& out_path,
   };
   McapScanOptions options;
   options.tolerant = true;
-  const McapScanResult r = reader.Scan(v, options);
-  writer.Close();
+  McapScanResult r;
+  try {
+    r = reader.Scan(v, options);
+    writer.Close();
+  } catch (...) {
+    // A write error (a full disk): no partial output that could pass for a recovered file.
+    std::remove(out_path.c_str());
+    throw;
+  }
   result.input_complete = r.complete;
   result.messages = r.messages;
   result.chunks_read = r.chunks;

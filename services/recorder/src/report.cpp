@@ -44,6 +44,12 @@ Vector6d ToVec(const std::array<double, 6>& a) {
   return v;
 }
 
+std::string Fixed3(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f", v);
+  return buf;
+}
+
 std::string SupervisorStateName(int s) {
   static const char* kNames[] = {"IDLE", "BLENDING", "TRACKING", "STOPPING", "HOLD"};
   return s >= 0 && s < 5 ? kNames[s] : "UNKNOWN";
@@ -67,8 +73,14 @@ struct TickSlot {
 }  // namespace
 
 SessionReport ComputeSessionReport(const std::string& path) {
+  return ComputeSessionReport(std::vector<std::string>{path});
+}
+
+SessionReport ComputeSessionReport(const std::vector<std::string>& parts) {
+  if (parts.empty()) throw std::invalid_argument("ComputeSessionReport: no recording");
   SessionReport r;
-  r.recording = path;
+  const std::string& path = parts.back();  // named in messages
+  for (const auto& part : parts) r.recording += (r.recording.empty() ? "" : " ") + part;
   std::vector<TickSlot> ticks;
   auto slot = [&](uint64_t tick) -> TickSlot& {
     if (tick > 50'000'000) throw std::runtime_error(path + ": tick " + std::to_string(tick) + " is implausible");
@@ -83,9 +95,13 @@ SessionReport ComputeSessionReport(const std::string& path) {
   std::vector<PoseSample> poses;
   std::map<std::string, rec::NodeStatus> last_status;
   uint64_t first_log = UINT64_MAX, last_log = 0;
+  // Per leg: the last tick of a primary's command, the first and count of a standby's.
+  std::array<uint64_t, 6> last_primary_tick{}, first_standby_tick{}, standby_commands{};
+  std::array<bool, 6> any_primary{};
+  first_standby_tick.fill(UINT64_MAX);
 
-  const McapScanResult scan = ReadRecording(
-      path, [&](const McapChannel& ch, const McapMessageView& view, const google::protobuf::Message&) {
+  const auto on_message = [&](const McapChannel& ch, const McapMessageView& view,
+                              const google::protobuf::Message&) {
         first_log = std::min(first_log, view.log_time_ns);
         last_log = std::max(last_log, view.log_time_ns);
         ++r.messages[ch.topic];
@@ -123,6 +139,14 @@ SessionReport ComputeSessionReport(const std::string& path) {
           if (m.leg_id() < 1 || m.leg_id() > 6) return;
           TickSlot& s = slot(m.header().tick());
           const int i = static_cast<int>(m.leg_id()) - 1;
+          const auto leg = static_cast<std::size_t>(i);
+          if (m.standby()) {
+            first_standby_tick[leg] = std::min<uint64_t>(first_standby_tick[leg], m.header().tick());
+            ++standby_commands[leg];
+          } else {
+            last_primary_tick[leg] = std::max<uint64_t>(last_primary_tick[leg], m.header().tick());
+            any_primary[leg] = true;
+          }
           if (s.command[i]) return;
           s.command[i] = true;
           s.command_desired_m[i] = m.desired_length_m();
@@ -144,9 +168,13 @@ SessionReport ComputeSessionReport(const std::string& path) {
              << rec::FaultReason_Name(m.reason()) << ": " << m.detail();
           r.faults.push_back(os.str());
         }
-      });
-  r.complete_file = scan.complete;
-  r.warnings = scan.problems;
+      };
+  r.complete_file = true;
+  for (const auto& part : parts) {
+    const McapScanResult scan = ReadRecording(part, on_message);
+    r.complete_file = r.complete_file && scan.complete;
+    r.warnings.insert(r.warnings.end(), scan.problems.begin(), scan.problems.end());
+  }
   if (first_log <= last_log) r.wall_time_s = static_cast<double>(last_log - first_log) * 1e-9;
 
   // Task space over the TRACKING window, at the supervisor ticks.
@@ -251,9 +279,34 @@ SessionReport ComputeSessionReport(const std::string& path) {
     else continue;
     r.deadline_misses[topic] += st.deadline_missed_total();
   }
-  const RecordingInfo info = Inspect(path, McapScanOptions{true, true});
-  for (const auto& ch : info.channels)
-    if (ch.loss_analysed) r.missing[ch.topic] = ch.missing;
+  // Per part (a gap across two parts' boundary is not counted).
+  for (const auto& part : parts) {
+    const RecordingInfo info = Inspect(part, McapScanOptions{true, true});
+    for (const auto& ch : info.channels) {
+      if (!ch.loss_analysed) continue;
+      r.missing[ch.topic] += ch.missing;
+      // The plant's streams: a gap in them is the recorder's loss. (A leg controller may skip
+      // ticks in real time and the supervisor may run late, so their gaps are not.)
+      if (ch.topic == "hexa_LegSensors" || ch.topic == "hexa_GroundTruth" ||
+          ch.topic == "hexa_ImuSample") {
+        r.recording_lost_samples += ch.missing;
+        for (const auto& l : ch.streams) r.recording_expected_samples += l.expected;
+      }
+    }
+  }
+  // A standby whose commands all come after the primary's last one took the valve over (a
+  // recorder reading with shared ownership would see both interleaved: no take-over then).
+  for (std::size_t leg = 0; leg < 6; ++leg) {
+    if (standby_commands[leg] == 0 || (any_primary[leg] && first_standby_tick[leg] <= last_primary_tick[leg]))
+      continue;
+    std::ostringstream os;
+    os << "leg " << leg + 1 << ": the hot standby drives the valve from tick " << first_standby_tick[leg]
+       << " (t = " << Fixed3(static_cast<double>(first_standby_tick[leg]) * kTickS) << " s; "
+       << (any_primary[leg] ? "the primary's last command at tick " + std::to_string(last_primary_tick[leg])
+                            : std::string("no command of the primary recorded"))
+       << "), " << standby_commands[leg] << " commands";
+    r.takeovers.push_back(os.str());
+  }
   return r;
 }
 
@@ -298,20 +351,34 @@ json::Value AxisJson(const std::array<double, 6>& a, bool relative) {
   return o;
 }
 
-json::Value ReportJson(const SessionReport& r) {
+// `session`: the session facts as report.md states them.
+json::Value ReportJson(const SessionReport& r, const std::map<std::string, std::string>& session) {
   json::Value j;
   j["recording"] = r.recording;
   j["session"] = json::Value::object();
-  for (const auto& [k, v] : r.meta) j["session"][k] = v;
+  for (const auto& [k, v] : session) j["session"][k] = v;
   j["recording_complete"] = r.complete_file;
   j["final_supervisor_state"] = r.final_supervisor_state;
   j["tracking_pose_samples"] = r.pose_samples_tracking;
-  j["rmse_vs_ground_truth"] = AxisJson(r.rmse_vs_truth, false);
-  j["relative_error_vs_ground_truth"] = AxisJson(r.relative_vs_truth, true);
-  j["rmse_vs_measured_pose"] = AxisJson(r.rmse_vs_measured, false);
-  j["relative_error_vs_measured_pose"] = AxisJson(r.relative_vs_measured, true);
-  j["leg_length_rmse_m"] = r.leg_length_rmse_m;
-  j["leg_length_max_abs_error_m"] = r.leg_length_max_abs_m;
+  j["recording_lost_samples"] = r.recording_lost_samples;
+  j["recording_expected_samples"] = r.recording_expected_samples;
+  // Not tracked: no figure (null), never an error of 0.
+  const bool tracked = r.pose_samples_tracking > 0;
+  auto axes = [&](const std::array<double, 6>& a, bool relative) {
+    json::Value o = AxisJson(a, relative);
+    if (!tracked)
+      for (auto& [key, value] : o.items()) value = nullptr;
+    return o;
+  };
+  auto legs = [&](const std::array<double, 6>& a) {
+    return tracked ? json::Value(a) : json::Value(std::vector<std::nullptr_t>(6, nullptr));
+  };
+  j["rmse_vs_ground_truth"] = axes(r.rmse_vs_truth, false);
+  j["relative_error_vs_ground_truth"] = axes(r.relative_vs_truth, true);
+  j["rmse_vs_measured_pose"] = axes(r.rmse_vs_measured, false);
+  j["relative_error_vs_measured_pose"] = axes(r.relative_vs_measured, true);
+  j["leg_length_rmse_m"] = legs(r.leg_length_rmse_m);
+  j["leg_length_max_abs_error_m"] = legs(r.leg_length_max_abs_m);
   j["valve_mean_abs_step_v_per_tick"] = r.valve_mean_abs_step_v;
   j["valve_saturated_fraction"] = r.valve_saturated_fraction;
   j["deadline_misses"] = json::Value::object();
@@ -347,11 +414,87 @@ json::Value ReportJson(const SessionReport& r) {
   j["wall_time_s"] = r.wall_time_s;
   j["sim_time_s"] = r.sim_time_s;
   j["faults"] = r.faults;
+  j["takeovers"] = r.takeovers;
   j["recording_warnings"] = r.warnings;
   return j;
 }
 
 }  // namespace
+
+// The task-space RMSE table and the leg-length / valve figures of report.md, over the TRACKING
+// window; a session that never tracked gets a sentence instead of a table of zeros.
+void WriteTrackingFigures(std::ostream& m, const SessionReport& r, const std::string& trajectory) {
+  m << "## Task-space RMSE over the tracking window (paper Table 9 / 10 layout)\n\n";
+  if (r.pose_samples_tracking == 0) {
+    if (r.final_supervisor_state.empty())
+      m << "Not tracked: the recording holds no pose report of the supervisor";
+    else
+      m << "Not tracked: the supervisor never reached TRACKING (final state "
+        << r.final_supervisor_state << ")";
+    m << ", so there is no tracking error to give (no RMSE, no leg-length figures). The "
+         "Faults section and the session's log say why.\n\n";
+    return;
+  }
+  if (r.final_supervisor_state == "HOLD") {
+    m << "The session was held: the figures cover the " << r.pose_samples_tracking
+      << " pose samples (" << Fixed3(static_cast<double>(r.pose_samples_tracking) * 0.005)
+      << " s at 5 ms) tracked before the hold, not the whole window.\n\n";
+  }
+  m << "| | X cm | Y cm | Z cm | rot X deg | rot Y deg | rot Z deg |\n|---|---|---|---|---|---|---|\n";
+  auto row = [&](const char* name, const std::array<double, 6>& a, bool rel) {
+    m << "| " << name;
+    for (int i = 0; i < 6; ++i) {
+      char buf[32];
+      if (rel) {
+        if (a[i] < 0) std::snprintf(buf, sizeof buf, "-");
+        else std::snprintf(buf, sizeof buf, "%.2f%%", 100 * a[i]);
+      } else {
+        std::snprintf(buf, sizeof buf, "%.3f", a[i] * (i < 3 ? 100.0 : kRadToDeg));
+      }
+      m << " | " << buf;
+    }
+    m << " |\n";
+  };
+  row("RMSE vs ground truth", r.rmse_vs_truth, false);
+  row("relative error vs ground truth", r.relative_vs_truth, true);
+  row("RMSE vs measured pose (GQFK + IMU)", r.rmse_vs_measured, false);
+  row("relative error vs measured pose", r.relative_vs_measured, true);
+  bool any_paper = false;
+  std::array<double, 6> paper{};
+  for (int i = 0; i < 6; ++i) {
+    double v = 0;
+    if (PaperValue(trajectory, i, v)) {
+      paper[i] = v / (i < 3 ? 100.0 : kRadToDeg);
+      any_paper = true;
+    } else {
+      paper[i] = std::nan("");
+    }
+  }
+  if (any_paper) {
+    m << "| paper (Table " << (trajectory == "combined" ? "10" : "9") << ")";
+    for (int i = 0; i < 6; ++i) {
+      char buf[32];
+      if (std::isnan(paper[i])) std::snprintf(buf, sizeof buf, "-");
+      else std::snprintf(buf, sizeof buf, "%.3f", paper[i] * (i < 3 ? 100.0 : kRadToDeg));
+      m << " | " << buf;
+    }
+    m << " |\n";
+  }
+  m << "\nRelative error = RMSE / peak-to-peak of the desired motion on that axis (the paper "
+       "does not define its own); '-' = no motion on that axis.\n\n";
+  m << "## Leg-length RMSE (desired incl. outer-loop correction vs potentiometer)\n\n"
+       "| leg | 1 | 2 | 3 | 4 | 5 | 6 |\n|---|---|---|---|---|---|---|\n| RMSE mm";
+  for (double v : r.leg_length_rmse_m) m << " | " << Num(1000 * v).substr(0, 6);
+  m << " |\n| max mm";
+  for (double v : r.leg_length_max_abs_m) m << " | " << Num(1000 * v).substr(0, 6);
+  m << " |\n| valve mean abs step V/tick";
+  for (double v : r.valve_mean_abs_step_v) m << " | " << Num(v).substr(0, 5);
+  m << " |\n| valve saturated %";
+  for (double v : r.valve_saturated_fraction) m << " | " << Num(100 * v).substr(0, 5);
+  m << " |\n\nValve activity is taken over the tracking window from the voltages the plant "
+       "applied: a smooth command moves a few hundredths of a volt per 1 ms tick; chattering "
+       "shows as large steps and time at 0 or 10 V.\n\n";
+}
 
 void WriteSessionReport(const SessionReport& r, const std::string& dir) {
   const auto meta = [&](const char* k) {
@@ -359,76 +502,39 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
     return it == r.meta.end() ? std::string() : it->second;
   };
   const std::string trajectory = meta("trajectory");
+  char lost_line[160] = "";
+  if (r.recording_lost_samples > 0)
+    std::snprintf(lost_line, sizeof lost_line,
+                  "the recording lost %llu of %llu samples of the plant's streams (%.3f %%)",
+                  static_cast<unsigned long long>(r.recording_lost_samples),
+                  static_cast<unsigned long long>(r.recording_expected_samples),
+                  r.recording_expected_samples
+                      ? 100.0 * static_cast<double>(r.recording_lost_samples) /
+                            static_cast<double>(r.recording_expected_samples)
+                      : 0.0);
+  // A session whose trajectory ran to its end but whose recording lost samples did not
+  // complete: its figures miss what was lost (hexa_session exits 7).
+  std::map<std::string, std::string> session = r.meta;
+  if (r.recording_lost_samples > 0 && meta("completed") == "yes")
+    session["completed"] = std::string("NO: the trajectory ran to its end, but ") + lost_line;
   {
     std::string error;
-    if (!json::WriteFile(dir + "/report.json", ReportJson(r), 2, error)) throw std::runtime_error(error);
+    if (!json::WriteFile(dir + "/report.json", ReportJson(r, session), 2, error)) throw std::runtime_error(error);
   }
   {
     std::ofstream m(dir + "/report.md");
     if (!m) throw std::runtime_error("cannot write " + dir + "/report.md");
     m << "# Session report\n\n";
-    for (const auto& [k, v] : r.meta) m << "- " << k << ": " << v << "\n";
+    for (const auto& [k, v] : session) m << "- " << k << ": " << v << "\n";
     m << "- recording: `" << r.recording << "`" << (r.complete_file ? "" : " (INCOMPLETE FILE)")
       << "\n- simulated time " << Num(r.sim_time_s) << " s, wall time " << Num(r.wall_time_s)
       << " s\n- final supervisor state: " << r.final_supervisor_state
       << "\n- tracking window: " << r.pose_samples_tracking << " pose samples (5 ms)\n";
     for (const auto& w : r.warnings) m << "- recording warning: " << w << "\n";
+    if (r.recording_lost_samples > 0)
+      m << "- recording: " << lost_line << " (per topic under Timing); the figures below miss them\n";
     m << "\n";
-    m << "## Task-space RMSE over the tracking window (paper Table 9 / 10 layout)\n\n";
-    m << "| | X cm | Y cm | Z cm | rot X deg | rot Y deg | rot Z deg |\n|---|---|---|---|---|---|---|\n";
-    auto row = [&](const char* name, const std::array<double, 6>& a, bool rel) {
-      m << "| " << name;
-      for (int i = 0; i < 6; ++i) {
-        char buf[32];
-        if (rel) {
-          if (a[i] < 0) std::snprintf(buf, sizeof buf, "-");
-          else std::snprintf(buf, sizeof buf, "%.2f%%", 100 * a[i]);
-        } else {
-          std::snprintf(buf, sizeof buf, "%.3f", a[i] * (i < 3 ? 100.0 : kRadToDeg));
-        }
-        m << " | " << buf;
-      }
-      m << " |\n";
-    };
-    row("RMSE vs ground truth", r.rmse_vs_truth, false);
-    row("relative error vs ground truth", r.relative_vs_truth, true);
-    row("RMSE vs measured pose (GQFK + IMU)", r.rmse_vs_measured, false);
-    row("relative error vs measured pose", r.relative_vs_measured, true);
-    bool any_paper = false;
-    std::array<double, 6> paper{};
-    for (int i = 0; i < 6; ++i) {
-      double v = 0;
-      if (PaperValue(trajectory, i, v)) {
-        paper[i] = v / (i < 3 ? 100.0 : kRadToDeg);
-        any_paper = true;
-      } else {
-        paper[i] = std::nan("");
-      }
-    }
-    if (any_paper) {
-      m << "| paper (Table " << (trajectory == "combined" ? "10" : "9") << ")";
-      for (int i = 0; i < 6; ++i) {
-        char buf[32];
-        if (std::isnan(paper[i])) std::snprintf(buf, sizeof buf, "-");
-        else std::snprintf(buf, sizeof buf, "%.3f", paper[i] * (i < 3 ? 100.0 : kRadToDeg));
-        m << " | " << buf;
-      }
-      m << " |\n";
-    }
-    m << "\nRelative error = RMSE / peak-to-peak of the desired motion on that axis (the paper "
-         "does not define its own); '-' = no motion on that axis.\n\n";
-    m << "## Leg-length RMSE (desired incl. outer-loop correction vs potentiometer)\n\n"
-         "| leg | 1 | 2 | 3 | 4 | 5 | 6 |\n|---|---|---|---|---|---|---|\n| RMSE mm";
-    for (double v : r.leg_length_rmse_m) m << " | " << Num(1000 * v).substr(0, 6);
-    m << " |\n| max mm";
-    for (double v : r.leg_length_max_abs_m) m << " | " << Num(1000 * v).substr(0, 6);
-    m << " |\n| valve mean abs step V/tick";
-    for (double v : r.valve_mean_abs_step_v) m << " | " << Num(v).substr(0, 5);
-    m << " |\n| valve saturated %";
-    for (double v : r.valve_saturated_fraction) m << " | " << Num(100 * v).substr(0, 5);
-    m << " |\n\nValve activity is taken over the tracking window from the voltages the plant "
-         "applied: a smooth command moves a few hundredths of a volt per 1 ms tick; chattering "
-         "shows as large steps and time at 0 or 10 V.\n\n";
+    WriteTrackingFigures(m, r, trajectory);
     if (r.AnyBsSmcLeg()) {
       m << "## Adapted friction scale theta over the tracking window (BS-SMC)\n\n"
            "| leg | end | min | max | commands |\n|---|---|---|---|---|\n";
@@ -475,8 +581,9 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
     m << "\n(In real time a leg controller answers only the newest sensor sample of its leg, so "
          "gaps in hexa_ValveCommand there are ticks it skipped, not samples the recorder lost.)\n";
     m << "\n## Faults\n\n";
-    if (r.faults.empty()) m << "none\n";
+    if (r.faults.empty() && r.takeovers.empty()) m << "none\n";
     for (const auto& f : r.faults) m << "- " << f << "\n";
+    for (const auto& t : r.takeovers) m << "- take-over (no FaultEvent): " << t << "\n";
     m << "\n## Plots\n\npose_tracking.png, pose_error.png, leg_lengths.png, valve_voltages.png, "
          "path_3d.png\n";
   }

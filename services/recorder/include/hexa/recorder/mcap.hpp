@@ -123,6 +123,12 @@ class McapWriter {
   // Closes the open chunk if its oldest message was logged chunk_max_span_ns before now.
   void FlushIfDue(uint64_t now_log_time_ns);
   void Close();
+  // Closes the open file (complete, with its summary) and continues in a new one at `path`:
+  // the schemas and channels are written there again with the same ids, sequence numbers go
+  // on. For recordings split by size or time; each file is a complete MCAP file of its own.
+  void Rotate(const std::string& path);
+  // Bytes written to the open file so far.
+  uint64_t file_bytes() const { return offset_; }
   bool is_open() const { return file_ != nullptr; }
   const McapWriterStats& stats() const { return stats_; }
   const std::string& path() const { return path_; }
@@ -153,6 +159,7 @@ class McapWriter {
   std::vector<std::vector<std::pair<uint64_t, uint64_t>>> chunk_index_;  // per channel
   std::vector<ChunkIndexEntry> chunk_indexes_;
   uint64_t message_start_ns_ = 0, message_end_ns_ = 0;
+  uint64_t file_messages_ = 0;  // in the open file (stats_.messages: in every file)
   std::string scratch_;
   std::string compressed_;
   std::unique_ptr<ZstdCodec> zstd_;

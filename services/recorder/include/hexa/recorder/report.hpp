@@ -60,6 +60,15 @@ struct SessionReport {
   std::map<std::string, std::uint64_t> messages;         // per topic
   std::map<std::string, std::uint64_t> missing;          // per periodic topic, from ticks
   std::vector<std::string> faults;                       // FaultEvent lines
+  // Hot-standby take-overs: one line per leg whose standby's commands follow the primary's
+  // last (the recorder reads ValveCommand with exclusive ownership, as the plant does, so a
+  // standby's commands appear only once it owns the valve). No FaultEvent says this.
+  std::vector<std::string> takeovers;
+  // Samples the recording lacks in the plant's streams (LegSensors, GroundTruth, ImuSample:
+  // one per tick or per IMU period whatever the controllers do), from their tick numbers:
+  // samples the recorder lost. `expected`: what those streams should hold.
+  std::uint64_t recording_lost_samples = 0;
+  std::uint64_t recording_expected_samples = 0;
   std::vector<std::string> warnings;  // what the reader repaired (invalid UTF-8), per channel
   double wall_time_s = 0.0;   // first to last log time
   double sim_time_s = 0.0;    // last ground-truth tick
@@ -86,6 +95,9 @@ struct SessionReport {
 
 // Throws McapError / std::runtime_error with a message naming the file on a bad recording.
 SessionReport ComputeSessionReport(const std::string& recording_path);
+// A recording split into parts (hexa_recorder record --split-*), oldest first: one report
+// over all of them, as if they were one file.
+SessionReport ComputeSessionReport(const std::vector<std::string>& parts);
 
 // Writes report.json, report.md, pose.csv, legs.csv into `out_dir`.
 void WriteSessionReport(const SessionReport& report, const std::string& out_dir);
