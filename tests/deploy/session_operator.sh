@@ -45,10 +45,12 @@ wait_for() {
   done
   return 1
 }
-# operator WANT_RC PATTERN COMMAND: hexa_operator's exit status and its message.
+# operator WANT_RC PATTERN COMMAND: hexa_operator's exit status and its message; KEY is the
+# session key of the session it commands (hexa_session writes OUT/session.key).
 operator() {
   want="$1"; pattern="$2"; shift 2
-  "$B/services/task_space/hexa_operator" --domain "$D" --linger 0.1 "$@" >"$DIR/op.log" 2>&1
+  "$B/services/task_space/hexa_operator" --domain "$D" --session-key "$KEY" --linger 0.1 "$@" \
+    >"$DIR/op.log" 2>&1
   rc=$?
   if [ "$rc" -eq "$want" ] && grep -q -- "$pattern" "$DIR/op.log"; then
     ok "hexa_operator $*: exit $rc: $(grep -- "$pattern" "$DIR/op.log" | head -n 1 | cut -c 1-220)"
@@ -72,6 +74,7 @@ else
 fi
 sleep 3
 if kill -0 "$SESSION" 2>/dev/null; then ok "1: the session waits in HOLD"; else bad "1: the session ended in HOLD without waiting for the operator"; fi
+KEY="$DIR/held/session.key"
 operator 4 "refused: the platform is held (SUPERVISOR_HOLD): only reset leaves HOLD" start
 operator 0 "reset: accepted" reset
 session_rc
@@ -115,6 +118,7 @@ grep -q "external_monitor: leg 0 tick [0-9]* FAULT_HOST_OVERLOAD" "$DIR/timeout/
   --timeout 300 >"$DIR/stop.console" 2>&1 &
 SESSION=$!
 wait_for "$DIR/stop/supervisor.log" "trajectory 'x' accepted" 180 || bad "3: the trajectory never started"
+KEY="$DIR/stop/session.key"
 operator 4 "refused: reset only leaves HOLD (state SUPERVISOR_" reset
 operator 0 "stop: accepted" stop
 session_rc
