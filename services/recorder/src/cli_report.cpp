@@ -9,6 +9,7 @@
 
 #include "cli.hpp"
 #include "hexa/recorder/report.hpp"
+#include "hexa/services/progress.hpp"
 
 namespace hexa::recorder::cli {
 
@@ -23,8 +24,10 @@ int RunReport(const std::vector<std::string>& argv) {
         "pose over the tracking window, relative errors, leg-length RMSE per leg, deadline\n"
         "misses per topic, control round-trip latency median/p99/max, wall and simulated time,\n"
         "faults; for a BS-SMC session each leg's adapted friction scale theta at the end of the\n"
-        "tracking window, min and max), pose.csv and legs.csv, and the PNG plots (deploy/plot_session.py, run with\n"
-        "/usr/bin/python3). --meta adds session facts (trajectory=combined,controller=bssmc,...);\n"
+        "tracking window, min and max), pose.csv, legs.csv and events.csv (faults, HOLD, take-overs,\n"
+        "operator commands), and the PNG plots, summary.png first (deploy/plot_session.py, run with\n"
+        "/usr/bin/python3). Progress on stderr (a line rewritten on a terminal, every 10 s otherwise).\n"
+        "--meta adds session facts (trajectory=combined,controller=bssmc,...);\n"
         "trajectory=<name> adds the paper's Table 9 / 10 figures for comparison.\n",
         stdout);
     return kExitOk;
@@ -33,7 +36,11 @@ int RunReport(const std::vector<std::string>& argv) {
   const std::string out = a.Get("out", "");
   if (out.empty()) throw UsageError("--out DIR is required");
   std::filesystem::create_directories(out);
-  SessionReport report = ComputeSessionReport(a.positional[0]);
+  SessionReport report;
+  {
+    progress::Line line("report: reading " + std::filesystem::path(a.positional[0]).filename().string());
+    report = ComputeSessionReport(a.positional[0], [&](double f) { line.Update(f); });
+  }
   for (const auto& kv : a.GetAll("meta")) {
     const auto eq = kv.find('=');
     if (eq == std::string::npos) throw UsageError("--meta wants key=value, got '" + kv + "'");
@@ -41,7 +48,8 @@ int RunReport(const std::vector<std::string>& argv) {
   }
   for (const auto& w : report.warnings) std::fprintf(stderr, "hexa_recorder report: warning: %s\n", w.c_str());
   WriteSessionReport(report, out);
-  std::printf("report: %s/report.md, report.json, pose.csv, legs.csv\n", out.c_str());
+  std::printf("report: %s/report.md, report.json, pose.csv, legs.csv, events.csv\n", out.c_str());
+  std::fflush(stdout);
   if (a.Has("no-plots")) return kExitOk;
   const std::string script = std::string(HEXA_SOURCE_DIR) + "/deploy/plot_session.py";
   std::string title = a.Get("title", "");

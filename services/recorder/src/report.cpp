@@ -11,6 +11,7 @@
 
 #include "hexa/core/pose.hpp"
 #include "hexa/recorder/recording.hpp"
+#include "report_events.hpp"
 #include "hexa/services/text.hpp"
 #include "recording.pb.h"
 
@@ -65,7 +66,18 @@ struct TickSlot {
 
 }  // namespace
 
-SessionReport ComputeSessionReport(const std::string& path) {
+SessionReport ComputeSessionReport(const std::string& path,
+                                   const std::function<void(double)>& progress) {
+  McapScanOptions read_options;
+  McapScanOptions loss_options{true, true, {}};
+  if (progress) {
+    read_options.progress = [&](uint64_t done, uint64_t size) {
+      progress(0.5 * static_cast<double>(done) / static_cast<double>(std::max<uint64_t>(size, 1)));
+    };
+    loss_options.progress = [&](uint64_t done, uint64_t size) {
+      progress(0.5 + 0.5 * static_cast<double>(done) / static_cast<double>(std::max<uint64_t>(size, 1)));
+    };
+  }
   SessionReport r;
   r.recording = path;
   std::vector<TickSlot> ticks;
@@ -82,6 +94,7 @@ SessionReport ComputeSessionReport(const std::string& path) {
   std::vector<PoseSample> poses;
   std::map<std::string, rec::NodeStatus> last_status;
   uint64_t first_log = UINT64_MAX, last_log = 0;
+  EventCollector events;
 
   const McapScanResult scan = ReadRecording(
       path, [&](const McapChannel& ch, const McapMessageView& view, const google::protobuf::Message&) {
@@ -100,6 +113,7 @@ SessionReport ComputeSessionReport(const std::string& path) {
           for (int i = 0; i < 6; ++i) s.truth_pose[i] = v[i];
           s.applied_v = Six(g.applied_valve_v());
           s.truth = true;
+          events.OnTruth(g.header().tick(), g.header().source_time_ns());
           if (g.command_age_ticks_size() == 6) {
             r.command_age_recorded = true;
             for (int i = 0; i < 6; ++i) {
@@ -123,6 +137,7 @@ SessionReport ComputeSessionReport(const std::string& path) {
           TickSlot& s = slot(m.header().tick());
           const int i = static_cast<int>(m.leg_id()) - 1;
           if (s.command[i]) return;
+          events.OnValveCommand(m.leg_id(), m.header().tick(), m.standby());
           s.command[i] = true;
           s.command_desired_m[i] = m.desired_length_m();
           s.command_v[i] = m.valve_v();
@@ -131,6 +146,7 @@ SessionReport ComputeSessionReport(const std::string& path) {
           s.command_friction_scale[i] = m.has_friction_scale() ? m.friction_scale() : std::nan("");
         } else if (ch.topic == "hexa_PoseReport") {
           const auto m = Parse<rec::PoseReport>(view, ch.topic);
+          events.OnPose(m.header().tick(), static_cast<int>(m.state()));
           poses.push_back({m.header().tick(), static_cast<int>(m.state()), Six(m.desired_pose()),
                            Six(m.estimated_pose())});
         } else if (ch.topic == "hexa_NodeStatus") {
@@ -142,9 +158,14 @@ SessionReport ComputeSessionReport(const std::string& path) {
           os << m.source_node() << ": leg " << m.leg_id() << " tick " << m.tick() << " "
              << rec::FaultReason_Name(m.reason()) << ": " << m.detail();
           r.faults.push_back(os.str());
+          events.OnFault(m);
+        } else if (ch.topic == "hexa_OperatorCommand") {
+          events.OnOperator(Parse<rec::OperatorCommand>(view, ch.topic));
         }
-      });
+      },
+      read_options);
   r.complete_file = scan.complete;
+  r.events = events.Finish();
   r.warnings = scan.problems;
   if (first_log <= last_log) r.wall_time_s = static_cast<double>(last_log - first_log) * 1e-9;
 
@@ -250,7 +271,7 @@ SessionReport ComputeSessionReport(const std::string& path) {
     else continue;
     r.deadline_misses[topic] += st.deadline_missed_total();
   }
-  const RecordingInfo info = Inspect(path, McapScanOptions{true, true});
+  const RecordingInfo info = Inspect(path, loss_options);
   for (const auto& ch : info.channels)
     if (ch.loss_analysed) r.missing[ch.topic] = ch.missing;
   return r;
@@ -400,7 +421,7 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
   {
     std::ofstream m(dir + "/report.md");
     if (!m) throw std::runtime_error("cannot write " + dir + "/report.md");
-    m << "# Session report\n\n";
+    m << "# Session report\n\n![summary: facts, RMSE, events, errors, path](summary.png)\n\n";
     for (const auto& [k, v] : r.meta) m << "- " << k << ": " << v << "\n";
     m << "- recording: `" << r.recording << "`" << (r.complete_file ? "" : " (INCOMPLETE FILE)")
       << "\n- simulated time " << Json(r.sim_time_s) << " s, wall time " << Json(r.wall_time_s)
@@ -511,14 +532,16 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
     m << "\n## Faults\n\n";
     if (r.faults.empty()) m << "none\n";
     for (const auto& f : r.faults) m << "- " << f << "\n";
-    m << "\n## Plots\n\npose_tracking.png, pose_error.png, leg_lengths.png, valve_voltages.png, "
-         "path_3d.png\n";
+    m << "\n## Plots\n\nsummary.png, pose_tracking.png, pose_error.png, leg_lengths.png, "
+         "valve_voltages.png, path_3d.png (the tracking window shaded, faults, HOLD, take-overs "
+         "and operator commands marked: events.csv; what each marks: plots.json)\n";
   }
+  WriteEventsCsv(r.events, dir + "/events.csv");
   {
     std::ofstream p(dir + "/pose.csv");
-    p << "time_s";
+    p << "time_s [s]";
     for (const char* w : {"desired", "true", "measured"})
-      for (const char* a : kAxes) p << "," << w << "_" << a;
+      for (int i = 0; i < 6; ++i) p << "," << w << "_" << kAxes[i] << (i < 3 ? " [m]" : " [rad]");
     p << "\n";
     char buf[32];
     for (const auto& row : r.pose_rows) {
@@ -531,9 +554,14 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
   }
   {
     std::ofstream l(dir + "/legs.csv");
-    l << "time_s";
-    for (const char* w : {"desired_length_m_", "measured_length_m_", "valve_v_", "friction_scale_"})
-      for (int i = 1; i <= 6; ++i) l << "," << w << i;
+    l << "time_s [s]";
+    for (const char* w : {"desired_length_m_%d [m]", "measured_length_m_%d [m]", "valve_v_%d [V]",
+                          "friction_scale_%d [1]"})
+      for (int i = 1; i <= 6; ++i) {
+        char name[40];
+        std::snprintf(name, sizeof name, w, i);
+        l << "," << name;
+      }
     l << "\n";
     char buf[32];
     for (const auto& row : r.leg_rows) {
