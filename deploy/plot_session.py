@@ -234,10 +234,12 @@ def plot_tracking(s, title):
         k, unit = scale(axis)
         marks = decorate(ax, s, label_marks=i in (0, 3))
         ax.plot(t, k * s.pose[f"desired_{axis}"], "k--", lw=1.0, label="desired", zorder=4)
-        ax.plot(t, k * s.pose[f"true_{axis}"], color="tab:blue", lw=2.2, alpha=0.55,
-                label="ground truth (plant)", zorder=5)
-        ax.plot(t, k * s.pose[f"measured_{axis}"], color="tab:orange", lw=0.9, ls=(0, (3, 1)),
-                label="measured (GQFK + IMU)", zorder=6)
+        # The measured pose (noisier) as a wide pale band, the ground truth thin and dark on
+        # top: both stay visible where they overlap.
+        ax.plot(t, k * s.pose[f"measured_{axis}"], color="tab:orange", lw=2.4, alpha=0.45,
+                label="measured (GQFK + IMU)", zorder=5)
+        ax.plot(t, k * s.pose[f"true_{axis}"], color="navy", lw=0.8,
+                label="ground truth (plant)", zorder=6)
         r = s.rmse("rmse_vs_ground_truth", axis)
         rmse[axis] = r
         ax.set_title(f"{axis}: RMSE vs ground truth " + (f"{r:.2f} {unit}" if r is not None else "-"),
@@ -389,7 +391,7 @@ def plot_valves(s, title):
     fig.legend(handles=handles + legend_handles(s), loc="lower center", ncol=5, fontsize=8)
     fig.suptitle(f"{title}: valve commands the plant applied, closed (null) at 5 V "
                  "(cf. paper Figs 14-19, 30)")
-    fig.tight_layout(rect=(0, 0.03, 1, 1))
+    fig.tight_layout(rect=(0, 0.03, 1, 0.985))
     save(fig, s, "valve_voltages.png", {"markers": marks[1], "markers_per_leg": marks,
                                         "zoom_s": zoom})
 
