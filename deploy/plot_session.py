@@ -122,7 +122,8 @@ class Session:
         self.report = json.load(open(path)) if os.path.exists(path) else {}
         self.meta = self.report.get("session", {})
         self.events += injected_faults(self.meta)
-        self.events.sort(key=lambda e: e["time_s"])
+        # At one time the injection first, then what it caused.
+        self.events.sort(key=lambda e: (e["time_s"], e["kind"] != "injected"))
         self.end_s = float(max(np.nanmax(self.pose["time_s"]), np.nanmax(self.legs["time_s"])))
         self.windows = self.tracking_windows()
         self.marks = self.mark_list()
@@ -150,6 +151,9 @@ class Session:
         return marks
 
     def rmse(self, key, axis):
+        """In mm / deg; None when the session never tracked (no window, no RMSE)."""
+        if not self.report.get("tracking_pose_samples"):
+            return None
         v = self.report.get(key, {}).get(axis + ("_m" if axis in "xyz" else "_rad"))
         return None if v is None else v * (1000.0 if axis in "xyz" else 180.0 / np.pi)
 
@@ -298,6 +302,8 @@ def plot_legs(s, title):
     t = s.legs["time_s"]
     marks, rmse = {}, {}
     rms = s.report.get("leg_length_rmse_m", [None] * 6)
+    if not s.report.get("tracking_pose_samples"):
+        rms = [None] * 6  # never tracked: no window, no RMSE
     for leg in range(1, 7):
         ax = panels[leg - 1]
         marks[leg] = decorate(ax, s, label_marks=leg in (1, 4), leg=leg)
@@ -443,6 +449,8 @@ def plot_summary(s, title):
         s.report.get("final_supervisor_state", "?")))
     if s.windows:
         lines.append("tracking window " + ", ".join(f"{a:.2f}-{b:.2f} s" for a, b in s.windows))
+    else:
+        lines.append("never tracked: no tracking window, no RMSE")
     text.text(0, 1, "\n".join(lines), va="top", fontsize=9, family="monospace")
     header = ["", "x mm", "y mm", "z mm", "roll deg", "pitch deg", "yaw deg"]
     cells = []

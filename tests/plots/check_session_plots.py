@@ -93,13 +93,19 @@ def main():
     windows = tracking["tracking_windows_s"]
     states = [e for e in ev if e["kind"] == "state"]
     starts = [e["time_s"] for e in states if e["label"] == "TRACKING"]
-    check(len(windows) >= 1 and starts and abs(windows[0][0] - starts[0]) < 1e-9,
-          f"tracking window shaded from the first TRACKING report ({windows})")
+    if starts:
+        check(len(windows) >= 1 and abs(windows[0][0] - starts[0]) < 1e-9,
+              f"tracking window shaded from the first TRACKING report ({windows})")
+    else:
+        check(windows == [], "no TRACKING report, no tracking window shaded")
     # The RMSE in the titles is the report's, in mm and deg.
     rm = tracking["rmse_vs_ground_truth"]
-    check(abs(rm["x"] - 1000 * report["rmse_vs_ground_truth"]["x_m"]) < 1e-6 and
-          abs(rm["yaw"] - 57.29577951308232 * report["rmse_vs_ground_truth"]["yaw_rad"]) < 1e-6,
-          f"RMSE per axis shown as the report's (x {rm['x']:.3f} mm, yaw {rm['yaw']:.3f} deg)")
+    if report["tracking_pose_samples"] > 0:
+        check(abs(rm["x"] - 1000 * report["rmse_vs_ground_truth"]["x_m"]) < 1e-6 and
+              abs(rm["yaw"] - 57.29577951308232 * report["rmse_vs_ground_truth"]["yaw_rad"]) < 1e-6,
+              f"RMSE per axis shown as the report's (x {rm['x']:.3f} mm, yaw {rm['yaw']:.3f} deg)")
+    else:
+        check(all(v is None for v in rm.values()), f"no tracking, no RMSE shown ({rm})")
     faults, holds = marks(tracking, "fault"), marks(tracking, "hold")
     takeovers = marks(tracking, "takeover")
 
@@ -123,8 +129,10 @@ def main():
               "its label names the reason (command not finite / out of range)")
         check(len(holds) == 1 and leg3 and 0 <= holds[0]["time_s"] - leg3[0]["time_s"] <= 0.05,
               f"HOLD marked within 50 ms of the detection ({holds})")
-        check(holds and abs(windows[-1][1] - holds[0]["time_s"]) < 1e-9,
-              f"the tracking window ends at HOLD ({windows})")
+        # The fault comes during the blend to the start pose (tracking begins at 2 s): the
+        # platform never tracked, and no window is shaded.
+        check(not starts and windows == [] and states[-1]["label"] == "HOLD",
+              f"never tracked, ends in HOLD ({[e['label'] for e in states]})")
         per_leg = plots["leg_lengths.png"]["markers_per_leg"]
         check(any(m["kind"] == "fault" and m["leg"] == 3 for m in per_leg["3"]),
               "leg 3's panel of leg_lengths.png carries the fault")
