@@ -412,8 +412,8 @@ int RunRecord(const std::vector<std::string>& argv) {
   const int64_t flush_ns = static_cast<int64_t>(flush_ms * 1e6);
   const int64_t batch_ns = static_cast<int64_t>(batch_ms * 1e6);
   int64_t next_flush_ns = start_ns + flush_ns;
-  // A progress line every 5 s of wall time on stderr (hexa_session shows the newest one).
-  constexpr int64_t kProgressPeriodNs = 5'000'000'000;
+  // A progress line every second of wall time on stderr (hexa_session shows the newest one).
+  constexpr int64_t kProgressPeriodNs = 1'000'000'000;
   int64_t next_progress_ns = start_ns + kProgressPeriodNs;
   while (!shutdown.requested()) {
     node::service_manager::Watchdog();
