@@ -183,12 +183,36 @@ def decorate(ax, s, label_marks=False, leg=None):
             else:
                 groups.append([m])
         for g in groups:
-            ax.annotate("\n".join(m["label"] for m in g), (g[0]["time_s"], 1.0),
+            ax.annotate("\n".join(group_labels(g)), (g[0]["time_s"], 1.0),
                         xycoords=("data", "axes fraction"), xytext=(3, -3),
                         textcoords="offset points", rotation=90, va="top", ha="left", fontsize=7,
                         color=MARK_STYLE[g[0]["kind"]][0], zorder=7,
                         bbox=dict(boxstyle="square,pad=0.1", fc="white", ec="none", alpha=0.7))
     return drawn
+
+
+def group_labels(marks):
+    """Labels of marks drawn together; faults of one reason on several legs as one line
+    ("legs 1,2,6 SETPOINT_STALE")."""
+    lines, by_reason = [], {}
+    for m in marks:
+        f = re.match(r"leg (\d) (\S+) \((.*)\)$", m["label"]) if m["kind"] == "fault" else None
+        if not f:
+            lines.append(m["label"])
+            continue
+        if f.group(2) not in by_reason:
+            by_reason[f.group(2)] = []
+            lines.append(f.group(2))  # placeholder, filled below
+        if f.group(1) not in by_reason[f.group(2)]:
+            by_reason[f.group(2)].append(f.group(1))
+    out = []
+    for line in lines:
+        legs = by_reason.get(line)
+        if legs is None:
+            out.append(line)
+        else:
+            out.append(("legs " if len(legs) > 1 else "leg ") + ",".join(sorted(legs)) + " " + line)
+    return out
 
 
 def legend_handles(s):
