@@ -72,11 +72,11 @@ def load_csv(path):
     if not os.path.exists(path):
         sys.exit(f"plot_session: missing {path}")
     with open(path, newline="") as f:
-        rows = list(csv.reader(f))
-    if len(rows) < 2:
+        header = next(csv.reader(f), [])
+    names = [re.sub(r"\s*\[.*\]$", "", h) for h in header]
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    if data.shape[0] == 0:
         sys.exit(f"plot_session: {path} has no rows")
-    names = [re.sub(r"\s*\[.*\]$", "", h) for h in rows[0]]
-    data = np.array([[float(v) if v not in ("", "nan") else np.nan for v in r] for r in rows[1:]])
     return {n: data[:, i] for i, n in enumerate(names)}
 
 
