@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Attributes the datagrams a lossy link dropped to the DDS writers whose samples they carried,
-and lays them beside what the recorder says it missed (docs/deployment.md, "The lossy recorder
-link").
+and lays them beside what the recorder says it missed (docs/measurements/deployment.md, "The lossy
+recorder link").
 
   dropped_datagrams.py --pcap LOGS/dropped.pcap --recorder-log LOGS/hexa-recorder.log
 

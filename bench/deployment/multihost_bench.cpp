@@ -1,4 +1,4 @@
-// hexa_multihost_bench: the networked deployment's figures (docs/deployment.md, "Measured"):
+// hexa_multihost_bench: the networked deployment's figures (docs/measurements/deployment.md):
 // five hosts in network namespaces, every process from its generated unit, DDS Security on
 // (or off for the side-by-side cost), z trajectory. Scenarios:
 //   lockstep        secured lockstep session: speed, RMSE, round trip, loss, bit-identity
@@ -31,6 +31,7 @@
 #include "hexa/recorder/recording.hpp"
 #include "hexa/recorder/report.hpp"
 #include "hexa/services/cli.hpp"
+#include "hexa/services/json.hpp"
 #include "lab_session.hpp"
 #include "recording.pb.h"
 
@@ -371,12 +372,16 @@ void Print(const Row& r) {
     std::printf("    nftables: %lld of %lld packets dropped on the lossy host's input (%.2f %%)\n", r.dropped,
                 r.input_packets, r.input_packets > 0 ? 100.0 * static_cast<double>(r.dropped) / static_cast<double>(r.input_packets) : 0.0);
   // One machine-readable line per run (bench/deployment/cpu_utilisation.py).
-  std::printf("RUN {\"scenario\": \"%s\", \"completed\": %s, \"ready_ns\": %lld, \"end_ns\": %lld, "
-              "\"first_fault_ns\": %lld, \"first_fault\": \"%s\", \"dropped\": %lld, \"missing\": %llu, "
-              "\"logs\": \"%s\"}\n",
-              r.scenario.c_str(), r.completed ? "true" : "false", static_cast<long long>(r.ready_ns),
-              static_cast<long long>(r.end_ns), static_cast<long long>(r.first_fault_ns), r.first_fault.c_str(),
-              r.dropped, static_cast<unsigned long long>(r.missing), r.work_dir.c_str());
+  const hexa::json::Value run = {{"scenario", r.scenario},
+                                 {"completed", r.completed},
+                                 {"ready_ns", static_cast<long long>(r.ready_ns)},
+                                 {"end_ns", static_cast<long long>(r.end_ns)},
+                                 {"first_fault_ns", static_cast<long long>(r.first_fault_ns)},
+                                 {"first_fault", r.first_fault},
+                                 {"dropped", r.dropped},
+                                 {"missing", static_cast<unsigned long long>(r.missing)},
+                                 {"logs", r.work_dir}};
+  std::printf("RUN %s\n", hexa::json::Dump(run).c_str());
   std::fflush(stdout);
 }
 

@@ -1,6 +1,5 @@
 #!/bin/sh
-# One real-time series of the multi-host benchmark with its witnesses (docs/deployment.md,
-# "Measured"): hexa_cpu_stall_probe (SCHED_FIFO 99 per CPU, stalls > 2 ms) and the per-CPU
+# One real-time series of the multi-host benchmark with its witnesses (docs/measurements/deployment.md): hexa_cpu_stall_probe (SCHED_FIFO 99 per CPU, stalls > 2 ms) and the per-CPU
 # utilisation sampler (/proc/stat every 100 ms) run beside
 # `hexa_multihost_bench ARGS...`; then cpu_utilisation.py lays both beside each run.
 #   bench/deployment/rt_series.sh OUT_DIR BUILD_DIR [hexa_multihost_bench arguments...]

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Security's cost on one machine, side by side in one run (docs/deployment.md, "Measured").
+"""Security's cost on one machine, side by side in one run (docs/measurements/deployment.md).
 
 N rounds; each round runs, one after the other:
   - hexa_session --trajectory z --periods 1 in lockstep, without and with --secure

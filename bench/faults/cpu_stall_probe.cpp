@@ -30,6 +30,8 @@
 #include <thread>
 #include <vector>
 
+#include "hexa/services/json.hpp"
+
 namespace {
 
 std::atomic<bool> g_stop{false};
@@ -246,16 +248,14 @@ int main(int argc, char** argv) {
     }
     return (first < 0 || last < 0) ? -1 : last - first;
   };
-  FILE* f = std::fopen(o.out.c_str(), "w");
-  if (!f) {
-    std::fprintf(stderr, "hexa_cpu_stall_probe: cannot write %s: %s\n", o.out.c_str(), std::strerror(errno));
-    return 1;
-  }
-  std::fprintf(f, "{\"start_realtime_ns\": %lld, \"end_realtime_ns\": %lld, \"period_us\": %lld, "
-                  "\"threshold_us\": %lld, \"priority\": %d, \"steal_sampled\": %s,\n \"per_cpu\": [",
-               static_cast<long long>(start_ns), static_cast<long long>(NowNs(CLOCK_REALTIME)),
-               static_cast<long long>(o.period_us), static_cast<long long>(o.threshold_us), o.priority,
-               steal_ok ? "true" : "false");
+  hexa::json::Value out = {{"start_realtime_ns", static_cast<long long>(start_ns)},
+                           {"end_realtime_ns", static_cast<long long>(NowNs(CLOCK_REALTIME))},
+                           {"period_us", static_cast<long long>(o.period_us)},
+                           {"threshold_us", static_cast<long long>(o.threshold_us)},
+                           {"priority", o.priority},
+                           {"steal_sampled", steal_ok},
+                           {"per_cpu", hexa::json::Value::array()},
+                           {"events", hexa::json::Value::array()}};
   for (size_t k = 0; k < n; ++k) {
     int64_t max_us = 0, over5 = 0, over10 = 0;
     for (const auto& e : events[k]) {
@@ -263,21 +263,23 @@ int main(int argc, char** argv) {
       over5 += e.late_us > 5000;
       over10 += e.late_us > 10000;
     }
-    std::fprintf(f, "%s{\"cpu\": %d, \"wakeups\": %lld, \"stalls\": %zu, \"max_late_us\": %lld, "
-                    "\"over_5ms\": %lld, \"over_10ms\": %lld}",
-                 k ? ", " : "", o.cpus[k], static_cast<long long>(wakeups[k]), events[k].size(),
-                 static_cast<long long>(max_us), static_cast<long long>(over5), static_cast<long long>(over10));
+    out["per_cpu"].push_back({{"cpu", o.cpus[k]},
+                              {"wakeups", static_cast<long long>(wakeups[k])},
+                              {"stalls", events[k].size()},
+                              {"max_late_us", static_cast<long long>(max_us)},
+                              {"over_5ms", static_cast<long long>(over5)},
+                              {"over_10ms", static_cast<long long>(over10)}});
   }
-  std::fprintf(f, "],\n \"events\": [");
-  bool first_event = true;
   for (size_t k = 0; k < n; ++k)
-    for (const auto& e : events[k]) {
-      std::fprintf(f, "%s\n  {\"cpu\": %d, \"due_realtime_ns\": %lld, \"late_us\": %lld, \"steal_jiffies\": %lld}",
-                   first_event ? "" : ",", e.cpu, static_cast<long long>(e.due_realtime_ns),
-                   static_cast<long long>(e.late_us), steal_around(k, e));
-      first_event = false;
-    }
-  std::fprintf(f, "]}\n");
-  std::fclose(f);
+    for (const auto& e : events[k])
+      out["events"].push_back({{"cpu", e.cpu},
+                               {"due_realtime_ns", static_cast<long long>(e.due_realtime_ns)},
+                               {"late_us", static_cast<long long>(e.late_us)},
+                               {"steal_jiffies", steal_around(k, e)}});
+  std::string error;
+  if (!hexa::json::WriteFile(o.out, out, 1, error)) {
+    std::fprintf(stderr, "hexa_cpu_stall_probe: %s\n", error.c_str());
+    return 1;
+  }
   return 0;
 }

@@ -24,6 +24,7 @@
 
 #include "hexa/comm/comm.hpp"
 #include "hexa/services/cli.hpp"
+#include "hexa/services/json.hpp"
 
 namespace {
 
@@ -72,15 +73,20 @@ void MarkFirstTick() {
   if (!g_first_tick_seen.exchange(true)) g_cpu_at_first_tick = CpuNow();
 }
 
-void PrintCpu(const Options& o, const char* extra = "") {
+void PrintCpu(const Options& o, const json::Value& extra = json::Value::object()) {
   const Cpu now = CpuNow();
   const double user = now.user_s - g_cpu_at_first_tick.user_s;
   const double sys = now.sys_s - g_cpu_at_first_tick.sys_s;
   const long nvcsw = now.voluntary - g_cpu_at_first_tick.voluntary;
   const long nivcsw = now.involuntary - g_cpu_at_first_tick.involuntary;
-  std::printf("{\"role\": \"%s\", \"leg\": %d, \"cpu_user_s\": %.4f, \"cpu_sys_s\": %.4f, "
-              "\"voluntary_switches\": %ld, \"involuntary_switches\": %ld%s}\n",
-              o.role.c_str(), o.leg, user, sys, nvcsw, nivcsw, extra);
+  json::Value line = {{"role", o.role},
+                      {"leg", o.leg},
+                      {"cpu_user_s", user},
+                      {"cpu_sys_s", sys},
+                      {"voluntary_switches", nvcsw},
+                      {"involuntary_switches", nivcsw}};
+  for (const auto& [k, v] : extra.items()) line[k] = v;
+  std::printf("%s\n", json::Dump(line).c_str());
   std::fflush(stdout);
 }
 
@@ -276,19 +282,17 @@ class Plant {
   comm::Reader<hexa_msg_LegSetpoint>& setpoints() { return setpoints_; }
   bool done() const { return done_; }
 
-  std::string Summary() {
+  json::Value Summary() {
     std::vector<int64_t> t = tick_ns_;
     std::sort(t.begin(), t.end());
     auto q = [&](double f) {
       return t.empty() ? 0.0 : static_cast<double>(t[std::min(t.size() - 1, static_cast<std::size_t>(f * t.size()))]) * 1e-6;
     };
-    char text[256];
-    std::snprintf(text, sizeof text,
-                  ", \"ticks\": %zu, \"tick_ms_median\": %.4f, \"tick_ms_p99\": %.4f, "
-                  "\"tick_ms_max\": %.4f, \"wall_s\": %.4f",
-                  t.size(), q(0.5), q(0.99), t.empty() ? 0.0 : static_cast<double>(t.back()) * 1e-6,
-                  static_cast<double>(Mono_ns() - run_start_ns_) * 1e-9);
-    return text;
+    return {{"ticks", t.size()},
+            {"tick_ms_median", q(0.5)},
+            {"tick_ms_p99", q(0.99)},
+            {"tick_ms_max", t.empty() ? 0.0 : static_cast<double>(t.back()) * 1e-6},
+            {"wall_s", static_cast<double>(Mono_ns() - run_start_ns_) * 1e-9}};
   }
   void StartRun() {
     run_start_ns_ = Mono_ns();
@@ -335,9 +339,7 @@ int RunRecorder(const comm::Participant& p, const Options& o) {
     while (sp.Take() > 0) samples += static_cast<long long>(sp.count());
     if (samples != before) last_data = Mono_ns();
   }
-  char extra[64];
-  std::snprintf(extra, sizeof extra, ", \"samples\": %lld", samples);
-  PrintCpu(o, extra);
+  PrintCpu(o, {{"samples", samples}});
   return 0;
 }
 
@@ -443,7 +445,7 @@ int main(int argc, char** argv) {
     } else {
       Drive(p, node, o.listener, start, node.valves());
     }
-    PrintCpu(o, node.Summary().c_str());
+    PrintCpu(o, node.Summary());
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "loop_fanout %s: %s\n", o.role.c_str(), e.what());

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The end of real-time sessions (docs/performance.md, "The end of a real-time session"): runs N
+# The end of real-time sessions (docs/measurements/performance.md, "The end of a real-time session"): runs N
 # real-time sessions (combined trajectory, 1 period, seeds 1..N) with each build given,
 # alternating builds run by run, and prints per session: exit code, the plant's error lines,
 # those within the last 60 ticks, and how many legs' writers were alive when the plant stopped.

@@ -185,7 +185,7 @@ BsSmcFeedback BsSmcController::Begin(const BsSmcInput& in) {
   friction_n += DitherForceN(in.tick, vd);
   double phi_hat = 0.0;
   if (in.has_feedforward) {
-    // Known load (issue 14): the platform inverse dynamics takes the place of M x_ddot_d and
+    // Known load: the platform inverse dynamics takes the place of M x_ddot_d and
     // of the lumped gravity constant F_g; M stays as the gain of the feedback M lambda e_dot.
     const double c_hat = -m.air.atmosphere_pressure_pa * cyl.rod_area_m2 - in.feedforward_force_n -
                          friction_n;  // eq 14
@@ -219,7 +219,7 @@ BsSmcFeedback BsSmcController::Begin(const BsSmcInput& in) {
   const double feedback_n = -p.effective_mass_kg * p.lambda_1_s * edot_m_s -
                             p.switching_gain_n * std::tanh(p.boundary_layer_xi_s_m * s_m_s) -
                             p.reaching_proportional_n_s_m * s_m_s;
-  // Optional band-limited rate of the feedback part (issue 14d, deviation from eq 38):
+  // Optional band-limited rate of the feedback part (deviation from eq 38):
   // dirty derivative s / (tau s + 1) by backward Euler, y_k = (tau y_k-1 + u_k - u_k-1) / (tau + h).
   // Observer variant: the rate is analytic, from the leg observer's acceleration and
   // velocity, low-passed y_k = (tau y_k-1 + h r_k) / (tau + h).
@@ -262,7 +262,7 @@ void BsSmcController::Complete(const BsSmcInput& in, const BsSmcFeedback* applie
   const double s_m_s = stage_.s_m_s;
   const double vd = in.desired_velocity_m_s;
   // eq 45, plus the proportional reaching term -k_s S and the integral term (not in the paper).
-  // Coupled (docs/task_space.md "Coupled leg feedback"): the feedback part is the mix the
+  // Coupled (docs/measurements/control.md "Coupled leg feedback"): the feedback part is the mix the
   // caller hands over instead of this leg's own.
   const double phi =
       applied ? stage_.phi_model_n + applied->force_n - integral_force_n_

@@ -225,7 +225,7 @@ void LegController::FinishCoupled(const BsSmcFeedback& applied, LegControllerOut
 }
 
 bool LegController::Prepare(const LegControllerInput& raw, LegControllerOutput& out) {
-  // Kinematic calibration of the potentiometer (rig overlay, issue 14): the reading of piston
+  // Kinematic calibration of the potentiometer (rig overlay): the reading of piston
   // position x is offset + gain x; the law works on the corrected length.
   LegControllerInput calibrated;
   const LegControllerInput* input = &raw;

@@ -149,7 +149,7 @@ void LockstepSimulation::UpdateCoupling(const Pose& pose) {
 }
 
 void LockstepSimulation::RunLegsCoupled(const LegArray<LegControllerInput>& in) {
-  // Two passes (docs/task_space.md "Coupled leg feedback"): every leg's own feedback part,
+  // Two passes (docs/measurements/control.md "Coupled leg feedback"): every leg's own feedback part,
   // then each running BS-SMC completes with sum_j W_ij f_j over the legs that run it (a
   // holding leg contributes nothing).
   // The observers see the legs' accelerations on the coupled platform: m_obs (M_ls^-1 F)_i.

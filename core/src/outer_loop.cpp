@@ -36,7 +36,7 @@ void OuterLoop::Update(const OuterLoopInput& input, OuterLoopOutput& output) noe
   LegJacobian(geometry_, input.desired, J);
   const Vector6d mapped = J * output.error;
   // What is integrated: translation and orientation errors weighted separately
-  // (docs/tuning.md, "Outer loop"); mapped_error_m stays the plain J e.
+  // (docs/measurements/tuning.md, "Outer loop"); mapped_error_m stays the plain J e.
   Vector6d weighted = output.error;
   weighted.head<3>() *= params_.translation_gain_scale;
   const Vector6d step = J * weighted;

@@ -54,7 +54,7 @@ void PiController::Update(const PiInput& in, PiOutput& out) {
   double rate_v = p.velocity_feedforward_v_s_m * in.desired_velocity_m_s +
                   p.rate_damping_v_s_m * (in.desired_velocity_m_s - v_m_s);
   if (in.has_feedforward) {
-    // Known load (issue 14): drive the measured pneumatic force towards the feed-forward.
+    // Known load: drive the measured pneumatic force towards the feed-forward.
     const CylinderParams& c = config_.cylinder;
     const double force_n = in.cap_pressure_pa * c.cap_area_m2 - in.rod_pressure_pa * c.annulus_area_m2 -
                            config_.atmosphere_pressure_pa * c.rod_area_m2;

@@ -289,7 +289,7 @@ namespace {
 
 // Solves M x = b for the symmetric positive definite 6x6 mass matrix, given its lower
 // triangle, by an unrolled Cholesky factorisation (M = L L^T). Eigen's generic LLT costs
-// several times more for this fixed size (docs/plant.md, "Speed").
+// several times more for this fixed size (docs/measurements/plant.md, "Speed").
 Vector6d SolveSpd6(double m[6][6], const Vector6d& b) {
   double inv_diag[6];
 #pragma GCC unroll 6

@@ -352,7 +352,7 @@ void Supervisor::Update(const SupervisorInput& input, SupervisorOutput& output) 
   output.command_result = CommandResult::kNone;
   output.fault_raised = false;
 
-  // 0. Calibrated lengths (reading of piston position x = offset + gain x, issue 14).
+  // 0. Calibrated lengths (reading of piston position x = offset + gain x).
   sensed_length_m_ = input.length_m;
   if (potentiometer_calibrated_) {
     const double mid = rig_.cylinder.mid_stroke_length_m;

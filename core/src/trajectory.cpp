@@ -1,5 +1,5 @@
 // Trajectories of the task-space supervisor: blend, tracking, stop (see trajectory.hpp and
-// docs/task_space.md for the formulas).
+// docs/trajectories.md for the formulas).
 #include "hexa/core/trajectory.hpp"
 #include "hexa/core/math_constants.hpp"
 

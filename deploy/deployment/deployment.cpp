@@ -104,7 +104,7 @@ void Validate(const Deployment& d, Checker& c) {
   if (d.security().certificate_days() > 36500)
     c.Error(L.Of("security"), "security.certificate_days",
             "value " + std::to_string(d.security().certificate_days()) + " (limit 1..36500)");
-  // The issue asks protected discovery and liveliness: signed at least.
+  // Discovery and liveliness must be protected: signed at least.
   if (d.security().discovery_protection() == deployment::NONE)
     c.Error(L.Of("security"), "security.discovery_protection",
             "NONE: discovery must be protected (SIGN or ENCRYPT)");

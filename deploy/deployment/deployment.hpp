@@ -14,14 +14,14 @@ inline constexpr char kDefaultBinDir[] = "/usr/bin";
 inline constexpr char kDefaultConfigDir[] = "/etc/hexa";
 inline constexpr char kDefaultRecordDir[] = "/var/lib/hexa/recordings";
 inline constexpr unsigned kDefaultCertificateDays = 3650;
-// security.metadata_protection when unset (docs/deployment.md, "Governance": the payload is
+// security.metadata_protection when unset (docs/security.md, "Governance": the payload is
 // encrypted either way; what NONE saves and gives up is measured and stated there).
 inline constexpr deployment::Protection kDefaultMetadataProtection = deployment::ENCRYPT;
 // security.loop_metadata_protection when unset: the same as metadata_protection (ENCRYPT by
 // default: security is not weakened by default). NONE on the 1 kHz loop topics is an explicit
 // choice of the deployment file: it took the secured real-time loop from 0 of 8 to 3 of 5
 // completed sessions on a 2-vCPU machine; what it gives up (replay of a captured sample, forged
-// heartbeats / acknowledgements on those topics): docs/deployment.md, "Governance".
+// heartbeats / acknowledgements on those topics): docs/security.md, "Governance".
 inline constexpr int kMaxDomainId = 230;
 
 struct LoadedDeployment {

@@ -24,7 +24,7 @@ std::string Fmt(double v) {
   return os.str();
 }
 
-// What each role may publish and subscribe (the issue's access-control table): only the
+// What each role may publish and subscribe (the access-control table of docs/security.md): only the
 // plant / I/O node publishes sensors, IMU, ground truth and the tracker's poses; only leg N's identities publish
 // ValveCommand, and only in partition LegPartition(N); only the supervisor publishes
 // setpoints and pose reports; only the operator publishes OperatorCommand; the recorder
@@ -165,7 +165,7 @@ bool HostHasControlProcess(const Host& host) {
 int DefaultPriority(Role role) {
   switch (role) {
     // The legs highest: the tightest deadline (10 ms lease) and the shortest work; a plant or
-    // supervisor above them on their CPU made them lapse (docs/deployment.md, "Where the
+    // supervisor above them on their CPU made them lapse (docs/measurements/deployment.md, "Where the
     // lapses' milliseconds go"). The same defaults as the services' own.
     case deployment::PLANT: return 70;        // hexa_plant_sim: late, its schedule slips
     case deployment::LEG: return 80;          // hexa_leg_ctrl
@@ -394,7 +394,7 @@ std::vector<std::string> CommandLine(const Deployment& d, const ProcessPlan& pla
                         "/session-$(date -u +%Y%m%d-%H%M%S).mcap --domain " + domain +
                         " --dds-config " + dds_config;
       // Real time: the periodic topics best effort, so that no control writer repairs what
-      // the recorder's link drops (docs/deployment.md, "The lossy recorder link").
+      // the recorder's link drops (docs/measurements/deployment.md, "The lossy recorder link").
       if (realtime) cmd += " --rt-priority " + std::to_string(prio) + " --periodic-reliability best-effort";
       for (const auto& a : p.arg()) cmd += " " + a;
       return {"/bin/sh", "-c", cmd};

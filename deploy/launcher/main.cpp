@@ -25,6 +25,7 @@
 #include "hexa/core/excitation.hpp"
 #include "hexa/core/plant_faults.hpp"
 #include "hexa/services/cli.hpp"
+#include "hexa/services/json.hpp"
 #include "identification.pb.h"
 #include "hexa/services/logging.hpp"
 #include "hexa/services/progress.hpp"
@@ -83,22 +84,22 @@ void WriteProcessTable(const std::string& out_dir, const std::vector<hexa::deplo
   double sim_s = 0.0;
   {
     std::ifstream summary(out_dir + "/plant.json");
-    const std::string text((std::istreambuf_iterator<char>(summary)), {});
-    if (const auto at = text.find("\"sim_time_s\": "); at != std::string::npos)
-      sim_s = std::strtod(text.c_str() + at + 14, nullptr);
+    const auto plant = hexa::json::Value::parse(summary, nullptr, false);  // no summary: 0
+    if (plant.is_object() && plant.contains("sim_time_s") && plant["sim_time_s"].is_number())
+      sim_s = plant["sim_time_s"].get<double>();
   }
-  std::ofstream json(out_dir + "/processes.json");
-  json << "{\n  \"wall_time_s\": " << wall_s << ",\n  \"sim_time_s\": " << sim_s
-       << ",\n  \"processes\": [";
+  hexa::json::Value json = {{"wall_time_s", wall_s}, {"sim_time_s", sim_s},
+                            {"processes", hexa::json::Value::array()}};
   double user = 0, sys = 0;
   std::string table;
   for (std::size_t k = 0; k < exits.size(); ++k) {
     const auto& e = exits[k];
     user += e.cpu_user_s;
     sys += e.cpu_system_s;
-    json << (k == 0 ? "" : ",") << "\n    {\"name\": \"" << e.name << "\", \"cpu_user_s\": "
-         << e.cpu_user_s << ", \"cpu_system_s\": " << e.cpu_system_s
-         << ", \"max_rss_kb\": " << e.max_rss_kb << "}";
+    json["processes"].push_back({{"name", e.name},
+                                 {"cpu_user_s", e.cpu_user_s},
+                                 {"cpu_system_s", e.cpu_system_s},
+                                 {"max_rss_kb", e.max_rss_kb}});
     char line[160];
     std::snprintf(line, sizeof line, "\n  %-16s user %7.3f s  system %7.3f s", e.name.c_str(),
                   e.cpu_user_s, e.cpu_system_s);
@@ -109,7 +110,10 @@ void WriteProcessTable(const std::string& out_dir, const std::vector<hexa::deplo
       table += line;
     }
   }
-  json << "\n  ],\n  \"cpu_user_s\": " << user << ",\n  \"cpu_system_s\": " << sys << "\n}\n";
+  json["cpu_user_s"] = user;
+  json["cpu_system_s"] = sys;
+  std::string error;
+  if (!hexa::json::WriteFile(out_dir + "/processes.json", json, 2, error)) log.error("{}", error);
   log.info("CPU time per process (whole life, start-up included):{}\n  {:<16} user {:7.3f} s  "
            "system {:7.3f} s{}",
            table, "all", user, sys,
@@ -127,7 +131,7 @@ int main(int argc, char** argv) {
   cli.AddOption("trajectory", "name|file.csv",
                 "x y z roll pitch yaw (pure motions, Table 9), combined (eq 49, Table 10), "
                 "calibration (kinematic calibration poses, with --tracker; docs/calibration.md), "
-                "or a CSV file (docs/task_space.md)", "combined");
+                "or a CSV file (docs/trajectories.md)", "combined");
   cli.AddChoice("controller", {"bssmc", "pi"}, "leg position controller", "bssmc");
   cli.AddChoice("profile", {"realistic", "ideal"}, "plant disturbance profile", "realistic");
   cli.AddChoice("mode", {"lockstep", "realtime"}, "time base", "lockstep");
@@ -194,7 +198,7 @@ int main(int argc, char** argv) {
   cli.AddOption("bridge-queue-kb", "n", "hexa_bridge --client-queue-kb", "4096");
   cli.AddFlag("secure", "DDS Security for the whole session: a project CA, one identity per "
                         "process, signed governance and permissions, encryption on the wire "
-                        "(files in <out>/security; docs/deployment.md)");
+                        "(files in <out>/security; docs/security.md)");
   cli.AddOption("rt-lease", "s",
                 "real time: liveliness lease of the leg controllers (a leg silent this long is "
                 "dead; docs/faults.md)", "0.01");
@@ -454,7 +458,7 @@ int main(int argc, char** argv) {
     // beside SCHED_FIFO peers is starved and loses samples.
     if (o.mode == "realtime" && o.rt_sched) r.argv.insert(r.argv.end(), {"--rt-priority", "50"});
     // Real time: the periodic topics best effort, as the controllers read them; no control
-    // writer repairs what the recorder misses (docs/deployment.md, "The lossy recorder link").
+    // writer repairs what the recorder misses (docs/measurements/deployment.md, "The lossy recorder link").
     if (o.mode == "realtime") r.argv.insert(r.argv.end(), {"--periodic-reliability", "best-effort"});
     r.env = env;
     r.env["HEXA_IDENTITY"] = "recorder";

@@ -90,7 +90,7 @@ class Source final : public SourceBase {
       dds_qset_durability(qos.get(), DDS_DURABILITY_VOLATILE);
     }
     if (kind == comm::TopicKind::kValveCommand) {
-      // The leg controllers write in their leg's partition (docs/deployment.md, DDS Security).
+      // The leg controllers write in their leg's partition (docs/security.md).
       const auto partitions = comm::EveryLegPartitionAndDefault();
       std::vector<const char*> names;
       for (const auto& n : partitions) names.push_back(n.c_str());

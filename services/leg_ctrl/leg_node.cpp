@@ -95,7 +95,7 @@ LegNode::LegNode(const LegNodeOptions& options, const config::SystemConfig& conf
       setpoint_reader_(participant_, setpoint_topic_, comm::EndpointRole::kControlReader,
                        ControlReaderQos(options, comm::TopicKind::kLegSetpoint), kSetpointRing,
                        {comm::LegPartition(options.leg)}),
-      // Leg N's partition: DDS Security grants it to leg N's identities only (docs/deployment.md).
+      // Leg N's partition: DDS Security grants it to leg N's identities only (docs/security.md).
       valve_writer_(participant_, valve_topic_, ValveQos(options),
                     {comm::LegPartition(options.leg)}),
       status_(participant_, name_),

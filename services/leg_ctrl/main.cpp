@@ -68,7 +68,7 @@ int main(int argc, char** argv) {
     if (!config) return 1;
     // Before the participant exists: Cyclone's threads inherit the policy (docs/platform_notes.md).
     // 80: the highest of the loop's processes; a leg has the tightest deadline (its 10 ms
-    // liveliness lease) and the shortest work (docs/deployment.md, "Where the lapses' milliseconds go").
+    // liveliness lease) and the shortest work (docs/measurements/deployment.md, "Where the lapses' milliseconds go").
     auto latency_hold = hexa::node::ApplyScheduling(o.common, 80, *log);
     hexa::leg_ctrl::LegNode node(o, *config, log);
     const int rc = node.Run();

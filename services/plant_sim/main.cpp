@@ -134,7 +134,7 @@ int main(int argc, char** argv) {
     // Before the participant exists: Cyclone's threads inherit the policy (docs/platform_notes.md).
     // 70, below the legs (80): a tick of the simulation can cost a millisecond (stiff substeps),
     // and the plant above the legs on their CPU made their valve writers lapse
-    // (docs/deployment.md, "Where the lapses' milliseconds go"); late, the plant only slips.
+    // (docs/measurements/deployment.md, "Where the lapses' milliseconds go"); late, the plant only slips.
     auto latency_hold = hexa::node::ApplyScheduling(o.common, 70, *log);
     hexa::plant_sim::PlantNode node(o, *config, log);
     if (cli.Has("truth-out")) {

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "hexa/services/json.hpp"
 #include "hexa/services/service_manager.hpp"
 
 namespace hexa::plant_sim {
@@ -1062,53 +1063,49 @@ void PlantNode::LogCommandAges() const {
 
 void PlantNode::WriteSummary(int exit_code) const {
   if (options_.summary_path.empty()) return;
-  std::FILE* f = std::fopen(options_.summary_path.c_str(), "w");
-  if (f == nullptr) {
-    log_->error("cannot write the summary to {}", options_.summary_path);
-    return;
-  }
+  const bool realtime = options_.common.mode == node::TimeMode::kRealtime;
   const auto valve = valve_readers_.Snapshot();
-  std::fprintf(f, "{\n  \"mode\": \"%s\",\n  \"exit_code\": %d,\n  \"ticks\": %llu,\n"
-               "  \"sim_time_s\": %.6f,\n  \"valve_deadline_misses\": %u,\n"
-               "  \"loop_overruns\": %u,\n  \"lockstep_resends\": %llu,\n"
-               "  \"schedule_slips\": %llu,\n  \"slipped_s\": %.6f,\n"
-               "  \"loop_wall_s\": %.6f,\n  \"%s\": {\"median\": %.6f, \"p99\": %.6f, "
-               "\"max\": %.6f, \"mean\": %.6f},\n"
-               "  \"command_age_bins\": [\"0\", \"1\", \"2\", \"3-7\", \"8-15\", \">=16\"],\n"
-               "  \"legs\": [",
-               options_.common.mode == node::TimeMode::kRealtime ? "realtime" : "lockstep",
-               exit_code, static_cast<unsigned long long>(tick_),
-               static_cast<double>(tick_) * kTickS, valve.requested_deadline_missed_total,
-               overruns_, static_cast<unsigned long long>(resent_samples_),
-               static_cast<unsigned long long>(slips_.count()), static_cast<double>(slips_.total_ns()) * 1e-9,
-               static_cast<double>(loop_ended_ns_ - loop_started_ns_) * 1e-9,
-               options_.common.mode == node::TimeMode::kRealtime ? "wake_lateness_s" : "tick_wall_s",
-               tick_wall_.Quantile_s(0.5), tick_wall_.Quantile_s(0.99), tick_wall_.max_s(),
-               tick_wall_.mean_s());
+  json::Value j = {{"mode", realtime ? "realtime" : "lockstep"},
+                   {"exit_code", exit_code},
+                   {"ticks", tick_},
+                   {"sim_time_s", static_cast<double>(tick_) * kTickS},
+                   {"valve_deadline_misses", valve.requested_deadline_missed_total},
+                   {"loop_overruns", overruns_},
+                   {"lockstep_resends", resent_samples_},
+                   {"schedule_slips", slips_.count()},
+                   {"slipped_s", static_cast<double>(slips_.total_ns()) * 1e-9},
+                   {"loop_wall_s", static_cast<double>(loop_ended_ns_ - loop_started_ns_) * 1e-9}};
+  j[realtime ? "wake_lateness_s" : "tick_wall_s"] = {{"median", tick_wall_.Quantile_s(0.5)},
+                                                     {"p99", tick_wall_.Quantile_s(0.99)},
+                                                     {"max", tick_wall_.max_s()},
+                                                     {"mean", tick_wall_.mean_s()}};
+  j["command_age_bins"] = {"0", "1", "2", "3-7", "8-15", ">=16"};
+  j["legs"] = json::Value::array();
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     const CommandAgeHistogram& h = command_age_[i];
-    std::fprintf(f, "%s\n    {\"leg\": %zu, \"command_age\": [", i == 0 ? "" : ",", i + 1);
-    for (int k = 0; k < CommandAgeHistogram::kBins; ++k)
-      std::fprintf(f, "%s%llu", k == 0 ? "" : ", ", static_cast<unsigned long long>(h.bins[static_cast<std::size_t>(k)]));
-    std::fprintf(f, "], \"no_command\": %llu, \"late_ticks\": %llu, \"faults\": %u, "
-                 "\"dead\": %s, \"forced_reason\": %d, \"interlock\": %s, "
-                 "\"compute_max_s\": %.6f, \"compute_over_budget\": %llu, \"cycles\": %llu}",
-                 static_cast<unsigned long long>(h.none), static_cast<unsigned long long>(h.late()),
-                 faults_per_leg_[i], link_dead_[i] ? "true" : "false",
-                 static_cast<int>(forced_reason_[i]), interlock_[i] ? "true" : "false",
-                 compute_[i].max_s(), static_cast<unsigned long long>(compute_[i].over_budget()),
-                 static_cast<unsigned long long>(compute_[i].cycles()));
+    json::Value ages = json::Value::array();
+    for (int k = 0; k < CommandAgeHistogram::kBins; ++k) ages.push_back(h.bins[static_cast<std::size_t>(k)]);
+    j["legs"].push_back({{"leg", i + 1},
+                         {"command_age", ages},
+                         {"no_command", h.none},
+                         {"late_ticks", h.late()},
+                         {"faults", faults_per_leg_[i]},
+                         {"dead", static_cast<bool>(link_dead_[i])},
+                         {"forced_reason", static_cast<int>(forced_reason_[i])},
+                         {"interlock", static_cast<bool>(interlock_[i])},
+                         {"compute_max_s", compute_[i].max_s()},
+                         {"compute_over_budget", compute_[i].over_budget()},
+                         {"cycles", compute_[i].cycles()}});
   }
   // Every slip's tick (the first ScheduleSlips::kKept), to match a fault to the stall before it.
-  std::fprintf(f, "\n  ],\n  \"worst_slip\": {\"tick\": %llu, \"late_s\": %.6f},\n  \"slips\": [",
-               static_cast<unsigned long long>(slips_.worst().tick),
-               static_cast<double>(slips_.worst().late_ns) * 1e-9);
+  j["worst_slip"] = {{"tick", slips_.worst().tick},
+                     {"late_s", static_cast<double>(slips_.worst().late_ns) * 1e-9}};
+  j["slips"] = json::Value::array();
   for (std::size_t k = 0; k < slips_.kept_count(); ++k)
-    std::fprintf(f, "%s{\"tick\": %llu, \"late_s\": %.6f}", k == 0 ? "" : ", ",
-                 static_cast<unsigned long long>(slips_.kept(k).tick),
-                 static_cast<double>(slips_.kept(k).late_ns) * 1e-9);
-  std::fprintf(f, "]\n}\n");
-  std::fclose(f);
+    j["slips"].push_back({{"tick", slips_.kept(k).tick},
+                          {"late_s", static_cast<double>(slips_.kept(k).late_ns) * 1e-9}});
+  std::string error;
+  if (!json::WriteFile(options_.summary_path, j, 2, error)) log_->error("summary: {}", error);
 }
 
 int PlantNode::Run() {

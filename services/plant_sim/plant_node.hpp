@@ -72,7 +72,7 @@ struct PlantNodeOptions {
   ComputeBudgetParams compute_budget;  // leg controllers' compute time per cycle
   PlantFaultParams plant_faults;       // injected rig faults (--fault)
   std::string summary_path;        // write the run's figures here as JSON at exit ("" = no)
-  bool tracker = false;            // publish the external pose instrument (calibration, issue 14)
+  bool tracker = false;            // publish the external pose instrument (calibration)
   FreeFallBenchParams free_fall;   // --bench free-fall: the Appendix B bench, not the platform
 };
 

@@ -32,7 +32,7 @@ int main(int argc, char** argv) {
                 "keep the command's writer this long after it was acknowledged: a reader that "
                 "matched this writer only just before the write answers at the writer's next "
                 "heartbeat, and Cyclone's wait for acknowledgements does not seem to count it yet "
-                "(commands were lost between hosts: docs/deployment.md)", "0.5");
+                "(commands were lost between hosts: docs/measurements/deployment.md)", "0.5");
   cli.AllowPositional("start|stop|reset|home|shutdown", 1);
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
@@ -84,7 +84,7 @@ int main(int argc, char** argv) {
     // The supervisor's reader, not any: a recorder (or another tool) reading the topic may
     // match first, and a command written before the supervisor's reader matched never reaches
     // it (volatile). Between secured hosts each new participant's handshakes with the peers
-    // complete one by one: the recorder's often first (docs/deployment.md).
+    // complete one by one: the recorder's often first (docs/measurements/deployment.md).
     const bool any_reader = cli.Get("to") == "any-reader";
     while (any_reader ? writer.Snapshot().publication_matched_current == 0
                       : hexa::comm::CountMatchedReadersWithUserData(writer.get(),
@@ -106,7 +106,7 @@ int main(int argc, char** argv) {
     const bool acked = dds_wait_for_acks(writer.get(), DDS_SECS(2)) == DDS_RETCODE_OK;
     const auto matched = writer.Snapshot().publication_matched_current;
     if (!acked) {
-      // Not a success: the supervisor may not have the command (exit 3, docs/deployment.md).
+      // Not a success: the supervisor may not have the command (exit 3, docs/exit_codes.md).
       log->error("sent {} to domain {} but it was NOT acknowledged by every matched reader "
                  "({} matched) within 2 s after the {} s linger: the supervisor may not have it",
                  what, *domain, matched, *linger_s);

@@ -102,7 +102,7 @@ bool SupervisorNode::WaitUntilMatched() {
     // Every leg's primary controller reads its setpoints (plus the plant in lockstep). Its
     // reader says so in its USER_DATA: a hot standby's reader alone is not enough, since a
     // primary without setpoints holds its leg (and its ownership of the valve) while the
-    // others move (docs/deployment.md, "A primary without setpoints").
+    // others move (docs/measurements/deployment.md, "A primary without setpoints").
     bool legs = true;
     missing_primaries_.clear();
     for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
@@ -175,7 +175,7 @@ bool SupervisorNode::PrepareStart(const std::string& trajectory, int periods) {
   PaperMotion motion;
   StartRequest request;
   if (trajectory == "calibration") {
-    // Kinematic calibration poses (issue 14, core/calibration.hpp), record with --tracker.
+    // Kinematic calibration poses (core/calibration.hpp), record with --tracker.
     request = supervisor_.PrepareStart(MakeCalibrationTrajectory(
         supervisor_.rig(), supervisor_.rest_xyz_rpy(), supervisor_.home_xyz_rpy(),
         supervisor_.timing(), CalibrationProcedureParams{}));

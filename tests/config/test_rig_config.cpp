@@ -361,7 +361,7 @@ const std::vector<BrokenCase> kBrokenCases = {
     {"duplicate_profile", "disturbance_profile[1].name", "'realistic' is defined twice (first at line",
      "\"realistic\"", "unique"},
     {"duplicate_leg_id", "geometry.leg[5].id", "leg 5 is defined twice", "5", "exactly once"},
-    // Physical limits (issue 12: each of these was accepted and broke the plant or the control).
+    // Physical limits (each of these was accepted and broke the plant or the control).
     {"supply_beyond_ideal_gas", "air.supply_pressure_pa", "ideal gas", "5020000 Pa",
      "<= 3055565.012 Pa"},
     {"platform_too_heavy", "platform.mass_kg", "the legs must hold the platform", "1e+30 kg",
@@ -374,12 +374,12 @@ const std::vector<BrokenCase> kBrokenCases = {
      "<= 5.129139494e-05 s"},
     {"heat_ratio_above_monatomic", "air.heat_ratio", "heat capacity ratio of a gas", "1.8",
      "(1, 1.6667]"},
-    // Feedback rate in phi_dot and its leg observer (issue 14d).
+    // Feedback rate in phi_dot and its leg observer.
     {"feedback_rate_fraction_above_one", "leg_controller.bssmc.feedback_rate_fraction",
      "fraction of the feedback part's rate in phi_dot is out of range", "1.5", "[0, 1]"},
     {"observer_mass_zero", "leg_controller.bssmc.observer_mass_kg", "observer mass must be positive", "0",
      "> 0"},
-    // Issue 14 (pure z): the BS-SMC's dither needs at least 4 control periods per cycle.
+    // The BS-SMC's dither needs at least 4 control periods per cycle.
     {"dither_too_fast", "leg_controller.bssmc.dither_frequency_hz", "dither frequency", "400",
      "[0, 250]"},
 };
@@ -532,7 +532,7 @@ TEST(RigConfigLines, EveryNumericFieldRemovedIsReportedAsMissingAtItsBlock) {
 
 // ---------------------------------------------------------------- one rule per parameter
 
-// Issue 12: core constructors and the rig file checked the same parameter against different
+// Core constructors and the rig file must check the same parameter against different
 // limits (air.heat_ratio: > 1 in the plant and the controller, (1, 5/3] in the file). Now both
 // call the same per-struct check: a value the file rejects, the core rejects too, naming the
 // same field and limit.
@@ -593,9 +593,9 @@ TEST(RigConfigValidate, CoreConstructorsApplyTheSameRuleAsTheRigFile) {
   EXPECT_THROW(hexa::Supervisor(c.rig, c.supervisor), std::invalid_argument);
 }
 
-// The four values of issue 12, as a user would write them: each is rejected on its field with
+// Four values that once passed validation, as a user would write them: each is rejected on its field with
 // a physical reason; the plant, whose state they made non-finite, rejects the plant ones too.
-TEST(RigConfigValidate, IssueExamplesAreRejectedWithAPhysicalReason) {
+TEST(RigConfigValidate, UnphysicalExamplesAreRejectedWithAPhysicalReason) {
   struct Case {
     const char* field;
     void (*apply)(SystemConfig&);

@@ -80,14 +80,14 @@ inline LegControllerConfig SingleLegControllerConfig(const RigParams& rig, LegCo
   c.params.bssmc.effective_mass_kg = mass;
   c.params.bssmc.gravity_load_n = mass * rig.platform.gravity_m_s2;  // rod up, vertical
   // The single-leg rig keeps the gains tuned on it (docs/controller.md); the shipped
-  // defaults are tuned on the full platform (docs/tuning.md) whose legs carry coupled
+  // defaults are tuned on the full platform (docs/measurements/tuning.md) whose legs carry coupled
   // loads and a ~10x larger horizontal reflected inertia.
   c.params.bssmc.lambda_1_s = 120.0;
   c.params.bssmc.switching_gain_n = 30.0;
   c.params.bssmc.boundary_layer_xi_s_m = 10.0;
   c.params.bssmc.backstepping_beta_1_s = 100.0;
   c.params.bssmc.reaching_proportional_n_s_m = 0.0;  // the paper's reaching law
-  // The valve-command smoothing was tuned on the platform (docs/tuning.md "Valve chatter");
+  // The valve-command smoothing was tuned on the platform (docs/measurements/tuning.md "Valve chatter");
   // the single-leg gains above were tuned without it: keep the paper's exact inversion here.
   c.params.bssmc.null_band_area_fraction = 0.0;
   c.params.bssmc.spool_filter_time_constant_s = 0.0;

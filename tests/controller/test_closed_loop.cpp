@@ -136,7 +136,7 @@ TEST(LegClosedLoop, FrictionAdaptationLowersTheErrorOfAMismatchedFriction) {
 TEST(LegClosedLoop, FrictionAdaptationLeavesSlowMotionsAtTheNominalEstimate) {
   // 0.1 Hz, +-50 mm: |v_d| <= 0.031 m/s, well below v_a = 0.12 m/s, where w <= 0.07: theta
   // barely moves and what it applies is (theta - 1) w, so the slow motions keep eq 14's
-  // nominal estimate and the dither (the stick-slip they are sensitive to, docs/results.md).
+  // nominal estimate and the dither (the stick-slip they are sensitive to, docs/measurements/results.md).
   const AdaptationRun run = RunAdaptation(1.2, 0.1, 0.05, LegControllerParams{}.bssmc.friction_adaptation_rate_1_n_m);
   std::printf("0.1 Hz, plant friction x1.2: theta range %.4f-%.4f\n", run.theta_min, run.theta_max);
   EXPECT_GT(run.theta_min, 0.95);

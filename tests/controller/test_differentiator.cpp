@@ -61,12 +61,11 @@ TEST(GaussianDifferentiator, SymmetricCentreIsExactOnQuadraticsAtTheCentre) {
 }
 
 TEST(GaussianDifferentiator, DocumentedDelayAndNoiseFiguresForTheDefaults) {
-  // docs/controller.md table: N 15, sigma 0.85, c 2 samples before the newest (the default
-  // until issue 14c).
+  // docs/controller.md table: N 15, sigma 0.85, c 2 samples before the newest.
   GaussianDifferentiator d(Config(15, 0.85, 2.0));
   EXPECT_NEAR(d.GroupDelaySamples(), 2.320, 0.001);
   EXPECT_NEAR(d.NoiseGain() * 0.001, 0.2801, 0.0005);  // in 1/h
-  // c 1: the default since issue 14c (docs/controller.md).
+  // c 1: the default (docs/controller.md).
   GaussianDifferentiator one(Config(15, 0.85, 1.0));
   EXPECT_NEAR(one.GroupDelaySamples(), 1.538, 0.001);
   EXPECT_NEAR(one.NoiseGain() * 0.001, 0.4200, 0.0005);

@@ -1,4 +1,4 @@
-// Leg observer (core/leg_observer.hpp, issue 14d): position + pneumatic force -> velocity and
+// Leg observer (core/leg_observer.hpp): position + pneumatic force -> velocity and
 // acceleration. Convergence on a noise-free motion that the model describes, lower noise and
 // less delay than the eq 40 velocity estimate it supplements, parameter validation.
 #include <gtest/gtest.h>

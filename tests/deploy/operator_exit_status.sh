@@ -1,5 +1,5 @@
 #!/bin/sh
-# hexa_operator's exit status says whether the command arrived (docs/deployment.md):
+# hexa_operator's exit status says whether the command arrived (docs/exit_codes.md):
 #   0  acknowledged by every matched reader;
 #   1  the supervisor's command reader (or, with --to any-reader, any reader) did not match
 #      within --wait: a recorder alone is not the supervisor (a command written before the

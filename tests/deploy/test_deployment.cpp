@@ -178,7 +178,7 @@ TEST_F(Generated, EveryCycloneConfigHasTheLoopbackConfigsInternalSettings) {
   EXPECT_EQ(Slurp(dir_ + "/plain/hosts/legs-a/etc/hexa/cyclonedds.xml").find("<Security>"), std::string::npos);
 }
 
-// A real-time recorder reads the periodic topics best effort (docs/deployment.md, "The lossy
+// A real-time recorder reads the periodic topics best effort (docs/measurements/deployment.md, "The lossy
 // recorder link": a reliable one made the control writers repair its lossy link on the control
 // CPU); a lockstep one stays reliable (the lockstep plant waits for its acknowledgements).
 TEST_F(Generated, RealTimeRecorderReadsThePeriodicTopicsBestEffort) {
@@ -372,7 +372,7 @@ TEST_F(Generated, UnitsAreNotifyWithWatchdogRestartAndRealtimeResources) {
   ASSERT_TRUE(ParseUnitFile(Host("io-sup", "lib/systemd/system/hexa-plant.service"), u, err)) << err;
   EXPECT_TRUE(has(u.exec_start, {"--expect-recorder"}));
   EXPECT_EQ(u.Get("Service.CPUAffinity"), "1");
-  // Below the legs that share its CPU (docs/deployment.md, "Where the lapses' milliseconds go").
+  // Below the legs that share its CPU (docs/measurements/deployment.md, "Where the lapses' milliseconds go").
   EXPECT_EQ(u.Get("Service.CPUSchedulingPriority"), "70");
   EXPECT_TRUE(has(u.exec_start, {"--rt-priority", "70"}));
   EXPECT_FALSE(fs::exists(Host("io-sup", "lib/systemd/system/hexa-operator.service")));

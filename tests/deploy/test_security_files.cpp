@@ -1,5 +1,5 @@
 // DDS Security files made by deploy/make_security.sh for a generated deployment, and the
-// start-up errors of bad ones (docs/deployment.md, "Bad input"): a missing file, an expired
+// start-up errors of bad ones (docs/security.md, "Start-up check"): a missing file, an expired
 // certificate, a certificate or permissions signed by another CA, permissions of another
 // identity, a configuration without security. Each is a clear error naming the file from
 // `hexa_deploy verify-security`, and the services themselves refuse to start (Cyclone fails

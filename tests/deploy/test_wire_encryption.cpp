@@ -1,4 +1,4 @@
-// Encryption on the wire (docs/deployment.md, "DDS Security"): an operator command carrying a
+// Encryption on the wire (docs/security.md, "DDS Security"): an operator command carrying a
 // marker string is sent to a recorder over loopback, once without and once with DDS Security,
 // while tcpdump captures every UDP packet. Without security the marker is on the wire; with
 // it, the command still arrives (the recording has it) but the marker appears in no packet.

@@ -1,7 +1,7 @@
 // libFuzzer target: the recorder's protobuf conversion (services/recorder convert.hpp) in
 // both directions. (1) Arbitrary bytes as a DDS sample of each wire type (any bytes in its
 // bounded strings) -> ToProto -> serialise -> parse must succeed: a recorded message is always
-// readable again (issue 12: bytes that were not UTF-8 made recordings unreadable). (2) Arbitrary
+// readable again (bytes that were not UTF-8 made recordings unreadable). (2) Arbitrary
 // bytes parsed as each recorded message (with the UTF-8 repair of recording.hpp) -> FromProto
 // -> ToProto: never crashes; a message FromProto accepts survives the round trip.
 #include <google/protobuf/stubs/logging.h>

@@ -1,4 +1,4 @@
-// Robustness at system level (issue 12): a CSV trajectory of random bytes gives a clear
+// Robustness at system level: a CSV trajectory of random bytes gives a clear
 // rejection (FaultEvent, exit), never a recording the tools cannot read, a log line the size of
 // the file, or a hang; a recorder killed mid-session leaves a recording the launcher recovers
 // and reports on.

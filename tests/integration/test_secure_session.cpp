@@ -1,4 +1,4 @@
-// hexa_session --secure (docs/deployment.md, "DDS Security"): the whole session with a
+// hexa_session --secure (docs/security.md, "DDS Security"): the whole session with a
 // project CA, one identity per process and encrypted topics completes, records everything,
 // and equals the in-process lockstep simulation bit for bit (security changes nothing but the
 // wire). Its security files are where the session says, one identity per process.

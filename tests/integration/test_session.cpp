@@ -1,5 +1,5 @@
-// Issue "One command runs a whole session": a short session end to end in lockstep, through
-// the launcher (nine processes + recorder over DDS), checked against fixed bounds, and
+// One command runs a whole session: a short session end to end in lockstep, through
+// the launcher (eight control processes + recorder over DDS), checked against fixed bounds, and
 // checked bit for bit against the in-process lockstep simulation of the same configuration.
 #include <filesystem>
 #include <regex>
@@ -41,7 +41,7 @@ TEST(Session, CombinedLockstepEndToEnd) {
     EXPECT_TRUE(r.complete_file);
     EXPECT_EQ(r.final_supervisor_state, "IDLE");
     EXPECT_EQ(r.pose_samples_tracking, 200u);  // one 1 s period of eq 49 at 5 ms
-    // A working loop tracks the 8 cm circle to about a centimetre (docs/results.md has the
+    // A working loop tracks the 8 cm circle to about a centimetre (docs/measurements/results.md has the
     // measured figures); a broken one is off by the full amplitude.
     for (int i = 0; i < 3; ++i) EXPECT_LT(r.rmse_vs_truth[i], 0.025) << "axis " << i;
     for (int i = 3; i < 6; ++i) EXPECT_LT(r.rmse_vs_truth[i], 0.06) << "axis " << i;
@@ -117,8 +117,8 @@ TEST(Session, RigOverlayReachesTheServicesAsInProcess) {
   EXPECT_TRUE(differs) << "the overlay changed nothing the plant applied";
 }
 
-// The supervisor's first inputs lost on the wire (the CI failure of stop 17: a reader that had
-// matched on one side only; tick 1 was never answered and the plant gave up after 10 s). The
+// The supervisor's first inputs lost on the wire (a reader that had matched on one side only:
+// without the repair tick 1 is never answered and the plant gives up after 10 s). The
 // plant withholds them (fault injection) and must recover them with its re-ask, which also
 // re-publishes the supervisor's inputs of the setpoint tick: the session completes and is
 // still bit-identical to the in-process simulation.

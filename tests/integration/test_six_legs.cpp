@@ -1,4 +1,4 @@
-// Issue "Leg controllers": six leg-controller processes over DDS against the plant in
+// Six leg-controller processes over DDS against the plant in
 // lockstep hold the home pose and track a leg setpoint step, without any process knowing
 // the others. This test process plays the supervisor's part with a fixed setpoint schedule.
 #include <unistd.h>

@@ -1,5 +1,5 @@
 // hexa_rogue: a participant that tries to command legs it has no right to (test tool of the
-// multi-host security tests, docs/deployment.md "Rogue participants"). It joins the domain
+// multi-host security tests, docs/security.md "Rogue participants"). It joins the domain
 // with whatever Cyclone configuration CYCLONEDDS_URI gives it (no security, a foreign CA, or
 // a valid identity of another leg) and, per --valve PART:KEY, creates a ValveCommand writer in
 // partition "leg<PART>" and writes leg KEY's commands with a high ownership strength; with

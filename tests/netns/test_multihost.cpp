@@ -104,7 +104,7 @@ class SecuredFiveHosts : public ::testing::Test {
   }
 };
 
-// The first row: the secured multi-host session completes the z trajectory in
+// The secured multi-host session completes the z trajectory in
 // lockstep with nothing lost, bit-identical to the in-process simulation (hence the same RMSE
 // as the one-machine session, which tests/integration proves bit-identical too).
 TEST_F(SecuredFiveHosts, LockstepSessionFromGeneratedUnitsIsLosslessAndBitIdentical) {
@@ -191,7 +191,7 @@ TEST_F(SecuredFiveHosts, LockstepSessionFromGeneratedUnitsIsLosslessAndBitIdenti
   std::printf("secured five-host lockstep session: %.1f s wall, recording %s\n", wall_s, mcap.c_str());
 }
 
-// The layout without standbys, from the sample deployment file
+// The four-host layout (no standbys), from the sample deployment file
 // deploy/deployments/four-hosts.textproto (its hosts and processes; the lab gives the
 // interfaces, addresses and CPU placement): plant + supervisor, legs 1-3, legs 4-6,
 // recorder. Secured lockstep: the z trajectory completes, nothing lost, bit-identical to the

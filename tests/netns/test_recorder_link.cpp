@@ -1,5 +1,5 @@
 // A lossy recorder link must never cost a control writer anything, and the recording must
-// miss exactly what the link dropped (docs/deployment.md, "The lossy recorder link"). Two
+// miss exactly what the link dropped (docs/measurements/deployment.md, "The lossy recorder link"). Two
 // hosts of a NetnsLab made by this test: "ctl" runs a leg's ValveCommand writer with the
 // production writer QoS (hexa_recorder_link_writer; real time: BEST_EFFORT), "rec" runs
 // hexa_recorder, with nftables dropping 20 % of the packets arriving at the recorder's

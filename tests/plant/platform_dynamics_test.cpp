@@ -124,7 +124,7 @@ TEST(PlatformDynamics, HomeAtRestCarriesTheWeight) {
   EXPECT_NEAR(f.force_n[0], (6.0 + 6 * 0.25) * 9.81 / 6.0 / unit[0].z(), 1e-9);
 }
 
-// Leg-space mass matrix (coupled leg feedback, issue 14): at rest, M_ls applied to leg
+// Leg-space mass matrix (coupled leg feedback): at rest, M_ls applied to leg
 // accelerations equals the leg forces that produce them minus the static (zero-acceleration)
 // forces, the forces computed independently by LegForcesForMotion (J^T f = wrench solved, not
 // J^-T M_p J^-1). And those forces, applied to the plant, give the accelerations.
@@ -173,7 +173,7 @@ TEST(PlatformDynamics, LegSpaceMassMatrixMapsLegAccelerationsToForcesAtRest) {
 }
 
 TEST(PlatformDynamics, LegSpaceMassMatrixModalMassesAtHome) {
-  // docs/task_space.md: eigenvalues 0.877 (x2), 1.502, 2.787, 10.27 (x2) kg on the reference rig.
+  // docs/measurements/control.md: eigenvalues 0.877 (x2), 1.502, 2.787, 10.27 (x2) kg on the reference rig.
   const RigParams rig = MakeReferenceRig();
   Pose home;
   home.p_BP_B_m = rig.geometry.home_position_m;

@@ -266,7 +266,7 @@ TEST_F(CliTest, RecoverRepairsATruncatedFileAndInfoThenAgreesWithTheIntactPart) 
 }
 
 // A recording whose FaultEvent.detail strings are not UTF-8 (written by recorders before the
-// sanitiser; issue 12: a CSV of random bytes made the session's recording unreadable): info,
+// sanitiser: a CSV of random bytes must not make the session's recording unreadable): info,
 // export and report read it, repair the strings (U+FFFD) and say so; recover does not call it
 // complete, repairs it, and its output then reads without any repair.
 TEST_F(CliTest, InvalidUtf8StringsAreRepairedOnReadAndReported) {

@@ -1,4 +1,4 @@
-// zstd chunk compression of the MCAP layer (docs/recorder.md, "Compression"): round trip in both
+// zstd chunk compression of the MCAP layer (docs/measurements/recorder.md, "Compression"): round trip in both
 // modes, and what the reader says about damaged compressed chunks.
 #include <gtest/gtest.h>
 

@@ -341,7 +341,7 @@ TEST(Convert, FaultEventBothWays) {
   EXPECT_FALSE(FromProto(p, b));
 }
 
-// Any process may publish bytes that are not UTF-8 in a string field (issue 12: a CSV of random
+// Any process may publish bytes that are not UTF-8 in a string field (a CSV of random
 // bytes ended up in FaultEvent.detail). The recorded protobuf must still parse: proto3 parsers
 // reject invalid UTF-8, so ToProto sanitises. Clean text is kept exactly (FaultEventBothWays).
 TEST(Convert, StringsThatAreNotUtf8AreRecordedReadably) {

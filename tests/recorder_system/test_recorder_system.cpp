@@ -1,4 +1,4 @@
-// The recorder against a real lockstep session (issue "record, inspect, replay"):
+// The recorder against a real lockstep session (record, inspect, replay):
 //  Session          records one short session through the launcher (ctest fixture setup);
 //  Counts           every topic's count is what the tick count says, nothing missing;
 //  RoundTrip        DDS -> MCAP -> DDS -> MCAP keeps every field of every message;

@@ -121,7 +121,7 @@ TEST(OuterLoop, MapsAPoseErrorToTheLegLengthChangeAndSaturates) {
   EXPECT_EQ(out.correction_m, before);
 }
 
-// Speed gate (issue 14b): the integration step is gain / (1 + (v / v0)^2) of the mapped
+// Speed gate: the integration step is gain / (1 + (v / v0)^2) of the mapped
 // error, v = the largest desired leg speed; v0 = 0 leaves the paper's constant gain.
 TEST(OuterLoop, SpeedGateScalesTheIntegrationStepWithTheLegSpeed) {
   const RigParams rig = MakeReferenceRig();

@@ -1,4 +1,4 @@
-// The legs' velocity loop on the platform's light modes (issue 14c, docs/task_space.md "Per-leg
+// The legs' velocity loop on the platform's light modes (docs/measurements/control.md "Per-leg
 // lag and leg 2's overshoot on combined"). Leg-space mass matrix at home J^-T M_p J^-1 + m_leg:
 // two 0.88 kg modes (roll / pitch). The BS-SMC's velocity gain (200 N s/m) through the
 // backstepping loop and ~7 ms of lag has a 20.7 Hz crossover with -20 deg phase margin on them:
@@ -10,7 +10,7 @@
 // scored as the sum over the six axes of RMSE / (one fifth of the paper's Table 10). Measured
 // when written: 15.55 with the default, 17.07 with 2 samples (ratio 0.911). With the old
 // default both runs are the same configuration and the test fails. With the feedback rate in
-// phi_dot of issue 14d on (defaults): 7.79 vs 8.72 (ratio 0.893). The friction adaptation at
+// phi_dot on (defaults): 7.79 vs 8.72 (ratio 0.893). The friction adaptation at
 // speed (docs/controller.md, added after) is off in these runs: it moves the ideal plant's
 // friction estimate by a few per cent (theta 0.96-1.05) and with it the score (8.72 vs 9.06,
 // ratio 0.962, measured 2026-11-27); the test is about the velocity estimate's delay alone.
@@ -62,7 +62,7 @@ TEST(LightModeClosedLoop, DefaultVelocityEstimateDelayTracksCombinedBetterOnTheI
   EXPECT_LT(with_default, 0.95 * with_old);
 }
 
-// Issue 14d (docs/task_space.md "Feedback rate in phi_dot"): the rate of phi's feedback part
+// The feedback rate in phi_dot (docs/measurements/control.md "Feedback rate in phi_dot"): the rate of phi's feedback part
 // in phi_dot, from the leg observer, gives the velocity loop its phase back on the light modes.
 // Measured: the legs' velocity error v_hat - v_d over the tracking window of combined, all six
 // legs, its part above ~10 Hz (minus a centred 100-sample moving average, whose first null is at

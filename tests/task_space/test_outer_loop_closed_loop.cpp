@@ -1,5 +1,5 @@
-// Issue requirement: under the realistic profile the pose RMSE against ground truth is lower
-// with the outer loop on than off, on the same seed. Definition (docs/task_space.md,
+// Under the realistic profile the pose RMSE against ground truth is lower
+// with the outer loop on than off, on the same seed. Definition (docs/measurements/control.md,
 // "Outer loop in closed loop"): the seven paper trajectories, seed 1, realistic profile,
 // default gains, run once with the outer loop on and once off (RunPaperSession, the
 // in-process lockstep system). Translation and rotation are aggregated separately (their

@@ -1,4 +1,4 @@
-// The PI baseline with the platform feed-forward must not be a weakened baseline (issue 14b):
+// The PI baseline with the platform feed-forward must not be a weakened baseline:
 // on the six pure motions (realistic, seed 1, in the lockstep simulation) its score, the mean
 // over the trajectories of (moving-axis RMSE against ground truth / the paper's Table 9
 // figure), is at most 15 % above the same PI without the feed-forward (its term

@@ -149,7 +149,7 @@ TEST(Supervisor, FeedforwardIsTheInverseDynamicsOfTheDesiredMotionWithAConsisten
   for (const auto& sp : bench.out.setpoint) EXPECT_EQ(sp.feedforward_force_rate_n_s, 0.0);
 }
 
-// Setpoint lead (issue 14b): with a lead of one supervisor period the legs get, at every tick,
+// Setpoint lead: with a lead of one supervisor period the legs get, at every tick,
 // exactly the lengths, rates and feed-forward that the supervisor without lead sends one tick
 // later; the desired pose reported (outer loop, metrics) stays the one of now.
 TEST(Supervisor, SetpointLeadSendsTheMotionOfOnePeriodAhead) {

@@ -1,9 +1,9 @@
-// Valve activity on the combined trajectory (issue 14 must-show: "no worse than 0.21 V per
+// Valve activity on the combined trajectory (limit: "no worse than 0.21 V per
 // tick mean step, 3 % saturated"), BS-SMC with the feed-forward, realistic profile, seeds
-// 1-3, in the lockstep simulation. Same definition as platform_study (docs/tuning.md "Valve
+// 1-3, in the lockstep simulation. Same definition as platform_study (docs/measurements/tuning.md "Valve
 // chatter"): over the TRACKING window, all six legs, mean |u(k) - u(k-1)| per 1 ms tick and
 // the fraction of ticks with u < 0.05 V or u > 9.95 V.
-// Before the outer loop's speed gate (docs/task_space.md "Outer loop speed gate") the
+// Before the outer loop's speed gate (docs/measurements/control.md "Outer loop speed gate") the
 // corrections swung between their +-5 mm bounds at 1 Hz and 4.2-4.9 % of the ticks were
 // saturated (seeds 1-3); this test failed then.
 #include <gtest/gtest.h>
@@ -55,7 +55,7 @@ Activity RunCombined(std::uint64_t seed) {
   return a;
 }
 
-TEST(ValveActivityClosedLoop, CombinedWithFeedforwardWithinTheIssueLimits) {
+TEST(ValveActivityClosedLoop, CombinedWithFeedforwardWithinTheValveActivityLimits) {
   std::array<double, 3> steps{};
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     const Activity a = RunCombined(seed);

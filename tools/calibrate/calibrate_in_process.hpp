@@ -12,7 +12,7 @@
 namespace hexa::calib {
 
 // Runs the procedure on `base` (tracker on, nominal controller model, outer loop off), prints
-// the fit against the plant's truth to `report` (the lines deploy/accuracy_tables.py reads),
+// the fit against the plant's truth to `report` (the lines studies/accuracy_tables.py reads),
 // and returns false when the run or the fit failed.
 bool CalibrateInProcess(const LockstepConfig& base, KinematicCalibration& out, std::FILE* report);
 

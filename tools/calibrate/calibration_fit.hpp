@@ -1,4 +1,4 @@
-// Least-squares fit of the kinematic calibration (issue 14) with Ceres: per leg, the base and
+// Least-squares fit of the kinematic calibration with Ceres: per leg, the base and
 // platform joint positions and the potentiometer offset and gain that best explain the
 // potentiometer readings at poses measured by an external instrument (the model of
 // core/calibration.hpp). Not in core/: Ceres is not Eigen.

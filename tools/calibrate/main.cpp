@@ -1,4 +1,4 @@
-// hexa_calibrate: kinematic calibration from a recorded calibration session (issue 14).
+// hexa_calibrate: kinematic calibration from a recorded calibration session.
 //
 //   hexa_session --trajectory calibration --tracker --out DIR      (records DIR/session.mcap)
 //   hexa_calibrate DIR/session.mcap [--out overlay.textproto] [--truth-seed N]

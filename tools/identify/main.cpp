@@ -626,7 +626,7 @@ int main(int argc, char** argv) {
   std::printf("tables: %s/identification.md, data: %s/identification.json\n", out_dir.c_str(), out_dir.c_str());
   if (!cli.Flag("no-plots")) {
     const std::string cmd = "/usr/bin/python3 " + std::string(HEXA_SOURCE_DIR) +
-                            "/deploy/plot_identification.py " + out_dir;
+                            "/tools/identify/plot_identification.py " + out_dir;
     if (std::system(cmd.c_str()) != 0) std::fprintf(stderr, "warning: the plot script failed (%s)\n", cmd.c_str());
   }
   return report.overlay_refused ? 3 : 0;

@@ -8,6 +8,7 @@
 
 #include "hexa/core/kinematics.hpp"
 #include "hexa/core/platform_inverse_dynamics.hpp"
+#include "hexa/services/json.hpp"
 
 namespace hexa::identify {
 namespace {
@@ -34,39 +35,86 @@ double ErrorPct(double identified, double truth) {
   return truth != 0.0 ? 100.0 * (identified - truth) / std::abs(truth) : NAN;
 }
 
-// Target of the issue: F_c, F_s, gamma_o, gamma_i, gamma_k within 5 %, v_s and B within 10 %.
+// Targets: F_c, F_s, gamma_o, gamma_i, gamma_k within 5 %, v_s and B within 10 %.
 double TargetPct(int i) { return i <= 1 ? 10.0 : 5.0; }
 
-std::string JsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  char b[64];
-  std::snprintf(b, sizeof b, "%.10g", v);
-  return b;
-}
-
-std::string ParamsJson(const StrokeParams& p) {
-  std::ostringstream o;
+json::Value ParamsJson(const StrokeParams& p) {
+  json::Value o = json::Value::object();
   const auto v = p.ToVector();
-  o << "{";
-  for (int i = 0; i < StrokeParams::kCount; ++i)
-    o << (i ? ", " : "") << "\"" << StrokeParams::Name(i) << "\": " << JsonNumber(v[i]);
-  o << "}";
-  return o.str();
+  for (int i = 0; i < StrokeParams::kCount; ++i) o[StrokeParams::Name(i)] = v[i];
+  return o;
 }
 
-std::string CurvatureJson(const CurvatureReport& c) {
-  std::ostringstream o;
-  o << "{\"objective\": " << JsonNumber(c.objective) << ", \"increase_alone_10pct\": [";
-  for (int i = 0; i < StrokeParams::kCount; ++i) o << (i ? ", " : "") << JsonNumber(c.increase_alone_10pct[i]);
-  o << "], \"increase_profile_10pct\": [";
-  for (int i = 0; i < StrokeParams::kCount; ++i) o << (i ? ", " : "") << JsonNumber(c.increase_profile_10pct[i]);
-  o << "], \"standard_error_pct\": [";
-  for (int i = 0; i < StrokeParams::kCount; ++i) o << (i ? ", " : "") << JsonNumber(c.standard_error_pct[i]);
-  o << "], \"flat_threshold\": " << JsonNumber(c.flat_threshold) << ", \"effective_samples\": "
-    << JsonNumber(c.effective_samples) << ", \"identifiable\": [";
-  for (int i = 0; i < StrokeParams::kCount; ++i) o << (i ? ", " : "") << (c.identifiable[static_cast<std::size_t>(i)] ? "true" : "false");
-  o << "]}";
-  return o.str();
+json::Value CurvatureJson(const CurvatureReport& c) {
+  json::Value o = {{"objective", c.objective}};
+  const auto list = [](const auto& a) {
+    json::Value l = json::Value::array();
+    for (int i = 0; i < StrokeParams::kCount; ++i) l.push_back(a[static_cast<std::size_t>(i)]);
+    return l;
+  };
+  o["increase_alone_10pct"] = list(c.increase_alone_10pct);
+  o["increase_profile_10pct"] = list(c.increase_profile_10pct);
+  o["standard_error_pct"] = list(c.standard_error_pct);
+  o["flat_threshold"] = c.flat_threshold;
+  o["effective_samples"] = c.effective_samples;
+  json::Value ident = json::Value::array();
+  for (int i = 0; i < StrokeParams::kCount; ++i) ident.push_back(static_cast<bool>(c.identifiable[static_cast<std::size_t>(i)]));
+  o["identifiable"] = ident;
+  return o;
+}
+
+json::Value IdentificationJson(const Report& r) {
+  json::Value js;
+  js["recording"] = r.recording;
+  js["payload_scale"] = r.payload_scale;
+  js["payload_estimated"] = r.payload_estimated;
+  js["true_payload_scale"] = r.truth ? json::Value(r.truth->payload_scale()) : json::Value(nullptr);
+  js["payload_per_leg"] = json::Value::object();
+  for (const auto& [leg, scale] : r.payload_per_leg) js["payload_per_leg"][std::to_string(leg)] = scale;
+  js["threads"] = r.threads;
+  js["ga_max_iterations"] = r.ga_params.max_iterations;
+  js["ga_population"] = r.ga_params.population;
+  js["ga_crossover"] = r.ga_params.crossover_per_pair ? "per-pair" : "per-gene";
+  js["ga_mutation_step"] = MutationStepName(r.ga_params.mutation_step);
+  js["flat_threshold"] = r.flat_threshold;
+  js["pressure_noise_pa"] = r.pressure_noise_pa;
+  js["overlay"] = r.overlay_refused ? json::Value(nullptr) : json::Value(r.overlay_path);
+  js["strokes"] = json::Value::array();
+  for (const StrokeReport& s : r.strokes) {
+    json::Value o = {{"leg", s.leg}, {"stroke", ToString(s.stroke)}, {"samples", s.samples}};
+    o["nominal"] = ParamsJson(s.nominal);
+    o["nominal_objective"] = s.nominal_objective;
+    if (r.truth) {
+      if (const auto t = TrueStroke(*r.truth, s.leg, s.stroke)) o["truth"] = ParamsJson(*t);
+    }
+    if (s.lsq) {
+      o["lsq"] = ParamsJson(*s.lsq);
+      o["lsq_objective"] = s.lsq_objective;
+      o["lsq_wall_s"] = s.lsq_wall_s;
+      o["lsq_iterations"] = s.lsq_iterations;
+      o["lsq_converged"] = s.lsq_converged;
+      o["lsq_curvature"] = CurvatureJson(s.lsq_curvature);
+    }
+    if (s.ga) {
+      o["ga"] = ParamsJson(*s.ga);
+      o["ga_objective"] = s.ga_objective;
+      o["ga_wall_s"] = s.ga_wall_s;
+      o["ga_evaluations"] = s.ga_evaluations;
+      o["ga_iterations"] = s.ga_iterations;
+      o["ga_curvature"] = CurvatureJson(s.ga_curvature);
+    }
+    js["strokes"].push_back(o);
+  }
+  js["free_fall"] = json::Value::array();
+  for (const FreeFallLeg& f : r.free_fall) {
+    js["free_fall"].push_back({{"leg", f.leg},
+                               {"ok", f.fit.ok},
+                               {"coulomb_n", f.fit.coulomb_n},
+                               {"viscous_n_s_m", f.fit.viscous_n_s_m},
+                               {"rms_residual_m", f.fit.rms_residual_m},
+                               {"samples", f.samples}});
+  }
+  return js;
 }
 
 }  // namespace
@@ -348,53 +396,11 @@ void WriteReport(const Report& r, const std::map<int, std::array<StrokeDataset, 
   md << "\nOverlay: " << (r.overlay_refused ? "REFUSED (nothing written): " + r.overlay_error : r.overlay_path) << "\n";
 
   // ---- JSON ------------------------------------------------------------------------------
-  std::ofstream js(out_dir + "/identification.json");
-  js << "{\n  \"recording\": \"" << r.recording << "\",\n  \"payload_scale\": " << JsonNumber(r.payload_scale)
-     << ",\n  \"payload_estimated\": " << (r.payload_estimated ? "true" : "false")
-     << ",\n  \"true_payload_scale\": " << (r.truth ? JsonNumber(r.truth->payload_scale()) : "null")
-     << ",\n  \"payload_per_leg\": {";
-  bool first = true;
-  for (const auto& [leg, s] : r.payload_per_leg) {
-    js << (first ? "" : ", ") << "\"" << leg << "\": " << JsonNumber(s);
-    first = false;
+  {
+    std::string error;
+    if (!json::WriteFile(out_dir + "/identification.json", IdentificationJson(r), 2, error))
+      std::fprintf(stderr, "error: %s\n", error.c_str());
   }
-  js << "},\n  \"threads\": " << r.threads << ",\n  \"ga_max_iterations\": " << r.ga_params.max_iterations
-     << ",\n  \"ga_population\": " << r.ga_params.population
-     << ",\n  \"ga_crossover\": \"" << (r.ga_params.crossover_per_pair ? "per-pair" : "per-gene")
-     << "\",\n  \"ga_mutation_step\": \"" << MutationStepName(r.ga_params.mutation_step)
-     << "\",\n  \"flat_threshold\": " << JsonNumber(r.flat_threshold)
-     << ",\n  \"pressure_noise_pa\": " << JsonNumber(r.pressure_noise_pa)
-     << ",\n  \"overlay\": " << (r.overlay_refused ? "null" : "\"" + r.overlay_path + "\"")
-     << ",\n  \"strokes\": [\n";
-  for (std::size_t k = 0; k < r.strokes.size(); ++k) {
-    const StrokeReport& s = r.strokes[k];
-    js << "    {\"leg\": " << s.leg << ", \"stroke\": \"" << ToString(s.stroke) << "\", \"samples\": " << s.samples
-       << ", \"nominal\": " << ParamsJson(s.nominal) << ", \"nominal_objective\": " << JsonNumber(s.nominal_objective);
-    if (r.truth) {
-      if (const auto t = TrueStroke(*r.truth, s.leg, s.stroke)) js << ", \"truth\": " << ParamsJson(*t);
-    }
-    if (s.lsq) {
-      js << ", \"lsq\": " << ParamsJson(*s.lsq) << ", \"lsq_objective\": " << JsonNumber(s.lsq_objective)
-         << ", \"lsq_wall_s\": " << JsonNumber(s.lsq_wall_s) << ", \"lsq_iterations\": " << s.lsq_iterations
-         << ", \"lsq_converged\": " << (s.lsq_converged ? "true" : "false")
-         << ", \"lsq_curvature\": " << CurvatureJson(s.lsq_curvature);
-    }
-    if (s.ga) {
-      js << ", \"ga\": " << ParamsJson(*s.ga) << ", \"ga_objective\": " << JsonNumber(s.ga_objective)
-         << ", \"ga_wall_s\": " << JsonNumber(s.ga_wall_s) << ", \"ga_evaluations\": " << s.ga_evaluations
-         << ", \"ga_iterations\": " << s.ga_iterations << ", \"ga_curvature\": " << CurvatureJson(s.ga_curvature);
-    }
-    js << "}" << (k + 1 < r.strokes.size() ? "," : "") << "\n";
-  }
-  js << "  ],\n  \"free_fall\": [";
-  for (std::size_t k = 0; k < r.free_fall.size(); ++k) {
-    const FreeFallLeg& f = r.free_fall[k];
-    js << (k ? ", " : "") << "{\"leg\": " << f.leg << ", \"ok\": " << (f.fit.ok ? "true" : "false")
-       << ", \"coulomb_n\": " << JsonNumber(f.fit.coulomb_n) << ", \"viscous_n_s_m\": "
-       << JsonNumber(f.fit.viscous_n_s_m) << ", \"rms_residual_m\": " << JsonNumber(f.fit.rms_residual_m)
-       << ", \"samples\": " << f.samples << "}";
-  }
-  js << "]\n}\n";
 
   // ---- CSV for the plots ----------------------------------------------------------------------
   std::ofstream hist(out_dir + "/ga_history.csv");

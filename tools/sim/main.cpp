@@ -13,6 +13,7 @@
 #include "hexa/core/calibration.hpp"
 #include "hexa/core/lockstep_simulation.hpp"
 #include "hexa/services/cli.hpp"
+#include "hexa/services/json.hpp"
 
 int main(int argc, char** argv) {
   hexa::cli::Parser cli("hexa_sim",
@@ -32,7 +33,7 @@ int main(int argc, char** argv) {
   cli.AddFlag("no-feedforward", "no inverse-dynamics feed-forward (paper-faithful)");
   cli.AddFlag("coupled-feedback",
               "study: the BS-SMC feedback mixed across the legs through the leg-space mass "
-              "matrix (in process only; docs/task_space.md \"Coupled leg feedback\")");
+              "matrix (in process only; docs/measurements/control.md \"Coupled leg feedback\")");
   cli.AddOption("coupled-reference-mass", "kg",
                 "--coupled-feedback: m_ref of W = M_ls / m_ref (0: the BS-SMC's effective mass)", "0");
   cli.AddFlag("coupled-raise-only",
@@ -162,30 +163,24 @@ int main(int argc, char** argv) {
   std::printf("%-9s %-4s | %8s %8s %8s | %8s %8s %8s | %s\n", "traj", "vs", "X cm", "Y cm",
               "Z cm", "rotX deg", "rotY deg", "rotZ deg", "leg RMSE mm (1..6)");
   int failures = 0;
-  std::string json = "{\"seed\": " + std::to_string(*seed) + ", \"profile\": \"" + cli.Get("profile") +
-                     "\", \"controller\": \"" + cli.Get("controller") + "\", \"overlays\": [";
-  for (std::size_t i = 0; i < loaded.config.overlays.size(); ++i)
-    json += (i ? ", \"" : "\"") + loaded.config.overlays[i].source_path + "\"";
-  json += "], \"trajectories\": {";
-  bool first_json = true;
+  hexa::json::Value json = {{"seed", *seed},
+                            {"profile", cli.Get("profile")},
+                            {"controller", cli.Get("controller")},
+                            {"overlays", hexa::json::Value::array()},
+                            {"trajectories", hexa::json::Value::object()}};
+  for (const auto& o : loaded.config.overlays) json["overlays"].push_back(o.source_path);
   for (const auto motion : motions) {
     const auto r = hexa::RunPaperSession(config, motion, static_cast<int>(*periods));
     {
-      char buf[512];
       const auto t = r.metrics.vs_truth.Rmse();
       const auto m = r.metrics.vs_measured.Rmse();
-      std::snprintf(buf, sizeof buf,
-                    "%s\"%s\": {\"completed\": %s, \"rmse_vs_truth\": [%.9g, %.9g, %.9g, %.9g, %.9g, %.9g], "
-                    "\"rmse_vs_measured\": [%.9g, %.9g, %.9g, %.9g, %.9g, %.9g], \"leg_rmse_m\": [",
-                    first_json ? "" : ", ", hexa::ToString(motion), r.completed ? "true" : "false", t[0], t[1],
-                    t[2], t[3], t[4], t[5], m[0], m[1], m[2], m[3], m[4], m[5]);
-      json += buf;
-      for (std::size_t i = 0; i < r.metrics.leg_length.size(); ++i) {
-        std::snprintf(buf, sizeof buf, "%s%.9g", i ? ", " : "", r.metrics.leg_length[i].Rmse());
-        json += buf;
-      }
-      json += "]}";
-      first_json = false;
+      hexa::json::Value legs = hexa::json::Value::array();
+      for (const auto& leg : r.metrics.leg_length) legs.push_back(leg.Rmse());
+      json["trajectories"][hexa::ToString(motion)] = {
+          {"completed", r.completed},
+          {"rmse_vs_truth", {t[0], t[1], t[2], t[3], t[4], t[5]}},
+          {"rmse_vs_measured", {m[0], m[1], m[2], m[3], m[4], m[5]}},
+          {"leg_rmse_m", legs}};
     }
     if (!r.completed) {
       ++failures;
@@ -204,14 +199,12 @@ int main(int argc, char** argv) {
       std::printf("\n");
     }
   }
-  json += "}}\n";
   if (cli.Has("json")) {
-    FILE* f = std::fopen(cli.Get("json").c_str(), "w");
-    if (f == nullptr || std::fputs(json.c_str(), f) < 0) {
-      std::fprintf(stderr, "error: cannot write %s\n", cli.Get("json").c_str());
+    std::string error;
+    if (!hexa::json::WriteFile(cli.Get("json"), json, -1, error)) {
+      std::fprintf(stderr, "error: %s\n", error.c_str());
       return 1;
     }
-    std::fclose(f);
   }
   return failures == 0 ? 0 : 1;
 }

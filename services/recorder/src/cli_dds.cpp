@@ -134,7 +134,7 @@ template <typename T, typename P>
 class TopicRecorder final : public TopicRecorderBase {
  public:
   static constexpr std::size_t kCapacity = 256;
-  // The leg controllers write ValveCommand in their leg's partition (docs/deployment.md, DDS
+  // The leg controllers write ValveCommand in their leg's partition (docs/security.md, DDS
   // Security): the recorder subscribes to every leg partition and the default one.
   static std::vector<std::string> Partitions() {
     if constexpr (comm::TopicTraits<T>::kKind != comm::TopicKind::kValveCommand) return {};

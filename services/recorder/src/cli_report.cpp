@@ -1,4 +1,4 @@
-// hexa_recorder report: the session report (docs/results.md) from a recording alone.
+// hexa_recorder report: the session report (docs/measurements/results.md) from a recording alone.
 #include <sys/wait.h>
 #include <unistd.h>
 

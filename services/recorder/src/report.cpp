@@ -11,6 +11,7 @@
 
 #include "hexa/core/pose.hpp"
 #include "hexa/recorder/recording.hpp"
+#include "hexa/services/json.hpp"
 #include "report_events.hpp"
 #include "hexa/services/text.hpp"
 #include "recording.pb.h"
@@ -298,35 +299,77 @@ bool PaperValue(const std::string& trajectory, int axis, double& value) {
   return false;
 }
 
-std::string Json(double v) {
+// A number in report.md's text ("%.9g"; a figure that is not finite reads "null", as in
+// report.json).
+std::string Num(double v) {
   if (!std::isfinite(v)) return "null";
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.9g", v);
   return buf;
 }
 
-std::string JsonString(const std::string& raw) {
-  const std::string s = text::RepairUtf8(raw);  // JSON text is UTF-8 (RFC 8259)
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) {
-      out += ' ';
-      continue;
-    }
-    out += c;
+// Per-axis figures as report.json writes them: {"x_m": ..., "roll_rad": ...}, or for a
+// relative error {"x": ...} with null where the paper gives no figure (a < 0).
+json::Value AxisJson(const std::array<double, 6>& a, bool relative) {
+  json::Value o = json::Value::object();
+  for (int i = 0; i < 6; ++i) {
+    const std::string key = std::string(kAxes[i]) + (relative ? "" : (i < 3 ? "_m" : "_rad"));
+    o[key] = relative && a[i] < 0 ? json::Value(nullptr) : json::Value(a[i]);
   }
-  return out + "\"";
+  return o;
 }
 
-std::string AxisJson(const std::array<double, 6>& a, bool relative) {
-  std::ostringstream os;
-  os << "{";
-  for (int i = 0; i < 6; ++i) {
-    os << (i ? ", " : "") << "\"" << kAxes[i] << (relative ? "" : (i < 3 ? "_m" : "_rad"))
-       << "\": " << (relative && a[i] < 0 ? "null" : Json(a[i]));
+json::Value ReportJson(const SessionReport& r) {
+  json::Value j;
+  j["recording"] = r.recording;
+  j["session"] = json::Value::object();
+  for (const auto& [k, v] : r.meta) j["session"][k] = v;
+  j["recording_complete"] = r.complete_file;
+  j["final_supervisor_state"] = r.final_supervisor_state;
+  j["tracking_pose_samples"] = r.pose_samples_tracking;
+  j["rmse_vs_ground_truth"] = AxisJson(r.rmse_vs_truth, false);
+  j["relative_error_vs_ground_truth"] = AxisJson(r.relative_vs_truth, true);
+  j["rmse_vs_measured_pose"] = AxisJson(r.rmse_vs_measured, false);
+  j["relative_error_vs_measured_pose"] = AxisJson(r.relative_vs_measured, true);
+  j["leg_length_rmse_m"] = r.leg_length_rmse_m;
+  j["leg_length_max_abs_error_m"] = r.leg_length_max_abs_m;
+  j["valve_mean_abs_step_v_per_tick"] = r.valve_mean_abs_step_v;
+  j["valve_saturated_fraction"] = r.valve_saturated_fraction;
+  j["deadline_misses"] = json::Value::object();
+  for (const auto& [k, v] : r.deadline_misses) j["deadline_misses"][k] = v;
+  j["command_age_bins"] = {"0", "1", "2", "3-7", "8-15", ">=16", "none"};
+  j["command_age_per_leg"] = nullptr;
+  if (r.command_age_recorded) j["command_age_per_leg"] = r.command_age;
+  j["friction_scale_per_leg"] = nullptr;
+  if (r.AnyBsSmcLeg()) {
+    json::Value legs = json::Value::array();
+    for (const auto& f : r.friction_scale) {
+      if (f.bssmc_commands == 0) {
+        legs.push_back(nullptr);
+        continue;
+      }
+      const bool have = f.commands > 0;
+      legs.push_back({{"bssmc_commands", f.bssmc_commands},
+                      {"commands", f.commands},
+                      {"end", have ? json::Value(f.end) : json::Value(nullptr)},
+                      {"min", have ? json::Value(f.min) : json::Value(nullptr)},
+                      {"max", have ? json::Value(f.max) : json::Value(nullptr)}});
+    }
+    j["friction_scale_per_leg"] = legs;
   }
-  return os.str() + "}";
+  j["missing_samples"] = json::Value::object();
+  for (const auto& [k, v] : r.missing) j["missing_samples"][k] = v;
+  j["messages"] = json::Value::object();
+  for (const auto& [k, v] : r.messages) j["messages"][k] = v;
+  j["control_round_trip_latency_s"] = {{"count", r.latency_pairs},
+                                       {"median", r.latency_s.median},
+                                       {"p99", r.latency_s.p99},
+                                       {"max", r.latency_s.max}};
+  j["wall_time_s"] = r.wall_time_s;
+  j["sim_time_s"] = r.sim_time_s;
+  j["faults"] = r.faults;
+  j["recording_warnings"] = r.warnings;
+  return j;
 }
 
 }  // namespace
@@ -338,85 +381,8 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
   };
   const std::string trajectory = meta("trajectory");
   {
-    std::ofstream j(dir + "/report.json");
-    if (!j) throw std::runtime_error("cannot write " + dir + "/report.json");
-    j << "{\n  \"recording\": " << JsonString(r.recording) << ",\n  \"session\": {";
-    bool first = true;
-    for (const auto& [k, v] : r.meta) {
-      j << (first ? "" : ", ") << JsonString(k) << ": " << JsonString(v);
-      first = false;
-    }
-    j << "},\n  \"recording_complete\": " << (r.complete_file ? "true" : "false")
-      << ",\n  \"final_supervisor_state\": " << JsonString(r.final_supervisor_state)
-      << ",\n  \"tracking_pose_samples\": " << r.pose_samples_tracking
-      << ",\n  \"rmse_vs_ground_truth\": " << AxisJson(r.rmse_vs_truth, false)
-      << ",\n  \"relative_error_vs_ground_truth\": " << AxisJson(r.relative_vs_truth, true)
-      << ",\n  \"rmse_vs_measured_pose\": " << AxisJson(r.rmse_vs_measured, false)
-      << ",\n  \"relative_error_vs_measured_pose\": " << AxisJson(r.relative_vs_measured, true)
-      << ",\n  \"leg_length_rmse_m\": [";
-    for (int i = 0; i < 6; ++i) j << (i ? ", " : "") << Json(r.leg_length_rmse_m[i]);
-    j << "],\n  \"leg_length_max_abs_error_m\": [";
-    for (int i = 0; i < 6; ++i) j << (i ? ", " : "") << Json(r.leg_length_max_abs_m[i]);
-    j << "],\n  \"valve_mean_abs_step_v_per_tick\": [";
-    for (int i = 0; i < 6; ++i) j << (i ? ", " : "") << Json(r.valve_mean_abs_step_v[i]);
-    j << "],\n  \"valve_saturated_fraction\": [";
-    for (int i = 0; i < 6; ++i) j << (i ? ", " : "") << Json(r.valve_saturated_fraction[i]);
-    j << "],\n  \"deadline_misses\": {";
-    first = true;
-    for (const auto& [k, v] : r.deadline_misses) {
-      j << (first ? "" : ", ") << JsonString(k) << ": " << v;
-      first = false;
-    }
-    j << "},\n  \"command_age_bins\": [\"0\", \"1\", \"2\", \"3-7\", \"8-15\", \">=16\", \"none\"],"
-      << "\n  \"command_age_per_leg\": ";
-    if (!r.command_age_recorded) j << "null";
-    else {
-      j << "[";
-      for (int i = 0; i < 6; ++i) {
-        j << (i ? ", " : "") << "[";
-        for (int b = 0; b < SessionReport::kAgeBins; ++b) j << (b ? ", " : "") << r.command_age[i][b];
-        j << "]";
-      }
-      j << "]";
-    }
-    j << ",\n  \"friction_scale_per_leg\": ";
-    if (!r.AnyBsSmcLeg()) j << "null";
-    else {
-      j << "[";
-      for (int i = 0; i < 6; ++i) {
-        const auto& f = r.friction_scale[i];
-        j << (i ? ", " : "");
-        if (f.bssmc_commands == 0) {
-          j << "null";
-          continue;
-        }
-        const bool have = f.commands > 0;
-        j << "{\"bssmc_commands\": " << f.bssmc_commands << ", \"commands\": " << f.commands
-          << ", \"end\": " << (have ? Json(f.end) : "null") << ", \"min\": "
-          << (have ? Json(f.min) : "null") << ", \"max\": " << (have ? Json(f.max) : "null") << "}";
-      }
-      j << "]";
-    }
-    j << ",\n  \"missing_samples\": {";
-    first = true;
-    for (const auto& [k, v] : r.missing) {
-      j << (first ? "" : ", ") << JsonString(k) << ": " << v;
-      first = false;
-    }
-    j << "},\n  \"messages\": {";
-    first = true;
-    for (const auto& [k, v] : r.messages) {
-      j << (first ? "" : ", ") << JsonString(k) << ": " << v;
-      first = false;
-    }
-    j << "},\n  \"control_round_trip_latency_s\": {\"count\": " << r.latency_pairs
-      << ", \"median\": " << Json(r.latency_s.median) << ", \"p99\": " << Json(r.latency_s.p99)
-      << ", \"max\": " << Json(r.latency_s.max) << "},\n  \"wall_time_s\": " << Json(r.wall_time_s)
-      << ",\n  \"sim_time_s\": " << Json(r.sim_time_s) << ",\n  \"faults\": [";
-    for (std::size_t i = 0; i < r.faults.size(); ++i) j << (i ? ", " : "") << JsonString(r.faults[i]);
-    j << "],\n  \"recording_warnings\": [";
-    for (std::size_t i = 0; i < r.warnings.size(); ++i) j << (i ? ", " : "") << JsonString(r.warnings[i]);
-    j << "]\n}\n";
+    std::string error;
+    if (!json::WriteFile(dir + "/report.json", ReportJson(r), 2, error)) throw std::runtime_error(error);
   }
   {
     std::ofstream m(dir + "/report.md");
@@ -424,7 +390,7 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
     m << "# Session report\n\n![summary: facts, RMSE, events, errors, path](summary.png)\n\n";
     for (const auto& [k, v] : r.meta) m << "- " << k << ": " << v << "\n";
     m << "- recording: `" << r.recording << "`" << (r.complete_file ? "" : " (INCOMPLETE FILE)")
-      << "\n- simulated time " << Json(r.sim_time_s) << " s, wall time " << Json(r.wall_time_s)
+      << "\n- simulated time " << Num(r.sim_time_s) << " s, wall time " << Num(r.wall_time_s)
       << " s\n- final supervisor state: " << r.final_supervisor_state
       << "\n- tracking window: " << r.pose_samples_tracking << " pose samples (5 ms)\n";
     for (const auto& w : r.warnings) m << "- recording warning: " << w << "\n";
@@ -474,13 +440,13 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
          "does not define its own); '-' = no motion on that axis.\n\n";
     m << "## Leg-length RMSE (desired incl. outer-loop correction vs potentiometer)\n\n"
          "| leg | 1 | 2 | 3 | 4 | 5 | 6 |\n|---|---|---|---|---|---|---|\n| RMSE mm";
-    for (double v : r.leg_length_rmse_m) m << " | " << Json(1000 * v).substr(0, 6);
+    for (double v : r.leg_length_rmse_m) m << " | " << Num(1000 * v).substr(0, 6);
     m << " |\n| max mm";
-    for (double v : r.leg_length_max_abs_m) m << " | " << Json(1000 * v).substr(0, 6);
+    for (double v : r.leg_length_max_abs_m) m << " | " << Num(1000 * v).substr(0, 6);
     m << " |\n| valve mean abs step V/tick";
-    for (double v : r.valve_mean_abs_step_v) m << " | " << Json(v).substr(0, 5);
+    for (double v : r.valve_mean_abs_step_v) m << " | " << Num(v).substr(0, 5);
     m << " |\n| valve saturated %";
-    for (double v : r.valve_saturated_fraction) m << " | " << Json(100 * v).substr(0, 5);
+    for (double v : r.valve_saturated_fraction) m << " | " << Num(100 * v).substr(0, 5);
     m << " |\n\nValve activity is taken over the tracking window from the voltages the plant "
          "applied: a smooth command moves a few hundredths of a volt per 1 ms tick; chattering "
          "shows as large steps and time at 0 or 10 V.\n\n";
@@ -506,8 +472,8 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
     m << "## Timing\n\n";
     m << "- control round trip (sensor sample written -> valve command written, same leg and "
          "tick): median "
-      << Json(r.latency_s.median * 1e6) << " us, p99 " << Json(r.latency_s.p99 * 1e6) << " us, max "
-      << Json(r.latency_s.max * 1e6) << " us over " << r.latency_pairs << " pairs\n";
+      << Num(r.latency_s.median * 1e6) << " us, p99 " << Num(r.latency_s.p99 * 1e6) << " us, max "
+      << Num(r.latency_s.max * 1e6) << " us over " << r.latency_pairs << " pairs\n";
     for (const auto& [k, v] : r.deadline_misses) m << "- deadline misses " << k << ": " << v << "\n";
     if (r.command_age_recorded) {
       m << "\nAge of the command the plant applied (ticks; >= 1 = a late tick: the command "
@@ -548,7 +514,7 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
       std::snprintf(buf, sizeof buf, "%.3f", row.time_s);
       p << buf;
       for (const auto* arr : {&row.desired, &row.truth, &row.measured})
-        for (double v : *arr) p << "," << Json(v);
+        for (double v : *arr) p << "," << Num(v);
       p << "\n";
     }
   }
@@ -569,7 +535,7 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
       l << buf;
       for (const auto* arr : {&row.desired_length_m, &row.measured_length_m, &row.valve_v,
                               &row.friction_scale})
-        for (double v : *arr) l << "," << (std::isnan(v) ? "nan" : Json(v));
+        for (double v : *arr) l << "," << (std::isnan(v) ? "nan" : Num(v));
       l << "\n";
     }
   }

@@ -1,7 +1,7 @@
 // LegReaders<T>: one reader per leg partition (LegPartition(1..6), partition.hpp) of a
 // leg-keyed topic. The plant reads ValveCommand this way: EXCLUSIVE ownership is decided
 // per reader and instance, so with one reader per leg only leg N's writers (with DDS Security:
-// only leg N's identities, docs/deployment.md) compete for leg N's instance. With a single
+// only leg N's identities, docs/security.md) compete for leg N's instance. With a single
 // reader of every partition, a writer allowed in some other leg's partition could write
 // leg N's key with a higher strength and take leg N's instance over: its samples would be
 // refused, but the real controller's would no longer arrive either.

@@ -26,7 +26,7 @@ enum class TopicKind : uint8_t {
   kOperatorCommand,
   kNodeStatus,
   kFaultEvent,
-  kTrackerPose,  // external pose instrument, calibration only (issue 14)
+  kTrackerPose,  // external pose instrument, calibration only
 };
 inline constexpr int kTopicKindCount = 10;
 
@@ -113,7 +113,7 @@ struct QosParams {
   // those topics repair what the recorder's link dropped: acknowledgements, retransmission
   // bursts out of up to 3 s of history, on the writers' receive threads, which in real time
   // run at the control loop's priority on the control CPU. A 5 % lossy recorder link sent a
-  // real-time session to HOLD that way (docs/deployment.md, "The lossy recorder link").
+  // real-time session to HOLD that way (docs/measurements/deployment.md, "The lossy recorder link").
   // Best effort, no recorder can cost a control writer anything: a sample dropped on the
   // recorder's link is missing in the recording (counted by tick). Lockstep keeps it false:
   // the lockstep plant waits for the recorder's acknowledgements and nothing may be lost.

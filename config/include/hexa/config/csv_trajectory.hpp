@@ -1,4 +1,4 @@
-// User trajectory from a CSV file (docs/task_space.md, "CSV format"): read, parsed and
+// User trajectory from a CSV file (docs/trajectories.md, "CSV user trajectory"): read, parsed and
 // validated here, at the edge; the core gets the rows (hexa::CsvMotion) and never opens a file.
 //
 //   time_s,x_m,y_m,z_m,roll_rad,pitch_rad,yaw_rad      <- header, exactly these names
@@ -7,7 +7,7 @@
 //
 // Absolute platform poses (B frame, angles as in pose.hpp), at least two rows, every value
 // finite. Blank lines and lines starting with '#' are ignored; fields may carry spaces around
-// them; CRLF line ends are accepted. Limits (CsvTrajectoryLimits, docs/task_space.md): file
+// them; CRLF line ends are accepted. Limits (CsvTrajectoryLimits, docs/trajectories.md): file
 // size, row count, time span, row spacing, value ranges. They keep every later step bounded:
 // the feasibility check samples the whole trajectory at 1 ms inside the supervisor, so a CSV
 // spanning 1e9 s used to stall it for hours.
@@ -33,7 +33,7 @@ struct CsvTrajectoryLimits {
   std::size_t max_file_bytes = 64u << 20;  // 64 MiB: ~800 000 rows of full-precision values
   std::size_t max_rows = 1'000'000;
   // Last minus first time. The supervisor checks feasibility at 1 ms over the whole trajectory
-  // (~0.3-1.3 us per sample measured, docs/task_space.md): 1800 s is at most ~2.4 s of checking.
+  // (~0.3-1.3 us per sample measured, docs/robustness.md): 1800 s is at most ~2.4 s of checking.
   double max_span_s = 1800.0;
   // Rows closer than one plant tick cannot be followed by a 1 kHz loop (and make the spline's
   // accelerations meaningless).

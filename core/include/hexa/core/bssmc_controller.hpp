@@ -10,7 +10,7 @@
 //      retract) chosen by the sign of the required flow term, spool -> voltage (eq 42, 44),
 //   saturated to the valve's 0-10 V.
 //
-// phi_dot is the Gaussian derivative (eq 40) of phi's model part, plus (issue 14d) a fraction of
+// phi_dot is the Gaussian derivative (eq 40) of phi's model part, plus a fraction of
 // the low-passed rate of its feedback part from the leg observer (leg_observer.hpp;
 // docs/controller.md "Feedback rate in phi_dot"). Velocity x_dot is the Gaussian derivative of
 // the measured length.
@@ -56,7 +56,7 @@ struct BsSmcInput {
   double desired_length_m = 0.0;       // x_d + l_mid (incl. outer-loop correction)
   double desired_velocity_m_s = 0.0;   // x_dot_d
   double desired_acceleration_m_s2 = 0.0;  // x_ddot_d
-  // Known load of the leg (issue 14, platform inverse dynamics): the axial force the leg must
+  // Known load of the leg (platform inverse dynamics): the axial force the leg must
   // deliver for the desired motion (inertia of platform and pistons, gravity). With it,
   // M x_ddot_d + F_g of eq 14/25 is replaced by feedforward_force_n (M stays as the gain of
   // the feedback term M lambda e_dot).
@@ -65,7 +65,7 @@ struct BsSmcInput {
   // Sensor tick of this period (LegControllerInput::tick): the dither's time base, the same
   // for the six legs.
   std::uint64_t tick = 0;
-  // Coupled leg feedback only (docs/task_space.md "Coupled leg feedback"): the force the leg
+  // Coupled leg feedback only (docs/measurements/control.md "Coupled leg feedback"): the force the leg
   // observer is driven with in place of this leg's pneumatic force, m_obs (M_ls^-1 F)_i, so
   // that its acceleration F / m_obs is the leg's acceleration on the coupled platform.
   bool has_observer_force = false;
@@ -89,7 +89,7 @@ struct BsSmcOutput {
 };
 
 // The feedback part of phi, f = -M lambda e_dot - K tanh(xi S) - k_s S (eq 45's feedback terms),
-// and its low-passed rate (issue 14d; 0 when the feedback rate is off), before the fraction.
+// and its low-passed rate (0 when the feedback rate is off), before the fraction.
 struct BsSmcFeedback {
   double force_n = 0.0;
   double rate_n_s = 0.0;
@@ -106,7 +106,7 @@ class BsSmcController {
   // them); a non-finite intermediate still yields the null voltage.
   void Update(const BsSmcInput& input, BsSmcOutput& output);
 
-  // Coupled leg feedback (docs/task_space.md "Coupled leg feedback"; off in the system): one
+  // Coupled leg feedback (docs/measurements/control.md "Coupled leg feedback"; off in the system): one
   // control period in two steps. Begin runs the estimates (velocity, integral, observer) and
   // returns this leg's own feedback part; Finish completes the law with the feedback part that
   // is to act on this leg (the caller mixes the six legs' parts through the leg-space mass

@@ -1,4 +1,4 @@
-// Kinematic calibration (issue 14): the measurement model, the identifiability analysis and
+// Kinematic calibration: the measurement model, the identifiability analysis and
 // the choice of calibration poses. The least-squares fit itself runs in hexa_calibrate
 // (Ceres, tools/calibrate); this part is Eigen only and shared by the supervisor (which
 // visits the poses), the fit and the tests.

@@ -15,11 +15,11 @@ struct DifferentiatorParams {
 
 // Backstepping-sliding mode controller (Sec. 3.2, eq 19-45).
 struct BsSmcParams {
-  double lambda_1_s = 40.0;             // sliding surface slope (eq 19); platform grid (docs/tuning.md)
-  double switching_gain_n = 90.0;       // K (eq 22, 30), as a force; platform grid (docs/tuning.md)
-  double boundary_layer_xi_s_m = 1.0;   // xi in tanh(xi S) (eq 45); paper: 10; chatter study (docs/tuning.md)
-  double backstepping_beta_1_s = 90.0;  // beta (eq 38); valve activity (docs/task_space.md, issue 14b)
-  double effective_mass_kg = 1.5;       // vertical-motion value; chatter study (docs/tuning.md)
+  double lambda_1_s = 40.0;             // sliding surface slope (eq 19); platform grid (docs/measurements/tuning.md)
+  double switching_gain_n = 90.0;       // K (eq 22, 30), as a force; platform grid (docs/measurements/tuning.md)
+  double boundary_layer_xi_s_m = 1.0;   // xi in tanh(xi S) (eq 45); paper: 10; chatter study (docs/measurements/tuning.md)
+  double backstepping_beta_1_s = 90.0;  // beta (eq 38); valve activity (docs/measurements/control.md)
+  double effective_mass_kg = 1.5;       // vertical-motion value; chatter study (docs/measurements/tuning.md)
   double gravity_load_n = 13.2;         // along the leg at home: 6 g/(6 cos) + 0.25 g cos (docs)
   double viscous_estimate_scale = 1.0;  // B_hat = scale * Table 8 B (eq 21)
   double friction_estimate_scale = 1.0; // F_s, F_c estimate = scale * Table 8 (eq 14)
@@ -28,16 +28,16 @@ struct BsSmcParams {
   // reaching law, Gao & Hung 1993). NOT in the paper (deviation, docs/controller.md): with
   // K tanh(xi S) alone the corrective force is capped near K, and a leg held by static
   // friction or by the platform coupling with a large error gets no more force.
-  double reaching_proportional_n_s_m = 50.0;  // chatter study (docs/tuning.md)
+  double reaching_proportional_n_s_m = 50.0;  // chatter study (docs/measurements/tuning.md)
   // Valve-command smoothing (NOT in the paper; docs/controller.md "Valve chatter").
   // Linearised inversion of the quadratic area law (eq 43) near null: for a required area
   // fraction r = A_v / A_max below this value the spool fraction is r / sqrt(r0) instead of
   // sqrt(r) (continuous at r0). 0 = the paper's square root everywhere, whose slope is
   // infinite at null and turns sensor noise into volt-sized spool jumps.
-  double null_band_area_fraction = 0.25;  // chatter study (docs/tuning.md)
+  double null_band_area_fraction = 0.25;  // chatter study (docs/measurements/tuning.md)
   // First-order low-pass on the commanded spool position (time constant; 0 = off). A lag
   // inside the force loop, in series with the spool's own (~3 ms) lag.
-  double spool_filter_time_constant_s = 0.002;  // chatter study (docs/tuning.md)
+  double spool_filter_time_constant_s = 0.002;  // chatter study (docs/measurements/tuning.md)
   // Integral of the sliding surface (NOT in the paper): phi -= k_i * integral(S dt), with the
   // integral's force clamped to +-integral_limit_n (anti-windup). Without it a leg held by
   // static friction (F_s up to ~110 N with the plant's x1.2) against the bounded corrective
@@ -55,19 +55,19 @@ struct BsSmcParams {
   // action against static friction otherwise hunts around the setpoint (measured at idle:
   // +-0.7 mm at ~1 Hz without it).
   double integral_deadband_m = 0.0003;
-  // Rate of the feedback part of phi in phi_dot (issue 14d, NOT in the paper's form; a
+  // Rate of the feedback part of phi in phi_dot (NOT in the paper's form; a
   // deviation from eq 38, docs/deviations.md). phi_dot = d/dt(model part) (eq 40) +
   // feedback_rate_fraction * LP(d/dt(feedback part)), the feedback part being
   // -M lambda e_dot - K tanh(xi S) - k_s S, LP a first-order low-pass of time constant
   // feedback_rate_time_constant_s (a band-limited derivative). With it the feedback force
   // reaches the pressure force through ((a + beta tau) s + beta) / ((tau s + 1)(s + beta))
   // instead of beta / (s + beta): phase back on the velocity loop of the platform's light
-  // modes (docs/task_space.md "Feedback rate in phi_dot"). 0 = off (only beta z acts on it).
-  double feedback_rate_fraction = 0.4;          // docs/task_space.md "Feedback rate in phi_dot"
+  // modes (docs/measurements/control.md "Feedback rate in phi_dot"). 0 = off (only beta z acts on it).
+  double feedback_rate_fraction = 0.4;          // docs/measurements/control.md "Feedback rate in phi_dot"
   double feedback_rate_time_constant_s = 0.001;
   // Speed schedule of the fraction: a_eff = a (1 - exp(-(v_d / this)^2)), v_d the desired
   // piston speed; 0 = a at every speed. Below ~0.05 m/s the plant's own bristle damping keeps
-  // the light modes quiet (docs/task_space.md) and the rate term only slows the force build-up
+  // the light modes quiet (docs/measurements/control.md) and the rate term only slows the force build-up
   // against static friction (an observer cannot tell a stuck piston from a lagging one).
   double feedback_rate_full_speed_m_s = 0.1;
   // Source of that rate. false: the backward difference of the feedback part computed from
@@ -80,7 +80,7 @@ struct BsSmcParams {
   double observer_length_sigma_m = 0.05e-3;
   double observer_force_sigma_n = 3.0;
   double observer_disturbance_rate_m_s3 = 100.0;
-  // Dither (NOT in the paper; issue 14, docs/controller.md "Dither"): a sinusoidal force
+  // Dither (NOT in the paper, docs/controller.md "Dither"): a sinusoidal force
   // A sin(2 pi f t) exp(-(v_d / v_g)^2) added to eq 14's friction estimate while the setpoint
   // is slow. It is part of the model part of phi, so phi_dot carries its rate and the valve
   // follows it: it keeps the spool off its null, where the chatter band's quadratic area law
@@ -88,19 +88,19 @@ struct BsSmcParams {
   // the bristles of a slowly moving leg from sticking. t = the sensor tick x period_s (common
   // to the six legs, lockstep and real time alike); f is rounded to 1 / (N period_s), N integer.
   // 0 N = off (the paper's eq 14).
-  // Grid on the seven trajectories, seeds 1-3 (docs/task_space.md "Pure z and the stick-slip
+  // Grid on the seven trajectories, seeds 1-3 (docs/measurements/control.md "Pure z and the stick-slip
   // of the slow motions"); the paper's 0.1 Hz motions move the legs at |v_d| <= 0.045 m/s.
   double dither_amplitude_n = 7.5;
   double dither_frequency_hz = 25.0;
   double dither_gate_speed_m_s = 0.12;
-  // Friction scale adaptation (NOT in the paper; issue 14, docs/controller.md "Friction
+  // Friction scale adaptation (NOT in the paper, docs/controller.md "Friction
   // adaptation at speed"): eq 14's friction and viscous estimates at v_d, F_r = F_f(v_d) +
   // B_hat v_d, are applied as k F_r with k = 1 + (theta - 1) w(v_d), w = 1 - exp(-(v_d / v_a)^2),
   // and theta follows the gradient law theta_dot = -gamma w S F_r (the Lyapunov-based update of
   // an unknown scale on a known regressor), projected on [min, max]. Fast legs adapt and get
   // the adapted scale; near v_d = 0 (w -> 0) the nominal estimate and the dither act unchanged,
   // since a friction estimate at full magnitude on a slow, reversing leg drives stick-slip
-  // (docs/results.md). gamma = 0: off (theta stays 1, eq 14 as before). gamma = 0.01 1/(N m)
+  // (docs/measurements/results.md). gamma = 0: off (theta stays 1, eq 14 as before). gamma = 0.01 1/(N m)
   // moves theta over seconds on the combined motion (measured: two thirds of its rise in ~3 s),
   // several periods of a 1 Hz motion, so theta does not follow the limit cycle within a period.
   double friction_adaptation_rate_1_n_m = 0.01;
@@ -110,21 +110,21 @@ struct BsSmcParams {
 };
 
 // PI baseline (paper ref [11]) with anti-windup, plus two terms that are not in ref [11]
-// and default to what the platform needs (docs/controller.md "PI baseline", docs/tuning.md):
+// and default to what the platform needs (docs/controller.md "PI baseline", docs/measurements/tuning.md):
 // a velocity feed-forward of the setpoint and rate damping on the velocity error
 // (velocity from the eq 40 differentiator). Both 0 = the plain PI of ref [11].
-// Gains: platform grid, seed 7 (docs/tuning.md).
+// Gains: platform grid, seed 7 (docs/measurements/tuning.md).
 struct PiParams {
-  double proportional_v_m = 200.0;       // valve volts per metre; platform grid (docs/tuning.md)
+  double proportional_v_m = 200.0;       // valve volts per metre; platform grid (docs/measurements/tuning.md)
   double integral_v_m_s = 30.0;          // valve volts per metre-second
   double integrator_limit_v = 2.0;      // anti-windup clamp of the integral term
   double velocity_feedforward_v_s_m = 6.0;  // volts per (m/s) of setpoint velocity
   double rate_damping_v_s_m = 20.0;         // volts per (m/s) of velocity error v_d - v
-  // Force feed-forward (issue 14), used only when the setpoint carries one: volts per newton
+  // Force feed-forward, used only when the setpoint carries one: volts per newton
   // of (feed-forward force - measured pneumatic force P1 A1 - P2 A2 - Pa Ar). The PI's only
   // output is a valve opening, i.e. a rate of force change, so the known load enters as a
   // proportional force loop towards it (docs/controller.md "Feed-forward").
-  double force_feedforward_v_n = 0.001;  // tuned on the seven trajectories (docs/controller.md, issue 14b)
+  double force_feedforward_v_n = 0.001;  // tuned on the seven trajectories (docs/controller.md)
 };
 
 struct LegControllerParams {
@@ -137,15 +137,15 @@ struct LegControllerParams {
 // Outer loop (Sec. 4.1): task-space error -> leg corrections through the Jacobian (eq 48).
 struct OuterLoopParams {
   bool enabled = true;
-  double gain = 0.4;                    // fraction of the mapped error added per 5 ms step (issue 14b: 0.2 -> 0.4 with the speed gate, docs/task_space.md)
+  double gain = 0.4;                    // fraction of the mapped error added per 5 ms step (0.2 -> 0.4 with the speed gate, docs/task_space.md)
   // Scale of the TRANSLATION part of the pose error before the Jacobian mapping (the
   // orientation part always uses `gain`). The position estimate (GQFK with the nominal
   // geometry) is biased by the joint / potentiometer calibration errors it cannot observe,
-  // the orientation (IMU) is not: docs/tuning.md, "Outer loop".
+  // the orientation (IMU) is not: docs/measurements/tuning.md, "Outer loop".
   double translation_gain_scale = 1.0;
   double max_correction_m = 0.005;      // per-leg bound of the accumulated correction
-  // Speed gate of the integration (issue 14b, NOT in the paper; docs/task_space.md "Outer
-  // loop speed gate"): the step's gain is gain / (1 + (v / gate_leg_speed_m_s)^2), v = the
+  // Speed gate of the integration (NOT in the paper; docs/task_space.md "Speed
+  // gate"): the step's gain is gain / (1 + (v / gate_leg_speed_m_s)^2), v = the
   // largest |desired leg speed| (eq 46) of the step. The loop is for slowly varying errors
   // (calibration bias, friction at 0.1 Hz: legs <= 0.045 m/s, gain >= 0.55 x); on the 1 Hz
   // combined motion (legs up to 0.67 m/s) its 25 ms integration acted on the legs' dynamic
@@ -172,18 +172,18 @@ struct SupervisorParams {
   double length_consistency_limit_m = 0.008;
   int length_consistency_ticks = 3;
   OuterLoopParams outer_loop;
-  // Platform inverse-dynamics feed-forward (issue 14, core/platform_dynamics.hpp): every
+  // Platform inverse-dynamics feed-forward (core/platform_dynamics.hpp): every
   // setpoint carries the axial force its leg must deliver for the desired motion (nominal
   // masses, J^-T of eq 48), used by the BS-SMC as the known load of eq 14/15 and by the PI
   // baseline as a force feed-forward. false = the paper's lumped load (paper-faithful).
   bool feedforward_enabled = true;
-  // Setpoint preview (issue 14b, NOT in the paper; docs/task_space.md "Setpoint lead"): while
+  // Setpoint preview (NOT in the paper; docs/measurements/control.md "Setpoint lead"): while
   // a trajectory runs, the legs get the lengths, rates and feed-forward of the desired motion
   // this far ahead (the trajectory is known in advance); the outer loop and the metrics keep
   // the desired pose of now. Default = the legs' measured lag: their mean first-harmonic lag
   // on the combined motion with no lead, 1.86 ms over the six legs and seeds 1-3 (calibrated,
   // realistic, with the friction adaptation; `platform_study --rig default --calibrate --seed S
-  // lead=0 legs combined`, docs/task_space.md "Setpoint lead"). Before the friction adaptation
+  // lead=0 legs combined`, docs/measurements/control.md "Setpoint lead"). Before the friction adaptation
   // it was 5 ms, the valve chain's two first-order lags (2 ms spool filter + 3 ms spool), when
   // the legs lagged 8-17 ms. 0 = off.
   double setpoint_lead_s = 0.002;

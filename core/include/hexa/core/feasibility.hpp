@@ -46,7 +46,7 @@ enum class FeasibilityViolation { kNone, kStroke, kSpeed, kAcceleration, kNotFin
 
 // Longest trajectory (blend + motion + stop) CheckFeasibility samples; longer ones are
 // infeasible (kTooLong) without sampling. At the default 1 ms period that is 2e6 samples,
-// 0.3-1.3 us each on this machine (docs/task_space.md): the check stays under ~3 s. A CSV
+// 0.3-1.3 us each on this machine (docs/robustness.md): the check stays under ~3 s. A CSV
 // trajectory may span 1800 s (config/csv_trajectory.hpp) and the rig's blend and stop at most
 // 60 s each (docs/config.md), so every accepted input fits.
 inline constexpr double kMaxTrajectoryDuration_s = 2000.0;

@@ -97,7 +97,7 @@ struct LegControllerInput {
   double setpoint_acceleration_m_s2 = 0.0;
   double correction_m = 0.0;  // outer-loop correction (Sec. 4.1), added to the length
   bool hold = false;
-  // Inverse-dynamics feed-forward of the setpoint (issue 14): force at setpoint_time_s and
+  // Inverse-dynamics feed-forward of the setpoint: force at setpoint_time_s and
   // its rate; interpolated like the length. Not valid: the lumped load model (paper).
   bool feedforward_valid = false;
   double feedforward_force_n = 0.0;
@@ -135,7 +135,7 @@ class LegController {
 
   void Update(const LegControllerInput& input, LegControllerOutput& output);
 
-  // Coupled leg feedback (BsSmcController::Begin / Finish; docs/task_space.md "Coupled leg
+  // Coupled leg feedback (BsSmcController::Begin / Finish; docs/measurements/control.md "Coupled leg
   // feedback"): BeginCoupled does everything Update does up to the BS-SMC's feedback part and
   // returns it; nothing (the output is then final) when the leg holds, is open loop or runs
   // the PI. FinishCoupled, only after a BeginCoupled that returned a value, completes the

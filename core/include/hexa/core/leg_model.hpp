@@ -122,7 +122,7 @@ class LegModel {
  private:
   LegModelParams params_;
   OrificeFlowModel orifice_;
-  // Constants of Evaluate, precomputed once (docs/plant.md, "Speed"): reciprocals of the
+  // Constants of Evaluate, precomputed once (docs/measurements/plant.md, "Speed"): reciprocals of the
   // Stribeck velocities (extend, retract) and of the LuGre damping fade velocity, R T.
   double inv_stribeck_extend_s_m_ = 0.0;
   double inv_stribeck_retract_s_m_ = 0.0;

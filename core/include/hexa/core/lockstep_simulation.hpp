@@ -43,7 +43,7 @@ struct LockstepConfig {
   // The plant's friction model (PlatformPlantConfig::friction_model).
   LegModelParams::FrictionModel plant_friction_model = LegModelParams::FrictionModel::kLugre;
   FreeFallBenchParams plant_free_fall;  // enabled: the free-fall bench instead of the platform
-  // Coupled leg feedback (issue 14 study, docs/task_space.md "Coupled leg feedback"; false =
+  // Coupled leg feedback (study, docs/measurements/control.md "Coupled leg feedback"; false =
   // the system): every tick the six BS-SMC feedback parts f_j (and their rates) are mixed,
   // leg i applying sum_j W_ij f_j with W = M_ls(q) / M_i: M_ls the leg-space mass matrix
   // (platform_dynamics.hpp) of the supervisor's rig at its pose estimate, refreshed every

@@ -14,7 +14,7 @@ namespace hexa {
 // Accumulates desired and actual [x y z roll pitch yaw] samples (m, rad) and reports per
 // axis RMSE and relative error. The paper does not define its "relative error" and its
 // Table 9 / 10 figures match no single definition; we use RMSE divided by the desired
-// motion's peak-to-peak range on that axis (docs/results.md).
+// motion's peak-to-peak range on that axis (docs/measurements/results.md).
 class AxisErrorAccumulator {
  public:
   void Add(const Vector6d& desired, const Vector6d& actual);

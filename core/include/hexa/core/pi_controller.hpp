@@ -30,7 +30,7 @@ struct PiInput {
   double length_m = 0.0;
   double desired_length_m = 0.0;
   double desired_velocity_m_s = 0.0;
-  // Force feed-forward (issue 14): with has_feedforward the term
+  // Force feed-forward: with has_feedforward the term
   // Kf (F_ff - (P1 A1 - P2 A2 - Pa A_r)) is added (PiParams::force_feedforward_v_n).
   bool has_feedforward = false;
   double feedforward_force_n = 0.0;

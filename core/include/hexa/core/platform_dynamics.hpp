@@ -1,4 +1,4 @@
-// Inverse dynamics of the platform (issue 14): the axial force every leg must deliver so
+// Inverse dynamics of the platform: the axial force every leg must deliver so
 // that the rigid platform, with the legs' moving masses, follows a desired motion.
 //
 // The model is the plant's (docs/plant.md): a rigid platform (mass m, inertia I_P about its
@@ -50,7 +50,7 @@ struct LegForceResult {
 KinStatus LegForcesForMotion(const GeometryParams& geometry, const PlatformInertialParams& inertial,
                              const PlatformMotion& motion, LegForceResult& result);
 
-// Leg-space mass matrix at `pose` (issue 14, coupled leg feedback; docs/task_space.md
+// Leg-space mass matrix at `pose` (coupled leg feedback; docs/measurements/control.md
 // "Coupled leg feedback"): with the platform at rest (zero twist, so c = 0 above),
 //   f - f(l_ddot = 0) = M_ls l_ddot,   M_ls = J^-T M_p J^-1 + m_leg I,
 // M_p = diag(m I_3, R I_P R^T) about the platform origin, J the eq 48 Jacobian. Symmetric,

@@ -64,7 +64,7 @@ struct PlatformPlantConfig {
   double laminar_pressure_ratio = 0.995;
   double lugre_damping_fade_velocity_m_s = 0.05;
   bool friction_enabled = true;  // false only for energy-conservation tests
-  // External pose instrument for kinematic calibration (issue 14); off by default.
+  // External pose instrument for kinematic calibration; off by default.
   TrackerParams tracker;
   bool chambers_sealed = false;  // true only for energy-conservation tests (valves never open)
   // The legs' friction: LuGre (default) or the static eq 3 (identification study of what

@@ -259,7 +259,7 @@ struct StrokeSearchSpace {
   // of B, F_s - F_c and F_c (each in [nominal / factor, nominal x factor] of the rig file's
   // values' force at that speed; v_s and the gammas as AroundNominal): the data fix the
   // friction curve over the recorded speeds much better than the three coefficients, which
-  // trade off against each other (docs/identification.md, "Why the template GA stalls").
+  // trade off against each other (docs/measurements/identification.md, "Why the template GA stalls").
   // Decoding solves eq 3 at the three speeds for F_c, F_s - F_c and B (given v_s); they
   // are not projected onto >= 0 (a projection makes a flat plateau the GA stalls on).
   static StrokeSearchSpace ForceAtSpeeds(const StrokeParams& nominal, double factor,

@@ -1,5 +1,5 @@
 #pragma once
-// Accounting of a real-time loop's schedule slips (docs/deployment.md, "Where the lapses'
+// Accounting of a real-time loop's schedule slips (docs/measurements/deployment.md, "Where the lapses'
 // milliseconds go"): every wake-up later than the threshold is a slip; the record keeps their
 // count, total and worst lateness and, for the first kKept of them, the tick and the lateness,
 // so that a fault at some tick can be matched to the stall before it. Pure: the caller measures

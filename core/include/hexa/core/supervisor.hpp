@@ -120,8 +120,8 @@ struct SupervisorOutput {
 class Supervisor {
  public:
   // Throws std::invalid_argument for inconsistent parameters (values named). `potentiometer`:
-  // the calibration of each leg's potentiometer (rig overlay, kinematic calibration, issue
-  // 14); every measured length is corrected with it before use. Identity by default.
+  // the calibration of each leg's potentiometer (rig overlay, kinematic
+  // calibration); every measured length is corrected with it before use. Identity by default.
   Supervisor(const RigParams& rig, const SupervisorParams& params,
              const LegArray<PotentiometerCalibrationParams>& potentiometer = {});
 

@@ -1,4 +1,4 @@
-// External pose instrument of the simulated rig (issue 14): a laser tracker / motion-capture
+// External pose instrument of the simulated rig: a laser tracker / motion-capture
 // system that measures the platform's TRUE pose with its own noise, for kinematic
 // calibration only (never used for tracking). Off by default; its random numbers come from
 // their own stream of the plant seed, so switching it on changes nothing else in a run.

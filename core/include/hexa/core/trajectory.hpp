@@ -14,7 +14,7 @@
 //
 // sigma is the quintic minimum-jerk ramp 10 s^3 - 15 s^4 + 6 s^5 (sigma, sigma', sigma''
 // vanish at the ends), so position, velocity and acceleration are continuous at every phase
-// boundary and zero at both ends. Derivation and formulas: docs/task_space.md.
+// boundary and zero at both ends. Derivation and formulas: docs/trajectories.md.
 //
 // Evaluate() neither throws nor allocates: it may run inside the 5 ms supervisor cycle.
 #pragma once

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Why the BS-SMC with the plant's TRUE pneumatic values tracks worse than with the rig
-file's nominal ones (docs/identification.md, "Why the truth rig tracks worse").
+file's nominal ones (docs/measurements/identification.md, "Why the truth rig tracks worse").
 
 In-process closed loop (hexa_sim: the services' controller, supervisor and plant code, no
 DDS), BS-SMC with the default feed-forward, the seven paper trajectories, seeds 1-3; sums over
@@ -15,9 +15,9 @@ RMSE. Rows:
   - the force-loop gain beta_1 of the BS-SMC (rig-file copies) with the nominal and the truth
     overlay.
 
-    /usr/bin/python3 deploy/truth_gap_study.py --truth-overlay out/identification/truth_overlay.textproto
+    /usr/bin/python3 studies/truth_gap_study.py --truth-overlay out/identification/truth_overlay.textproto
 
-(the truth overlay is written by hexa_identify --truth-overlay, deploy/identification_study.py).
+(the truth overlay is written by hexa_identify --truth-overlay, studies/identification_study.py).
 """
 import argparse
 import json

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Reads a trace saved by lapse_trace.py (ftrace text, record-tgid) and answers where a leg's
-milliseconds went (docs/deployment.md, "Where the lapses' milliseconds go").
+milliseconds went (docs/measurements/deployment.md, "Where the lapses' milliseconds go").
 
   lapse_analyse.py gaps TRACE TID [T0 T1]     a thread's sends (net:netif_rx in its context)
                                               and every gap between them over 2 ms

@@ -1,11 +1,11 @@
 #!/usr/bin/python3
 """How much of the closed-loop 'closure' figure is noise, and which identified parameters drive
-the identified rig's distance from the truth rig (docs/identification.md, "What the closure
-figure can and cannot say").
+the identified rig's distance from the truth rig (docs/measurements/identification.md,
+"The closed-loop row: sensitivity floor and attribution").
 
 In-process closed loop (hexa_sim: the services' controller, supervisor and plant code, no DDS),
 `realistic`, BS-SMC, the seven paper trajectories, seeds 1-3, in both modes of
-deploy/identification_study.py (with the platform feed-forward, and paper-faithful
+studies/identification_study.py (with the platform feed-forward, and paper-faithful
 --no-feedforward). Per trajectory the translation RMSE against ground truth summed over the
 seeds, as the study's closure table.
 
@@ -21,7 +21,7 @@ seeds, as the study's closure table.
   3. --seed-triples N: the nominal, identified and truth rigs also with seeds 1..3N, the closure
      per seed triple and over all.
 
-    /usr/bin/python3 deploy/closure_attribution_study.py \
+    /usr/bin/python3 studies/closure_attribution_study.py \
         --truth-overlay out/identification/truth_overlay.textproto \
         --identified-overlay out/identification/identified/identified.textproto
 

@@ -1,6 +1,6 @@
 // platform_study: tuning and diagnosis of the leg controllers ON THE FULL PLATFORM, in the
 // in-process lockstep simulation (RunPaperSession, same protocol as the DDS system).
-// Not a test. docs/tuning.md gives the grids run with it and the figures.
+// Not a test. docs/measurements/tuning.md gives the grids run with it and the figures.
 //
 //   platform_study [--rig file|default] [--seed N] [--controller bssmc|pi] [--ideal] [--traj all|x,y,...]
 //                  [--periods N] [key=value ...]
@@ -8,15 +8,15 @@
 //   platform_study fit <traj> [options]        first-harmonic fit of the tracking window:
 //        per axis and per leg the amplitude ratio true/desired, the phase lag, the mean peak
 //        overshoot and what remains after removing the fitted harmonic, that first harmonic
-//        split into its amplitude and timing parts and the rest's RMS by frequency band (issue 14)
+//        split into its amplitude and timing parts and the rest's RMS by frequency band
 //   platform_study legs <traj> [options]       per-leg lag against the trajectory of NOW (no
-//        setpoint lead) and the force budget along each leg (issue 14c, see Legs below)
-//   platform_study reversals <traj> [options]  where the moving axis' error is made (issue
-//        14, pure z): share of the squared error within +-N ms of the desired motion's
+//        setpoint lead) and the force budget along each leg (see Legs below)
+//   platform_study reversals <traj> [options]  where the moving axis' error is made (pure
+//        z): share of the squared error within +-N ms of the desired motion's
 //        reversals, bias / first harmonic / rest, the rest's share above 1 Hz, and per leg
 //        the stick-slip (see Reversals below)
 //   platform_study modes [options]             leg-space modal masses at home and the BS-SMC
-//        velocity loop's crossover and phase margin on each (issue 14c, see Modes below)
+//        velocity loop's crossover and phase margin on each (see Modes below)
 //
 // --calibrate (needs --rig): first the kinematic calibration procedure in process, exactly as
 // hexa_sim --calibrate (tools/calibrate/calibrate_in_process.hpp), then the run with the
@@ -26,7 +26,7 @@
 // RMSE (mm), fraction of ticks with a saturated valve, and the score: the mean over the
 // seven trajectories of (moving-axis RMSE / paper's value for that axis), i.e. 1.0 = the
 // paper's Table 9 / Table 10 accuracy on average.
-// Valve activity (docs/tuning.md "Valve chatter"), over the TRACKING window, all six legs:
+// Valve activity (docs/measurements/tuning.md "Valve chatter"), over the TRACKING window, all six legs:
 //   du   mean |u(k) - u(k-1)| per 1 ms tick, V
 //   sat  fraction of ticks with u < 0.05 V or u > 9.95 V
 //   flip extend <-> retract reversals of the command per leg and second (u below 3 V counts as
@@ -90,12 +90,12 @@ std::vector<Key> Keys() {
       {"ol_gate", [](auto& c, double v) { c.supervisor.outer_loop.gate_leg_speed_m_s = v; }},
       {"lead", [](auto& c, double v) { c.supervisor.setpoint_lead_s = v; }},
       {"ff", [](auto& c, double v) { c.supervisor.feedforward_enabled = v != 0.0; }},
-      // Coupled leg feedback (LockstepConfig::coupled_leg_feedback, docs/task_space.md).
+      // Coupled leg feedback (LockstepConfig::coupled_leg_feedback, docs/measurements/control.md).
       {"coupled", [](auto& c, double v) { c.coupled_leg_feedback = v != 0.0; }},
       {"coupled_mref", [](auto& c, double v) { c.coupled_reference_mass_kg = v; }},
       {"coupled_obsv", [](auto& c, double v) { c.coupled_observer_velocity = v != 0.0; }},
       {"coupled_raise", [](auto& c, double v) { c.coupled_raise_only = v != 0.0; }},
-      // Feedback part's rate in phi_dot (issue 14d): fraction alpha and low-pass tau_fb.
+      // Feedback part's rate in phi_dot: fraction alpha and low-pass tau_fb.
       {"fb_alpha", [](auto& c, double v) { c.leg_controller.bssmc.feedback_rate_fraction = v; }},
       {"fb_tau", [](auto& c, double v) { c.leg_controller.bssmc.feedback_rate_time_constant_s = v; }},
       {"fb_speed", [](auto& c, double v) { c.leg_controller.bssmc.feedback_rate_full_speed_m_s = v; }},
@@ -105,7 +105,7 @@ std::vector<Key> Keys() {
       {"obs_f", [](auto& c, double v) { c.leg_controller.bssmc.observer_force_sigma_n = v; }},
       {"obs_d", [](auto& c, double v) { c.leg_controller.bssmc.observer_disturbance_rate_m_s3 = v; }},
       {"kf", [](auto& c, double v) { c.leg_controller.pi.force_feedforward_v_n = v; }},
-      // BS-SMC integral of S and friction compensation (issue 14, pure z).
+      // BS-SMC integral of S and friction compensation (pure z).
       {"ki_n", [](auto& c, double v) { c.leg_controller.bssmc.integral_gain_n_m = v; }},
       {"iact", [](auto& c, double v) { c.leg_controller.bssmc.integral_active_below_m_s = v; }},
       {"ileak", [](auto& c, double v) { c.leg_controller.bssmc.integral_leak_time_constant_s = v; }},
@@ -118,7 +118,7 @@ std::vector<Key> Keys() {
       {"fadapt", [](auto& c, double v) { c.leg_controller.bssmc.friction_adaptation_rate_1_n_m = v; }},
       {"fadapt_speed", [](auto& c, double v) { c.leg_controller.bssmc.friction_adaptation_speed_m_s = v; }},
       {"dither_gate", [](auto& c, double v) { c.leg_controller.bssmc.dither_gate_speed_m_s = v; }},
-      // Plant-only changes (diagnosis, issue 14c): the valve spool's time constant (the
+      // Plant-only changes (diagnosis): the valve spool's time constant (the
       // controllers do not use it), and the plant's friction model (0 LuGre, 1 static eq 3).
       {"pspool", [](auto& c, double v) { c.rig.valve.spool_time_constant_s = v; }},
       // The plant's friction scale (the disturbance profile's; 1 = the rig file's Table 8
@@ -522,7 +522,7 @@ void Fit(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
 }
 
 
-// Per-leg analysis of the tracking window (issue 14c), every 1 ms tick. The desired leg
+// Per-leg analysis of the tracking window, every 1 ms tick. The desired leg
 // motion is the trajectory's at the CURRENT time (no setpoint lead), from the desired pose
 // through eq 46. Per leg: first-harmonic gain / lag of the true length against it, RMSE;
 // the force budget along the leg (N RMS and 1st-harmonic amplitude / phase against the
@@ -618,7 +618,7 @@ void Legs(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
   }
 }
 
-// Where the moving axis' error is made (issue 14, pure z). Every 1 ms tick of the tracking
+// Where the moving axis' error is made (pure z). Every 1 ms tick of the tracking
 // window: e = true pose - desired pose of NOW (the trajectory at the current time, no setpoint
 // lead) on the moving axis of a pure motion. Printed: RMSE; bias (mean), the first harmonic
 // at the motion's frequency and the rest, and the rest's share above 1 Hz (a centred 1 s
@@ -736,12 +736,12 @@ void Reversals(const hexa::LockstepConfig& config, PaperMotion motion, int perio
 }
 
 
-// Leg-space modes at home (issue 14c): eigenvalues of J^-T M_p J^-1 + m_leg I (eq 48; the
+// Leg-space modes at home: eigenvalues of J^-T M_p J^-1 + m_leg I (eq 48; the
 // rig's platform mass and inertia, the pistons' moving mass), and for each the BS-SMC's
 // velocity loop c / (m s) * P(s) * exp(-s tau): c = M lambda + K xi + k_s, P(s) = beta / (s + beta)
-// or, with the feedback rate in phi_dot (issue 14d), ((a + beta tf) s + beta) / ((tf s + 1)(s + beta)),
+// or, with the feedback rate in phi_dot, ((a + beta tf) s + beta) / ((tf s + 1)(s + beta)),
 // tau = spool filter + valve spool + the velocity estimate's group delay. Crossover and phase
-// margin (docs/task_space.md "Per-leg lag and leg 2's overshoot on combined").
+// margin (docs/measurements/control.md "Per-leg lag and leg 2's overshoot on combined").
 void Modes(const hexa::LockstepConfig& config) {
   const hexa::RigParams& rig = config.rig;
   hexa::Pose home;
@@ -763,7 +763,7 @@ void Modes(const hexa::LockstepConfig& config) {
                      hexa::GaussianDifferentiator(dc).GroupDelaySamples() * config.tick_s;
   const double beta = b.backstepping_beta_1_s;
   // Path from the feedback force to the pressure force (eq 38 with the optional feedback
-  // rate in phi_dot, issue 14d): ((a + beta tf) s + beta) / ((tf s + 1)(s + beta)), a the
+  // rate in phi_dot): ((a + beta tf) s + beta) / ((tf s + 1)(s + beta)), a the
   // fraction, tf its low-pass; a = 0: beta / (s + beta).
   const double a = b.feedback_rate_fraction;
   const double tf = b.feedback_rate_time_constant_s;

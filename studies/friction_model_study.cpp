@@ -3,7 +3,7 @@
 // model, 3 kg on the rod) driven by the identification excitation for 60 s, friction and
 // polytropic coefficients of the `realistic` profile (x1.2, x1.1), identified by least squares
 // with hexa_identify's default settings, for {static eq 3, LuGre} x {no noise, the rig's sensor
-// noise}. Prints a markdown table of the errors. Not a test: a study (deploy/identification_study.py).
+// noise}. Prints a markdown table of the errors. A study (studies/identification_study.py runs it).
 #include <cstdio>
 #include <random>
 #include <string>

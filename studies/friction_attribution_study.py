@@ -1,12 +1,12 @@
 #!/usr/bin/python3
 """How much of the Table 9 / 10 error is the controllers' friction model, and what is left
-with an exact model (issue 14, docs/results.md "What limits the cells that miss one fifth").
+with an exact model (docs/measurements/results.md "What limits the cells that miss one fifth").
 
 Runs the seven paper trajectories in the in-process lockstep simulation (hexa_sim, BS-SMC,
 feed-forward on, realistic profile, kinematic calibration first: `--calibrate`), seeds 1-3,
 with the controllers and the supervisor given, in turn:
-  - the rig file's nominal model (what docs/results.md's first section reports);
-  - the identified model (the overlay of deploy/identification_study.py);
+  - the rig file's nominal model (what docs/measurements/results.md's first section reports);
+  - the identified model (the overlay of studies/identification_study.py);
   - the plant's true model (the truth overlay the same study writes: friction, polytropic
     indices, gravity loads of the realistic profile);
   - the true model with eq 14's friction estimate scaled by 0.95, 0.90 and 1/1.2 (the last
@@ -19,8 +19,8 @@ motion, the six axes of combined), '*' above one fifth of the paper, and the com
 trajectory's leg RMSE.
 
 Usage:
-  /usr/bin/python3 deploy/identification_study.py          # writes the two overlays (DDS, ~7 min)
-  /usr/bin/python3 deploy/friction_attribution_study.py [--build build] [--seeds 1,2,3]
+  /usr/bin/python3 studies/identification_study.py          # writes the two overlays (DDS, ~7 min)
+  /usr/bin/python3 studies/friction_attribution_study.py [--build build] [--seeds 1,2,3]
       [--truth-overlay F] [--identified-overlay F] [--jobs 2] [--out out/friction_attribution] > table.md
 """
 import argparse
@@ -77,7 +77,7 @@ def main():
     a = ap.parse_args()
     for name, path in [("--truth-overlay", a.truth_overlay), ("--identified-overlay", a.identified_overlay)]:
         if not os.path.isfile(path):
-            sys.exit(f"{name} {path}: no such file; deploy/identification_study.py writes it")
+            sys.exit(f"{name} {path}: no such file; studies/identification_study.py writes it")
     seeds = [int(s) for s in a.seeds.split(",")]
     os.makedirs(a.out, exist_ok=True)
     cal = ["--calibrate", "--rig"]

@@ -8,7 +8,7 @@
   parameter_errors.png     identified minus true, % (GA and least squares), when the recording
                            carries the plant's truth
 
-Usage: /usr/bin/python3 deploy/plot_identification.py OUT_DIR
+Usage: /usr/bin/python3 tools/identify/plot_identification.py OUT_DIR
 """
 import csv
 import glob
