@@ -17,7 +17,7 @@ mm and deg. Files written:
   pose_tracking.png  desired, ground truth, measured per axis, RMSE in each title
   pose_error.png     desired - ground truth, desired - measured, measured - ground truth
   leg_lengths.png    desired vs measured leg length, RMSE per leg
-  valve_voltages.png per leg: the whole session (min/max per 20 ms + mean), a 0.3 s zoom,
+  valve_voltages.png per leg: the whole session (min/max per 20 ms or wider + mean), a 0.3 s zoom,
                      a histogram over the tracking window
   path_3d.png        3-D path with its three projections
   plots.json         what each PNG marks (the same JSON is in each PNG's "Description")
@@ -382,15 +382,17 @@ def plot_valves(s, title):
     for a, b in s.windows:
         inside |= (t >= a) & (t <= b)
     marks = {}
+    # 20 ms bins, wider for a long session (at most ~1500 bins across the panel).
+    bin_s = max(0.02, float(np.nanmax(t) - np.nanmin(t)) / 1500)
     steps = s.report.get("valve_mean_abs_step_v_per_tick", [None] * 6)
     sat = s.report.get("valve_saturated_fraction", [None] * 6)
     for leg in range(1, 7):
         v = s.legs[f"valve_v_{leg}"]
         whole, near, hist = axs[leg - 1]
         marks[leg] = decorate(whole, s, label_marks=leg == 1, leg=leg)
-        c, lo, mean, hi = envelope(t, v, 0.02)
-        whole.fill_between(c, lo, hi, color="0.45", alpha=0.35, lw=0, label="min-max per 20 ms")
-        whole.plot(c, mean, color="k", lw=0.8, label="mean per 20 ms")
+        c, lo, mean, hi = envelope(t, v, bin_s)
+        whole.fill_between(c, lo, hi, color="0.45", alpha=0.35, lw=0, label=f"min-max per {1000 * bin_s:.0f} ms")
+        whole.plot(c, mean, color="k", lw=0.8, label=f"mean per {1000 * bin_s:.0f} ms")
         whole.axvspan(zoom[0], zoom[1], color="k", alpha=0.12, lw=0)
         whole.axhline(5.0, color="k", lw=0.6, ls=":")
         whole.set_ylim(-0.3, 10.3)
