@@ -35,6 +35,9 @@ PROGRAMS = [
     ("hexa_sim", "tools/hexa_sim", "the paper trajectories in the in-process lockstep simulation"),
     ("hexa_calibrate", "tools/hexa_calibrate", "fits the kinematic calibration to a recorded calibration session (docs/calibration.md)"),
     ("hexa_identify", "tools/hexa_identify", "identifies the pneumatic model from a recorded excitation (docs/identification.md)"),
+    ("hexa_stream_send", "tools/hexa_stream_send", "sends the external motion stream over UDP, for tests and demos (docs/operate.md)"),
+    ("hexa_teach", "tools/hexa_teach", "turns the poses of a recording into a trajectory CSV to replay (docs/operate.md)"),
+    ("hexa_washout", "tools/hexa_washout", "runs the washout filter on a vehicle motion and writes the cue as a trajectory CSV (docs/operate.md)"),
 ]
 
 

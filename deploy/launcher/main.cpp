@@ -62,8 +62,9 @@ struct Options {
   long long seed = 1, domain = 0, periods = 0, stale_ticks = 15;
   bool recorder = true, standby = false, outer_loop = true, rt_sched = true, bridge = false,
        feedforward = true, tracker = false, secure = false;
-  std::string cpus_control, cpus_recorder, cpus_standby, cpus_supervisor;
-  std::string bridge_listen, bridge_port, bridge_queue_kb;
+  std::string cpus_control, cpus_recorder, cpus_standby, cpus_supervisor, cpus_bridge;
+  std::string bridge_listen, bridge_port, bridge_queue_kb, bridge_max_clients;
+  bool bridge_operator_input = false;
   int fault_leg = 0;           // 1..6; 0 none
   bool fault_supervisor = false;  // --fault supervisor:crash:T
   std::string fault_kind, fault_at;
@@ -196,6 +197,14 @@ int main(int argc, char** argv) {
   cli.AddOption("bridge-port", "n", "TCP port of hexa_bridge (0 = any free port, see bridge.log)",
                 "8765");
   cli.AddOption("bridge-queue-kb", "n", "hexa_bridge --client-queue-kb", "4096");
+  cli.AddOption("bridge-max-clients", "n", "hexa_bridge --max-clients", "32");
+  cli.AddFlag("wait-for-operator",
+              "the supervisor holds the home pose until an operator start (hexa_operator start, "
+              "or Foxglove with --bridge-operator-input) instead of starting the trajectory "
+              "itself; the session ends when the trajectory has finished or was stopped");
+  cli.AddFlag("bridge-operator-input",
+              "hexa_bridge --operator-input: Foxglove clients may start, stop, reset and home "
+              "the platform (docs/foxglove.md)");
   cli.AddFlag("secure", "DDS Security for the whole session: a project CA, one identity per "
                         "process, signed governance and permissions, encryption on the wire "
                         "(files in <out>/security; docs/security.md)");
@@ -238,14 +247,10 @@ int main(int argc, char** argv) {
   o.rt_sched = !cli.Flag("no-rt-sched");
   {
     // auto: the control loop on the last allowed CPU, the recorder on the others.
-    const std::vector<int> allowed = hexa::sched::AllowedCpus();
-    const bool split = allowed.size() >= 2;
-    const std::vector<int> control_auto = split ? std::vector<int>{allowed.back()} : std::vector<int>{};
-    const std::vector<int> recorder_auto =
-        split ? std::vector<int>(allowed.begin(), allowed.end() - 1) : std::vector<int>{};
-    if (cli.Get("cpus-control") == "auto") o.cpus_control = hexa::sched::FormatCpuList(control_auto);
+    const hexa::sched::CpuSplit split = hexa::sched::AutoCpuSplit();
+    if (cli.Get("cpus-control") == "auto") o.cpus_control = hexa::sched::FormatCpuList(split.control);
     if (cli.Get("cpus-recorder") == "auto")
-      o.cpus_recorder = cli.Get("cpus-control") == "auto" ? hexa::sched::FormatCpuList(recorder_auto) : "";
+      o.cpus_recorder = cli.Get("cpus-control") == "auto" ? hexa::sched::FormatCpuList(split.others) : "";
   }
   for (auto [name, field] : {std::pair{"cpus-control", &o.cpus_control},
                              std::pair{"cpus-recorder", &o.cpus_recorder},
@@ -267,10 +272,28 @@ int main(int argc, char** argv) {
                                       : o.cpus_control;
   if (cli.Get("cpus-standby") == "auto") o.cpus_standby = off_control;
   if (cli.Get("cpus-supervisor") == "auto") o.cpus_supervisor = off_control;
+  {
+    // The bridge: off the control CPUs whichever they are, so that its clients cannot take
+    // the loop's CPU (docs/foxglove.md); nowhere in particular when the control has none.
+    std::vector<int> control, others;
+    if (!o.cpus_control.empty() && hexa::sched::ParseCpuList(o.cpus_control, control))
+      for (int c : hexa::sched::AllowedCpus())
+        if (std::find(control.begin(), control.end(), c) == control.end()) others.push_back(c);
+    o.cpus_bridge = hexa::sched::FormatCpuList(others);
+  }
   o.bridge = cli.Flag("bridge");
   o.bridge_listen = cli.Get("bridge-listen");
   o.bridge_port = cli.Get("bridge-port");
   o.bridge_queue_kb = cli.Get("bridge-queue-kb");
+  o.bridge_max_clients = cli.Get("bridge-max-clients");
+  o.bridge_operator_input = cli.Flag("bridge-operator-input");
+  if (o.bridge_operator_input && (!o.bridge || o.secure)) {
+    std::fprintf(stderr, "error: --bridge-operator-input %s\n",
+                 !o.bridge ? "needs --bridge"
+                           : "cannot be combined with --secure: the bridge's DDS permissions "
+                             "allow it to read only (docs/foxglove.md)");
+    return 2;
+  }
   o.feedforward = !cli.Flag("no-feedforward");
   o.tracker = cli.Flag("tracker");
   auto seed = cli.GetInt("seed", 0, (1LL << 62));
@@ -380,12 +403,14 @@ int main(int argc, char** argv) {
   log->info("session: trajectory={} controller={} profile={} mode={} seed={} domain={} out={}",
             o.trajectory, o.controller, o.profile, o.mode, o.seed, o.domain, o.out_dir);
   log->info("DDS config: {}", o.dds_config);
-  log->info("CPUs: plant and legs {}, supervisor {}, recorder {}{}{}",
+  log->info("CPUs: plant and legs {}, supervisor {}, recorder {}{}{}{}{}",
             o.cpus_control.empty() ? "any" : o.cpus_control,
             o.cpus_supervisor.empty() ? "any" : o.cpus_supervisor,
             o.cpus_recorder.empty() ? "any" : o.cpus_recorder,
             o.standby ? ", hot standbys " : "",
-            o.standby ? (o.cpus_standby.empty() ? "any" : o.cpus_standby) : "");
+            o.standby ? (o.cpus_standby.empty() ? "any" : o.cpus_standby) : "",
+            o.bridge ? ", bridge " : "",
+            o.bridge ? (o.cpus_bridge.empty() ? "any" : o.cpus_bridge) : "");
   std::vector<std::string> overlay_args;  // legs and supervisor only: the plant keeps its truth
   for (const auto& overlay : o.rig_overlays) {
     log->info("rig overlay for the controllers and the supervisor: {}", overlay);
@@ -470,9 +495,11 @@ int main(int argc, char** argv) {
     b.name = "bridge";
     b.argv = {executable("/services/bridge/hexa_bridge"), "--domain", std::to_string(o.domain),
               "--listen", o.bridge_listen, "--port", o.bridge_port, "--client-queue-kb",
-              o.bridge_queue_kb, "--rig", o.rig,
+              o.bridge_queue_kb, "--max-clients", o.bridge_max_clients, "--cpus",
+              o.cpus_bridge.empty() ? "none" : o.cpus_bridge, "--rig", o.rig,
               "--profile", o.profile, "--seed", std::to_string(o.seed), "--log-file",
               o.out_dir + "/bridge.log"};
+    if (o.bridge_operator_input) b.argv.push_back("--operator-input");
     b.env = env;
     b.env["HEXA_IDENTITY"] = "bridge";  // --secure: reads every topic, publishes nothing
     b.log_path = o.out_dir + "/bridge.console.log";
@@ -522,8 +549,9 @@ int main(int argc, char** argv) {
       specs.push_back(sb);
     }
   }
-  std::vector<std::string> sup_args{"--trajectory", o.trajectory, "--autostart",
-                                    "--exit-when-done", "--periods", std::to_string(o.periods)};
+  std::vector<std::string> sup_args{"--trajectory", o.trajectory, "--exit-when-done",
+                                    "--periods", std::to_string(o.periods)};
+  if (!cli.Flag("wait-for-operator")) sup_args.push_back("--autostart");
   // Identification: the supervisor only holds home (no trajectory); its outer loop would
   // fight the excited leg, which moves the platform. The free-fall bench has no platform, but
   // lockstep legs answer a tick only with its setpoint: the supervisor runs (holding, outer

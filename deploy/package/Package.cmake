@@ -7,7 +7,8 @@ set(HEXA_PKG_DOC "share/doc/hexataar-control")
 # Every program of the product (tests/package/check_deb.sh checks the package against the
 # hexa_* programs of a build tree and against docs/).
 set(HEXA_PKG_PROGRAMS hexa_plant_sim hexa_leg_ctrl hexa_task_space hexa_operator hexa_recorder
-    hexa_session hexa_deploy hexa_check_config hexa_sim hexa_calibrate hexa_identify)
+    hexa_session hexa_deploy hexa_check_config hexa_sim hexa_calibrate hexa_identify
+    hexa_stream_send hexa_teach hexa_washout)
 if(TARGET hexa_bridge)
   list(APPEND HEXA_PKG_PROGRAMS hexa_bridge)
 endif()
@@ -20,6 +21,8 @@ install(PROGRAMS deploy/plot_session.py DESTINATION share/hexa/deploy)
 # hexa_identify runs <HEXA_SOURCE_DIR>/deploy/plot_identification.py the same way.
 install(PROGRAMS deploy/plot_identification.py DESTINATION share/hexa/deploy)
 install(FILES deploy/foxglove/hexataar.layout.json DESTINATION share/hexa/foxglove)
+# hexa_washout's default cue settings: <HEXA_SOURCE_DIR>/deploy/cueing/washout.textproto.
+install(FILES deploy/cueing/washout.textproto DESTINATION share/hexa/deploy/cueing)
 install(FILES deploy/rigs/hexataar_r.textproto DESTINATION /etc/hexa RENAME rig.textproto)
 install(FILES deploy/deployments/five-hosts.textproto "${HEXA_PKG_DIR}/single-host.textproto"
         DESTINATION /etc/hexa/deployments)
@@ -74,7 +77,10 @@ if(HEXA_HELP2MAN)
       "hexa_bridge|serve a HexaTaar session to Foxglove over WebSocket"
       "hexa_sim|paper trajectories in the in-process HexaTaar simulation"
       "hexa_calibrate|kinematic calibration of a HexaTaar rig from a recording"
-      "hexa_identify|identify the pneumatic model of a HexaTaar rig from a recording")
+      "hexa_identify|identify the pneumatic model of a HexaTaar rig from a recording"
+      "hexa_stream_send|send an external motion stream to a HexaTaar supervisor"
+      "hexa_teach|teach a HexaTaar trajectory from a recording"
+      "hexa_washout|washout cue of a vehicle motion as a HexaTaar trajectory")
     string(REPLACE "|" ";" parts "${entry}")
     list(GET parts 0 prog)
     list(GET parts 1 what)

@@ -4,10 +4,13 @@
 // commands and fault events), through best-effort keep-last readers: an idle bridge costs
 // the control loop nothing, a watched one one more datagram per watched sample, and a slow
 // client only its own drops (ws_server.hpp).
+#include <sys/resource.h>
 #include <time.h>
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
+#include <cstring>
 #include <cinttypes>
 #include <memory>
 #include <optional>
@@ -28,6 +31,8 @@
 #include "hexa/recorder/scene.hpp"
 #include "hexa/services/cli.hpp"
 #include "hexa/services/logging.hpp"
+#include "hexa/services/scheduling.hpp"
+#include "operator_forward.hpp"
 #include "ws_server.hpp"
 
 namespace {
@@ -151,6 +156,20 @@ class Source final : public SourceBase {
   P msg_;
 };
 
+// CPU affinity and niceness for the whole process, logged; a refusal leaves it as it was.
+void SchedulePolitely(const std::vector<int>& cpus, int nice, spdlog::logger& log) {
+  std::string message;
+  if (!cpus.empty()) {
+    const bool ok = hexa::sched::SetCpuAffinity(cpus, message);
+    if (ok) log.info("{}", message);
+    else log.warn("{}", message);
+  }
+  if (nice > 0 && setpriority(PRIO_PROCESS, 0, nice) != 0)
+    log.warn("niceness {} not applied: {}", nice, std::strerror(errno));
+  else if (nice > 0)
+    log.info("niceness {}", nice);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -164,10 +183,30 @@ int main(int argc, char** argv) {
                 "control network's address to let other hosts connect", "127.0.0.1");
   cli.AddOption("port", "n", "TCP port (0 = any free port, printed at start)", "8765");
   cli.AddOption("client-queue-kb", "n",
-                "per client: KiB of messages waiting for its socket before messages are "
-                "dropped for that client (and counted)", "4096");
+                "per client: KiB of messages waiting for its socket (counted with their "
+                "allocation overhead) before messages are dropped for that client (and counted)",
+                "4096");
+  cli.AddOption("max-clients", "n",
+                "clients served at once; more connections are refused with HTTP 503 (logged)",
+                "32");
+  cli.AddOption("total-queue-mb", "n",
+                "MiB of messages waiting for all clients together: each client's queue is "
+                "capped at min(--client-queue-kb, this / --max-clients)", "128");
+  cli.AddOption("cpus", "list|auto|none",
+                "pin the bridge (every thread) to these CPUs; auto: off the CPU a session's "
+                "control loop takes by default (hexa_session --cpus-control auto)", "auto");
+  cli.AddOption("nice", "n", "scheduling niceness of every thread (0 = normal, 19 = lowest)",
+                "10");
   cli.AddOption("stats-s", "s", "log every client's sent / dropped counts this often (0 = only "
                 "when a client leaves)", "5");
+  cli.AddFlag("operator-input",
+              "accept the operator's commands (start stop reset home) from Foxglove clients on "
+              "topic hexa_OperatorInput and forward them to the supervisor: whoever can connect "
+              "can then move the platform (docs/foxglove.md, \"Operator input\")");
+  cli.AddOption("operator-input-rate-hz", "hz",
+                "per client: operator inputs a second beyond which they are refused", "10");
+  cli.AddFlag("operator-input-any-host",
+              "allow --operator-input with a --listen address other than loopback");
   cli.AddOption("rig", "file", "rig file whose joints the 3-D scene draws",
                 hexa::config::DefaultRigFile());
   cli.AddOption("profile", "name", "disturbance profile of the simulated plant (with --seed)");
@@ -179,15 +218,38 @@ int main(int argc, char** argv) {
   const auto domain = cli.GetInt("domain", 0, 232);
   const auto port = cli.GetInt("port", 0, 65535);
   const auto queue_kb = cli.GetInt("client-queue-kb", 1, 1 << 20);
+  const auto max_clients = cli.GetInt("max-clients", 1, 4096);
+  const auto total_queue_mb = cli.GetInt("total-queue-mb", 1, 1 << 16);
+  const auto nice = cli.GetInt("nice", 0, 19);
+  const auto operator_rate_hz = cli.GetDouble("operator-input-rate-hz", 0.1, 100);
   const auto stats_s = cli.GetDouble("stats-s", 0, 3600);
   const auto scene_hz = cli.GetDouble("scene-hz", 1, 1000);
   std::optional<long long> seed;
   if (cli.Has("seed")) seed = cli.GetInt("seed", 0, 1LL << 62);
-  if (!domain || !port || !queue_kb || !stats_s || !scene_hz || (cli.Has("seed") && !seed)) {
+  std::vector<int> cpus;
+  if (cli.Get("cpus") == "auto") {
+    cpus = hexa::sched::AutoCpuSplit().others;
+  } else if (cli.Get("cpus") != "none" && !hexa::sched::ParseCpuList(cli.Get("cpus"), cpus)) {
+    std::fprintf(stderr, "hexa_bridge: error: --cpus '%s': expected CPU numbers such as 1, 0,1 "
+                 "or 0-1, auto or none\n", cli.Get("cpus").c_str());
+    return 2;
+  }
+  if (!domain || !port || !queue_kb || !max_clients || !total_queue_mb || !nice || !stats_s ||
+      !scene_hz || !operator_rate_hz || (cli.Has("seed") && !seed)) {
     std::fprintf(stderr, "hexa_bridge: error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
+  const bool operator_input = cli.Flag("operator-input");
+  const bool loopback = cli.Get("listen").rfind("127.", 0) == 0 || cli.Get("listen") == "::1";
+  if (operator_input && !loopback && !cli.Flag("operator-input-any-host")) {
+    std::fprintf(stderr, "hexa_bridge: error: --operator-input with --listen %s: every host that "
+                 "can reach it could move the platform; add --operator-input-any-host to mean "
+                 "it (docs/foxglove.md)\n", cli.Get("listen").c_str());
+    return 2;
+  }
   auto log = hexa::logging::Init("bridge", cli.Has("log-file") ? cli.Get("log-file") : "");
+  // Before any thread exists (Cyclone's, the WebSocket I/O thread): they inherit both.
+  SchedulePolitely(cpus, static_cast<int>(*nice), *log);
   try {
     std::optional<std::string> dds_config;
     if (cli.Has("dds-config")) dds_config = cli.Get("dds-config");
@@ -205,6 +267,13 @@ int main(int argc, char** argv) {
     comm::WaitSet waitset(participant, 16);
     waitset.Attach(shutdown.guard_condition(), 0);
     waitset.Attach(demand.get(), 1);
+    constexpr dds_attach_t kOperatorToken = 100;
+    comm::GuardCondition operator_wake(participant);
+    std::unique_ptr<hexa::bridge::OperatorForwarder> forwarder;
+    if (operator_input) {
+      forwarder = std::make_unique<hexa::bridge::OperatorForwarder>(participant, operator_wake, log);
+      waitset.Attach(operator_wake.get(), kOperatorToken);
+    }
 
     std::vector<std::unique_ptr<SourceBase>> sources;
     sources.push_back(std::make_unique<Source<hexa_msg_LegSensors, rec::LegSensors>>(participant));
@@ -234,14 +303,33 @@ int main(int argc, char** argv) {
     sc.listen_address = cli.Get("listen");
     sc.port = static_cast<uint16_t>(*port);
     sc.client_queue_bytes = static_cast<std::size_t>(*queue_kb) * 1024;
+    sc.max_clients = static_cast<std::size_t>(*max_clients);
+    sc.total_queue_bytes = static_cast<std::size_t>(*total_queue_mb) << 20;
+    sc.operator_input = operator_input;
+    sc.operator_input_rate_hz = *operator_rate_hz;
+    sc.operator_input_burst = std::max(1.0, *operator_rate_hz);
     Server server(sc, channels, log);
     server.OnDemandChange([&demand] { demand.Set(true); });
+    if (forwarder) {
+      server.OnOperatorInput([&forwarder](uint64_t id, const std::string& remote,
+                                          const hexa::bridge::OperatorInput& input) {
+        return forwarder->Submit(id, remote, input);
+      });
+    }
     server.Start();
     log->info("serving {} channels on ws://{}:{} (Foxglove WebSocket protocol), DDS domain {}; "
               "scene joints: {}", channels.size(), sc.listen_address, server.port(), *domain,
               scene_options.geometry_note);
-    if (sc.listen_address != "127.0.0.1" && sc.listen_address != "::1")
+    log->info("at most {} clients, each queue capped at {} KiB (charged with allocation "
+              "overhead), {} MiB for all together", sc.max_clients,
+              sc.EffectiveClientQueueBytes() >> 10, sc.total_queue_bytes >> 20);
+    if (!loopback)
       log->warn("--listen {}: other hosts can connect (no authentication)", sc.listen_address);
+    if (operator_input)
+      log->warn("operator input ON: any client that can connect to ws://{}:{} can start, stop, "
+                "reset and home the platform (topic {}, at most {} a second per client)",
+                sc.listen_address, server.port(), hexa::bridge::kOperatorInputTopic,
+                *operator_rate_hz);
 
     Context ctx;
     ctx.server = &server;
@@ -269,14 +357,24 @@ int main(int argc, char** argv) {
         demand.Set(false);
         update_readers();
       }
+      if (forwarder) {
+        if (waitset.Triggered(kOperatorToken)) operator_wake.Set(false);
+        forwarder->WritePending();
+      }
       for (auto& s : sources) s->Drain(ctx);
       const int64_t now = comm::RealtimeNow_ns();
       if (stats_ns > 0 && now >= next_stats) {
         next_stats = now + stats_ns;
-        for (const auto& c : server.Stats())
+        const auto stats = server.Stats();
+        for (const auto& c : stats)
           log->info("client {} ({}): {} subscriptions, sent {} messages ({} bytes), dropped {} "
-                    "(queue full), {} bytes queued", c.id, c.remote, c.subscriptions, c.sent,
-                    c.sent_bytes, c.dropped, c.queued_bytes);
+                    "(queue full), {} messages ({} bytes) queued", c.id, c.remote,
+                    c.subscriptions, c.sent, c.sent_bytes, c.dropped, c.queued_messages,
+                    c.queued_bytes);
+        if (!stats.empty() || server.refused_connections() > 0)
+          log->info("{} clients, {} bytes queued for all (peak {}), {} connections refused",
+                    stats.size(), server.queued_bytes(), server.queued_peak_bytes(),
+                    server.refused_connections());
         if (server.inbox_drops() > 0)
           log->warn("{} messages dropped before reaching any client (inbox full)",
                     server.inbox_drops());

@@ -32,12 +32,13 @@ ClientRequest Error(std::string what) {
 }
 }  // namespace
 
-std::string ServerInfoJson(const std::string& name, const std::string& session_id) {
+std::string ServerInfoJson(const std::string& name, const std::string& session_id,
+                           bool client_publish) {
   json j;
   j["op"] = "serverInfo";
   j["name"] = name;
-  j["capabilities"] = json::array();
-  j["supportedEncodings"] = json::array();
+  j["capabilities"] = client_publish ? json::array({"clientPublish"}) : json::array();
+  j["supportedEncodings"] = client_publish ? json::array({"json"}) : json::array();
   j["metadata"] = json::object();
   j["sessionId"] = session_id;
   return j.dump();
@@ -72,7 +73,7 @@ void MessageDataFrame(uint32_t subscription_id, uint64_t timestamp_ns, std::stri
   std::memcpy(out.data() + 13, payload.data(), payload.size());
 }
 
-ClientRequest ParseClientText(std::string_view text) {
+ClientRequest ParseClientText(std::string_view text, bool client_publish) {
   const json j = json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/false);
   if (j.is_discarded()) return Error("message is not valid JSON");
   if (!j.is_object()) return Error("message is not a JSON object");
@@ -107,8 +108,59 @@ ClientRequest ParseClientText(std::string_view text) {
     r.kind = ClientRequest::Kind::kUnsubscribe;
     return r;
   }
-  return Error("unsupported op '" + name +
-               "' (this server advertises no capabilities: only subscribe and unsubscribe)");
+  if (client_publish && name == "advertise") {
+    const auto chs = j.find("channels");
+    if (chs == j.end() || !chs->is_array()) return Error("advertise: 'channels' must be an array");
+    for (const auto& c : *chs) {
+      ClientChannel ch;
+      if (!c.is_object() || !c.contains("id") || !AsU32(c["id"], ch.id))
+        return Error("advertise: each channel needs an integer 'id' in [0, 2^32)");
+      for (auto [key, field] : {std::pair{"topic", &ch.topic}, std::pair{"encoding", &ch.encoding},
+                                std::pair{"schemaName", &ch.schema_name}}) {
+        if (!c.contains(key) || !c[key].is_string())
+          return Error(std::string("advertise: each channel needs a string '") + key + "'");
+        *field = c[key].get<std::string>();
+      }
+      r.channels.push_back(std::move(ch));
+    }
+    r.kind = ClientRequest::Kind::kAdvertise;
+    return r;
+  }
+  if (client_publish && name == "unadvertise") {
+    const auto ids = j.find("channelIds");
+    if (ids == j.end() || !ids->is_array())
+      return Error("unadvertise: 'channelIds' must be an array");
+    for (const auto& v : *ids) {
+      uint32_t id = 0;
+      if (!AsU32(v, id)) return Error("unadvertise: channel ids must be integers in [0, 2^32)");
+      r.unadvertise_ids.push_back(id);
+    }
+    r.kind = ClientRequest::Kind::kUnadvertise;
+    return r;
+  }
+  return Error("unsupported op '" + name + "' (" +
+               (client_publish ? "this server supports subscribe, unsubscribe, advertise and "
+                                 "unadvertise"
+                               : "this server advertises no capabilities: only subscribe and "
+                                 "unsubscribe") + ")");
+}
+
+ClientMessageData ParseClientBinary(std::string_view frame) {
+  ClientMessageData m;
+  if (frame.size() < 5) {
+    m.error = "binary message of " + std::to_string(frame.size()) +
+              " bytes: shorter than the 5-byte Client Message Data header";
+    return m;
+  }
+  if (static_cast<uint8_t>(frame[0]) != 0x01) {
+    m.error = "binary opcode " + std::to_string(static_cast<uint8_t>(frame[0])) +
+              " is not supported (only 1, Client Message Data)";
+    return m;
+  }
+  std::memcpy(&m.channel_id, frame.data() + 1, 4);
+  m.payload = frame.substr(5);
+  m.ok = true;
+  return m;
 }
 
 }  // namespace hexa::bridge

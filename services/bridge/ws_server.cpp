@@ -4,9 +4,15 @@
 #include <websocketpp/config/asio_no_tls.hpp>
 #include <websocketpp/server.hpp>
 
+#include <malloc.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <chrono>
+#include <cstdio>
 #include <map>
 #include <stdexcept>
+#include <tuple>
 
 namespace hexa::bridge {
 
@@ -20,19 +26,64 @@ void ServerConfig::Validate() const {
   if (inbox_messages < 16)
     throw std::invalid_argument("inbox messages = " + std::to_string(inbox_messages) +
                                 " is below 16");
+  if (max_clients < 1 || max_clients > 4096)
+    throw std::invalid_argument("max clients = " + std::to_string(max_clients) +
+                                " is outside [1, 4096]");
+  if (total_queue_bytes / max_clients < 64u << 10)
+    throw std::invalid_argument(
+        "total queue bytes = " + std::to_string(total_queue_bytes) + " leaves " +
+        std::to_string(total_queue_bytes / max_clients) + " bytes to each of " +
+        std::to_string(max_clients) + " clients, below 65536");
+  if (inbox_bytes < 64u << 10)
+    throw std::invalid_argument("inbox bytes = " + std::to_string(inbox_bytes) +
+                                " is below 65536");
 }
 
+std::size_t ServerConfig::EffectiveClientQueueBytes() const {
+  return std::min(client_queue_bytes, total_queue_bytes / std::max<std::size_t>(max_clients, 1));
+}
+
+namespace {
+// The process's resident set (/proc/self/statm), 0 if unreadable.
+std::size_t ResidentBytes() {
+  std::FILE* f = std::fopen("/proc/self/statm", "r");
+  if (f == nullptr) return 0;
+  unsigned long pages = 0, resident = 0;
+  const int n = std::fscanf(f, "%lu %lu", &pages, &resident);
+  std::fclose(f);
+  return n == 2 ? resident * static_cast<std::size_t>(sysconf(_SC_PAGESIZE)) : 0;
+}
+int64_t SteadyNow_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+}  // namespace
+
 struct Server::Impl {
+  struct Queued {
+    std::shared_ptr<const Pending> message;  // shared by every client that queues it
+    uint32_t subscription;
+  };
   struct Client {
     ClientStats stats;
     std::map<uint32_t, uint32_t> subscription_channel;  // subscription id -> channel id
     std::map<uint32_t, uint32_t> channel_subscription;  // channel id -> subscription id
+    std::deque<Queued> queue;
+    std::map<uint32_t, ClientChannel> advertised;  // the client's operator input channels
+    RateLimiter operator_limiter{10, 10};
+    uint64_t rate_refused = 0;            // operator inputs over the rate, not yet reported
+    int64_t rate_reported_ns = -(int64_t{1} << 62);  // last status about them
   };
   WsServer ws;
   mutable std::mutex clients_mutex;  // clients: written on the I/O thread, read by Stats()
+  // Every connection past its handshake's validation (counted against max_clients).
   std::map<Hdl, Client, std::owner_less<Hdl>> clients;
   uint64_t next_client_id = 1;
-  std::string frame;  // scratch of Flush()
+  std::string frame;  // scratch of Pump()
+  std::unique_ptr<asio::steady_timer> tick;
+  bool trim_due = false;  // a client left: give its memory back to the system
+  std::chrono::steady_clock::time_point last_trim{}, last_departure{};
 };
 
 Server::Server(ServerConfig config, std::vector<ChannelInfo> channels,
@@ -56,10 +107,16 @@ bool Server::Watched(uint32_t channel_id) const {
 std::vector<ClientStats> Server::Stats() const {
   std::lock_guard<std::mutex> lock(impl_->clients_mutex);
   std::vector<ClientStats> out;
+  out.reserve(impl_->clients.size());
   for (const auto& [hdl, c] : impl_->clients) {
     out.push_back(c.stats);
   }
   return out;
+}
+
+std::size_t Server::client_count() const {
+  std::lock_guard<std::mutex> lock(impl_->clients_mutex);
+  return impl_->clients.size();
 }
 
 void Server::Start() {
@@ -71,33 +128,53 @@ void Server::Start() {
   ws.set_reuse_addr(true);
   ws.set_max_message_size(config_.max_client_message_bytes);
   // Handshake: the client must offer the Foxglove subprotocol.
+  // Handshake: the client must offer the Foxglove subprotocol, and there must be room.
   ws.set_validate_handler([this](Hdl hdl) {
     auto con = impl_->ws.get_con_from_hdl(hdl);
-    for (const auto& p : con->get_requested_subprotocols()) {
-      if (p == kSubprotocol) {
-        con->select_subprotocol(kSubprotocol);
-        return true;
-      }
+    const auto& offered = con->get_requested_subprotocols();
+    if (std::find(offered.begin(), offered.end(), kSubprotocol) == offered.end()) {
+      log_->warn("refused a WebSocket handshake from {}: subprotocol {} not offered",
+                 con->get_remote_endpoint(), kSubprotocol);
+      con->set_status(websocketpp::http::status_code::bad_request);
+      return false;
     }
-    log_->warn("refused a WebSocket handshake from {}: subprotocol {} not offered",
-               con->get_remote_endpoint(), kSubprotocol);
-    con->set_status(websocketpp::http::status_code::bad_request);
-    return false;
+    std::lock_guard<std::mutex> lock(impl_->clients_mutex);
+    if (impl_->clients.size() >= config_.max_clients) {
+      const uint64_t n = ++refused_connections_;
+      // Every refusal is answered; the log says so for the first ten and then every 100th.
+      if (n <= 10 || n % 100 == 0)
+        log_->warn("refused a connection from {}: {} clients connected, the limit "
+                   "(--max-clients); {} refused so far", con->get_remote_endpoint(),
+                   impl_->clients.size(), n);
+      con->set_status(websocketpp::http::status_code::service_unavailable);
+      con->set_body("hexa_bridge: too many clients (limit " +
+                    std::to_string(config_.max_clients) + ")\n");
+      return false;
+    }
+    con->select_subprotocol(kSubprotocol);
+    Impl::Client& c = impl_->clients[hdl];
+    c.operator_limiter = RateLimiter(config_.operator_input_rate_hz, config_.operator_input_burst);
+    c.stats.id = impl_->next_client_id++;
+    c.stats.remote = con->get_remote_endpoint();
+    return true;
   });
   ws.set_open_handler([this](Hdl hdl) {
     auto con = impl_->ws.get_con_from_hdl(hdl);
     asio::error_code nodelay_ec;  // small frames go out at once (best effort)
     con->get_socket().set_option(asio::ip::tcp::no_delay(true), nodelay_ec);
-    Impl::Client c;
+    ClientStats c;
+    std::size_t connected = 0;
     {
       std::lock_guard<std::mutex> lock(impl_->clients_mutex);
-      c.stats.id = impl_->next_client_id++;
-      c.stats.remote = con->get_remote_endpoint();
-      impl_->clients[hdl] = c;
+      auto it = impl_->clients.find(hdl);
+      if (it == impl_->clients.end()) return;
+      c = it->second.stats;
+      connected = impl_->clients.size();
     }
-    log_->info("client {} connected from {}", c.stats.id, c.stats.remote);
+    log_->info("client {} connected from {} ({} of at most {})", c.id, c.remote, connected,
+               config_.max_clients);
     websocketpp::lib::error_code ec;
-    impl_->ws.send(hdl, ServerInfoJson(config_.name, std::to_string(bound_port_)),
+    impl_->ws.send(hdl, ServerInfoJson(config_.name, std::to_string(bound_port_), config_.operator_input),
                    websocketpp::frame::opcode::text, ec);
     if (!ec)
       impl_->ws.send(hdl, AdvertiseJson(channels_), websocketpp::frame::opcode::text, ec);
@@ -111,13 +188,17 @@ void Server::Start() {
       if (it == impl_->clients.end()) return;
       c = std::move(it->second);
       impl_->clients.erase(it);
+      queued_bytes_ -= c.stats.queued_bytes;
+      impl_->trim_due = true;
+      impl_->last_departure = std::chrono::steady_clock::now();
     }
+    c.queue = {};
     for (const auto& [channel, sub] : c.channel_subscription) {
       if (channel < watchers_.size() && watchers_[channel]->fetch_sub(1) == 1) demand_changed = true;
     }
-    log_->info("client {} ({}) {}: sent {} messages ({} bytes), dropped {} (queue full)",
-               c.stats.id, c.stats.remote, how, c.stats.sent, c.stats.sent_bytes,
-               c.stats.dropped);
+    log_->info("client {} ({}) {}: sent {} messages ({} bytes), dropped {} (queue full), "
+               "queue peak {} bytes", c.stats.id, c.stats.remote, how, c.stats.sent,
+               c.stats.sent_bytes, c.stats.dropped, c.stats.queued_peak_bytes);
     if (demand_changed && on_demand_) on_demand_();
   };
   ws.set_close_handler([closed](Hdl hdl) { closed(hdl, "closed"); });
@@ -139,12 +220,25 @@ void Server::Start() {
                       why.substr(0, 120), ec);
     };
     if (msg->get_opcode() != websocketpp::frame::opcode::text) {
-      protocol_error("binary messages from clients are not accepted (no clientPublish capability)");
+      if (!config_.operator_input) {
+        protocol_error("binary messages from clients are not accepted (no clientPublish capability)");
+        return;
+      }
+      const ClientMessageData data = ParseClientBinary(msg->get_payload());
+      if (!data.ok) {
+        protocol_error(data.error);
+        return;
+      }
+      OnClientBinary(hdl, msg->get_payload());
       return;
     }
-    const ClientRequest req = ParseClientText(msg->get_payload());
+    const ClientRequest req = ParseClientText(msg->get_payload(), config_.operator_input);
     if (req.kind == ClientRequest::Kind::kError) {
       protocol_error(req.error);
+      return;
+    }
+    if (req.kind == ClientRequest::Kind::kAdvertise || req.kind == ClientRequest::Kind::kUnadvertise) {
+      OnClientChannels(hdl, req);
       return;
     }
     std::string warning;
@@ -207,6 +301,9 @@ void Server::Start() {
   asio::error_code aec;
   const auto local = ws.get_local_endpoint(aec);
   bound_port_ = aec ? config_.port : local.port();
+  impl_->tick = std::make_unique<asio::steady_timer>(ws.get_io_service());
+  impl_->last_trim = std::chrono::steady_clock::now();
+  ScheduleTick();
   io_thread_ = std::thread([this] {
     try {
       impl_->ws.run();
@@ -228,6 +325,7 @@ void Server::Stop() {
     }
     for (auto& hdl : all) impl_->ws.close(hdl, websocketpp::close::status::going_away, "bridge stops", ec);
     // A client that does not answer the close handshake (one that never reads) is cut here.
+    impl_->tick->cancel();
     auto timer = std::make_shared<asio::steady_timer>(impl_->ws.get_io_service(),
                                                       std::chrono::seconds(2));
     timer->async_wait([this, timer](const asio::error_code&) { impl_->ws.stop(); });
@@ -235,50 +333,252 @@ void Server::Stop() {
   io_thread_.join();
 }
 
+void Server::SendStatus(const std::weak_ptr<void>& hdl, StatusLevel level,
+                        const std::string& message) {
+  websocketpp::lib::error_code ec;
+  WsServer::connection_ptr con = impl_->ws.get_con_from_hdl(hdl, ec);
+  if (ec || con->get_state() != websocketpp::session::state::open) return;
+  if (con->get_buffered_amount() > (64u << 10)) return;  // a client that does not read
+  con->send(StatusJson(level, message), websocketpp::frame::opcode::text);
+}
+
+// I/O thread: a client advertises (or withdraws) the channels it will publish on. Only the
+// operator input topic, JSON-encoded, is accepted; anything else is refused with a status.
+void Server::OnClientChannels(const std::weak_ptr<void>& hdl, const ClientRequest& req) {
+  std::string refused, accepted;
+  uint64_t id = 0;
+  {
+    std::lock_guard<std::mutex> lock(impl_->clients_mutex);
+    auto it = impl_->clients.find(hdl);
+    if (it == impl_->clients.end()) return;
+    Impl::Client& c = it->second;
+    id = c.stats.id;
+    for (const ClientChannel& ch : req.channels) {
+      if (ch.topic != kOperatorInputTopic) {
+        refused += "channel " + std::to_string(ch.id) + ": topic '" + ch.topic.substr(0, 60) +
+                   "' is not accepted (only " + kOperatorInputTopic + "); ";
+      } else if (ch.encoding != kOperatorInputEncoding) {
+        refused += "channel " + std::to_string(ch.id) + ": encoding '" + ch.encoding.substr(0, 20) +
+                   "' is not accepted (only json); ";
+      } else if (c.advertised.count(ch.id) != 0) {
+        refused += "channel " + std::to_string(ch.id) + " is already advertised; ";
+      } else {
+        c.advertised[ch.id] = ch;
+        accepted += " " + std::to_string(ch.id);
+      }
+    }
+    for (uint32_t ch : req.unadvertise_ids) {
+      if (c.advertised.erase(ch) == 0)
+        refused += "no advertised channel " + std::to_string(ch) + "; ";
+    }
+  }
+  if (!accepted.empty())
+    log_->info("client {}: operator input channel{} advertised", id, accepted);
+  if (!refused.empty()) {
+    ++operator_inputs_refused_;
+    log_->warn("client {}: {}", id, refused);
+    SendStatus(hdl, StatusLevel::kError, refused);
+  }
+}
+
+// I/O thread: one Client Message Data frame (well-formed: ParseClientBinary). Checked for its
+// channel, the client's rate and its content, then handed to the operator input handler; the
+// client is told the outcome by a status (errors level 2), except that refusals for rate are
+// summed up once a second.
+void Server::OnClientBinary(const std::weak_ptr<void>& hdl, const std::string& frame) {
+  const ClientMessageData data = ParseClientBinary(frame);
+  const int64_t now_ns = SteadyNow_ns();
+  uint64_t id = 0;
+  std::string remote, refusal;
+  uint64_t rate_refused = 0;
+  {
+    std::lock_guard<std::mutex> lock(impl_->clients_mutex);
+    auto it = impl_->clients.find(hdl);
+    if (it == impl_->clients.end()) return;
+    Impl::Client& c = it->second;
+    id = c.stats.id;
+    remote = c.stats.remote;
+    if (c.advertised.count(data.channel_id) == 0) {
+      refusal = "message on channel " + std::to_string(data.channel_id) +
+                ", which this client has not advertised (advertise " + kOperatorInputTopic +
+                " first)";
+    } else if (!c.operator_limiter.Allow(now_ns)) {
+      ++c.rate_refused;
+      ++operator_inputs_refused_;
+      if (now_ns - c.rate_reported_ns < 1'000'000'000) return;
+      c.rate_reported_ns = now_ns;
+      rate_refused = c.rate_refused;
+      c.rate_refused = 0;
+    }
+  }
+  if (rate_refused > 0) {
+    ReportRateRefusals(hdl, id, remote, rate_refused);
+    return;
+  }
+  OperatorInputResult parsed;
+  if (refusal.empty()) {
+    parsed = ParseOperatorInput(data.payload);
+    if (!parsed.ok) refusal = parsed.error;
+  }
+  std::string answer;
+  if (refusal.empty()) {
+    answer = on_operator_input_ ? on_operator_input_(id, remote, parsed.input) : "";
+    if (answer.empty()) refusal = "operator input is not forwarded (see the bridge's log)";
+  }
+  if (!refusal.empty()) {
+    ++operator_inputs_refused_;
+    log_->warn("client {} ({}): operator input refused: {}", id, remote, refusal);
+    SendStatus(hdl, StatusLevel::kError, "refused: " + refusal);
+    return;
+  }
+  SendStatus(hdl, StatusLevel::kInfo, answer);
+}
+
+void Server::ReportRateRefusals(const std::weak_ptr<void>& hdl, uint64_t id,
+                                const std::string& remote, uint64_t count) {
+  char rate[32];
+  std::snprintf(rate, sizeof rate, "%g", config_.operator_input_rate_hz);
+  const std::string why = std::to_string(count) + " operator input(s) refused: more than " +
+                          rate + " a second from this client (rate limit)";
+  log_->warn("client {} ({}): {}", id, remote, why);
+  SendStatus(hdl, StatusLevel::kError, why);
+}
+
+// I/O thread: refusals for rate not yet reported (at most one report a second per client).
+void Server::ReportPendingRateRefusals() {
+  const int64_t now_ns = SteadyNow_ns();
+  std::vector<std::tuple<Hdl, uint64_t, std::string, uint64_t>> due;
+  {
+    std::lock_guard<std::mutex> lock(impl_->clients_mutex);
+    for (auto& [hdl, c] : impl_->clients) {
+      if (c.rate_refused == 0 || now_ns - c.rate_reported_ns < 1'000'000'000) continue;
+      due.emplace_back(hdl, c.stats.id, c.stats.remote, c.rate_refused);
+      c.rate_refused = 0;
+      c.rate_reported_ns = now_ns;
+    }
+  }
+  for (const auto& [hdl, id, remote, count] : due) ReportRateRefusals(hdl, id, remote, count);
+}
+
 void Server::Publish(uint32_t channel_id, uint64_t timestamp_ns, std::string payload) {
+  const std::size_t cost = QueuedMessageCost(payload.size());
   bool post = false;
   {
     std::lock_guard<std::mutex> lock(inbox_mutex_);
-    if (inbox_.size() >= config_.inbox_messages) {
+    if (inbox_.size() >= config_.inbox_messages || inbox_charge_ + cost > config_.inbox_bytes) {
       ++inbox_drops_;
       return;
     }
-    inbox_.push_back({channel_id, timestamp_ns, std::move(payload)});
+    inbox_.push_back(std::make_shared<const Pending>(
+        Pending{channel_id, timestamp_ns, std::move(payload)}));
+    inbox_charge_ += cost;
     if (!flush_posted_) post = flush_posted_ = true;
   }
   if (post) asio::post(impl_->ws.get_io_service(), [this] { Flush(); });
 }
 
+// I/O thread: the inbox into each subscribed client's queue, within its cap.
 void Server::Flush() {
-  std::deque<Pending> batch;
+  std::deque<std::shared_ptr<const Pending>> batch;
   {
     std::lock_guard<std::mutex> lock(inbox_mutex_);
     batch.swap(inbox_);
+    inbox_charge_ = 0;
     flush_posted_ = false;
   }
+  const std::size_t cap = config_.EffectiveClientQueueBytes();
+  {
+    std::lock_guard<std::mutex> lock(impl_->clients_mutex);
+    std::size_t added = 0;
+    for (auto& [hdl, c] : impl_->clients) {
+      if (c.channel_subscription.empty()) continue;
+      for (const auto& m : batch) {
+        auto sub = c.channel_subscription.find(m->channel);
+        if (sub == c.channel_subscription.end()) continue;
+        const std::size_t cost = QueuedMessageCost(m->payload.size());
+        if (c.stats.queued_bytes + cost > cap) {
+          ++c.stats.dropped;  // this client's queue is full: drop for this client only
+          continue;
+        }
+        c.queue.push_back({m, sub->second});
+        c.stats.queued_bytes += cost;
+        added += cost;
+      }
+      c.stats.queued_messages = c.queue.size();
+      c.stats.queued_peak_bytes = std::max(c.stats.queued_peak_bytes, c.stats.queued_bytes);
+    }
+    const std::size_t total = queued_bytes_ += added;
+    if (total > queued_peak_bytes_.load()) queued_peak_bytes_ = total;
+  }
+  batch = {};  // messages no client queued are freed here
+  Pump();
+}
+
+// I/O thread: a client whose socket has taken everything handed to it so far (websocketpp's
+// queue empty; one write may be in flight) gets the next hand-off from its queue.
+void Server::Pump() {
   std::lock_guard<std::mutex> lock(impl_->clients_mutex);
+  std::size_t sent_charge = 0;
   for (auto& [hdl, c] : impl_->clients) {
-    if (c.channel_subscription.empty()) continue;
+    if (c.queue.empty()) continue;
     websocketpp::lib::error_code ec;
     WsServer::connection_ptr con = impl_->ws.get_con_from_hdl(hdl, ec);
     if (ec || con->get_state() != websocketpp::session::state::open) continue;
-    for (const Pending& m : batch) {
-      auto sub = c.channel_subscription.find(m.channel);
-      if (sub == c.channel_subscription.end()) continue;
-      const std::size_t size = 13 + m.payload.size();
-      const std::size_t queued = con->get_buffered_amount();
-      c.stats.queued_bytes = queued;
-      if (queued + size > config_.client_queue_bytes) {
-        ++c.stats.dropped;  // this client's queue is full: drop for this client only
-        continue;
-      }
-      MessageDataFrame(sub->second, m.timestamp_ns, m.payload, impl_->frame);
+    if (con->get_buffered_amount() > 0) continue;
+    std::size_t bytes = 0, count = 0;
+    while (!c.queue.empty() && count < kHandOffMessages && bytes < kHandOffBytes) {
+      const Impl::Queued& q = c.queue.front();
+      MessageDataFrame(q.subscription, q.message->timestamp_ns, q.message->payload, impl_->frame);
       con->send(impl_->frame.data(), impl_->frame.size(), websocketpp::frame::opcode::binary);
+      const std::size_t cost = QueuedMessageCost(q.message->payload.size());
+      c.stats.queued_bytes -= cost;
+      sent_charge += cost;
+      bytes += impl_->frame.size();
+      ++count;
       ++c.stats.sent;
-      c.stats.sent_bytes += size;
+      c.stats.sent_bytes += impl_->frame.size();
+      c.queue.pop_front();
     }
-    c.stats.queued_bytes = con->get_buffered_amount();
+    c.stats.queued_messages = c.queue.size();
   }
+  queued_bytes_ -= sent_charge;
+}
+
+// I/O thread: hand-offs continue while no new message arrives; freed memory goes back.
+void Server::ScheduleTick() {
+  bool busy = false;
+  {
+    std::lock_guard<std::mutex> lock(impl_->clients_mutex);
+    for (const auto& [hdl, c] : impl_->clients) busy = busy || !c.queue.empty();
+  }
+  impl_->tick->expires_after(std::chrono::milliseconds(busy ? 2 : 50));
+  impl_->tick->async_wait([this](const asio::error_code& ec) {
+    if (ec) return;  // cancelled: the server stops
+    Pump();
+    ReturnFreedMemory();
+    if (config_.operator_input) ReportPendingRateRefusals();
+    ScheduleTick();
+  });
+}
+
+// glibc keeps freed memory in its arenas (the I/O thread's and Cyclone's threads' arenas are
+// not the main heap and are trimmed only on request): once departures have settled for 1 s
+// (by then the DDS thread has deleted the readers no client needs), or every 10 s while
+// clients keep leaving, malloc_trim returns every free page to the system.
+void Server::ReturnFreedMemory() {
+  if (!impl_->trim_due) return;
+  const auto now = std::chrono::steady_clock::now();
+  if (now - impl_->last_departure < std::chrono::seconds(1) &&
+      now - impl_->last_trim < std::chrono::seconds(10))
+    return;
+  impl_->trim_due = false;
+  impl_->last_trim = now;
+  const std::size_t before = ResidentBytes();
+  malloc_trim(0);
+  const struct mallinfo2 mi = mallinfo2();
+  log_->info("clients left: freed memory returned to the system, resident {:.1f} -> {:.1f} MiB "
+             "({:.1f} MiB allocated, {:.1f} MiB free in the allocator)", before / 1048576.0,
+             ResidentBytes() / 1048576.0, mi.uordblks / 1048576.0, mi.fordblks / 1048576.0);
 }
 
 }  // namespace hexa::bridge

@@ -15,6 +15,7 @@
 #include "hexa/core/kinematics.hpp"
 #include "hexa/core/pose.hpp"
 #include "hexa/core/rig.hpp"
+#include "uniform_sampler.hpp"
 
 namespace hexa {
 namespace {
@@ -23,19 +24,7 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
 constexpr int kNumRandomPoses = 100000;
 
-// Portable uniform sampling from the raw 64-bit engine output (the std distributions are
-// implementation-defined, the engine is not).
-class Sampler {
- public:
-  explicit Sampler(std::uint64_t seed) : engine_(seed) {}
-  double Uniform(double lo, double hi) {
-    const double u = static_cast<double>(engine_() >> 11) * 0x1.0p-53;
-    return lo + (hi - lo) * u;
-  }
-
- private:
-  std::mt19937_64 engine_;
-};
+using Sampler = test::UniformSampler;
 
 struct Sample {
   Pose pose;

@@ -12,6 +12,7 @@
 #include "hexa/core/scene.hpp"
 #include "hexa/recorder/scene.hpp"
 #include "protocol.hpp"
+#include "ws_server.hpp"
 #include "recording.pb.h"
 
 namespace hexa {
@@ -240,3 +241,94 @@ TEST(BridgeProtocol, ServerMessagesFollowTheSpec) {
 
 }  // namespace
 }  // namespace hexa
+
+TEST(BridgeConfig, EveryClientQueueIsAFairShareOfTheTotal) {
+  hexa::bridge::ServerConfig c;
+  c.client_queue_bytes = 4u << 20;
+  c.total_queue_bytes = 128u << 20;
+  c.max_clients = 32;
+  EXPECT_NO_THROW(c.Validate());
+  EXPECT_EQ(c.EffectiveClientQueueBytes(), 4u << 20);  // 128 MiB / 32 = 4 MiB
+  c.max_clients = 200;
+  EXPECT_EQ(c.EffectiveClientQueueBytes(), (128u << 20) / 200);
+  EXPECT_LE(c.EffectiveClientQueueBytes() * c.max_clients, c.total_queue_bytes);
+  // A queued message is charged beyond its frame for the allocations around it.
+  EXPECT_EQ(hexa::bridge::QueuedMessageCost(100), 13 + 100 + hexa::bridge::kQueuedMessageBytes);
+  c.max_clients = 0;
+  EXPECT_THROW(c.Validate(), std::invalid_argument);
+  c.max_clients = 4097;
+  EXPECT_THROW(c.Validate(), std::invalid_argument);
+  c.max_clients = 4096;  // 32 KiB each: below the 64 KiB a client needs
+  try {
+    c.Validate();
+    ADD_FAILURE() << "accepted 32 KiB per client";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("4096 clients"), std::string::npos) << e.what();
+  }
+}
+
+TEST(BridgeOperatorInput, OnlyWellFormedCommandsPass) {
+  using hexa::bridge::OperatorInput;
+  using hexa::bridge::ParseOperatorInput;
+  auto ok = ParseOperatorInput(R"({"command": "start", "trajectory": "pitch"})");
+  ASSERT_TRUE(ok.ok) << ok.error;
+  EXPECT_EQ(ok.input.command, OperatorInput::Command::kStart);
+  EXPECT_EQ(ok.input.trajectory, "pitch");
+  EXPECT_EQ(ParseOperatorInput(R"({"command": "start"})").input.trajectory, "combined");
+  for (const char* c : {"stop", "reset", "home"}) {
+    const auto r = ParseOperatorInput(std::string(R"({"command": ")") + c + "\"}");
+    EXPECT_TRUE(r.ok) << c << ": " << r.error;
+    EXPECT_STREQ(hexa::bridge::CommandName(r.input.command), c);
+  }
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"", "not valid JSON"},
+      {R"({"command": NaN})", "not valid JSON"},
+      {R"({"command": "start", "trajectory": Infinity})", "not valid JSON"},
+      {"[1]", "not a JSON object"},
+      {"{}", "'command' is absent"},
+      {R"({"command": null})", "must be a string"},
+      {R"({"command": "shutdown"})", "unknown command"},
+      {R"({"command": "stop", "x": 1})", "unknown field 'x'"},
+      {R"({"command": "start", "trajectory": "data/traj.csv"})", "is not one of"},
+      {R"({"command": "start", "trajectory": 1})", "must be a string"},
+      {R"({"command": "home", "trajectory": "x"})", "for start only"}};
+  for (const auto& [text, words] : bad) {
+    const auto r = ParseOperatorInput(text);
+    EXPECT_FALSE(r.ok) << text;
+    EXPECT_NE(r.error.find(words), std::string::npos) << text << ": " << r.error;
+  }
+}
+
+TEST(BridgeOperatorInput, RateLimiterAllowsTheBurstThenTheRate) {
+  hexa::bridge::RateLimiter limiter(10, 10);
+  int allowed = 0;
+  for (int i = 0; i < 1000; ++i) allowed += limiter.Allow(1'000'000'000) ? 1 : 0;
+  EXPECT_EQ(allowed, 10);  // 1000 at once: the burst
+  allowed = 0;
+  for (int64_t t_ms = 1; t_ms <= 2000; ++t_ms)  // 1000 a second for 2 s: the rate
+    allowed += limiter.Allow(1'000'000'000 + t_ms * 1'000'000) ? 1 : 0;
+  EXPECT_EQ(allowed, 20);
+}
+
+TEST(BridgeProtocol, ClientPublishIsParsedOnlyWhenEnabled) {
+  using hexa::bridge::ClientRequest;
+  const std::string adv =
+      R"({"op":"advertise","channels":[{"id":3,"topic":"hexa_OperatorInput","encoding":"json","schemaName":"s"}]})";
+  EXPECT_EQ(hexa::bridge::ParseClientText(adv).kind, ClientRequest::Kind::kError);
+  const auto r = hexa::bridge::ParseClientText(adv, true);
+  ASSERT_EQ(r.kind, ClientRequest::Kind::kAdvertise) << r.error;
+  ASSERT_EQ(r.channels.size(), 1u);
+  EXPECT_EQ(r.channels[0].id, 3u);
+  EXPECT_EQ(r.channels[0].topic, "hexa_OperatorInput");
+  EXPECT_EQ(hexa::bridge::ParseClientText(R"({"op":"advertise","channels":[{"id":3}]})", true).kind,
+            ClientRequest::Kind::kError);
+  const std::string frame("\x01\x07\x00\x00\x00{}", 7);
+  const auto m = hexa::bridge::ParseClientBinary(frame);
+  ASSERT_TRUE(m.ok) << m.error;
+  EXPECT_EQ(m.channel_id, 7u);
+  EXPECT_EQ(m.payload, "{}");
+  EXPECT_FALSE(hexa::bridge::ParseClientBinary(std::string("\x02\x07\x00\x00\x00", 5)).ok);
+  EXPECT_FALSE(hexa::bridge::ParseClientBinary(std::string("\x01\x07", 2)).ok);
+  const auto info = nlohmann::json::parse(hexa::bridge::ServerInfoJson("n", "s", true));
+  EXPECT_EQ(info["capabilities"], nlohmann::json::array({"clientPublish"}));
+}

@@ -55,6 +55,12 @@ std::vector<int> AllowedCpus() {
   return cpus;
 }
 
+CpuSplit AutoCpuSplit() {
+  const std::vector<int> allowed = AllowedCpus();
+  if (allowed.size() < 2) return {};
+  return {{allowed.back()}, std::vector<int>(allowed.begin(), allowed.end() - 1)};
+}
+
 std::string FormatCpuList(const std::vector<int>& cpus) {
   std::string list;
   for (int c : cpus) list += (list.empty() ? "" : ",") + std::to_string(c);

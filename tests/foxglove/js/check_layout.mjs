@@ -42,6 +42,18 @@ check(JSON.stringify([...inTree].sort()) === JSON.stringify([...ids].sort()),
 for (const id of ids) check(/^[A-Za-z0-9]+![A-Za-z0-9_]+$/.test(id), `panel id '${id}' is Type!name`);
 const types = ids.map((i) => i.split("!")[0]);
 for (const t of ["3D", "Plot", "StateTransitions"]) check(types.includes(t), `a ${t} panel`);
+// The operator controls (Publish panels; the bridge with --operator-input): each publishes a
+// JSON operator input on hexa_OperatorInput, one per command.
+const commands = [];
+for (const [id, config] of Object.entries(layout.configById)) {
+  if (!id.startsWith("Publish!")) continue;
+  check(config.topicName === "hexa_OperatorInput", `${id} publishes on hexa_OperatorInput`);
+  const value = JSON.parse(config.value);
+  check(Object.keys(value).every((k) => k === "command" || k === "trajectory"), `${id}: fields ${Object.keys(value)}`);
+  commands.push(value.command);
+}
+check(JSON.stringify(commands.sort()) === JSON.stringify(["home", "reset", "start", "stop"]),
+      `operator controls for start stop reset home (${commands})`);
 
 // The recording: schema per topic and every decoded message.
 const bytes = new Uint8Array(readFileSync(file));

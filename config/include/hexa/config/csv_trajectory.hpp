@@ -22,6 +22,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "hexa/core/csv_trajectory.hpp"
 
@@ -61,5 +62,13 @@ std::shared_ptr<const CsvMotion> ParseCsvTrajectory(std::string_view text, std::
 // "<path>:0: file is N bytes, more than the limit M" before reading a huge file.
 std::shared_ptr<const CsvMotion> LoadCsvTrajectory(const std::string& path,
                                                    const CsvTrajectoryLimits& limits = {});
+
+// The text of a trajectory CSV (header + one row per pose, every value in the shortest form
+// that reads back to the same double), e.g. the rows of a taught recording (core/teach.hpp).
+// `comment` (may be empty) becomes '#' lines above the header. ParseCsvTrajectory reads it
+// back to the same rows.
+std::string FormatCsvTrajectory(const std::vector<double>& time_s,
+                                const std::vector<Vector6d>& xyz_rpy,
+                                const std::string& comment = {});
 
 }  // namespace hexa::config

@@ -16,6 +16,15 @@ bool ParseCpuList(const std::string& text, std::vector<int>& cpus);
 // The CPUs this process may run on (sched_getaffinity), ascending; empty on error.
 std::vector<int> AllowedCpus();
 
+// How a session splits the CPUs this process may use when nothing says otherwise
+// (hexa_session --cpus-control auto): the control loop on the last one, everything else
+// (recorder, supervisor, standbys, bridge) on the others; with one CPU, no split (both empty).
+struct CpuSplit {
+  std::vector<int> control;
+  std::vector<int> others;
+};
+CpuSplit AutoCpuSplit();
+
 // "0,1" text of a CPU list.
 std::string FormatCpuList(const std::vector<int>& cpus);
 

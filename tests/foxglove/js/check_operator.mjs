@@ -1,0 +1,138 @@
+// Foxglove as the operator console, with Foxglove's own client library (@foxglove/ws-protocol
+// over `ws`), against `hexa_session --wait-for-operator --bridge --bridge-operator-input`:
+//   node check_operator.mjs ws://127.0.0.1:PORT
+// 1. serverInfo advertises clientPublish (json); the client watches hexa_PoseReport.state;
+// 2. bad inputs are refused, each with a status error naming why, and the connection stays:
+//    a channel on another topic, another encoding, a message on a channel never advertised,
+//    not JSON, NaN, absent command, unknown command, unknown field, a CSV path as trajectory,
+//    trajectory on stop; meanwhile the supervisor stays IDLE;
+// 3. 1000 messages at once (stop, which changes nothing while IDLE): at most the
+//    burst (10) pass, the rest is refused for rate with a status;
+// 4. start (combined): the supervisor leaves IDLE (BLENDING, then TRACKING); an info status
+//    says it was forwarded;
+// 5. stop: the supervisor goes to STOPPING and then IDLE.
+import { createRequire } from "node:module";
+import WebSocket from "ws";
+
+const require = createRequire(import.meta.url);
+const { FoxgloveClient } = require("@foxglove/ws-protocol");
+const protobuf = require("protobufjs");
+const descriptor = require("protobufjs/ext/descriptor");
+const url = process.argv[2];
+let passed = 0;
+let failed = 0;
+function check(ok, what) {
+  if (ok) passed += 1;
+  else failed += 1;
+  console.log(`${ok ? "ok" : "FAIL"}: ${what}`);
+}
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+async function until(pred, ms, what) {
+  const t0 = Date.now();
+  while (!pred()) {
+    if (Date.now() - t0 > ms) throw new Error(`timeout after ${ms} ms: ${what}`);
+    await sleep(20);
+  }
+}
+const STATES = ["IDLE", "BLENDING", "TRACKING", "STOPPING", "HOLD"];
+const enc = new TextEncoder();
+
+const c = { info: null, channels: new Map(), statuses: [], states: [], closed: false };
+const client = new FoxgloveClient({ ws: new WebSocket(url, [FoxgloveClient.SUPPORTED_SUBPROTOCOL]) });
+client.on("serverInfo", (i) => (c.info = i));
+client.on("advertise", (chs) => chs.forEach((ch) => c.channels.set(ch.topic, ch)));
+client.on("status", (s) => c.statuses.push(s));
+client.on("close", () => (c.closed = true));
+let poseType = null;
+let poseSub = null;
+client.on("message", (m) => {
+  if (m.subscriptionId !== poseSub) return;
+  const state = STATES[poseType.decode(new Uint8Array(m.data.buffer, m.data.byteOffset, m.data.byteLength)).state ?? 0];
+  if (c.states[c.states.length - 1] !== state) {
+    c.states.push(state);
+    console.log(`supervisor state: ${state}`);
+  }
+});
+const state = () => c.states[c.states.length - 1];
+
+// Sends one message and waits for the status that answers it.
+async function answer(send, what) {
+  const n = c.statuses.length;
+  send();
+  await until(() => c.statuses.length > n, 10000, `${what}: a status`);
+  return c.statuses[n];
+}
+async function refused(send, what, words) {
+  const s = await answer(send, what);
+  check(s.level === 2 && s.message.includes(words),
+        `${what}: refused with a status error naming it ('${s.message}')`);
+}
+
+try {
+  await until(() => c.info && c.channels.has("hexa_PoseReport"), 30000, "serverInfo and advertise");
+  check(c.info.capabilities.includes("clientPublish"), `capabilities ${JSON.stringify(c.info.capabilities)}`);
+  check(JSON.stringify(c.info.supportedEncodings) === '["json"]', `encodings ${JSON.stringify(c.info.supportedEncodings)}`);
+  const pose = c.channels.get("hexa_PoseReport");
+  poseType = protobuf.Root.fromDescriptor(
+    descriptor.FileDescriptorSet.decode(Buffer.from(pose.schema, "base64"))).lookupType(pose.schemaName);
+  poseSub = client.subscribe(pose.id);
+  await until(() => state() === "IDLE", 60000, "the supervisor reports IDLE (waiting for the operator)");
+
+  // ---- 2: bad inputs -----------------------------------------------------------------------
+  await refused(() => client.advertise({ topic: "hexa_ValveCommand", encoding: "json", schemaName: "x" }),
+                "a channel on hexa_ValveCommand", "not accepted");
+  await refused(() => client.advertise({ topic: "hexa_OperatorInput", encoding: "protobuf", schemaName: "x" }),
+                "an operator channel encoded protobuf", "encoding");
+  await refused(() => client.sendMessage(4242, enc.encode('{"command":"start"}')),
+                "a message on a channel never advertised", "not advertised");
+  const op = client.advertise({ topic: "hexa_OperatorInput", encoding: "json", schemaName: "hexa.OperatorInput" });
+  const send = (text) => () => client.sendMessage(op, enc.encode(text));
+  await refused(send("start please"), "text that is not JSON", "not valid JSON");
+  await refused(send('{"command": NaN}'), "NaN", "not valid JSON");
+  await refused(send('{"trajectory": "combined"}'), "no command", "'command' is absent");
+  await refused(send('{"command": 3}'), "a command that is a number", "must be a string");
+  await refused(send('{"command": "jump"}'), "an unknown command", "unknown command 'jump'");
+  await refused(send('{"command": "start", "speed": 2}'), "an unknown field", "unknown field 'speed'");
+  await refused(send('{"command": "start", "trajectory": "/etc/passwd"}'), "a CSV path", "is not one of");
+  await refused(send('{"command": "stop", "trajectory": "x"}'), "a trajectory on stop", "for start only");
+  check(!c.closed, "the connection stays open after the refused inputs");
+  await sleep(500);
+  check(state() === "IDLE", `the supervisor is still IDLE (${c.states.join(" -> ")})`);
+
+  // ---- 3: 1000 messages at once ------------------------------------------------------------
+  const before = c.statuses.length;
+  for (let i = 0; i < 1000; i += 1) client.sendMessage(op, enc.encode('{"command":"stop"}'));
+  await until(() => c.statuses.slice(before).some((s) => s.message.includes("rate limit")), 10000,
+              "a status about the rate limit");
+  await sleep(500);
+  await sleep(1500);  // the refusals are summed up once a second; the bucket refills
+  const burst = c.statuses.slice(before);
+  const forwarded = burst.filter((s) => s.level === 0 && s.message.includes("forwarded")).length;
+  const rate = burst.filter((s) => s.message.includes("rate limit"));
+  const refusedCount = rate.reduce((n, s) => n + Number(/^(\d+) operator input/.exec(s.message)?.[1] ?? 0), 0);
+  console.log(`1000 stop messages at once: ${forwarded} forwarded; ${rate.map((s) => `'${s.message}'`).join(", ")}`);
+  check(forwarded >= 1 && forwarded <= 11, `at most the burst forwarded (${forwarded})`);
+  check(rate.every((s) => s.level === 2), "the rest refused for rate with status errors");
+  check(forwarded + refusedCount === 1000, `every message forwarded or counted as refused (${forwarded} + ${refusedCount})`);
+
+  // ---- 4: start ----------------------------------------------------------------------------
+  const s = await answer(send('{"command":"start","trajectory":"combined"}'), "start");
+  check(s.level === 0 && s.message.includes("start (combined) forwarded"), `start: '${s.message}'`);
+  await until(() => state() === "TRACKING", 60000, "the supervisor tracking after start");
+  check(c.states.includes("BLENDING") || c.states.includes("TRACKING"), `after start: ${c.states.join(" -> ")}`);
+
+  // ---- 5: stop -----------------------------------------------------------------------------
+  const t = await answer(send('{"command":"stop"}'), "stop");
+  check(t.level === 0 && t.message.includes("stop forwarded"), `stop: '${t.message}'`);
+  await until(() => c.states.slice(c.states.lastIndexOf("TRACKING")).includes("STOPPING"), 30000,
+              "the supervisor stopping after stop");
+  check(true, `after stop: ${c.states.join(" -> ")}`);
+  await until(() => state() === "IDLE" || c.closed, 60000, "the supervisor back to IDLE");
+  check(state() === "IDLE", `the supervisor back to IDLE (${c.states.join(" -> ")})`);
+} catch (e) {
+  failed += 1;
+  console.log(`FAIL: ${e.message}`);
+}
+client.close();
+console.log(`${passed} passed, ${failed} failed`);
+process.exit(failed === 0 ? 0 : 1);
