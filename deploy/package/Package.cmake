@@ -18,8 +18,8 @@ install(FILES deploy/cyclonedds-loopback.xml deploy/cyclonedds-network.example.x
 install(PROGRAMS deploy/make_security.sh DESTINATION share/hexa)
 # hexa_recorder report runs <HEXA_SOURCE_DIR>/deploy/plot_session.py (share/hexa when installed).
 install(PROGRAMS deploy/plot_session.py DESTINATION share/hexa/deploy)
-# hexa_identify runs <HEXA_SOURCE_DIR>/deploy/plot_identification.py the same way.
-install(PROGRAMS deploy/plot_identification.py DESTINATION share/hexa/deploy)
+# hexa_identify runs <HEXA_SOURCE_DIR>/tools/identify/plot_identification.py the same way.
+install(PROGRAMS tools/identify/plot_identification.py DESTINATION share/hexa/tools/identify)
 install(FILES deploy/foxglove/hexataar.layout.json DESTINATION share/hexa/foxglove)
 # hexa_washout's default cue settings: <HEXA_SOURCE_DIR>/deploy/cueing/washout.textproto.
 install(FILES deploy/cueing/washout.textproto DESTINATION share/hexa/deploy/cueing)

@@ -36,7 +36,8 @@ for f in $(cd "$src" && find docs -name '*.md'); do
   has "$doc/$f" || bad "$f is not in $doc/"
 done
 for f in "$doc/README.md" "$doc/copyright" /usr/share/hexa/foxglove/hexataar.layout.json \
-         /usr/share/hexa/deploy/plot_session.py /usr/share/hexa/deploy/plot_identification.py \
+         /usr/share/hexa/deploy/plot_session.py /usr/share/hexa/tools/identify/plot_identification.py \
+         /usr/share/hexa/deploy/cueing/washout.textproto \
          /usr/share/hexa/cyclonedds-loopback.xml /etc/hexa/rig.textproto; do
   has "$f" || bad "$f is missing"
 done
