@@ -17,6 +17,7 @@ packages=(
   libzstd-dev                                           # zstd MCAP chunks (recorder)
   libwebsocketpp-dev libasio-dev nlohmann-json3-dev     # hexa_bridge (Foxglove WebSocket)
   clang-14 libclang-rt-14-dev   # tests/fuzz: libFuzzer, ASan, UBSan runtimes
+  gcc-arm-none-eabi             # firmware/board: the Cortex-M4 compile check (board.CortexM4Build)
   # Networked deployments (docs/deployment.md): sd_notify for the systemd units, OpenSSL for
   # the DDS Security files (openssl CLI in deploy/make_security.sh, libssl in hexa_deploy
   # verify-security), systemd-analyze to verify generated units, nftables for network faults

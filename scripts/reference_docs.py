@@ -38,6 +38,7 @@ PROGRAMS = [
     ("hexa_stream_send", "tools/hexa_stream_send", "sends the external motion stream over UDP, for tests and demos (docs/operate.md)"),
     ("hexa_teach", "tools/hexa_teach", "turns the poses of a recording into a trajectory CSV to replay (docs/operate.md)"),
     ("hexa_washout", "tools/hexa_washout", "runs the washout filter on a vehicle motion and writes the cue as a trajectory CSV (docs/operate.md)"),
+    ("hexa_board_emulator", "device/emulator/hexa_board_emulator", "the remote I/O board emulated over UDP: the board's C code with the simulated rig behind its channels (docs/board_protocol.md)"),
 ]
 
 
@@ -120,7 +121,8 @@ def rig_page():
     L = ["# Reference: the rig file", "",
          "Every field of the rig file (protobuf text format, schema `proto/rig.proto`), generated from",
          "the schema by `scripts/reference_docs.py --write` (ctest `docs.reference_pages_match_the_code`",
-         "checks it). Every field must be written: the loader refuses a file with a value missing.",
+         "checks it). Every field must be written: the loader refuses a file with a value missing",
+         "(only the `board` block may be left out, by a rig that only the simulator drives).",
          "The unit is the suffix of the name (`_m`, `_pa`, `_s`, `_n_s_m`, ...), pressures are absolute,",
          "a `Vector3` is `{ x: .. y: .. z: .. }`. How to write one, the validation rules and their limits:",
          "docs/config.md; the reference rig: `deploy/rigs/hexataar_r.textproto`.", ""]

@@ -54,6 +54,9 @@ std::string DefaultRigFile() { return HEXA_DEFAULT_RIG_FILE; }
 
 namespace {
 
+// The one block a rig file may leave out (proto/rig.proto): a rig without an I/O board.
+constexpr const char* kOptionalTopLevelBlock = "board";
+
 struct PresenceContext {
   const std::string& file;
   int eof_line;
@@ -82,6 +85,7 @@ void CheckPresence(const gp::Message& msg, const ParseInfoTree* tree, const std:
       continue;
     }
     const Location loc = tree ? FromRange(tree->GetLocationRange(fd, -1)) : Location{};
+    if (!r->HasField(msg, fd) && path.empty() && fd->name() == kOptionalTopLevelBlock) continue;
     if (!r->HasField(msg, fd)) {
       ConfigIssue issue;
       issue.file = ctx.file;
@@ -177,6 +181,48 @@ void ToPb(const std::string& name, const DisturbanceProfile& p, pb::DisturbanceP
   d->set_joint_position_error_max_m(p.joint_position_error_max_m);
   d->set_potentiometer_offset_max_m(p.potentiometer_offset_max_m);
   d->set_potentiometer_gain_error_max(p.potentiometer_gain_error_max);
+}
+
+ChannelCalibration FromPb(const pb::ChannelCalibrationConfig& c) {
+  return {c.offset_si(), c.gain_si_per_count(), c.min_si(), c.max_si()};
+}
+void ToPb(const ChannelCalibration& c, pb::ChannelCalibrationConfig* out) {
+  out->set_offset_si(c.offset_si);
+  out->set_gain_si_per_count(c.gain_si_per_count);
+  out->set_min_si(c.min_si);
+  out->set_max_si(c.max_si);
+}
+
+BoardCalibration FromPb(const pb::BoardConfig& f) {
+  BoardCalibration b;
+  for (const pb::BoardLegChannelsConfig& leg : f.leg()) {
+    BoardLegCalibration& l = b.legs[static_cast<std::size_t>(leg.id() - 1)];
+    l.potentiometer_m = FromPb(leg.potentiometer_m());
+    l.chamber1_pressure_pa = FromPb(leg.chamber1_pressure_pa());
+    l.chamber2_pressure_pa = FromPb(leg.chamber2_pressure_pa());
+    l.valve_v = FromPb(leg.valve_v());
+  }
+  b.supply_pressure_pa = FromPb(f.supply_pressure_pa());
+  b.imu_rate_rad_s = FromPb(f.imu_rate_rad_s());
+  b.adc_bits = f.adc_bits();
+  b.dac_bits = f.dac_bits();
+  b.watchdog_timeout_s = f.watchdog_timeout_s();
+  return b;
+}
+void ToPb(const BoardCalibration& b, pb::BoardConfig* f) {
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    pb::BoardLegChannelsConfig* leg = f->add_leg();
+    leg->set_id(static_cast<int>(i + 1));
+    ToPb(b.legs[i].potentiometer_m, leg->mutable_potentiometer_m());
+    ToPb(b.legs[i].chamber1_pressure_pa, leg->mutable_chamber1_pressure_pa());
+    ToPb(b.legs[i].chamber2_pressure_pa, leg->mutable_chamber2_pressure_pa());
+    ToPb(b.legs[i].valve_v, leg->mutable_valve_v());
+  }
+  ToPb(b.supply_pressure_pa, f->mutable_supply_pressure_pa());
+  ToPb(b.imu_rate_rad_s, f->mutable_imu_rate_rad_s());
+  f->set_adc_bits(b.adc_bits);
+  f->set_dac_bits(b.dac_bits);
+  f->set_watchdog_timeout_s(b.watchdog_timeout_s);
 }
 
 // Stage 4a: proto -> structs (all fields known to be present; legs and profiles checked).
@@ -307,28 +353,32 @@ SystemConfig Translate(const pb::RigFile& f) {
 
   for (const pb::DisturbanceProfileConfig& d : f.disturbance_profile()) c.profiles[d.name()] = FromPb(d);
   c.default_profile = f.default_profile();
+  if (f.has_board()) c.board = FromPb(f.board());
   return c;
 }
 
-// Stage 3: six legs with ids 1..6 once each; profile names non-empty and unique.
-void CheckStructure(const pb::RigFile& f, const ParseInfoTree& tree, const std::string& file, int eof_line,
-                    std::vector<ConfigIssue>& issues) {
-  const gp::FieldDescriptor* geometry_fd = pb::RigFile::descriptor()->FindFieldByName("geometry");
-  const Location geometry_loc = FromRange(tree.GetLocationRange(geometry_fd, -1));
-  const ParseInfoTree* geometry_tree = tree.GetTreeForNested(geometry_fd, -1);
-  const gp::FieldDescriptor* leg_fd = pb::GeometryConfig::descriptor()->FindFieldByName("leg");
-  const gp::FieldDescriptor* id_fd = pb::LegConfig::descriptor()->FindFieldByName("id");
-  if (f.geometry().leg_size() != static_cast<int>(kNumLegs)) {
-    issues.push_back({file, geometry_loc.line, geometry_loc.column, "geometry.leg",
-                      "a 6-6 platform needs exactly six legs", std::to_string(f.geometry().leg_size()) + " legs",
+// Six `leg` elements with ids 1..6 once each in the top-level block `block` (geometry, board).
+void CheckSixLegIds(const pb::RigFile& f, const ParseInfoTree& tree, const std::string& file, const std::string& block,
+                    const std::string& what, std::vector<ConfigIssue>& issues) {
+  const gp::FieldDescriptor* block_fd = pb::RigFile::descriptor()->FindFieldByName(block);
+  const gp::Message& msg = f.GetReflection()->GetMessage(f, block_fd);
+  const gp::FieldDescriptor* leg_fd = msg.GetDescriptor()->FindFieldByName("leg");
+  const gp::Reflection* r = msg.GetReflection();
+  const Location block_loc = FromRange(tree.GetLocationRange(block_fd, -1));
+  const ParseInfoTree* block_tree = tree.GetTreeForNested(block_fd, -1);
+  const int legs = r->FieldSize(msg, leg_fd);
+  if (legs != static_cast<int>(kNumLegs)) {
+    issues.push_back({file, block_loc.line, block_loc.column, block + ".leg", what, std::to_string(legs) + " legs",
                       "exactly 6"});
   }
   std::map<int, int> first_line_of_id;
-  for (int k = 0; k < f.geometry().leg_size(); ++k) {
-    const int id = f.geometry().leg(k).id();
-    const ParseInfoTree* leg_tree = geometry_tree ? geometry_tree->GetTreeForNested(leg_fd, k) : nullptr;
-    const Location loc = leg_tree ? FromRange(leg_tree->GetLocationRange(id_fd, -1)) : geometry_loc;
-    const std::string path = "geometry.leg[" + std::to_string(k) + "].id";
+  for (int k = 0; k < legs; ++k) {
+    const gp::Message& leg = r->GetRepeatedMessage(msg, leg_fd, k);
+    const gp::FieldDescriptor* id_fd = leg.GetDescriptor()->FindFieldByName("id");
+    const int id = leg.GetReflection()->GetInt32(leg, id_fd);
+    const ParseInfoTree* leg_tree = block_tree ? block_tree->GetTreeForNested(leg_fd, k) : nullptr;
+    const Location loc = leg_tree ? FromRange(leg_tree->GetLocationRange(id_fd, -1)) : block_loc;
+    const std::string path = block + ".leg[" + std::to_string(k) + "].id";
     if (id < 1 || id > static_cast<int>(kNumLegs)) {
       issues.push_back({file, loc.line, loc.column, path, "leg id out of range", std::to_string(id), "[1, 6]"});
     } else if (const auto it = first_line_of_id.find(id); it != first_line_of_id.end()) {
@@ -340,6 +390,14 @@ void CheckStructure(const pb::RigFile& f, const ParseInfoTree& tree, const std::
       first_line_of_id[id] = loc.line;
     }
   }
+}
+
+// Stage 3: six legs with ids 1..6 once each (geometry, board); profile names non-empty and
+// unique.
+void CheckStructure(const pb::RigFile& f, const ParseInfoTree& tree, const std::string& file, int eof_line,
+                    std::vector<ConfigIssue>& issues) {
+  CheckSixLegIds(f, tree, file, "geometry", "a 6-6 platform needs exactly six legs", issues);
+  if (f.has_board()) CheckSixLegIds(f, tree, file, "board", "the board serves exactly six legs", issues);
 
   const gp::FieldDescriptor* profile_fd = pb::RigFile::descriptor()->FindFieldByName("disturbance_profile");
   const gp::FieldDescriptor* name_fd = pb::DisturbanceProfileConfig::descriptor()->FindFieldByName("name");
@@ -594,6 +652,7 @@ std::string ToTextFormat(const SystemConfig& c) {
 
   for (const auto& [name, profile] : c.profiles) ToPb(name, profile, f.add_disturbance_profile());
   f.set_default_profile(c.default_profile);
+  if (c.board) ToPb(*c.board, f.mutable_board());
 
   std::string text;
   gp::TextFormat::Printer printer;
@@ -617,6 +676,10 @@ std::string Summary(const SystemConfig& c) {
     first = false;
   }
   out << "}, default " << c.default_profile;
+  if (c.board) {
+    out << ", I/O board " << c.board->adc_bits << "-bit ADC / " << c.board->dac_bits << "-bit DAC, watchdog "
+        << c.board->watchdog_timeout_s << " s";
+  }
   for (const RigOverlay& o : c.overlays) {
     int legs = 0;
     for (const LegOverride& l : o.leg) legs += l.empty() ? 0 : 1;

@@ -13,6 +13,7 @@
 #include <tuple>
 
 #include "hexa/config/rig_config.hpp"
+#include "hexa/core/board_calibration.hpp"
 #include "hexa/core/kinematics.hpp"
 #include "hexa/core/param_checks.hpp"
 #include "hexa/core/physical_limits.hpp"
@@ -254,7 +255,16 @@ std::vector<ConfigIssue> ValidateSystemConfig(const SystemConfig& config) {
   if (structural == 0) {
     CheckPhysicalLimits(c, DerivePhysicalLimits(config));
   }
-  return ToConfigIssues(issues, structural);
+  std::vector<ConfigIssue> out = ToConfigIssues(issues, structural);
+  // Stage 4, for a valid rig only (its ranges are judged against the rig's stroke, pressures
+  // and voltages): the I/O board's calibration.
+  if (out.empty() && config.board) {
+    std::vector<ParamIssue> board_issues;
+    Checker board(board_issues);
+    CheckBoardCalibration(board, *config.board, rig);
+    out = ToConfigIssues(board_issues, board_issues.size());
+  }
+  return out;
 }
 
 std::vector<ConfigIssue> ValidateControllerModel(const SystemConfig& config) {

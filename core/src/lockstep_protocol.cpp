@@ -52,18 +52,42 @@ const char* ToString(SilentLegVerdict verdict) {
     case SilentLegVerdict::kWait: return "wait";
     case SilentLegVerdict::kLivelinessLost: return "liveliness lost";
     case SilentLegVerdict::kWriterGone: return "writer gone";
-    case SilentLegVerdict::kNoAnswer: return "no answer from a live writer";
+    case SilentLegVerdict::kProcessEnded: return "process ended";
   }
   return "?";
 }
 
-SilentLegVerdict JudgeSilentLeg(const LegWriterCounts& writers, std::int64_t silent_ns,
-                                const SilentLegParams& params) {
-  if (writers.alive > 0) {
-    return silent_ns >= params.answer_timeout_ns ? SilentLegVerdict::kNoAnswer
-                                                 : SilentLegVerdict::kWait;
-  }
+SilentLegVerdict JudgeSilentLeg(const LegWriterCounts& writers) {
+  if (writers.alive > 0) return SilentLegVerdict::kWait;
   return writers.not_alive > 0 ? SilentLegVerdict::kLivelinessLost : SilentLegVerdict::kWriterGone;
+}
+
+SilentLegVerdict JudgeSilentLegLockstep(const SilentLegFacts& f) {
+  if (f.processes > 0 && f.processes_ended >= f.processes) return SilentLegVerdict::kProcessEnded;
+  if (f.writers.alive > 0) return SilentLegVerdict::kWait;  // it (or a standby taking over) answers
+  if (f.writers.not_alive == 0) return SilentLegVerdict::kWriterGone;
+  // Every writer whose lease lapsed belongs to a controller that says its cycle is stuck (a
+  // standby that is only stopped keeps the leg waiting: it takes over when it runs again).
+  if (f.processes_stuck > 0 && f.processes_stuck >= f.writers.not_alive)
+    return SilentLegVerdict::kLivelinessLost;
+  return SilentLegVerdict::kWait;
+}
+
+ControlCycleWatch::Cause ControlCycleWatch::Check(std::uint64_t cycle_sequence, bool unpublished,
+                                                  std::uint64_t unpublished_tick) {
+  Cause now = Cause::kNone;
+  if ((cycle_sequence & 1u) != 0 && cycle_sequence == last_sequence_) {
+    now = Cause::kHang;  // the same cycle is still running
+  } else if (unpublished && last_unpublished_ && unpublished_tick == last_tick_) {
+    now = Cause::kSilence;  // the same answer is still unpublished
+  }
+  last_sequence_ = cycle_sequence;
+  last_unpublished_ = unpublished;
+  last_tick_ = unpublished_tick;
+  checks_ = now == Cause::kNone ? 0 : checks_ + 1;
+  // kStuckChecks checks in a row, i.e. kStuckChecks - 1 repeats after the first sighting.
+  cause_ = checks_ >= kStuckChecks - 1 ? now : Cause::kNone;
+  return cause_;
 }
 
 bool RealtimeLapseMeansDead(const LegWriterCounts& writers, std::int64_t command_age_ticks,

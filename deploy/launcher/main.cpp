@@ -32,6 +32,7 @@
 #include "hexa/services/scheduling.hpp"
 #include "child_progress.hpp"
 #include "process_group.hpp"
+#include "domain_probe.hpp"
 #include "secure_session.hpp"
 
 namespace fs = std::filesystem;
@@ -153,7 +154,9 @@ int main(int argc, char** argv) {
   cli.AddOption("legs", "list", "--experiment identify: legs to excite (1-6, 1,3, ...)", "1-6");
   cli.AddOption("excite-duration", "s", "--experiment identify: excitation per leg", "30");
   cli.AddOption("dds-config", "file", "Cyclone DDS configuration", HEXA_DEFAULT_CYCLONE_CONFIG);
-  cli.AddOption("domain", "id", "DDS domain id (default: derived from the pid, 100-199)");
+  cli.AddOption("domain", "id",
+                "DDS domain id (default: derived from the pid, 100-199, the next free one if "
+                "another session uses it); a domain with other participants on it is refused");
   cli.AddOption("periods", "N", "trajectory periods to track (0 = the trajectory's default)", "0");
   cli.AddOption("timeout", "s", "wall-clock limit of the session (0 = none)", "0");
   cli.AddFlag("no-recorder", "do not record (no report)");
@@ -212,8 +215,9 @@ int main(int argc, char** argv) {
                 "real time: liveliness lease of the leg controllers (a leg silent this long is "
                 "dead; docs/faults.md)", "0.01");
   cli.AddOption("lockstep-lease", "s",
-                "lockstep: liveliness lease of the leg controllers and the supervisor "
-                "(docs/faults.md)", "0.2");
+                "lockstep: liveliness lease of the leg controllers and the supervisor: how soon "
+                "a hot standby takes over; a lapse alone is no fault in lockstep, which waits "
+                "for a slow or stopped process (docs/faults.md)", "0.2");
   cli.AddOption("fault", "leg:kind:time_s",
                 "inject a fault into one primary leg controller, e.g. 3:crash:2.0 "
                 "(kinds: crash hang slow garbage silence), or supervisor:crash:time_s "
@@ -400,6 +404,33 @@ int main(int argc, char** argv) {
 
   ProcessGroup group;  // blocks SIGINT/SIGTERM/SIGCHLD before any thread exists
   auto log = hexa::logging::Init("session", o.out_dir + "/session.log");
+  {
+    // Another session (or a process left of one) on the domain would read and command this
+    // one: refuse a domain in use. The default domain (100 + pid % 100) is chosen by chance,
+    // so then the next free one is taken.
+    setenv("CYCLONEDDS_URI", ("file://" + o.dds_config).c_str(), 1);
+    const bool chosen = !cli.Has("domain");
+    for (int attempt = 0;; ++attempt) {
+      const auto probe = hexa::deploy::ProbeDomain(static_cast<int>(o.domain), 0.5);
+      if (!probe.error.empty()) {
+        log->error("cannot check DDS domain {} for another session: {}", o.domain, probe.error);
+        return 1;
+      }
+      if (probe.other_participants == 0) break;
+      if (!chosen || attempt == 20) {
+        log->error("DDS domain {} is in use: {} other participant(s) on it (another session, or "
+                   "a process left of one): two sessions on one domain would command each other. "
+                   "{}", o.domain, probe.other_participants,
+                   chosen ? "No free domain among the next 20."
+                          : "Choose another --domain, or stop the other session.");
+        return 2;
+      }
+      const long long next = 100 + (o.domain - 100 + 1) % 100;
+      log->warn("DDS domain {} is in use ({} other participant(s): another session?): trying {}",
+                o.domain, probe.other_participants, next);
+      o.domain = next;
+    }
+  }
   log->info("session: trajectory={} controller={} profile={} mode={} seed={} domain={} out={}",
             o.trajectory, o.controller, o.profile, o.mode, o.seed, o.domain, o.out_dir);
   log->info("DDS config: {}", o.dds_config);
@@ -596,15 +627,31 @@ int main(int argc, char** argv) {
   }
   specs.push_back(spec("plant", "/services/plant_sim/hexa_plant_sim", plant_args, o.cpus_control));
 
+  // Start order: the supervisor before the legs, so that each leg knows the supervisor's
+  // process id; the plant last, knowing every other process's. In lockstep a process that
+  // ended is dead at once for them, where DDS would see it after its participant's lease
+  // (10 s); a stopped or slow one is waited for (docs/faults.md).
+  std::stable_partition(specs.begin(), specs.end(), [](const ChildSpec& s) {
+    return s.name == "recorder" || s.name == "bridge" || s.name == "supervisor";
+  });
+  std::vector<std::string> peer_pids;  // "name=pid" of every control process started so far
   const auto t0 = std::chrono::steady_clock::now();
-  for (const auto& s : specs) {
+  for (auto s : specs) {
+    const bool leg = s.name.rfind("leg", 0) == 0;
+    if (leg || s.name == "plant") {
+      for (const auto& p : peer_pids)
+        if (s.name == "plant" || p.rfind("supervisor=", 0) == 0)
+          s.argv.insert(s.argv.end(), {"--peer-pid", p});
+    }
     std::string err;
-    if (group.Start(s, err) < 0) {
+    const pid_t pid = group.Start(s, err);
+    if (pid < 0) {
       log->error("cannot start {}: {}", s.name, err);
       group.StopAll(std::chrono::milliseconds(2000));
       return 1;
     }
-    log->info("started {}", s.name);
+    if (s.name != "bridge") peer_pids.push_back(s.name + "=" + std::to_string(pid));
+    log->info("started {} (pid {})", s.name, pid);
   }
 
   bool completed = false;

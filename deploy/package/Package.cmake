@@ -9,6 +9,9 @@ set(HEXA_PKG_DOC "share/doc/hexataar-control")
 set(HEXA_PKG_PROGRAMS hexa_plant_sim hexa_leg_ctrl hexa_task_space hexa_operator hexa_recorder
     hexa_session hexa_deploy hexa_check_config hexa_sim hexa_calibrate hexa_identify
     hexa_stream_send hexa_teach hexa_washout)
+if(TARGET hexa_board_emulator)
+  list(APPEND HEXA_PKG_PROGRAMS hexa_board_emulator)
+endif()
 if(TARGET hexa_bridge)
   list(APPEND HEXA_PKG_PROGRAMS hexa_bridge)
 endif()
@@ -80,7 +83,8 @@ if(HEXA_HELP2MAN)
       "hexa_identify|identify the pneumatic model of a HexaTaar rig from a recording"
       "hexa_stream_send|send an external motion stream to a HexaTaar supervisor"
       "hexa_teach|teach a HexaTaar trajectory from a recording"
-      "hexa_washout|washout cue of a vehicle motion as a HexaTaar trajectory")
+      "hexa_washout|washout cue of a vehicle motion as a HexaTaar trajectory"
+      "hexa_board_emulator|emulated remote I/O board of a HexaTaar rig")
     string(REPLACE "|" ";" parts "${entry}")
     list(GET parts 0 prog)
     list(GET parts 1 what)

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
 
 #include "hexa/core/lockstep_simulation.hpp"
 #include "hexa/services/service_manager.hpp"
@@ -99,9 +100,14 @@ LegNode::LegNode(const LegNodeOptions& options, const config::SystemConfig& conf
       valve_writer_(participant_, valve_topic_, ValveQos(options),
                     {comm::LegPartition(options.leg)}),
       status_(participant_, name_),
+      stuck_status_(participant_, name_),
       faults_(participant_, name_),
       waitset_(participant_) {
   waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
+  for (const std::string& spec : options.common.peer_pids) {
+    std::string error;
+    if (!peer_processes_.Add(spec, error)) throw std::invalid_argument(error);
+  }
   last_command_.leg_id = static_cast<uint8_t>(options.leg);
   base_controller_ =
       options.controller == LegControllerKind::kPi ? hexa_msg_CONTROLLER_PI : hexa_msg_CONTROLLER_BSSMC;
@@ -176,14 +182,16 @@ void LegNode::TakeSetpoints() {
   }
 }
 
-bool LegNode::SupervisorLost() const {
-  // Its writer was alive and is no longer: its lease lapsed or it disappeared (a killed
-  // process: Cyclone drops the proxy of a participant whose AUTOMATIC lease expired), without
-  // having disposed its setpoints first, as a supervisor ending the session does.
-  if (options_.common.mode != node::TimeMode::kLockstep || !supervisor_seen_alive_ ||
-      supervisor_finished_)
+bool LegNode::SupervisorGoneNow() const {
+  // Its writer left without disposing its setpoints (a supervisor ending the session disposes
+  // them first), or the process the launcher started for it ended. A lapsed lease is not
+  // enough: a supervisor that is stopped or not scheduled lets it lapse too, and lockstep
+  // waits for it (docs/faults.md).
+  if (options_.common.mode != node::TimeMode::kLockstep || !supervisor_seen_ || supervisor_finished_)
     return false;
-  return setpoint_reader_.Snapshot().liveliness_alive_count == 0;
+  const auto s = setpoint_reader_.Snapshot();
+  if (s.liveliness_alive_count == 0 && s.liveliness_not_alive_count == 0) return true;
+  return peer_processes_.State("supervisor") == node::PeerProcessState::kEnded;
 }
 
 const IssuedSetpoint* LegNode::SetpointFor(std::uint64_t tick) const {
@@ -236,7 +244,7 @@ void LegNode::ReportControlFault(const hexa_msg_LegSensors& s) {
   if (cause == hexa_msg_FAULT_SETPOINT_STALE) {
     std::snprintf(detail, sizeof detail, "setpoint of tick %llu is %.3f s old%s: valve held at null",
                   static_cast<unsigned long long>(output_.setpoint_tick), output_.input_fault_value,
-                  SupervisorLost() ? " (the supervisor's writer is gone)" : "");
+                  SupervisorLost() ? " (the supervisor is gone)" : "");
   } else {
     std::snprintf(detail, sizeof detail, "%s reads %.6g (held %llu ticks): valve held at null",
                   ToString(output_.input_fault), output_.input_fault_value,
@@ -397,12 +405,56 @@ void LegNode::TakeSensorsLockstep() {
 void LegNode::OnData(void* self) {
   auto* node = static_cast<LegNode*>(self);
   std::lock_guard<std::mutex> lock(node->mutex_);
-  node->RunCycle();
+  node->RunCycleCounted();
+}
+
+void LegNode::RunCycleCounted() {
+  cycle_sequence_.fetch_add(1, std::memory_order_acq_rel);  // odd: a cycle runs
+  RunCycle();
+  cycle_sequence_.fetch_add(1, std::memory_order_acq_rel);
+}
+
+void LegNode::WatchControlCycle() {
+  // The same cycle in progress, or the same answer unpublished, at kStuckChecks checks of
+  // this thread in a row: the cycle is stuck (hang, silence). Counted in this thread's own
+  // checks, so a process that is stopped or not scheduled is never called stuck.
+  bool unpublished = false;
+  std::uint64_t tick = 0;
+  {
+    std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+    if (lock.owns_lock()) {
+      unpublished = unwritten_answer_;
+      tick = last_command_.header.tick;
+    }
+  }
+  const auto cause = cycle_watch_.Check(cycle_sequence_.load(std::memory_order_acquire),
+                                        unpublished, tick);
+  if (cause == stuck_reported_) return;
+  stuck_reported_ = cause;
+  char detail[160];
+  if (cause == ControlCycleWatch::Cause::kNone) {
+    std::snprintf(detail, sizeof detail, "control cycle running again");
+    stuck_status_.Publish(hexa_msg_NODE_RUNNING, tick, 0.0, 0, 0, cycles_, 0.0, 0.0, detail);
+    log_->info("{}: {}", name_, detail);
+    return;
+  }
+  if (cause == ControlCycleWatch::Cause::kHang) {
+    std::snprintf(detail, sizeof detail, "control cycle stuck: the same cycle has run through %d "
+                  "checks of the main thread (hang)", kStuckChecks);
+  } else {
+    std::snprintf(detail, sizeof detail, "control cycle stuck: the answer to tick %llu was "
+                  "computed and not published through %d checks (silence)",
+                  static_cast<unsigned long long>(tick), kStuckChecks);
+  }
+  stuck_status_.Publish(hexa_msg_NODE_FAULT, tick, 0.0, 0, 0, cycles_, 0.0, 0.0, detail);
+  log_->error("{}: {}", name_, detail);
 }
 
 void LegNode::RunCycle() {
-  if (!supervisor_seen_alive_ && setpoint_reader_.Snapshot().liveliness_alive_count > 0)
-    supervisor_seen_alive_ = true;
+  if (!supervisor_seen_) {
+    const auto s = setpoint_reader_.Snapshot();
+    supervisor_seen_ = s.liveliness_alive_count + s.liveliness_not_alive_count > 0;
+  }
   TakeSetpoints();
   if (options_.common.mode == node::TimeMode::kRealtime) {
     TakeSensorsRealtime();
@@ -444,7 +496,6 @@ int LegNode::Run() {
   const double lease_s = realtime ? options_.common.realtime_lease_s : options_.common.lockstep_lease_s;
   const int64_t idle_ns = realtime ? 3'000'000 : static_cast<int64_t>(lease_s * 0.25e9);
   const dds_duration_t wait = static_cast<dds_duration_t>(idle_ns);
-  bool supervisor_lost_logged = false;
   while (!shutdown_.requested()) {
     const dds_return_t n = waitset_.Wait(wait);
     if (n < 0) {
@@ -458,17 +509,23 @@ int LegNode::Run() {
       if (lock.owns_lock()) node::service_manager::Watchdog();
     }
     if (shutdown_.requested()) continue;
-    if (!realtime && SupervisorLost()) {
+    if (!realtime) WatchControlCycle();
+    if (!realtime && (supervisor_lost_ || SupervisorGoneNow())) {
       // No setpoint will arrive to trigger the cycle: answer the queued ticks from here.
       std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
       if (lock.owns_lock()) {
-        if (!supervisor_lost_logged) {
-          supervisor_lost_logged = true;
-          log_->warn("{}: the supervisor's setpoint writer is no longer alive: answering every "
-                     "tick with the newest setpoint held (tick {}), valve at null once stale",
-                     name_, setpoints_.newest() ? setpoints_.newest()->tick : 0);
+        if (!supervisor_lost_) {
+          TakeSetpoints();  // a dispose not taken yet: the supervisor ended the session
+          supervisor_lost_ = SupervisorGoneNow();
+          if (supervisor_lost_)
+            log_->warn("{}: the supervisor is gone ({}): answering every tick with the newest "
+                       "setpoint held (tick {}), valve at null once stale", name_,
+                       peer_processes_.State("supervisor") == node::PeerProcessState::kEnded
+                           ? "its process ended"
+                           : "its setpoint writer left without disposing its setpoints",
+                       setpoints_.newest() ? setpoints_.newest()->tick : 0);
         }
-        RunCycle();
+        if (supervisor_lost_) RunCycleCounted();
       }
     }
     AssertLivelinessIfIdle(idle_ns);

@@ -9,8 +9,10 @@
 // for shutdown and, in both modes, asserts the writer's MANUAL_BY_TOPIC liveliness while the
 // control path is idle - only if it can take the control lock (a hung control cycle holds
 // it) and every answer the cycle computed was published (a silent one did not): a crashed,
-// hung or silent controller lets its lease lapse, and the plant and a hot standby see it
-// (docs/faults.md).
+// hung or silent controller lets its lease lapse, and a hot standby takes over. In lockstep a
+// lapse alone does not tell a hung controller from a stopped one, so the main thread also
+// says when its cycle is stuck (NodeStatus FAULT; core ControlCycleWatch), and the plant
+// judges by that (docs/faults.md).
 #pragma once
 
 #include <array>
@@ -24,6 +26,7 @@
 #include "hexa/core/leg_controller.hpp"
 #include "hexa/core/lockstep_protocol.hpp"
 #include "hexa/services/node.hpp"
+#include "hexa/services/peer_processes.hpp"
 
 namespace hexa::leg_ctrl {
 
@@ -79,9 +82,17 @@ class LegNode {
   void Answer(const hexa_msg_LegSensors& sensors);
   bool InjectFault(double sim_time_s);
   void PublishStatus(hexa_msg_NodeState state, const char* detail);
-  // Lockstep: the supervisor's setpoint writer was alive and is no longer (its process is
-  // gone): ticks are answered with the newest setpoint held, which goes stale.
-  bool SupervisorLost() const;
+  // Lockstep: the supervisor's process is gone (its setpoint writer left without disposing
+  // its setpoints, or the launcher's process id of it ended): ticks are answered with the
+  // newest setpoint held, which goes stale. A lapsed lease alone is a supervisor that does not
+  // run now (stopped, or a loaded machine): the legs wait for it. Real time: never (the legs
+  // use the newest setpoint anyway). Evaluated by the main thread (SupervisorGoneNow), read
+  // by the cycle.
+  bool SupervisorLost() const { return supervisor_lost_; }
+  bool SupervisorGoneNow() const;
+  void RunCycleCounted();  // RunCycle, with cycle_sequence_ odd while it runs
+  // Lockstep, main thread: the control cycle stuck (hang / silence) is said on NodeStatus.
+  void WatchControlCycle();
   // One FaultEvent per episode of held control (bad input, stale setpoint), repeated at the
   // status rate while it lasts (docs/faults.md).
   void ReportControlFault(const hexa_msg_LegSensors& sensors);
@@ -100,12 +111,17 @@ class LegNode {
   comm::Reader<hexa_msg_LegSetpoint> setpoint_reader_;
   comm::Writer<hexa_msg_ValveCommand> valve_writer_;
   node::StatusPublisher status_;
+  node::StatusPublisher stuck_status_;  // the main thread's: the cycle stuck (or no longer)
   node::FaultPublisher faults_;
+  node::PeerProcesses peer_processes_;  // --peer-pid: the supervisor's process (same host)
   comm::WaitSet waitset_;
 
   LockstepSchedule schedule_;
   std::mutex mutex_;  // the control state below: receive thread(s) and the main thread
   std::atomic<std::int64_t> last_write_ns_{0};
+  std::atomic<std::uint64_t> cycle_sequence_{0};  // odd while a cycle runs (ControlCycleWatch)
+  ControlCycleWatch cycle_watch_;                 // main thread only
+  ControlCycleWatch::Cause stuck_reported_ = ControlCycleWatch::Cause::kNone;
   SetpointRing<IssuedSetpoint, kSetpointRing> setpoints_;
   bool has_pending_ = false;         // real time: the newest unanswered sample
   hexa_msg_LegSensors pending_{};
@@ -115,7 +131,8 @@ class LegNode {
   std::uint64_t ticks_missed_ = 0;  // lockstep: ticks that never reached this node
   bool answered_any_ = false;
   bool unwritten_answer_ = false;    // an answer was computed and not published (yet)
-  bool supervisor_seen_alive_ = false;
+  bool supervisor_seen_ = false;     // its setpoint writer has been matched
+  bool supervisor_lost_ = false;     // SupervisorLost()
   bool supervisor_finished_ = false;  // it disposed its setpoints: the session is ending
   // Held-control fault episode (ReportControlFault).
   hexa_msg_FaultReason control_fault_ = hexa_msg_FAULT_NONE;

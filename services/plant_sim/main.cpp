@@ -50,9 +50,6 @@ int main(int argc, char** argv) {
   cli.AddOption("truth-out", "file",
                 "write the plant's true parameters (hexa.rec.PlantTruth, text format) to this "
                 "file at start-up, for evaluation (docs/identification.md)");
-  cli.AddOption("answer-timeout", "s",
-                "lockstep: a leg whose writer is alive but has not answered a tick this long is "
-                "dead (no longer awaited, valve at null); 0 = 10 liveliness leases (2 s)", "0");
   cli.AddOption("compute-budget", "s",
                 "leg controllers' compute time per cycle (ValveCommand.compute_time_s) beyond "
                 "which a cycle overruns", "0.0005");
@@ -74,16 +71,14 @@ int main(int argc, char** argv) {
   const auto lose = cli.GetInt("lose-supervisor-inputs", -1, 1LL << 40);
   const auto bench_load = cli.GetDouble("bench-load-kg", 0, 1000);
   const auto bench_release = cli.GetDouble("bench-release-s", 0, 1e6);
-  const auto answer_timeout = cli.GetDouble("answer-timeout", 0, 3600);
   const auto budget = cli.GetDouble("compute-budget", 1e-6, 10);
   const auto overrun = cli.GetInt("compute-overrun-cycles", 1, 1000000);
   if (!hexa::node::ReadCommonOptions(cli, o.common) || !seed || !legs || !duration || !startup ||
-      !stale || !grace || !lose || !bench_load || !bench_release || !answer_timeout || !budget ||
+      !stale || !grace || !lose || !bench_load || !bench_release || !budget ||
       !overrun) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
-  o.answer_timeout_s = *answer_timeout;
   o.compute_budget.budget_s = *budget;
   o.compute_budget.overrun_limit = static_cast<std::uint64_t>(*overrun);
   if (cli.Has("fault")) {

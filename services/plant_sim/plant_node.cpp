@@ -42,18 +42,11 @@ PlatformPlantConfig MakePlantConfig(const PlantNodeOptions& o, const config::Sys
   return p;
 }
 
-SilentLegParams SilentParams(const PlantNodeOptions& o) {
-  SilentLegParams p;
-  const double timeout_s = o.answer_timeout_s > 0 ? o.answer_timeout_s : 10.0 * o.common.lockstep_lease_s;
-  p.answer_timeout_ns = static_cast<std::int64_t>(timeout_s * 1e9);
-  return p;
-}
-
 hexa_msg_FaultReason WireReason(SilentLegVerdict v) {
   switch (v) {
     case SilentLegVerdict::kLivelinessLost: return hexa_msg_FAULT_LIVELINESS_LOST;
     case SilentLegVerdict::kWriterGone: return hexa_msg_FAULT_WRITER_GONE;
-    case SilentLegVerdict::kNoAnswer: return hexa_msg_FAULT_COMMAND_DEADLINE_MISSED;
+    case SilentLegVerdict::kProcessEnded: return hexa_msg_FAULT_WRITER_GONE;
     case SilentLegVerdict::kWait: break;
   }
   return hexa_msg_FAULT_NONE;
@@ -237,7 +230,14 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
       fault_reader_(participant_, fault_topic_, comm::EndpointRole::kControlReader,
                     node::QosFor(options.common, comm::TopicKind::kFaultEvent), 64),
       waitset_(participant_) {
-  silent_params_ = SilentParams(options);
+  for (const std::string& spec : options.common.peer_pids) {
+    std::string error;
+    if (!peer_processes_.Add(spec, error)) throw std::invalid_argument(error);
+  }
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    leg_name_[i] = "leg" + std::to_string(i + 1);
+    standby_name_[i] = leg_name_[i] + "_standby";
+  }
   lapse_confirm_ticks_ = std::max<std::int64_t>(1, std::llround(options.common.realtime_lease_s / kTickS));
   forced_reason_.fill(hexa_msg_FAULT_NONE);
   waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
@@ -269,6 +269,48 @@ void PlantNode::PublishStatus(hexa_msg_NodeState state, const char* detail) {
                   cycle_times_.Max(), detail);
 }
 
+bool PlantNode::SyncGiveUpDue(std::int64_t blocked_ns) const {
+  // The readers the sync waits for: the supervisor's and the recorder's (all-legs partition,
+  // ground truth). Processes that exist (perhaps stopped: a SIGSTOP, a loaded machine) are
+  // waited for: giving up would let the loop run past the writers' history and the recorder
+  // lose samples. One whose process ended never acknowledges (until discovery drops it,
+  // 10 s): given up after recorder_sync_give_up_s, as when the processes are not known here
+  // (another host). Not at once: a supervisor that died ends the session 2 s later (the
+  // launcher), and a loop let free at once outran the recorder in that time (21680 samples
+  // lost in one run) where a 1 s pause keeps it within the history.
+  bool known = false, ended = false;
+  for (const char* name : {"recorder", "supervisor"}) {
+    const node::PeerProcessState state = peer_processes_.State(name);
+    ended = ended || state == node::PeerProcessState::kEnded;
+    known = known || state != node::PeerProcessState::kUnknown;
+  }
+  if (known && !ended) return false;
+  return blocked_ns > static_cast<std::int64_t>(options_.recorder_sync_give_up_s * 1e9);
+}
+
+std::string PlantNode::EndedPeer(const std::vector<std::string>& expected) const {
+  for (const std::string& name : expected)
+    if (peer_processes_.State(name) == node::PeerProcessState::kEnded) return name;
+  return {};
+}
+
+std::string PlantNode::DescribeMissing(const std::vector<std::string>& missing) const {
+  std::string text;
+  for (const std::string& name : missing) {
+    text += text.empty() ? "" : "; ";
+    if (!peer_processes_.Known(name)) {
+      text += name + " (no NodeStatus RUNNING yet; process not known on this host)";
+      continue;
+    }
+    const node::PeerProcessState state = peer_processes_.State(name);
+    text += peer_processes_.Describe(name) +
+            (state == node::PeerProcessState::kStopped
+                 ? ": it cannot start until it is continued"
+                 : state == node::PeerProcessState::kRunning ? ": not RUNNING yet (matching its peers)" : "");
+  }
+  return text;
+}
+
 bool PlantNode::WaitForPeers() {
   std::vector<std::string> expected;
   for (int leg = 1; leg <= options_.expected_legs; ++leg) {
@@ -295,7 +337,8 @@ bool PlantNode::WaitForPeers() {
   const uint32_t valve_writers = static_cast<uint32_t>(options_.expected_legs) * per_leg;
   PublishStatus(hexa_msg_NODE_STARTING, "waiting for peers");
   const int64_t end = node::MonotonicNow_ns() + static_cast<int64_t>(options_.startup_timeout_s * 1e9);
-  int64_t next_log = node::MonotonicNow_ns() + 2'000'000'000;
+  int64_t next_log =
+      node::MonotonicNow_ns() + static_cast<int64_t>(options_.startup_report_after_s * 1e9);
   while (!shutdown_.requested()) {
     peers_.Poll();
     const auto missing = peers_.NotRunning(expected);
@@ -306,15 +349,19 @@ bool PlantNode::WaitForPeers() {
     const auto imu = imu_writer_.Snapshot().publication_matched_current;
     const auto truth = truth_writer_.Snapshot().publication_matched_current;
     const uint32_t truth_readers = options_.expect_recorder ? 1u : 0u;
-    // Every awaited leg's writer known and alive (its liveliness decides whether the leg is
-    // dead once ticking: docs/faults.md).
+    // Every awaited leg's writers known as that leg's (USER_DATA resolved). Alive or not: a
+    // writer whose lease lapsed before it wrote (its process stopped or not scheduled during
+    // start-up) is seen alive again only when it writes, and in lockstep a lapse decides
+    // nothing (docs/faults.md). Real time: the control readers are best effort, and a
+    // best-effort reader learns a writer's liveliness from its data only (no heartbeats):
+    // before the first command no leg looks alive. CheckLinksRealtime arms a leg once it has
+    // been seen alive.
     writers_.Refresh(valve_readers_, /*may_give_up=*/false);
     int legs_alive = 0;
-    for (int leg = 1; leg <= options_.expected_legs; ++leg)
-      legs_alive += writers_.Counts(leg).alive >= static_cast<int>(per_leg) ? 1 : 0;
-    // Real time: the control readers are best effort, and a best-effort reader learns a
-    // writer's liveliness from its data only (no heartbeats): before the first command no leg
-    // looks alive. CheckLinksRealtime arms a leg once it has been seen alive.
+    for (int leg = 1; leg <= options_.expected_legs; ++leg) {
+      const LegWriterCounts c = writers_.Counts(leg);
+      legs_alive += c.alive + c.not_alive >= static_cast<int>(per_leg) ? 1 : 0;
+    }
     if (options_.common.mode == node::TimeMode::kRealtime) legs_alive = options_.expected_legs;
     if (missing.empty() && sensors >= sensor_readers && valves >= valve_writers &&
         imu >= all_legs_readers && truth >= truth_readers && legs_alive == options_.expected_legs) {
@@ -323,23 +370,31 @@ bool PlantNode::WaitForPeers() {
       return true;
     }
     const int64_t now = node::MonotonicNow_ns();
+    // A process the launcher started for this session has ended: it will never be ready.
+    if (const std::string ended = EndedPeer(expected); !ended.empty()) {
+      log_->error("peers not ready: {}'s process has ended (the launcher's log says how); "
+                  "waited {:.1f} s", ended,
+                  options_.startup_timeout_s - static_cast<double>(end - now) * 1e-9);
+      return false;
+    }
     if (now > end) {
-      std::string names;
-      for (const auto& m : missing) names += " " + m;
-      log_->error("peers not ready after {} s: not running:{}; sensor readers {}/{}, valve "
-                  "writers {}/{} (legs with a live writer {}/{}), IMU readers {}/{}, "
+      log_->error("peers not ready after {} s: not running: {}; sensor readers {}/{}, valve "
+                  "writers {}/{} (legs with known writers {}/{}), IMU readers {}/{}, "
                   "ground-truth readers {}/{}; writers:{}",
-                  options_.startup_timeout_s, names.empty() ? " none" : names, sensors,
+                  options_.startup_timeout_s, missing.empty() ? "none" : DescribeMissing(missing), sensors,
                   sensor_readers, valves, valve_writers, legs_alive, options_.expected_legs, imu,
                   all_legs_readers, truth, truth_readers, writers_.Describe());
       return false;
     }
     if (now > next_log) {
-      log_->info("waiting for peers ({} not running, sensor readers {}/{}, valve writers {}/{}, "
-                 "legs with a live writer {}/{}; writers:{})",
-                 missing.size(), sensors, sensor_readers, valves, valve_writers, legs_alive,
+      // After a few seconds, every second: which peer is missing and why.
+      log_->warn("waiting for peers for {:.1f} s: {}; sensor readers {}/{}, valve writers {}/{} "
+                 "(legs with known writers {}/{}); writers:{}",
+                 options_.startup_timeout_s - static_cast<double>(end - now) * 1e-9,
+                 missing.empty() ? std::string("every process RUNNING") : DescribeMissing(missing),
+                 sensors, sensor_readers, valves, valve_writers, legs_alive,
                  options_.expected_legs, writers_.Describe());
-      next_log = now + 2'000'000'000;
+      next_log = now + 1'000'000'000;
     }
     // Wakes on NodeStatus data or shutdown; the timeout re-checks the match counts, which
     // change without data.
@@ -530,58 +585,67 @@ void PlantNode::MarkLegDead(int leg, hexa_msg_FaultReason reason, const char* de
   log_->error("leg {} tick {}: {}", leg, tick_, detail);
 }
 
+SilentLegFacts PlantNode::LegFacts(int leg) {
+  const std::size_t i = static_cast<std::size_t>(leg - 1);
+  SilentLegFacts f;
+  f.writers = writers_.Counts(leg);
+  auto add = [&](const std::string& name) {
+    if (peer_processes_.Known(name)) {
+      ++f.processes;
+      if (peer_processes_.State(name) == node::PeerProcessState::kEnded) ++f.processes_ended;
+    }
+    // The controller's main thread says its cycle is stuck (leg_node: ControlCycleWatch).
+    if (peers_.StateOf(name) == hexa_msg_NODE_FAULT) ++f.processes_stuck;
+  };
+  add(leg_name_[i]);
+  if (options_.expect_standbys) add(standby_name_[i]);
+  return f;
+}
+
 void PlantNode::JudgeSilentLegs(std::int64_t now_ns) {
-  if (barrier_.complete()) return;
-  writers_.Refresh(valve_readers_);
+  // Lockstep: facts about the legs' processes, never the wall clock alone
+  // (JudgeSilentLegLockstep). A leg that is slow, stopped or not scheduled is waited for; the
+  // lockstep timeout stays the last resort.
+  // A tick normally completes within a millisecond: the processes are looked at (which reads
+  // /proc and NodeStatus under the loop's lock) only once it has waited a few.
   const std::int64_t silent_ns = now_ns - barrier_.began_ns();
-  LegMask dead = 0, no_answer = 0;
-  std::array<SilentLegVerdict, kNumLegs> verdict{};
+  if (barrier_.complete() || silent_ns < 5'000'000) return;
+  writers_.Refresh(valve_readers_);
+  peers_.Poll();
+  LegMask dead = 0;
   for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
     if (!(barrier_.missing() & LegBit(leg))) continue;
-    verdict[static_cast<std::size_t>(leg - 1)] =
-        JudgeSilentLeg(writers_.Counts(leg), silent_ns, silent_params_);
-    if (verdict[static_cast<std::size_t>(leg - 1)] == SilentLegVerdict::kWait) continue;
+    const std::size_t i = static_cast<std::size_t>(leg - 1);
+    const SilentLegFacts f = LegFacts(leg);
+    const SilentLegVerdict v = JudgeSilentLegLockstep(f);
+    if (v == SilentLegVerdict::kWait) {
+      if (f.writers.alive == 0 && lapse_waited_tick_[i] != tick_ + 1) {
+        ++lapses_waited_;
+        if (lapse_waited_tick_[i] == 0)
+          log_->warn("tick {}: leg {}'s lease lapsed ({}): not a fault in lockstep, the plant "
+                     "waits for it (logged once per leg, counted)", tick_, leg,
+                     peer_processes_.Known(leg_name_[i]) ? peer_processes_.Describe(leg_name_[i])
+                                                         : "process not known on this host");
+        lapse_waited_tick_[i] = tick_ + 1;
+      }
+      continue;
+    }
     dead |= LegBit(leg);
-    if (verdict[static_cast<std::size_t>(leg - 1)] == SilentLegVerdict::kNoAnswer) no_answer |= LegBit(leg);
+    char detail[160];
+    if (v == SilentLegVerdict::kLivelinessLost) {
+      std::snprintf(detail, sizeof detail, "liveliness lost: no answer to tick %llu; %s",
+                    static_cast<unsigned long long>(tick_), peers_.DetailOf(leg_name_[i]).c_str());
+    } else {
+      std::snprintf(detail, sizeof detail, "%s: no answer to tick %llu for %.0f ms (writers: %d "
+                    "alive, %d not alive, %d gone; processes ended %d of %d): no longer "
+                    "awaited, valve held at null", ToString(v), static_cast<unsigned long long>(tick_),
+                    static_cast<double>(silent_ns) * 1e-6, f.writers.alive, f.writers.not_alive,
+                    f.writers.gone, f.processes_ended, f.processes);
+    }
+    MarkLegDead(leg, WireReason(v), detail);
+    gone_reported_[i] = v != SilentLegVerdict::kLivelinessLost;
   }
   if (dead == 0) return;
-  if (dead == barrier_.awaited() && no_answer == 0 && std::popcount(dead) > 1 &&
-      std::all_of(verdict.begin(), verdict.end(), [](SilentLegVerdict v) {
-        return v == SilentLegVerdict::kWait || v == SilentLegVerdict::kLivelinessLost;
-      })) {
-    // Every awaited leg's lease lapsed together: the host did not run them (a shared
-    // machine's other work on the control CPU), not that many controllers failing at once.
-    // Lockstep has no deadline: it waits for them (the lockstep timeout remains).
-    if (all_lapsed_logged_++ == 0)
-      log_->warn("tick {}: every awaited leg's liveliness lapsed at once: the host did not run "
-                 "them; lockstep waits (logged once, counted)", tick_);
-    return;
-  }
-  if (no_answer != 0 && no_answer == barrier_.awaited()) {
-    // Every awaited leg alive and none answers: not six controller faults. The legs wait for
-    // something they all need (the supervisor's setpoint) or the host does not run them.
-    char detail[160];
-    std::snprintf(detail, sizeof detail, "lockstep: no leg answered tick %llu within %.3f s though "
-                  "all their writers are alive: the supervisor or the host is stalled",
-                  static_cast<unsigned long long>(tick_), static_cast<double>(silent_ns) * 1e-9);
-    faults_.Publish(0, tick_, hexa_msg_FAULT_COMMAND_DEADLINE_MISSED, detail);
-    log_->error("{}", detail);
-    exit_code_ = 3;
-    running_ = false;
-    return;
-  }
-  for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
-    if (!(dead & LegBit(leg))) continue;
-    const SilentLegVerdict v = verdict[static_cast<std::size_t>(leg - 1)];
-    const LegWriterCounts c = writers_.Counts(leg);
-    char detail[160];
-    std::snprintf(detail, sizeof detail, "%s: no answer to tick %llu for %.0f ms (writers: %d "
-                  "alive, %d not alive, %d gone): no longer awaited, valve held at null",
-                  ToString(v), static_cast<unsigned long long>(tick_),
-                  static_cast<double>(silent_ns) * 1e-6, c.alive, c.not_alive, c.gone);
-    MarkLegDead(leg, WireReason(v), detail);
-    gone_reported_[static_cast<std::size_t>(leg - 1)] = v == SilentLegVerdict::kWriterGone;
-  }
   dropped_ |= dead;
   barrier_.Release(dead);
   AdvanceIfComplete();
@@ -623,7 +687,7 @@ void PlantNode::CheckLinksRealtime() {
           continue;
         }
         link_dead_[i] = true;
-        forced_reason_[i] = WireReason(JudgeSilentLeg(c, 0, silent_params_));
+        forced_reason_[i] = WireReason(JudgeSilentLeg(c));
       }
     } else {
       lapse_while_fresh_[i] = false;
@@ -840,20 +904,7 @@ void PlantNode::WatchSilence(dds_duration_t& wait) {
   TakeFaultEvents();
   ReportGoneWriters();
   const int64_t now = node::MonotonicNow_ns();
-  // This thread runs every 10 ms (20 in a recorder sync). When it ran much later, the host
-  // stalled it, and the legs very likely with it (the control processes share a CPU): their
-  // leases may have lapsed without any fault of theirs. They get a full lease to assert again
-  // before anyone is judged.
-  const int64_t lease_ns = static_cast<int64_t>(options_.common.lockstep_lease_s * 1e9);
-  if (last_watch_ns_ != 0 && now - last_watch_ns_ > lease_ns / 2) {
-    if (host_stalls_++ == 0)
-      log_->warn("tick {}: the plant's watch ran {:.0f} ms late (the host stalled it): dead legs "
-                 "are judged again after one lease (logged once, counted)", tick_,
-                 static_cast<double>(now - last_watch_ns_) * 1e-6);
-    judge_after_ns_ = now + lease_ns;
-  }
-  last_watch_ns_ = now;
-  if (now >= judge_after_ns_) JudgeSilentLegs(now);
+  JudgeSilentLegs(now);
   if (exit_code_ >= 0) return;
   switch (barrier_.Check(now)) {
     case LockstepBarrier::Action::kWait:
@@ -871,8 +922,13 @@ void PlantNode::WatchSilence(dds_duration_t& wait) {
       ReaskSupervisor();
       break;
     case LockstepBarrier::Action::kTimeout: {
-      log_->error("lockstep: tick {} not answered within {} s by:{}", tick_,
-                  options_.common.lockstep_timeout_s, LegList(barrier_.missing()));
+      std::string states;
+      for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg)
+        if (barrier_.missing() & LegBit(leg))
+          states += "; " + peer_processes_.Describe(leg_name_[static_cast<std::size_t>(leg - 1)]);
+      if (options_.expect_supervisor) states += "; " + peer_processes_.Describe("supervisor");
+      log_->error("lockstep: tick {} not answered within {} s (the last resort) by:{}{}", tick_,
+                  options_.common.lockstep_timeout_s, LegList(barrier_.missing()), states);
       for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
         if (!(barrier_.missing() & LegBit(leg))) continue;
         char detail[160];
@@ -944,16 +1000,15 @@ int PlantNode::RunLockstep(std::uint64_t last_tick) {
         if (sync_suspended_) log_->info("tick {}: recorder sync acknowledged again", tick_);
         sync_suspended_ = false;
         resume = sync_pending_;
-      } else if (waiting_for_acks && sync_pending_ &&
-                 now - sync_blocked_since_ns_ >
-                     static_cast<int64_t>(options_.recorder_sync_give_up_s * 1e9)) {
+      } else if (waiting_for_acks && sync_pending_ && SyncGiveUpDue(now - sync_blocked_since_ns_)) {
         // A reader does not acknowledge (a dead supervisor or recorder, until discovery
         // drops it): the control loop must not stand still for it.
         sync_suspended_ = true;
         ++recorder_syncs_given_up_;
-        log_->warn("tick {}: a reliable reader has not acknowledged for {:.1f} s (its process "
-                   "is gone or hung): recorder sync given up, the loop runs on (counted, "
-                   "logged per episode)", tick_, options_.recorder_sync_give_up_s);
+        log_->warn("tick {}: a reliable reader has not acknowledged for {:.1f} s ({}; {}): "
+                   "recorder sync given up, the loop runs on (counted, logged per episode)",
+                   tick_, static_cast<double>(now - sync_blocked_since_ns_) * 1e-9,
+                   peer_processes_.Describe("recorder"), peer_processes_.Describe("supervisor"));
         resume = true;
       }
       if (resume) {
@@ -1118,10 +1173,17 @@ int PlantNode::Run() {
   node::service_manager::Ready(realtime ? "ticking in real time" : "ticking in lockstep");
   log_->info("ticking in {} mode, profile '{}', seed {}", realtime ? "real-time" : "lockstep",
              options_.profile, options_.seed);
-  log_->info("dead legs: liveliness lease {:.3f} s{}; compute budget {:.3f} ms x {} cycles",
-             realtime ? options_.common.realtime_lease_s : options_.common.lockstep_lease_s,
-             realtime ? std::string() : fmt::format(", answer timeout {:.3f} s",
-                                                    static_cast<double>(silent_params_.answer_timeout_ns) * 1e-9),
+  log_->info("dead legs: {}; compute budget {:.3f} ms x {} cycles",
+             realtime ? fmt::format("liveliness lease {:.3f} s", options_.common.realtime_lease_s)
+                      : fmt::format("lockstep: a process ended ({}), writers gone, or a "
+                                    "controller stuck (lease {:.3f} s lapsed and its cycle "
+                                    "stuck); last resort {:.1f} s",
+                                    peer_processes_.empty()
+                                        ? "no process ids given: seen when its participant's "
+                                          "lease expires"
+                                        : "process ids given by the launcher",
+                                    options_.common.lockstep_lease_s,
+                                    options_.common.lockstep_timeout_s),
              options_.compute_budget.budget_s * 1e3, options_.compute_budget.overrun_limit);
   for (const PlantFault& f : options_.plant_faults.faults)
     log_->warn("FAULT INJECTION: {} of leg {} at t = {:.3f} s", ToString(f.kind), f.leg, f.at_time_s);
@@ -1140,14 +1202,14 @@ int PlantNode::Run() {
   log_->info("stopped at tick {} (t = {:.3f} s): valve deadline misses {}, loop overruns {}, "
              "command faults {}, lockstep resends {} (in {} re-asks, {} to the supervisor), "
              "failed writes {}, recorder syncs {} (the loop stood still for {} of them, "
-             "{:.3f} s; {} given up), schedule slips {} ({:.1f} ms), lockstep host stalls {} "
-             "(all legs lapsed at once: {}), real-time lease lapses with fresh commands {}, "
+             "{:.3f} s; {} given up), schedule slips {} ({:.1f} ms), lockstep lease lapses "
+             "waited through {}, real-time lease lapses with fresh commands {}, "
              "rejected commands {}; writers:{}",
              tick_, static_cast<double>(tick_) * kTickS, valve.requested_deadline_missed_total,
              overruns_, faults, resent_samples_, barrier_.reasks_total(), supervisor_reasks_,
              sensors_writer_.write_errors_total(), recorder_syncs_, recorder_sync_blocks_,
              recorder_sync_wait_s_, recorder_syncs_given_up_, slips_.count(),
-             static_cast<double>(slips_.total_ns()) * 1e-6, host_stalls_, all_lapsed_logged_, lapses_while_fresh_, rejected,
+             static_cast<double>(slips_.total_ns()) * 1e-6, lapses_waited_, lapses_while_fresh_, rejected,
              writers_.Describe());
   if (slips_.count() > 0) {
     std::string ticks;

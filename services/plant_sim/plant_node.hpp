@@ -11,10 +11,13 @@
 // thread wakes on their arrival. One mutex guards the loop state in both.
 //
 // Dead legs (docs/faults.md): every leg controller's ValveCommand writer carries its leg in
-// USER_DATA and asserts MANUAL_BY_TOPIC liveliness from its control loop. A leg with no live
-// writer (crashed, hung or silent; or gone), or in lockstep one whose live writer does not
-// answer within the answer timeout, has its valve held at null and is reported with the
-// cause; lockstep stops awaiting it and keeps ticking, so that the supervisor can hold.
+// USER_DATA and asserts MANUAL_BY_TOPIC liveliness from its control loop. Real time: a leg
+// with no live writer (crashed, hung or silent; or gone) has its valve held at null and is
+// reported with the cause. Lockstep judges facts, not the wall clock: a leg whose controller
+// process ended (--peer-pid, same host), whose writers are gone, or whose controller reports
+// its cycle stuck with its lease lapsed, is dead; a leg that is only slow, stopped or not
+// scheduled is waited for. A dead leg is no longer awaited, and lockstep keeps ticking so
+// that the supervisor can hold.
 #pragma once
 
 #include <array>
@@ -32,6 +35,7 @@
 #include "hexa/core/plant_faults.hpp"
 #include "hexa/core/platform_plant.hpp"
 #include "hexa/services/node.hpp"
+#include "hexa/services/peer_processes.hpp"
 
 namespace hexa::plant_sim {
 
@@ -66,9 +70,8 @@ struct PlantNodeOptions {
   // until a wait succeeds again: a reader that never acknowledges (its process killed or hung
   // and not yet dropped by discovery, 10 s) must not stop the control loop (docs/faults.md).
   double recorder_sync_give_up_s = 1.0;
-  // Lockstep: a leg whose writer is alive but has not answered this long is dead all the
-  // same (0 = 10 liveliness leases).
-  double answer_timeout_s = 0.0;
+  // Start-up: after this long waiting, say every second which peer is missing and why.
+  double startup_report_after_s = 3.0;
   ComputeBudgetParams compute_budget;  // leg controllers' compute time per cycle
   PlantFaultParams plant_faults;       // injected rig faults (--fault)
   std::string summary_path;        // write the run's figures here as JSON at exit ("" = no)
@@ -150,6 +153,16 @@ class PlantNode {
 
  private:
   bool WaitForPeers();
+  // Start-up: the first expected peer whose process the launcher named and that ended
+  // ("" if none); and each missing peer with its process state, for the log.
+  std::string EndedPeer(const std::vector<std::string>& expected) const;
+  std::string DescribeMissing(const std::vector<std::string>& missing) const;
+  // Lockstep: what leg `leg`'s controllers show (writers, processes ended or stuck).
+  SilentLegFacts LegFacts(int leg);
+  // Lockstep, recorder sync: may a sync that has stood still `blocked_ns` be given up? Never
+  // while the readers' processes (supervisor, recorder) exist (a stopped recorder is waited
+  // for); after recorder_sync_give_up_s when one ended or they are not known (another host).
+  bool SyncGiveUpDue(std::int64_t blocked_ns) const;
   int RunLockstep(std::uint64_t last_tick);
   int RunRealtime(std::uint64_t last_tick);
   // Receive thread (lockstep): takes the commands and, when the tick is complete, advances.
@@ -223,12 +236,12 @@ class PlantNode {
   bool ack_wait_active_ = false;     // ... and is in it
   std::uint64_t ack_wait_tick_ = 0;  // the tick at which it was requested
   int64_t sync_blocked_since_ns_ = 0;
-  // Lockstep watch (WatchSilence): when it last ran, no judging before judge_after_ns_ (after
-  // a host stall), stalls seen, rounds in which every awaited leg lapsed at once.
-  int64_t last_watch_ns_ = 0;
-  int64_t judge_after_ns_ = 0;
-  std::uint64_t host_stalls_ = 0;
-  std::uint64_t all_lapsed_logged_ = 0;
+  // Lockstep: leases of awaited legs lapsed while their processes were not shown dead or
+  // stuck (stopped, not scheduled): waited through, one per leg and tick, logged once per leg.
+  std::uint64_t lapses_waited_ = 0;
+  LegArray<std::uint64_t> lapse_waited_tick_{};
+  node::PeerProcesses peer_processes_;  // --peer-pid: the session's processes on this host
+  LegArray<std::string> leg_name_{}, standby_name_{};  // "leg3", "leg3_standby"
   bool sync_suspended_ = false;  // a sync was given up: no blocking until a wait succeeds
   std::uint64_t recorder_syncs_given_up_ = 0;
   // Real time: wake-ups later than this restart the schedule (RunRealtime).
@@ -248,7 +261,6 @@ class PlantNode {
   LegArray<bool> lapse_while_fresh_{};
   std::uint64_t lapses_while_fresh_ = 0;
   LegWriterTable writers_;
-  SilentLegParams silent_params_;
   LegMask dropped_ = 0;                  // lockstep: legs no longer awaited (dead)
   LegArray<bool> link_dead_{};           // no live writer now (real time) / dropped (lockstep)
   LegArray<bool> interlock_{};           // a sensor fault of the leg reported: valve at null

@@ -57,6 +57,17 @@ def delete_block(block_start, note):
     return edit
 
 
+def delete_block_lines(element_start, block, note):
+    """Delete the first `element_start` { ... } element inside top-level `block`; mark the block."""
+    def edit(lines):
+        b = find(lines, r"^" + block + r" \{")
+        i = next(k for k in range(b, len(lines)) if re.search(element_start, lines[k]))
+        j = next(k for k in range(i, len(lines)) if lines[k].startswith("  }"))
+        del lines[i:j + 1]
+        lines[b] += "  # DEFECT: " + note
+    return edit
+
+
 def platform_joints(azimuths_deg, note):
     """Rewrite every platform joint at the given azimuths (0.25 m circle); mark geometry."""
     def edit(lines):
@@ -119,6 +130,13 @@ CASES = {
     "observer_mass_zero": replace(r"observer_mass_kg:", "observer_mass_kg: 0", "observer without mass"),
     "dither_too_fast": replace(r"dither_frequency_hz:", "dither_frequency_hz: 400",
                                "2.5 control periods per dither cycle"),
+    # The remote I/O board's channel calibration (docs/board_protocol.md).
+    "board_gain_zero": replace(r"valve_v \{", "valve_v { offset_si: 0 gain_si_per_count: 0 min_si: 0 max_si: 10 }",
+                               "leg 3's valve channel has no gain", occurrence=2),
+    "board_potentiometer_short": replace(
+        r"potentiometer_m \{", "potentiometer_m { offset_si: 0.3734 gain_si_per_count: 4.0e-6 min_si: 0.40 max_si: 0.6324 }",
+        "leg 1's potentiometer range misses the short end of the stroke"),
+    "board_five_legs": delete_block_lines(r"^  leg \{", "board", "a board block with five legs"),
 }
 
 

@@ -216,6 +216,29 @@ hexa::DisturbanceProfile IdealProfile() {
   return p;
 }
 
+void ExpectChannelEq(const hexa::ChannelCalibration& a, const hexa::ChannelCalibration& b, double tol,
+                     const std::string& what) {
+  EXPECT_NEAR(a.offset_si, b.offset_si, tol) << what;
+  EXPECT_NEAR(a.gain_si_per_count, b.gain_si_per_count, tol) << what;
+  EXPECT_NEAR(a.min_si, b.min_si, tol) << what;
+  EXPECT_NEAR(a.max_si, b.max_si, tol) << what;
+}
+
+void ExpectBoardEq(const hexa::BoardCalibration& a, const hexa::BoardCalibration& b, double tol) {
+  for (std::size_t i = 0; i < hexa::kNumLegs; ++i) {
+    const std::string leg = "leg " + std::to_string(i + 1);
+    ExpectChannelEq(a.legs[i].potentiometer_m, b.legs[i].potentiometer_m, tol, leg + " potentiometer");
+    ExpectChannelEq(a.legs[i].chamber1_pressure_pa, b.legs[i].chamber1_pressure_pa, tol, leg + " chamber 1");
+    ExpectChannelEq(a.legs[i].chamber2_pressure_pa, b.legs[i].chamber2_pressure_pa, tol, leg + " chamber 2");
+    ExpectChannelEq(a.legs[i].valve_v, b.legs[i].valve_v, tol, leg + " valve");
+  }
+  ExpectChannelEq(a.supply_pressure_pa, b.supply_pressure_pa, tol, "supply");
+  ExpectChannelEq(a.imu_rate_rad_s, b.imu_rate_rad_s, tol, "gyro");
+  EXPECT_EQ(a.adc_bits, b.adc_bits);
+  EXPECT_EQ(a.dac_bits, b.dac_bits);
+  EXPECT_EQ(a.watchdog_timeout_s, b.watchdog_timeout_s);
+}
+
 SystemConfig DefaultsInCode() {
   SystemConfig c;
   c.rig_name = "HexaTaar-R";
@@ -244,6 +267,22 @@ TEST(RigConfigReference, LoadsAndEqualsCoreDefaults) {
   ExpectProfileEq(r.config.profiles.at("realistic"), hexa::DisturbanceProfile{});
   ExpectProfileEq(r.config.profiles.at("ideal"), IdealProfile());
   EXPECT_EQ(r.config.default_profile, "realistic");
+  ASSERT_TRUE(r.config.board.has_value());
+  ExpectBoardEq(*r.config.board, hexa::MakeReferenceBoardCalibration(hexa::MakeReferenceRig()), 1e-12);
+}
+
+TEST(RigConfigReference, BoardBlockIsOptionalAndRoundTrips) {
+  SystemConfig c = DefaultsInCode();  // no board: a rig the simulator drives only
+  ConfigResult r = hexa::config::ParseSystemConfig(hexa::config::ToTextFormat(c), "no_board");
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_FALSE(r.config.board.has_value());
+  c.board = hexa::MakeReferenceBoardCalibration(c.rig);
+  c.board->legs[4].potentiometer_m.offset_si += 0.0005;
+  c.board->watchdog_timeout_s = 0.02;
+  r = hexa::config::ParseSystemConfig(hexa::config::ToTextFormat(c), "board");
+  ASSERT_TRUE(r.ok) << r.error;
+  ASSERT_TRUE(r.config.board.has_value());
+  ExpectBoardEq(*r.config.board, *c.board, 0.0);
 }
 
 // A field added to a core struct must also be added to proto/rig.proto, the translation
@@ -382,6 +421,12 @@ const std::vector<BrokenCase> kBrokenCases = {
     // The BS-SMC's dither needs at least 4 control periods per cycle.
     {"dither_too_fast", "leg_controller.bssmc.dither_frequency_hz", "dither frequency", "400",
      "[0, 250]"},
+    // The remote I/O board's calibration (docs/board_protocol.md).
+    {"board_gain_zero", "board.leg[id=3].valve_v.gain_si_per_count", "channel gain must not be zero", "0",
+     "!= 0"},
+    {"board_potentiometer_short", "board.leg[id=1].potentiometer_m.min_si",
+     "plausible range must cover the stroke", "0.4", "<= 0.3784"},
+    {"board_five_legs", "board.leg", "the board serves exactly six legs", "5 legs", "exactly 6"},
 };
 
 class BrokenFile : public ::testing::TestWithParam<BrokenCase> {};

@@ -21,20 +21,61 @@ TEST(LockstepProtocol, SetpointOfTickIsTheNewestIssuedStrictlyBefore) {
   EXPECT_EQ(s, 10u);
 }
 
-// Dead legs (docs/faults.md): no live writer is dead at once, with the cause; a live writer is
-// waited for (a hot standby answers a re-ask) up to the answer timeout.
+// Real time (docs/faults.md): a leg without a live writer is dead with its cause.
 TEST(LockstepProtocol, SilentLegVerdictNamesTheCause) {
-  SilentLegParams p;
-  p.answer_timeout_ns = 1'000'000'000;
-  EXPECT_EQ(JudgeSilentLeg({1, 0, 0}, 0, p), SilentLegVerdict::kWait);
-  EXPECT_EQ(JudgeSilentLeg({1, 1, 0}, 999'999'999, p), SilentLegVerdict::kWait);  // standby alive
-  EXPECT_EQ(JudgeSilentLeg({1, 0, 1}, 1'000'000'000, p), SilentLegVerdict::kNoAnswer);
-  EXPECT_EQ(JudgeSilentLeg({0, 1, 0}, 0, p), SilentLegVerdict::kLivelinessLost);
-  EXPECT_EQ(JudgeSilentLeg({0, 1, 1}, 0, p), SilentLegVerdict::kLivelinessLost);  // hung primary,
-                                                                                // standby gone
-  EXPECT_EQ(JudgeSilentLeg({0, 0, 1}, 0, p), SilentLegVerdict::kWriterGone);
-  EXPECT_EQ(JudgeSilentLeg({0, 0, 0}, 0, p), SilentLegVerdict::kWriterGone);
-  EXPECT_STREQ(ToString(SilentLegVerdict::kNoAnswer), "no answer from a live writer");
+  EXPECT_EQ(JudgeSilentLeg({1, 0, 0}), SilentLegVerdict::kWait);
+  EXPECT_EQ(JudgeSilentLeg({1, 1, 0}), SilentLegVerdict::kWait);  // standby alive
+  EXPECT_EQ(JudgeSilentLeg({0, 1, 0}), SilentLegVerdict::kLivelinessLost);
+  EXPECT_EQ(JudgeSilentLeg({0, 1, 1}), SilentLegVerdict::kLivelinessLost);  // hung primary,
+                                                                          // standby gone
+  EXPECT_EQ(JudgeSilentLeg({0, 0, 1}), SilentLegVerdict::kWriterGone);
+  EXPECT_EQ(JudgeSilentLeg({0, 0, 0}), SilentLegVerdict::kWriterGone);
+  EXPECT_STREQ(ToString(SilentLegVerdict::kProcessEnded), "process ended");
+}
+
+// Lockstep (docs/faults.md): a lapsed lease alone is never a death, whatever the wall clock
+// says; an ended process, gone writers, or a controller that runs and reports its cycle stuck
+// is.
+TEST(LockstepProtocol, LockstepSilentLegIsDeadOnlyOnFactsAboutItsProcess) {
+  auto judge = [](LegWriterCounts w, int processes, int ended, int stuck) {
+    return JudgeSilentLegLockstep(SilentLegFacts{w, processes, ended, stuck});
+  };
+  // Stopped or starved (SIGSTOP, a loaded machine): its lease lapsed, nothing else is known.
+  EXPECT_EQ(judge({0, 1, 0}, 1, 0, 0), SilentLegVerdict::kWait);
+  EXPECT_EQ(judge({0, 1, 0}, 0, 0, 0), SilentLegVerdict::kWait);  // no process id (other host)
+  // Crash: the process ended (same host), or its participant left (any host).
+  EXPECT_EQ(judge({0, 1, 0}, 1, 1, 0), SilentLegVerdict::kProcessEnded);
+  EXPECT_EQ(judge({1, 0, 0}, 1, 1, 0), SilentLegVerdict::kProcessEnded);  // lease not lapsed yet
+  EXPECT_EQ(judge({0, 0, 1}, 0, 0, 0), SilentLegVerdict::kWriterGone);
+  // Hang or silence: the lease lapsed and the controller says its cycle is stuck.
+  EXPECT_EQ(judge({0, 1, 0}, 1, 0, 1), SilentLegVerdict::kLivelinessLost);
+  EXPECT_EQ(judge({1, 0, 0}, 1, 0, 1), SilentLegVerdict::kWait);  // still asserting: not yet
+  // With a hot standby: one process ended or stuck, the other alive or only stopped: wait.
+  EXPECT_EQ(judge({1, 1, 0}, 2, 1, 0), SilentLegVerdict::kWait);
+  EXPECT_EQ(judge({0, 2, 0}, 2, 0, 1), SilentLegVerdict::kWait);
+  EXPECT_EQ(judge({0, 2, 0}, 2, 0, 2), SilentLegVerdict::kLivelinessLost);
+  EXPECT_EQ(judge({0, 1, 1}, 2, 1, 1), SilentLegVerdict::kLivelinessLost);
+  EXPECT_EQ(judge({0, 1, 1}, 2, 2, 0), SilentLegVerdict::kProcessEnded);
+}
+
+// A controller's own watch of its control cycle counts its own checks, not time.
+TEST(LockstepProtocol, ControlCycleWatchNeedsTheSameStuckCycleAtFourChecks) {
+  using Cause = ControlCycleWatch::Cause;
+  ControlCycleWatch hang;
+  EXPECT_EQ(hang.Check(7, false, 0), Cause::kNone);  // a cycle runs (odd): first sighting
+  EXPECT_EQ(hang.Check(7, false, 0), Cause::kNone);
+  EXPECT_EQ(hang.Check(7, false, 0), Cause::kNone);
+  EXPECT_EQ(hang.Check(7, false, 0), Cause::kHang);  // the 4th check in a row
+  EXPECT_EQ(hang.Check(8, false, 0), Cause::kNone);  // it ended: not stuck any more
+  ControlCycleWatch busy;  // a different cycle at every check: progress, never stuck
+  for (std::uint64_t seq = 1; seq < 40; seq += 2) EXPECT_EQ(busy.Check(seq, false, 0), Cause::kNone);
+  ControlCycleWatch idle;  // between cycles (even): waiting for the plant or a setpoint
+  for (int k = 0; k < 10; ++k) EXPECT_EQ(idle.Check(8, false, 0), Cause::kNone);
+  ControlCycleWatch silent;
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(silent.Check(8, true, 1500), Cause::kNone);
+  EXPECT_EQ(silent.Check(8, true, 1500), Cause::kSilence);
+  ControlCycleWatch slow;  // an unpublished answer of a new tick each time: progress
+  for (std::uint64_t t = 0; t < 10; ++t) EXPECT_EQ(slow.Check(8, true, t), Cause::kNone);
 }
 
 // Real time: a lease lapse counts only when the leg's commands stopped too (docs/faults.md).

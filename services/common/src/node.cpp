@@ -22,7 +22,8 @@ void AddCommonOptions(cli::Parser& p) {
   p.AddOption("lockstep-timeout", "s", "lockstep: a peer silent this long is a fault", "10");
   p.AddOption("lockstep-lease", "s",
               "lockstep: liveliness lease of the leg controllers' valve commands (asserted by "
-              "the control loop) and of the supervisor's setpoints; docs/faults.md", "0.2");
+              "the control loop) and of the supervisor's setpoints: how soon a hot standby "
+              "takes over; a lapse alone is no fault in lockstep (docs/faults.md)", "0.2");
   p.AddOption("rt-lease", "s",
               "real time: liveliness lease of the leg controllers' valve commands", "0.01");
   p.AddOption("rt-deadline-1ms", "s", "real time: deadline of the 1 ms topics", "0.001");
@@ -38,6 +39,9 @@ void AddCommonOptions(cli::Parser& p) {
               "heartbeats): normal keeps its per-millisecond wake-ups off the loop's priority "
               "(docs/performance.md)", "normal");
   p.AddOption("cpus", "list", "pin every thread to these CPUs, e.g. 1 or 0,1 or 0-1");
+  p.AddRepeatable("peer-pid", "name=pid",
+                  "another process of the session on this host (the launcher gives them): one "
+                  "that ended is dead at once (docs/faults.md)");
 }
 
 bool ReadCommonOptions(cli::Parser& p, CommonOptions& o) {
@@ -70,6 +74,7 @@ bool ReadCommonOptions(cli::Parser& p, CommonOptions& o) {
     if (!prio) return false;
     o.realtime_priority = static_cast<int>(*prio);
   }
+  o.peer_pids = p.GetAll("peer-pid");
   if (p.Has("cpus") && !sched::ParseCpuList(p.Get("cpus"), o.cpus)) {
     return p.Fail("--cpus '" + p.Get("cpus") + "': expected CPU numbers such as 1, 0,1 or 0-1");
   }
@@ -219,17 +224,26 @@ void PeerTracker::Poll() {
       const auto& s = reader_.sample(i);
       const std::string name = s.node_name;
       auto it = std::find_if(states_.begin(), states_.end(),
-                             [&](const auto& e) { return e.first == name; });
-      if (it == states_.end()) states_.emplace_back(name, s.state);
-      else it->second = s.state;
+                             [&](const Peer& e) { return e.name == name; });
+      if (it == states_.end()) states_.push_back(Peer{name, s.state, s.detail});
+      else {
+        it->state = s.state;
+        it->detail = s.detail;
+      }
     }
   }
 }
 
 std::optional<hexa_msg_NodeState> PeerTracker::StateOf(const std::string& name) const {
-  for (const auto& [n, s] : states_)
-    if (n == name) return s;
+  for (const Peer& p : states_)
+    if (p.name == name) return p.state;
   return std::nullopt;
+}
+
+std::string PeerTracker::DetailOf(const std::string& name) const {
+  for (const Peer& p : states_)
+    if (p.name == name) return p.detail;
+  return {};
 }
 
 std::vector<std::string> PeerTracker::NotRunning(const std::vector<std::string>& expected) const {

@@ -16,6 +16,7 @@
 
 #include <Eigen/Core>
 
+#include "hexa/core/board_calibration.hpp"
 #include "hexa/core/control_params.hpp"
 #include "hexa/core/controller_model.hpp"
 #include "hexa/core/leg_controller.hpp"
@@ -71,6 +72,9 @@ struct SystemConfig {
   // and the supervisor see rig + leg_override (MakeControllerModel); the plant never does.
   std::vector<RigOverlay> overlays;
   LegArray<LegOverride> leg_override{};
+  // The remote I/O board's calibration (the file's optional `board` block; absent: a rig the
+  // simulator drives only).
+  std::optional<hexa::BoardCalibration> board;
 };
 
 // One problem found in a file. `line`/`column` are 1-based; 0 when not known (a config

@@ -102,22 +102,56 @@ struct LegWriterCounts {
 };
 
 enum class SilentLegVerdict : std::uint8_t {
-  kWait,            // a live writer may still answer (a hot standby taking over answers a re-ask)
-  kLivelinessLost,  // no live writer, at least one whose lease lapsed: crashed, hung or silent
+  kWait,            // a live writer may still answer, or the leg's process is only not running now
+  kLivelinessLost,  // no live writer: crashed, hung or silent (lockstep: its process says it is stuck)
   kWriterGone,      // no writer left at all: the process (or its participant) is gone
-  kNoAnswer,        // a live writer, but no answer within the answer timeout
+  kProcessEnded,    // lockstep: every controller process of the leg has ended (same host)
 };
 const char* ToString(SilentLegVerdict verdict);
 
-struct SilentLegParams {
-  // A leg with a live writer that has not answered this long is dead all the same (a cycle
-  // that runs and asserts liveliness but never publishes an answer).
-  std::int64_t answer_timeout_ns = 1'000'000'000;
-};
+// Real time, pure: the cause of a leg without a live writer (kWait while one is alive).
+SilentLegVerdict JudgeSilentLeg(const LegWriterCounts& writers);
 
-// Pure: the verdict on an awaited leg silent for `silent_ns` with these writers.
-SilentLegVerdict JudgeSilentLeg(const LegWriterCounts& writers, std::int64_t silent_ns,
-                                const SilentLegParams& params);
+// Lockstep, pure: what the leg's controllers show while the clock awaits the leg's answer.
+// Lockstep has no deadline, so the wall clock alone never makes a leg dead: a lapsed lease
+// says only that the process did not run its loop for a lease, which a stopped or starved
+// process (a loaded machine, SIGSTOP, a debugger) does as well as a dead one. Dead is a fact
+// about the process: it ended (`processes_ended`, from the process ids the launcher gave,
+// same host), its writers are gone (DDS: its participant left or its lease of 10 s expired),
+// or it runs and says that its control cycle is stuck (`processes_stuck`: its main thread saw
+// the same cycle in progress, or an answer computed and not published, at
+// kStuckChecks of its own checks in a row: hang or silence).
+struct SilentLegFacts {
+  LegWriterCounts writers;
+  int processes = 0;         // the leg's controller processes with a known process id
+  int processes_ended = 0;   // of them, ended
+  int processes_stuck = 0;   // the leg's controllers that report their control cycle stuck
+};
+SilentLegVerdict JudgeSilentLegLockstep(const SilentLegFacts& facts);
+
+// A leg controller's main thread calls its control cycle stuck after this many checks in a row
+// (one every quarter lease) that found the same cycle in progress, or the same answer computed
+// and not published. Counted in the controller's own checks, not in wall time: a process that
+// is not scheduled makes no checks and is never called stuck.
+inline constexpr int kStuckChecks = 4;
+
+// The leg controller's watch of its own control cycle (main thread), pure: fed at each check
+// with what the cycle shows, it says when the cycle is stuck.
+class ControlCycleWatch {
+ public:
+  enum class Cause : std::uint8_t { kNone, kHang, kSilence };
+  // `cycle_sequence`: odd while a cycle runs (incremented at its start and end); `unpublished`:
+  // an answer was computed and not published, for tick `unpublished_tick`.
+  Cause Check(std::uint64_t cycle_sequence, bool unpublished, std::uint64_t unpublished_tick);
+  Cause cause() const { return cause_; }
+
+ private:
+  std::uint64_t last_sequence_ = 0;
+  bool last_unpublished_ = false;
+  std::uint64_t last_tick_ = 0;
+  int checks_ = 0;
+  Cause cause_ = Cause::kNone;
+};
 
 // Real time, pure: is a leg with no live writer dead? Only if its commands have stopped too:
 // its newest applied answer is at least `confirm_ticks` old (the plant: the lease in ticks, or

@@ -53,11 +53,14 @@ struct CommonOptions {
   // at the process's SCHED_FIFO like every other thread (false).
   bool realtime_dds_event_thread_normal = true;
   std::vector<int> cpus;       // --cpus: CPU affinity of every thread; empty = any CPU
+  // --peer-pid NAME=PID (repeatable): the session's other processes on this host, as the
+  // launcher started them (peer_processes.hpp): a peer that ended is dead at once.
+  std::vector<std::string> peer_pids;
 };
 
 // Adds --rig --rig-overlay --domain --mode --dds-config --log-file --log-level
 // --lockstep-timeout --lockstep-lease --rt-lease --rt-deadline-1ms --rt-deadline-5ms
-// --no-rt-sched --rt-priority --cpus.
+// --no-rt-sched --rt-priority --cpus --peer-pid.
 void AddCommonOptions(cli::Parser& parser);
 // Reads them back; false with parser.error() set on a bad value.
 bool ReadCommonOptions(cli::Parser& parser, CommonOptions& options);
@@ -132,6 +135,8 @@ class PeerTracker {
   void Poll();
   // State of a node by name; nullopt if never seen.
   std::optional<hexa_msg_NodeState> StateOf(const std::string& name) const;
+  // The detail of the node's newest status ("" if never seen).
+  std::string DetailOf(const std::string& name) const;
   // Names from `expected` that are not RUNNING (empty = all ready).
   std::vector<std::string> NotRunning(const std::vector<std::string>& expected) const;
   dds_entity_t data_condition() const { return reader_.data_condition(); }
@@ -139,7 +144,12 @@ class PeerTracker {
  private:
   comm::Topic<hexa_msg_NodeStatus> topic_;
   comm::Reader<hexa_msg_NodeStatus> reader_;
-  std::vector<std::pair<std::string, hexa_msg_NodeState>> states_;
+  struct Peer {
+    std::string name;
+    hexa_msg_NodeState state;
+    std::string detail;
+  };
+  std::vector<Peer> states_;
 };
 
 // Fixed-size window of cycle times with allocation-free median / max.

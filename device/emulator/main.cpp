@@ -1,0 +1,248 @@
+// hexa_board_emulator: the remote I/O board emulated over UDP (board_emulator.hpp,
+// docs/board_protocol.md "Emulator"). Wall clock: one board tick per millisecond, each
+// sending a sensor frame to the host that sent the last accepted command. Step: one tick per
+// received datagram, answered to its sender (deterministic: lockstep tests).
+//
+// Exit codes: 0 stopped (signal, --duration-s, --idle-exit-s), 1 rig file invalid or without
+// a `board` block, 2 usage, 3 the UDP socket cannot be opened (bad --bind address, port in
+// use), 4 the plant stopped (non-finite state).
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <memory>
+#include <span>
+#include <string>
+
+#include "board_emulator.hpp"
+#include "hexa/config/rig_config.hpp"
+#include "hexa/device/udp_socket.hpp"
+#include "hexa/services/cli.hpp"
+#include "hexa/services/logging.hpp"
+
+namespace {
+
+volatile std::sig_atomic_t g_stop = 0;
+void OnSignal(int) { g_stop = 1; }
+
+struct Options {
+  std::string rig, profile, bind, port_file;
+  std::uint64_t seed = 1;
+  int port = 0;
+  bool step = false;
+  double duration_s = 0.0, idle_exit_s = 0.0;
+  std::vector<hexa::device::EstopOpenWindow> estop_open;
+};
+
+bool ParseWindow(const std::string& text, hexa::device::EstopOpenWindow& w) {
+  unsigned long long from = 0, to = 0;
+  char colon = 0, extra = 0;
+  if (std::sscanf(text.c_str(), "%llu%c%llu%c", &from, &colon, &to, &extra) != 3 || colon != ':' || to <= from) {
+    return false;
+  }
+  w = {from, to};
+  return true;
+}
+
+int ParseOptions(int argc, char** argv, Options& o) {
+  hexa::cli::Parser p("hexa_board_emulator",
+                      "The remote I/O board emulated: the board's C code with the simulated rig behind its "
+                      "ADC and DAC channels, answering over UDP (docs/board_protocol.md).");
+  p.AddOption("rig", "FILE", "rig file with a `board` block", hexa::config::DefaultRigFile());
+  p.AddOption("profile", "NAME", "disturbance profile of the rig file (default: the file's)", "");
+  p.AddOption("seed", "N", "seed of the plant's disturbances and sensor noise", "1");
+  p.AddOption("bind", "ADDRESS", "IPv4 address to listen on", "127.0.0.1");
+  p.AddOption("port", "N", "UDP port to listen on (0: any free port)", "0");
+  p.AddOption("port-file", "FILE", "write the bound port here once listening", "");
+  p.AddChoice("clock", {"wall", "step"}, "wall: tick every 1 ms; step: one tick per received datagram", "wall");
+  p.AddRepeatable("estop-open", "FROM:TO", "open the e-stop loop during board ticks [FROM, TO)");
+  p.AddOption("duration-s", "S", "stop after this many seconds of board time (0: never)", "0");
+  p.AddOption("idle-exit-s", "S", "step: stop when no datagram came for this long (0: never)", "0");
+  const int r = hexa::cli::HandleParseResult(p, p.Parse(argc, argv));
+  if (r >= 0) return r;
+  o.rig = p.Get("rig");
+  o.profile = p.Get("profile");
+  o.bind = p.Get("bind");
+  o.port_file = p.Get("port-file");
+  o.step = p.Get("clock") == "step";
+  const auto seed = p.GetInt("seed", 0, 1LL << 62);
+  const auto port = p.GetInt("port", 0, 65535);
+  const auto duration = p.GetDouble("duration-s", 0.0, 1e6);
+  const auto idle = p.GetDouble("idle-exit-s", 0.0, 1e6);
+  for (const std::string& w : p.GetAll("estop-open")) {
+    hexa::device::EstopOpenWindow window;
+    if (!ParseWindow(w, window)) p.Fail("--estop-open: expected FROM:TO ticks with FROM < TO, got '" + w + "'");
+    o.estop_open.push_back(window);
+  }
+  if (!seed || !port || !duration || !idle || !p.error().empty()) return hexa::cli::HandleParseResult(p, false);
+  o.seed = static_cast<std::uint64_t>(*seed);
+  o.port = static_cast<int>(*port);
+  o.duration_s = *duration;
+  o.idle_exit_s = *idle;
+  return -1;
+}
+
+std::timespec Add(std::timespec t, long ns) {
+  t.tv_nsec += ns;
+  while (t.tv_nsec >= 1'000'000'000L) {
+    t.tv_nsec -= 1'000'000'000L;
+    ++t.tv_sec;
+  }
+  return t;
+}
+
+// The rig file's plant, profile and board calibration; 0 or the exit code (logged).
+int LoadConfig(const Options& o, spdlog::logger& log, hexa::device::BoardEmulatorConfig& ec, std::string& summary) {
+  const hexa::config::ConfigResult rig = hexa::config::LoadSystemConfig(o.rig);
+  if (!rig.ok) {
+    log.error("{}", rig.error);
+    return 1;
+  }
+  if (!rig.config.board) {
+    log.error("{}: no `board` block: the emulator needs the board's calibration (docs/board_protocol.md)", o.rig);
+    return 1;
+  }
+  const hexa::config::ProfileResult profile = hexa::config::SelectProfile(rig.config, o.profile);
+  if (!profile.ok) {
+    log.error("{}", profile.error);
+    return 1;
+  }
+  ec.plant.rig = rig.config.rig;
+  ec.plant.disturbance = profile.profile;
+  ec.plant.seed = o.seed;
+  ec.calibration = *rig.config.board;
+  ec.valve_null_v = rig.config.rig.valve.null_voltage_v;
+  ec.estop_open = o.estop_open;
+  summary = "rig " + rig.config.rig_name + ", profile " + profile.name + ", seed " + std::to_string(o.seed);
+  return 0;
+}
+
+// The emulated board on its UDP socket: datagrams in, ticks, frames out.
+class Server {
+ public:
+  Server(const hexa::device::BoardEmulatorConfig& config, hexa::device::UdpSocket socket)
+      : emulator_(std::make_unique<hexa::device::BoardEmulator>(config)), socket_(std::move(socket)) {}
+
+  // Step: one tick per received datagram, answered to its sender.
+  void RunStep(const Options& o) {
+    double idle_s = 0.0;
+    while (Running(o)) {
+      if (!socket_.WaitReadable(0.1)) {
+        idle_s += 0.1;
+        if (o.idle_exit_s > 0.0 && idle_s >= o.idle_exit_s) return;
+        continue;
+      }
+      idle_s = 0.0;
+      sockaddr_in from{};
+      while (ReceiveOne(from) && Running(o)) {
+        emulator_->Tick(tx_);
+        SendTo(from);
+      }
+    }
+  }
+
+  // Wall clock: a tick every millisecond, its frame to the sender of the last accepted command.
+  void RunWall(const Options& o) {
+    std::timespec next{};
+    clock_gettime(CLOCK_MONOTONIC, &next);
+    while (Running(o)) {
+      next = Add(next, 1'000'000L);
+      while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr) == EINTR && !g_stop) {
+      }
+      sockaddr_in from{};
+      while (ReceiveOne(from)) {
+      }
+      emulator_->Tick(tx_);
+      if (have_peer_) SendTo(peer_);
+    }
+  }
+
+  bool plant_failed() const { return emulator_->plant().output().status == hexa::PlantStatus::kNonFiniteState; }
+
+  std::string Summary() const {
+    std::string counts;
+    for (int r = 0; r < HB_FRAME_REASON_COUNT; ++r) {
+      if (received_[r] == 0) continue;
+      counts += (counts.empty() ? "" : ", ") + std::string(hb_frame_reason_name(static_cast<hb_frame_reason>(r))) +
+                " " + std::to_string(received_[r]);
+    }
+    return "stopped at board tick " + std::to_string(emulator_->tick()) + ": datagrams received: " +
+           (counts.empty() ? "none" : counts) + "; watchdog fired " +
+           std::to_string(emulator_->board().watchdog_count) + " times; send errors " + std::to_string(send_errors_);
+  }
+
+ private:
+  bool Running(const Options& o) const {
+    const auto duration_ticks = static_cast<std::uint64_t>(o.duration_s * 1000.0);
+    return !g_stop && !plant_failed() && (duration_ticks == 0 || emulator_->tick() < duration_ticks);
+  }
+  bool ReceiveOne(sockaddr_in& from) {
+    int err = 0;
+    const long n = socket_.Receive(rx_, from, err);
+    if (n < 0) return false;
+    const std::size_t size = std::min<std::size_t>(static_cast<std::size_t>(n), rx_.size());
+    const hb_frame_reason r = emulator_->Receive(std::span<const std::uint8_t>(rx_.data(), size));
+    ++received_[r];
+    if (r == HB_FRAME_OK) {
+      peer_ = from;
+      have_peer_ = true;
+    }
+    return true;
+  }
+  void SendTo(const sockaddr_in& to) {
+    int err = 0;
+    if (!socket_.Send(tx_, to, err)) ++send_errors_;
+  }
+
+  std::unique_ptr<hexa::device::BoardEmulator> emulator_;  // the plant is large: on the heap
+  hexa::device::UdpSocket socket_;
+  std::array<std::uint64_t, HB_FRAME_REASON_COUNT> received_{};
+  std::array<std::uint8_t, HB_MAX_FRAME_SIZE + 1> rx_{};
+  std::array<std::uint8_t, HB_SENSOR_FRAME_SIZE> tx_{};
+  sockaddr_in peer_{};
+  bool have_peer_ = false;
+  std::uint64_t send_errors_ = 0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace hexa::device;
+  Options o;
+  if (const int r = ParseOptions(argc, argv, o); r >= 0) return r;
+  auto log = hexa::logging::Init("board_emulator");
+  BoardEmulatorConfig config;
+  std::string summary;
+  if (const int r = LoadConfig(o, *log, config, summary); r != 0) return r;
+
+  const auto local = ParseIpv4(o.bind, static_cast<std::uint16_t>(o.port));
+  if (!local) {
+    log->error("--bind: not a dotted IPv4 address: '{}'", o.bind);
+    return 3;
+  }
+  UdpSocket socket;
+  std::string error;
+  if (!socket.Open(*local, error)) {
+    log->error("{}", error);
+    return 3;
+  }
+  const sockaddr_in bound = socket.local_address();
+  if (!o.port_file.empty()) std::ofstream(o.port_file) << ntohs(bound.sin_port) << "\n";
+  log->info("listening on UDP {} ({} clock, {}, watchdog {} ms)", ToString(bound), o.step ? "step" : "wall", summary,
+            std::lround(config.calibration.watchdog_timeout_s * 1000.0));
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+
+  Server server(config, std::move(socket));
+  if (o.step) server.RunStep(o);
+  else server.RunWall(o);
+  log->info("{}", server.Summary());
+  if (server.plant_failed()) {
+    log->error("the plant's state became non-finite: stopped");
+    return 4;
+  }
+  return 0;
+}
