@@ -144,7 +144,9 @@ def read_csv(path):
     if not os.path.exists(path):
         return []
     with open(path, newline="") as f:
-        return list(csv.DictReader(f))
+        # Header cells are "name [unit]" (hexa_recorder export): keyed by name.
+        return [{re.sub(r" \[[^\]]*\]$", "", k): v for k, v in row.items()}
+                for row in csv.DictReader(f)]
 
 
 def export(build, mcap, out_dir):

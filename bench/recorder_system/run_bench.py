@@ -48,9 +48,9 @@ def info_counts(recorder, path, env):
     out = subprocess.run([recorder, "info", path], env=env, capture_output=True, text=True,
                          timeout=120).stdout
     recorded = missing = 0
-    # Channel table rows: "id topic type messages rate_hz max_gap_ms missing loss_%".
+    # Channel table rows: "id topic type messages sim_hz wall_hz max_gap_ms missing loss_%".
     for line in out.splitlines():
-        m = re.match(r"\s*\d+\s+(hexa_\w+)\s+\S+\s+(\d+)\s+[0-9.]+\s+[0-9.]+\s+(\d+|-)\s+\S+\s*$",
+        m = re.match(r"\s*\d+\s+(hexa_\w+)\s+\S+\s+(\d+)\s+\S+\s+[0-9.]+\s+[0-9.]+\s+(\d+|-)\s+\S+\s*$",
                      line)
         if m and m.group(1) not in ("hexa_Scene", "hexa_FrameTransforms"):  # display only
             recorded += int(m.group(2))

@@ -31,7 +31,9 @@
 #include "hexa/services/json.hpp"
 #include "identification.pb.h"
 #include "hexa/services/logging.hpp"
+#include "hexa/services/progress.hpp"
 #include "hexa/services/scheduling.hpp"
+#include "child_progress.hpp"
 #include "process_group.hpp"
 #include "domain_probe.hpp"
 #include "hexa/comm/command_auth.hpp"
@@ -793,11 +795,20 @@ int main(int argc, char** argv) {
   double supervisor_lost_at_s = -1;  // the supervisor died: watch the legs hold for 2 s
   std::vector<hexa::deploy::ChildExit> exits;  // every child's exit, with its CPU time
   bool recorder_clean = false;  // the recorder exited 0 after closing its file
+  // Progress: on a terminal one line (the recorder's newest progress line), in session.log a
+  // line every 10 s.
+  hexa::progress::Line progress("session", stderr, 10.0);
+  progress.SetLogSink([&](const std::string& line) { log->info("{}", line); });
+  const std::string recorder_console = o.out_dir + "/recorder.console.log";
   while (!completed && !failed) {
     auto ev = group.WaitEvent(std::chrono::milliseconds(supervisor_lost_at_s >= 0 ? 100 : 1000));
     const double elapsed_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     watch_hold();
+    if (ev.kind == ProcessGroup::Event::kChildExited || ev.kind == ProcessGroup::Event::kInterrupted)
+      progress.Clear();
+    else
+      progress.Update(-1, hexa::deploy::NewestProgress(recorder_console, {"record: progress: "}));
     if (supervisor_lost_at_s >= 0 && elapsed_s > supervisor_lost_at_s + 2.0) {
       log->error("the supervisor was lost {:.1f} s ago: stopping (exit 5)",
                  elapsed_s - supervisor_lost_at_s);
@@ -869,6 +880,7 @@ int main(int argc, char** argv) {
     }
   }
 
+  progress.Close();  // the log says how the session ended
   // Stop order: plant first (the clock), then controllers, recorder last so that it
   // records everything the others published.
   bool clean = completed;
@@ -911,13 +923,18 @@ int main(int argc, char** argv) {
       log->error("cannot start {}: {}", spec.name, err);
       return std::nullopt;
     }
+    // Its progress lines (report: reading ..., plot_session: [k/n] ...) on ours.
+    hexa::progress::Line line(spec.name, stderr, 10.0);
+    line.SetLogSink([&](const std::string& text) { log->info("{}", text); });
     while (true) {
-      auto ev = group.WaitEvent(std::chrono::milliseconds(600000));
-      if (ev.kind == ProcessGroup::Event::kChildExited) return ev.exit;
+      auto ev = group.WaitEvent(std::chrono::milliseconds(1000));
+      if (ev.kind == ProcessGroup::Event::kChildExited) return ev.exit;  // "<tool>: done in .."
       if (ev.kind != ProcessGroup::Event::kTimeout) {
+        line.Close();
         group.Stop(spec.name, std::chrono::milliseconds(2000));
         return std::nullopt;
       }
+      line.Update(-1, hexa::deploy::NewestProgress(spec.log_path, {"report: ", "plot_session: "}));
     }
   };
   // The report is written whenever there is a recording: after a fault it shows what

@@ -4,17 +4,28 @@
 set(HEXA_PKG_DIR "${CMAKE_SOURCE_DIR}/deploy/package")
 set(HEXA_PKG_DOC "share/doc/hexataar-control")
 
-install(TARGETS hexa_plant_sim hexa_leg_ctrl hexa_task_space hexa_operator hexa_recorder
-                hexa_session hexa_deploy hexa_check_config
-        RUNTIME DESTINATION bin)
-if(TARGET hexa_bridge)
-  install(TARGETS hexa_bridge RUNTIME DESTINATION bin)
+# Every program of the product (tests/package/check_deb.sh checks the package against the
+# hexa_* programs of a build tree and against docs/).
+set(HEXA_PKG_PROGRAMS hexa_plant_sim hexa_leg_ctrl hexa_task_space hexa_operator hexa_recorder
+    hexa_session hexa_deploy hexa_check_config hexa_sim hexa_calibrate hexa_identify
+    hexa_stream_send hexa_teach hexa_washout)
+if(TARGET hexa_board_emulator)
+  list(APPEND HEXA_PKG_PROGRAMS hexa_board_emulator)
 endif()
+if(TARGET hexa_bridge)
+  list(APPEND HEXA_PKG_PROGRAMS hexa_bridge)
+endif()
+install(TARGETS ${HEXA_PKG_PROGRAMS} RUNTIME DESTINATION bin)
 install(FILES deploy/cyclonedds-loopback.xml deploy/cyclonedds-network.example.xml
         DESTINATION share/hexa)
 install(PROGRAMS deploy/make_security.sh DESTINATION share/hexa)
 # hexa_recorder report runs <HEXA_SOURCE_DIR>/deploy/plot_session.py (share/hexa when installed).
 install(PROGRAMS deploy/plot_session.py DESTINATION share/hexa/deploy)
+# hexa_identify runs <HEXA_SOURCE_DIR>/tools/identify/plot_identification.py the same way.
+install(PROGRAMS tools/identify/plot_identification.py DESTINATION share/hexa/tools/identify)
+install(FILES deploy/foxglove/hexataar.layout.json DESTINATION share/hexa/foxglove)
+# hexa_washout's default cue settings: <HEXA_SOURCE_DIR>/deploy/cueing/washout.textproto.
+install(FILES deploy/cueing/washout.textproto DESTINATION share/hexa/deploy/cueing)
 install(FILES deploy/rigs/hexataar_r.textproto DESTINATION /etc/hexa RENAME rig.textproto)
 install(FILES deploy/deployments/five-hosts.textproto "${HEXA_PKG_DIR}/single-host.textproto"
         DESTINATION /etc/hexa/deployments)
@@ -47,8 +58,11 @@ add_custom_target(hexa_package_files ALL
 install(FILES ${HEXA_PKG_UNIT_FILES} DESTINATION /lib/systemd/system)
 install(FILES "${HEXA_PKG_GEN}/hosts/local/etc/hexa/cyclonedds.xml" DESTINATION /etc/hexa)
 install(FILES "${HEXA_PKG_UDEV_RULE}" DESTINATION /lib/udev/rules.d)
-install(FILES README.md docs/deployment.md "${CMAKE_BINARY_DIR}/package/changelog.Debian.gz"
+install(FILES README.md "${CMAKE_BINARY_DIR}/package/changelog.Debian.gz"
         DESTINATION ${HEXA_PKG_DOC})
+# The manual: every page of docs/ (and its figures), as in the source tree.
+install(DIRECTORY docs/ DESTINATION ${HEXA_PKG_DOC}/docs
+        FILES_MATCHING PATTERN "*.md" PATTERN "*.png" PATTERN "*.svg" PATTERN "*.csv")
 
 # Manual pages from each program's --help (Debian's help2man), when it is installed.
 find_program(HEXA_HELP2MAN help2man)
@@ -63,7 +77,14 @@ if(HEXA_HELP2MAN)
       "hexa_session|run a complete closed-loop HexaTaar session"
       "hexa_deploy|deployment descriptions to per-host configuration"
       "hexa_check_config|validate a HexaTaar rig file"
-      "hexa_bridge|serve a HexaTaar session to Foxglove over WebSocket")
+      "hexa_bridge|serve a HexaTaar session to Foxglove over WebSocket"
+      "hexa_sim|paper trajectories in the in-process HexaTaar simulation"
+      "hexa_calibrate|kinematic calibration of a HexaTaar rig from a recording"
+      "hexa_identify|identify the pneumatic model of a HexaTaar rig from a recording"
+      "hexa_stream_send|send an external motion stream to a HexaTaar supervisor"
+      "hexa_teach|teach a HexaTaar trajectory from a recording"
+      "hexa_washout|washout cue of a vehicle motion as a HexaTaar trajectory"
+      "hexa_board_emulator|emulated remote I/O board of a HexaTaar rig")
     string(REPLACE "|" ";" parts "${entry}")
     list(GET parts 0 prog)
     list(GET parts 1 what)
@@ -116,6 +137,8 @@ set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
     "${HEXA_PKG_DIR}/postinst;${HEXA_PKG_DIR}/prerm;${HEXA_PKG_DIR}/postrm;${HEXA_PKG_CONFFILES}")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION TRUE)
 set(CPACK_STRIP_FILES TRUE)
+# xz compression of ~100 MB of programs is most of the packaging time: on every core.
+set(CPACK_THREADS 0)
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 include(CPack)

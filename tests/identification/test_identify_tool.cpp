@@ -173,6 +173,11 @@ TEST_F(IdentifyTool, TheKinematicCalibrationReachesTheIdentification) {
   const ToolRun calibrated = Identify(common + " --rig-overlay " + cal + " --out " + dir_ + "/calibrated");
   ASSERT_EQ(calibrated.exit_code, 0) << calibrated.output;
   EXPECT_NE(calibrated.output.find("rig overlays applied"), std::string::npos) << calibrated.output;
+  // Without the calibration the tool says so, naming the legs and the way to calibrate.
+  EXPECT_NE(plain.output.find("warning: no kinematic calibration for leg(s) 1 4"), std::string::npos)
+      << plain.output;
+  EXPECT_NE(plain.output.find("--rig-overlay calibration.textproto"), std::string::npos) << plain.output;
+  EXPECT_EQ(calibrated.output.find("no kinematic calibration"), std::string::npos) << calibrated.output;
   const double plain_gap = std::abs(PayloadScaleOfLeg(plain.output, 1) - PayloadScaleOfLeg(plain.output, 4));
   const double calibrated_gap =
       std::abs(PayloadScaleOfLeg(calibrated.output, 1) - PayloadScaleOfLeg(calibrated.output, 4));

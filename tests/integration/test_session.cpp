@@ -22,7 +22,7 @@ TEST(Session, CombinedLockstepEndToEnd) {
   {
     SCOPED_TRACE("every output is written");
     for (const char* f : {"session.mcap", "report.md", "report.json", "pose.csv", "legs.csv",
-                          "pose_tracking.png", "pose_error.png", "leg_lengths.png",
+                          "events.csv", "summary.png", "plots.json", "pose_tracking.png", "pose_error.png", "leg_lengths.png",
                           "valve_voltages.png", "path_3d.png", "plant.log", "leg1.log",
                           "supervisor.log", "session.log"}) {
       EXPECT_TRUE(std::filesystem::exists(run.dir + "/" + f)) << f;

@@ -245,6 +245,10 @@ TEST(RecordingInfo, CountsAndLossOfTheSyntheticRecordingAreExact) {
   EXPECT_FALSE(by_topic["hexa_FaultEvent"]->loss_analysed);
   // 1 kHz topics: (n - 1) / span. GroundTruth has 1000 samples 999 ms apart.
   EXPECT_NEAR(by_topic["hexa_GroundTruth"]->rate_hz, 1000.0, 1e-9);
+  // Per simulated second, from the ticks (999 ticks span 1000 samples; six legs per tick).
+  EXPECT_NEAR(by_topic["hexa_GroundTruth"]->sim_rate_hz, 1000.0, 1e-9);
+  EXPECT_NEAR(by_topic["hexa_LegSensors"]->sim_rate_hz, 6000.0, 30.0);
+  EXPECT_NE(FormatInfo(info).find("sim_hz"), std::string::npos);
   EXPECT_EQ(by_topic["hexa_LegSensors"]->metadata.at(kMetaPeriodS), "0.001");
   // Loss events: the plant's ticks 50 (ImuSample) and 100-104 (leg 3's LegSensors), leg 2's
   // ValveCommand of tick 500.
@@ -321,8 +325,8 @@ TEST(SessionReport, FrictionScalePerLegOverTheTrackingWindow) {
   EXPECT_NEAR(leg1["min"].get<double>(), 1.01, 1e-9) << json;
   EXPECT_NEAR(leg1["max"].get<double>(), 1.0349, 1e-9) << json;
   const std::string csv = slurp("legs.csv");
-  EXPECT_NE(csv.find(",valve_v_6,friction_scale_1,friction_scale_2,friction_scale_3,"
-                     "friction_scale_4,friction_scale_5,friction_scale_6\n"),
+  EXPECT_NE(csv.find(",valve_v_6 [V],friction_scale_1 [1],friction_scale_2 [1],friction_scale_3 [1],"
+                     "friction_scale_4 [1],friction_scale_5 [1],friction_scale_6 [1]\n"),
             std::string::npos);
 }
 
@@ -403,8 +407,9 @@ TEST(RecordingExport, WritesOneCsvPerTopicWithEveryField) {
   std::getline(f, header);
   std::getline(f, first);
   EXPECT_EQ(header,
-            "log_time_ns,publish_time_ns,sequence,leg_id,header.tick,header.sim_time_s,"
-            "header.source_time_ns,length_m,cap_pressure_pa,rod_pressure_pa,supply_pressure_pa");
+            "log_time_ns [ns],publish_time_ns [ns],sequence [1],leg_id [1],header.tick [1],"
+            "header.sim_time_s [s],header.source_time_ns [ns],length_m [m],cap_pressure_pa [Pa],"
+            "rod_pressure_pa [Pa],supply_pressure_pa [Pa]");
   EXPECT_EQ(first.substr(first.find(",0,") + 3, 6), "1,1,0.");  // sequence 0, leg 1, tick 1
   uint64_t rows = 1;
   for (std::string line; std::getline(f, line);) ++rows;

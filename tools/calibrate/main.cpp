@@ -11,6 +11,7 @@
 // platform joints and the potentiometer offsets and gains with Ceres (least squares); prints
 // the per-leg report and, for a simulated rig, the error of every parameter against the
 // plant's truth (--truth-seed).
+#include <algorithm>
 #include <cmath>
 #include <ctime>
 #include <fstream>
@@ -23,6 +24,7 @@
 #include "hexa/config/rig_config.hpp"
 #include "hexa/core/platform_plant.hpp"
 #include "hexa/recorder/recording.hpp"
+#include "hexa/services/progress.hpp"
 #include "hexa/services/cli.hpp"
 #include "recording.pb.h"
 
@@ -88,7 +90,12 @@ int main(int argc, char** argv) {
   // seconds of each averaged (core CalibrationSampleCollector).
   hexa::CalibrationSampleCollector collector(hexa::StillWindowParams{*min_still, *window, 0.001});
   try {
-    hexa::recorder::ReadRecording(
+    hexa::progress::Line line("hexa_calibrate: reading " + recording);
+    hexa::recorder::McapScanOptions scan;
+    scan.progress = [&](uint64_t done, uint64_t size) {
+      line.Update(static_cast<double>(done) / static_cast<double>(std::max<uint64_t>(size, 1)));
+    };
+    const hexa::recorder::McapScanResult result = hexa::recorder::ReadRecording(
         recording, [&](const hexa::recorder::McapChannel& ch,
                        const hexa::recorder::McapMessageView& view,
                        const google::protobuf::Message&) {
@@ -110,7 +117,10 @@ int main(int argc, char** argv) {
             for (int k = 0; k < 6; ++k) q[k] = m.desired_pose(k);
             collector.AddDesired(m.header().tick(), q, m.state() != hexa::rec::SUPERVISOR_HOLD);
           }
-        });
+        },
+        scan);
+    line.Done();
+    for (const auto& p : result.problems) std::fprintf(stderr, "warning: %s: %s\n", recording.c_str(), p.c_str());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s: %s\n", recording.c_str(), e.what());
     return 1;

@@ -51,7 +51,9 @@ double GetDouble(const gp::Message& m, const gp::FieldDescriptor* fd) {
 
 }  // namespace
 
-IdentificationRecording ReadIdentificationRecording(const std::string& path) {
+IdentificationRecording ReadIdentificationRecording(
+    const std::string& path,
+    const std::function<void(std::uint64_t, std::uint64_t)>& progress) {
   IdentificationRecording rec;
   rec.path = path;
   struct Raw {
@@ -70,6 +72,8 @@ IdentificationRecording ReadIdentificationRecording(const std::string& path) {
   std::map<std::uint16_t, Fields> fields;
   bool sensors_channel = false, commands_channel = false;
   bool pressure_fields = true;
+  recorder::McapScanOptions scan_options;
+  scan_options.progress = progress;
   const recorder::McapScanResult scan = recorder::ReadRecording(
       path, [&](const recorder::McapChannel& ch, const recorder::McapMessageView& view,
                 const gp::Message& msg) {
@@ -129,8 +133,10 @@ IdentificationRecording ReadIdentificationRecording(const std::string& path) {
           // CONTROLLER_NONE = 0: open loop (identification excitation).
           w.open_loop[tick] = r->GetEnumValue(msg, f.values.at("controller")) == 0 ? 1 : 0;
         }
-      });
+      },
+      scan_options);
   rec.complete_file = scan.complete;
+  rec.problems = scan.problems;
   if (!sensors_channel) {
     throw IdentificationInputError(path + ": no hexa_LegSensors channel: the recording has no "
                                    "potentiometer or pressure data");

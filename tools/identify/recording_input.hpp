@@ -7,6 +7,8 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -31,9 +33,13 @@ struct IdentificationRecording {
   std::optional<rec::SessionInfo> session;    // hexa_SessionInfo
   std::optional<rec::PlantTruth> truth;       // hexa_PlantTruth: evaluation only
   bool complete_file = false;
+  std::vector<std::string> problems;  // what the reader repaired or found (another build's schema)
 };
 
 // Throws IdentificationInputError (or recorder::McapError for a malformed file).
-IdentificationRecording ReadIdentificationRecording(const std::string& path);
+// `progress` (optional) hears the bytes read and the file size.
+IdentificationRecording ReadIdentificationRecording(
+    const std::string& path,
+    const std::function<void(std::uint64_t bytes_read, std::uint64_t file_size)>& progress = {});
 
 }  // namespace hexa::identify

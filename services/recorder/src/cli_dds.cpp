@@ -28,6 +28,7 @@
 #include "hexa/comm/topic.hpp"
 #include "hexa/comm/waitset.hpp"
 #include "hexa/comm/writer.hpp"
+#include "hexa/core/param_checks.hpp"
 #include "hexa/core/lockstep_protocol.hpp"
 #include "hexa/recorder/convert.hpp"
 #include "hexa/recorder/recording.hpp"
@@ -117,6 +118,7 @@ struct TopicRecorderBase {
   bool periodic = false;
   uint64_t received = 0;
   uint64_t refused = 0;  // command samples not authenticated with the session key
+  uint64_t last_tick = 0;  // newest header.tick received (progress lines)
   TickLossTracker loss;
   // Writers this topic's reader could not match (incompatible QoS), as last reported.
   uint32_t incompatible_reported = 0;
@@ -184,6 +186,7 @@ class TopicRecorder final : public TopicRecorderBase {
         if (on_sample) on_sample(msg_);
         if constexpr (requires { s.header.tick; }) {  // every periodic topic has a header
           if (periodic) loss.AddAt(StreamOf(s), s.header.tick);
+          last_tick = std::max<uint64_t>(last_tick, s.header.tick);
         }
       }
       if (static_cast<std::size_t>(n) < kCapacity) return;
@@ -447,6 +450,9 @@ int RunRecord(const std::vector<std::string>& argv) {
   const int64_t flush_ns = static_cast<int64_t>(flush_ms * 1e6);
   const int64_t batch_ns = static_cast<int64_t>(batch_ms * 1e6);
   int64_t next_flush_ns = start_ns + flush_ns;
+  // A progress line every second of wall time on stderr (hexa_session shows the newest one).
+  constexpr int64_t kProgressPeriodNs = 1'000'000'000;
+  int64_t next_progress_ns = start_ns + kProgressPeriodNs;
   while (!shutdown.requested()) {
     node::service_manager::Watchdog();
     const int64_t now = comm::RealtimeNow_ns();
@@ -476,6 +482,17 @@ int RunRecord(const std::vector<std::string>& argv) {
       for (auto& t : topics) {
         ReportIncompatibleWriters(*t, periodic);
         NoteMatchedWriters(*t);
+      }
+      if (!quiet && after >= next_progress_ns) {
+        uint64_t tick = 0, messages = 0;
+        for (const auto& t : topics) {
+          tick = std::max(tick, t->last_tick);
+          messages += t->received;
+        }
+        std::fprintf(stderr, "record: progress: %.1f s simulated (tick %" PRIu64 "), %.0f s wall, %" PRIu64
+                     " messages\n", static_cast<double>(tick) * kPlantTick_s,
+                     tick, static_cast<double>(after - start_ns) * 1e-9, messages);
+        next_progress_ns = after + kProgressPeriodNs;
       }
     }
     // Let samples accumulate in the readers (keep-all) before the next take: at 1 kHz x 13

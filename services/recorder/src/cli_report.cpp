@@ -9,6 +9,7 @@
 
 #include "cli.hpp"
 #include "hexa/recorder/report.hpp"
+#include "hexa/services/progress.hpp"
 
 namespace hexa::recorder::cli {
 
@@ -24,8 +25,10 @@ int RunReport(const std::vector<std::string>& argv) {
         "pose over the tracking window, relative errors, leg-length RMSE per leg, deadline\n"
         "misses per topic, control round-trip latency median/p99/max, wall and simulated time,\n"
         "faults; for a BS-SMC session each leg's adapted friction scale theta at the end of the\n"
-        "tracking window, min and max), pose.csv and legs.csv, and the PNG plots (deploy/plot_session.py, run with\n"
+        "tracking window, min and max), pose.csv, legs.csv and events.csv (faults, HOLD, take-overs,\n"
+        "operator commands), and the PNG plots, summary.png first (deploy/plot_session.py, run with\n"
         "/usr/bin/python3, or the absolute path given with --python; never looked up on PATH).\n"
+        "Progress on stderr (a line rewritten on a terminal, every 10 s otherwise).\n"
         "--meta adds session facts (trajectory=combined,controller=bssmc,...);\n"
         "trajectory=<name> adds the paper's Table 9 / 10 figures for comparison.\n",
         stdout);
@@ -41,7 +44,11 @@ int RunReport(const std::vector<std::string>& argv) {
   if (python.empty() || python[0] != '/')
     throw UsageError("--python wants an absolute path, got '" + python + "'");
   std::filesystem::create_directories(out);
-  SessionReport report = ComputeSessionReport(a.positional);
+  SessionReport report;
+  {
+    progress::Line line("report: reading " + std::filesystem::path(a.positional.back()).filename().string());
+    report = ComputeSessionReport(a.positional, [&](double f) { line.Update(f); });
+  }
   for (const auto& kv : a.GetAll("meta")) {
     const auto eq = kv.find('=');
     if (eq == std::string::npos) throw UsageError("--meta wants key=value, got '" + kv + "'");
@@ -49,7 +56,8 @@ int RunReport(const std::vector<std::string>& argv) {
   }
   for (const auto& w : report.warnings) std::fprintf(stderr, "hexa_recorder report: warning: %s\n", w.c_str());
   WriteSessionReport(report, out);
-  std::printf("report: %s/report.md, report.json, pose.csv, legs.csv\n", out.c_str());
+  std::printf("report: %s/report.md, report.json, pose.csv, legs.csv, events.csv\n", out.c_str());
+  std::fflush(stdout);
   if (a.Has("no-plots")) return kExitOk;
   const std::string script = std::string(HEXA_SOURCE_DIR) + "/deploy/plot_session.py";
   std::string title = a.Get("title", "");

@@ -847,6 +847,7 @@ McapScanResult McapReader::Scan(const McapVisitor& visitor, const McapScanOption
       break;
     }
     result.valid_data_end = pos;
+    if (options.progress) options.progress(pos, file_size_);
   }
   if (!data_end_seen) return result;
 

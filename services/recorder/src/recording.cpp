@@ -19,6 +19,8 @@
 #include <set>
 #include <sstream>
 
+#include "hexa/core/param_checks.hpp"
+#include "hexa/recorder/csv_columns.hpp"
 #include "hexa/services/text.hpp"
 
 namespace hexa::recorder {
@@ -176,6 +178,54 @@ ProtoDecoder::~ProtoDecoder() {
   schemas_.clear();
 }
 
+namespace {
+// Fields of `recorded` (a recording's schema) against the same message type compiled into
+// this build, nested message types included: "" when they agree.
+void CompareFields(const gp::Descriptor& recorded, const gp::Descriptor& compiled,
+                   const std::string& prefix, std::set<std::string>& visited,
+                   std::vector<std::string>& only_compiled, std::vector<std::string>& only_recorded,
+                   std::vector<std::string>& changed) {
+  if (!visited.insert(compiled.full_name()).second) return;
+  for (int i = 0; i < compiled.field_count(); ++i) {
+    const gp::FieldDescriptor* c = compiled.field(i);
+    const gp::FieldDescriptor* r = recorded.FindFieldByNumber(c->number());
+    if (r == nullptr) {
+      only_compiled.push_back(prefix + c->name());
+    } else if (r->name() != c->name() || r->type() != c->type() || r->is_repeated() != c->is_repeated()) {
+      changed.push_back(prefix + c->name());
+    } else if (c->message_type() != nullptr && r->message_type() != nullptr) {
+      CompareFields(*r->message_type(), *c->message_type(), prefix + c->name() + ".", visited,
+                    only_compiled, only_recorded, changed);
+    }
+  }
+  for (int i = 0; i < recorded.field_count(); ++i)
+    if (compiled.FindFieldByNumber(recorded.field(i)->number()) == nullptr)
+      only_recorded.push_back(prefix + recorded.field(i)->name());
+}
+}  // namespace
+
+std::string SchemaDifference(const gp::Descriptor& recorded) {
+  const gp::Descriptor* compiled =
+      gp::DescriptorPool::generated_pool()->FindMessageTypeByName(recorded.full_name());
+  if (compiled == nullptr) return "";  // a type this build does not know: nothing to compare
+  std::set<std::string> visited;
+  std::vector<std::string> only_compiled, only_recorded, changed;
+  CompareFields(recorded, *compiled, "", visited, only_compiled, only_recorded, changed);
+  if (only_compiled.empty() && only_recorded.empty() && changed.empty()) return "";
+  auto list = [](const std::vector<std::string>& v) {
+    std::string out;
+    for (const auto& f : v) out += (out.empty() ? "" : ", ") + f;
+    return out;
+  };
+  std::string out = "schema " + recorded.full_name() +
+                    " differs from this build's (recorded by another build):";
+  if (!only_compiled.empty()) out += " not in the recording: " + list(only_compiled) + " (read as absent);";
+  if (!only_recorded.empty()) out += " unknown to this build: " + list(only_recorded) + " (ignored);";
+  if (!changed.empty()) out += " changed name or type: " + list(changed) + ";";
+  out.pop_back();
+  return out;
+}
+
 void ProtoDecoder::AddSchema(const McapSchema& schema) {
   const std::string what = "schema " + std::to_string(schema.id) + " '" + text::Excerpt(schema.name) + "'";
   if (auto it = schemas_.find(schema.id); it != schemas_.end()) {
@@ -207,6 +257,8 @@ void ProtoDecoder::AddSchema(const McapSchema& schema) {
                     (errors->text.empty() ? std::string() : " (" + text::Sanitize(errors->text, 1024) + ")"));
   entry.errors = std::move(errors);
   entry.type = type;
+  if (std::string difference = SchemaDifference(*type); !difference.empty())
+    schema_differences_.push_back(std::move(difference));
   entry.record = schema;
   schemas_[schema.id] = std::move(entry);
 }
@@ -289,6 +341,7 @@ McapScanResult ReadRecording(const std::string& path, const DecodedMessageFn& fn
     McapScanResult r = reader.Scan(v, options);
     for (const auto& [channel, repairs] : decoder.repairs()) r.repaired_messages += repairs.messages;
     for (auto& p : decoder.RepairProblems()) r.problems.push_back(std::move(p));
+    for (const auto& d : decoder.schema_differences()) r.problems.push_back(d);
     if (catalog != nullptr) {
       catalog->schemas = reader.schemas();
       catalog->channels = reader.channels();
@@ -548,12 +601,18 @@ RecordingInfo Inspect(const std::string& path, const McapScanOptions& options) {
         c.first_log_ns = std::min(c.first_log_ns, m.log_time_ns);
         c.last_log_ns = std::max(c.last_log_ns, m.log_time_ns);
         ++c.count;
+        const auto message_tick = MessageTick(msg);
+        if (message_tick) {
+          c.first_tick = c.has_ticks ? std::min(c.first_tick, *message_tick) : *message_tick;
+          c.last_tick = c.has_ticks ? std::max(c.last_tick, *message_tick) : *message_tick;
+          c.has_ticks = true;
+        }
         // Loss only for periodic topics: event topics (period 0) have no expected tick step.
         auto period = ch.metadata.find(kMetaPeriodS);
         const bool periodic =
             period == ch.metadata.end() ? true : std::strtod(period->second.c_str(), nullptr) > 0;
         if (!periodic) return;
-        if (auto tick = MessageTick(msg)) trackers[ch.id].Add(MessageKey(msg), *tick);
+        if (message_tick) trackers[ch.id].Add(MessageKey(msg), *message_tick);
       },
       options, &catalog);
   info.file_size = r.file_size;
@@ -576,6 +635,9 @@ RecordingInfo Inspect(const std::string& path, const McapScanOptions& options) {
     if (c.count > 1 && c.last_log_ns > c.first_log_ns)
       c.rate_hz = static_cast<double>(c.count - 1) * 1e9 /
                   static_cast<double>(c.last_log_ns - c.first_log_ns);
+    if (c.count > 1 && c.has_ticks && c.last_tick > c.first_tick)
+      c.sim_rate_hz = static_cast<double>(c.count - 1) /
+                      (static_cast<double>(c.last_tick - c.first_tick) * kPlantTick_s);
     if (trackers.count(id)) {
       c.loss_analysed = true;
       c.streams = trackers[id].Results();
@@ -615,9 +677,22 @@ std::string FormatInfo(const RecordingInfo& info) {
   for (const auto& p : info.problems) o << "problem:   " << p << "\n";
   const double duration_s =
       info.end_ns > info.start_ns ? static_cast<double>(info.end_ns - info.start_ns) * 1e-9 : 0.0;
-  std::snprintf(line, sizeof line, "duration:  %.3f s (log time %" PRIu64 " .. %" PRIu64 " ns)\n",
+  std::snprintf(line, sizeof line, "duration:  %.3f s of log (wall-clock) time (%" PRIu64 " .. %" PRIu64 " ns)\n",
                 duration_s, info.start_ns, info.end_ns);
   o << line;
+  bool any_ticks = false;
+  uint64_t first_tick = 0, last_tick = 0;
+  for (const auto& c : info.channels) {
+    if (!c.has_ticks) continue;
+    first_tick = any_ticks ? std::min(first_tick, c.first_tick) : c.first_tick;
+    last_tick = any_ticks ? std::max(last_tick, c.last_tick) : c.last_tick;
+    any_ticks = true;
+  }
+  if (any_ticks) {
+    std::snprintf(line, sizeof line, "simulated: %.3f s (ticks %" PRIu64 " .. %" PRIu64 " of 1 ms)\n",
+                  static_cast<double>(last_tick - first_tick) * kPlantTick_s, first_tick, last_tick);
+    o << line;
+  }
   o << "messages:  " << info.messages << " in " << info.chunks << " chunks, "
     << info.channels.size() << " channels\n";
   if (info.chunks > 0) {
@@ -634,8 +709,11 @@ std::string FormatInfo(const RecordingInfo& info) {
     o << line;
   }
   o << "\n";
-  std::snprintf(line, sizeof line, "%-4s %-28s %-26s %10s %10s %11s %9s %8s\n", "id", "topic",
-                "type", "messages", "rate_hz", "max_gap_ms", "missing", "loss_%");
+  o << "rates: sim_hz per simulated second (from the messages' ticks; the topic's own rate), "
+       "wall_hz per second of log time (lockstep runs the simulated clock faster or slower "
+       "than the wall clock)\n";
+  std::snprintf(line, sizeof line, "%-4s %-28s %-26s %10s %10s %10s %11s %9s %8s\n", "id", "topic",
+                "type", "messages", "sim_hz", "wall_hz", "max_gap_ms", "missing", "loss_%");
   o << line;
   for (const auto& c : info.channels) {
     uint64_t expected = 0;
@@ -645,8 +723,10 @@ std::string FormatInfo(const RecordingInfo& info) {
     if (c.loss_analysed && expected > 0)
       std::snprintf(loss, sizeof loss, "%.3f", 100.0 * static_cast<double>(c.missing) /
                                                    static_cast<double>(expected));
-    std::snprintf(line, sizeof line, "%-4u %-28s %-26s %10" PRIu64 " %10.1f %11.3f %9s %8s\n",
-                  c.id, c.topic.c_str(), c.schema_name.c_str(), c.count, c.rate_hz,
+    char sim_hz[32] = "-";
+    if (c.sim_rate_hz > 0) std::snprintf(sim_hz, sizeof sim_hz, "%.1f", c.sim_rate_hz);
+    std::snprintf(line, sizeof line, "%-4u %-28s %-26s %10" PRIu64 " %10s %10.1f %11.3f %9s %8s\n",
+                  c.id, c.topic.c_str(), c.schema_name.c_str(), c.count, sim_hz, c.rate_hz,
                   static_cast<double>(c.max_log_gap_ns) * 1e-6, missing.c_str(), loss);
     o << line;
   }
@@ -786,6 +866,10 @@ std::string FormatDiff(const DiffReport& report) {
 
 // ================================================================ export
 
+bool TopicFilter::NamesExplicitly(const std::string& topic) const {
+  return std::find(include.begin(), include.end(), topic) != include.end();
+}
+
 bool TopicFilter::Matches(const std::string& topic) const {
   auto any = [&](const std::vector<std::string>& globs) {
     for (const auto& g : globs)
@@ -862,11 +946,44 @@ void BuildColumns(const gp::Message& m, std::vector<const gp::FieldDescriptor*> 
     }
     if (f->is_repeated()) {
       for (int k = 0; k < r->FieldSize(m, f); ++k)
-        out.push_back({p, k, name + "[" + std::to_string(k) + "]"});
+        out.push_back({p, k, prefix + ElementName(*f, k) + " [" + ColumnUnit(*f, k) + "]"});
     } else {
-      out.push_back({p, -1, name});
+      out.push_back({p, -1, name + " [" + ColumnUnit(*f, -1) + "]"});
     }
   }
+}
+
+struct ExportedFile {
+  std::string file, topic, type;
+  uint64_t rows;
+  std::vector<std::string> columns;
+};
+
+// README.txt beside the CSVs: what each file holds and how its header reads.
+void WriteExportReadme(const std::string& readme, const std::string& recording,
+                       const std::vector<ExportedFile>& files) {
+  std::ofstream o(readme);
+  if (!o) throw McapError("cannot write '" + readme + "': " + std::strerror(errno));
+  o << "CSV export of " << recording << " (hexa_recorder export; docs/recorder.md, \"Export\").\n\n"
+    << "One file per topic, one row per recorded message. Every header cell is \"name [unit]\":\n"
+    << "SI units (m, rad, s, ns, Pa, V, N, kg, Hz and their products), [1] for a dimensionless\n"
+    << "number (counts, ids, tick numbers of 1 ms, flags 0/1, quaternion components, scale\n"
+    << "factors), [-] for text (strings, enum names). Nested fields read a.b; repeated fields\n"
+    << "name the component they hold (desired_pose.x, orientation_wxyz.w, leg_length_m.leg3)\n"
+    << "or their index (name[i]). log_time_ns: when the recorder received the message;\n"
+    << "publish_time_ns: the writer's source time (both CLOCK_REALTIME); header.tick and\n"
+    << "header.sim_time_s: the simulated time the sample belongs to. The Foxglove 3-D scene\n"
+    << "(hexa_Scene, hexa_FrameTransforms) has no flat form and is exported only when --topics\n"
+    << "names it.\n\n";
+  for (const auto& f : files) {
+    o << f.file << ": topic " << f.topic << ", message " << f.type << ", " << f.rows << " rows\n";
+    const std::string what = MessageDescription(f.type);
+    if (!what.empty()) o << "  " << what << "\n";
+    o << "  columns: log_time_ns [ns], publish_time_ns [ns], sequence [1]";
+    for (const auto& c : f.columns) o << ", " << c;
+    o << "\n\n";
+  }
+  if (!o) throw McapError("writing '" + readme + "' failed");
 }
 
 std::string ColumnValue(const gp::Message& root, const Column& c) {
@@ -889,6 +1006,7 @@ ExportResult ExportCsv(const std::string& path, const std::string& out_dir,
     std::string temp_path;  // written here, renamed to `path` once the whole export succeeded
     std::vector<Column> columns;
     uint64_t rows = 0;
+    std::string type, topic;
   };
   std::map<uint16_t, Sink> sinks;
   // All or nothing: CSVs are written under temporary names and renamed only after the whole
@@ -909,6 +1027,9 @@ ExportResult ExportCsv(const std::string& path, const std::string& out_dir,
   std::string row;
   const McapScanResult scan = ReadRecording(path, [&](const McapChannel& ch, const McapMessageView& m, const gp::Message& msg) {
     if (!filter.Matches(ch.topic)) return;
+    // The 3-D scene is a drawing (repeated messages, no flat form): exported only by name.
+    if (msg.GetDescriptor()->file()->package() == "foxglove" && !filter.NamesExplicitly(ch.topic))
+      return;
     auto it = sinks.find(ch.id);
     if (it == sinks.end()) {
       std::string name = ch.topic;
@@ -923,7 +1044,9 @@ ExportResult ExportCsv(const std::string& path, const std::string& out_dir,
       n.file.open(n.temp_path, std::ios::out | std::ios::trunc);
       if (!n.file) throw McapError("cannot write '" + n.temp_path + "': " + std::strerror(errno));
       BuildColumns(msg, {}, "", n.columns);
-      n.file << "log_time_ns,publish_time_ns,sequence";
+      n.file << "log_time_ns [ns],publish_time_ns [ns],sequence [1]";
+      n.type = msg.GetDescriptor()->full_name();
+      n.topic = ch.topic;
       for (const auto& c : n.columns) n.file << ',' << c.name;
       n.file << '\n';
     }
@@ -951,6 +1074,13 @@ ExportResult ExportCsv(const std::string& path, const std::string& out_dir,
   }
   guard.armed = false;
   result.warnings = scan.problems;
+  std::vector<ExportedFile> described;
+  for (const auto& [id, s] : sinks) {
+    ExportedFile e{s.path.substr(out_dir.size() + 1), s.topic, s.type, s.rows, {}};
+    for (const auto& c : s.columns) e.columns.push_back(c.name);
+    described.push_back(std::move(e));
+  }
+  WriteExportReadme(out_dir + "/README.txt", path, described);
   return result;
 }
 

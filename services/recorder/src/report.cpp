@@ -12,6 +12,7 @@
 #include "hexa/core/pose.hpp"
 #include "hexa/recorder/recording.hpp"
 #include "hexa/services/json.hpp"
+#include "report_events.hpp"
 #include "hexa/services/text.hpp"
 #include "recording.pb.h"
 
@@ -72,12 +73,28 @@ struct TickSlot {
 
 }  // namespace
 
-SessionReport ComputeSessionReport(const std::string& path) {
-  return ComputeSessionReport(std::vector<std::string>{path});
+SessionReport ComputeSessionReport(const std::string& path,
+                                   const std::function<void(double)>& progress) {
+  return ComputeSessionReport(std::vector<std::string>{path}, progress);
 }
 
-SessionReport ComputeSessionReport(const std::vector<std::string>& parts) {
+SessionReport ComputeSessionReport(const std::vector<std::string>& parts,
+                                   const std::function<void(double)>& progress) {
   if (parts.empty()) throw std::invalid_argument("ComputeSessionReport: no recording");
+  // Progress: the parts are read twice (the figures, then the loss analysis of hexa_recorder
+  // info), each read half of the work, each part an equal share of it.
+  const double part_share = 1.0 / static_cast<double>(parts.size());
+  std::size_t part_index = 0;
+  const auto scan_options = [&](bool loss_analysis, double half) {
+    McapScanOptions o;
+    if (loss_analysis) o = McapScanOptions{true, true, {}};
+    if (progress)
+      o.progress = [&progress, &part_index, part_share, half](uint64_t done, uint64_t size) {
+        const double in_part = static_cast<double>(done) / static_cast<double>(std::max<uint64_t>(size, 1));
+        progress(half + 0.5 * part_share * (static_cast<double>(part_index) + in_part));
+      };
+    return o;
+  };
   SessionReport r;
   const std::string& path = parts.back();  // named in messages
   for (const auto& part : parts) r.recording += (r.recording.empty() ? "" : " ") + part;
@@ -99,6 +116,7 @@ SessionReport ComputeSessionReport(const std::vector<std::string>& parts) {
   std::array<uint64_t, 6> last_primary_tick{}, first_standby_tick{}, standby_commands{};
   std::array<bool, 6> any_primary{};
   first_standby_tick.fill(UINT64_MAX);
+  EventCollector events;
 
   const auto on_message = [&](const McapChannel& ch, const McapMessageView& view,
                               const google::protobuf::Message&) {
@@ -117,6 +135,7 @@ SessionReport ComputeSessionReport(const std::vector<std::string>& parts) {
           for (int i = 0; i < 6; ++i) s.truth_pose[i] = v[i];
           s.applied_v = Six(g.applied_valve_v());
           s.truth = true;
+          events.OnTruth(g.header().tick(), g.header().source_time_ns());
           if (g.command_age_ticks_size() == 6) {
             r.command_age_recorded = true;
             for (int i = 0; i < 6; ++i) {
@@ -148,6 +167,7 @@ SessionReport ComputeSessionReport(const std::vector<std::string>& parts) {
             any_primary[leg] = true;
           }
           if (s.command[i]) return;
+          events.OnValveCommand(m.leg_id(), m.header().tick(), m.standby());
           s.command[i] = true;
           s.command_desired_m[i] = m.desired_length_m();
           s.command_v[i] = m.valve_v();
@@ -156,6 +176,7 @@ SessionReport ComputeSessionReport(const std::vector<std::string>& parts) {
           s.command_friction_scale[i] = m.has_friction_scale() ? m.friction_scale() : std::nan("");
         } else if (ch.topic == "hexa_PoseReport") {
           const auto m = Parse<rec::PoseReport>(view, ch.topic);
+          events.OnPose(m.header().tick(), static_cast<int>(m.state()));
           poses.push_back({m.header().tick(), static_cast<int>(m.state()), Six(m.desired_pose()),
                            Six(m.estimated_pose())});
         } else if (ch.topic == "hexa_NodeStatus") {
@@ -167,14 +188,18 @@ SessionReport ComputeSessionReport(const std::vector<std::string>& parts) {
           os << m.source_node() << ": leg " << m.leg_id() << " tick " << m.tick() << " "
              << rec::FaultReason_Name(m.reason()) << ": " << m.detail();
           r.faults.push_back(os.str());
+          events.OnFault(m);
+        } else if (ch.topic == "hexa_OperatorCommand") {
+          events.OnOperator(Parse<rec::OperatorCommand>(view, ch.topic));
         }
       };
   r.complete_file = true;
-  for (const auto& part : parts) {
-    const McapScanResult scan = ReadRecording(part, on_message);
+  for (part_index = 0; part_index < parts.size(); ++part_index) {
+    const McapScanResult scan = ReadRecording(parts[part_index], on_message, scan_options(false, 0.0));
     r.complete_file = r.complete_file && scan.complete;
     r.warnings.insert(r.warnings.end(), scan.problems.begin(), scan.problems.end());
   }
+  r.events = events.Finish();
   if (first_log <= last_log) r.wall_time_s = static_cast<double>(last_log - first_log) * 1e-9;
 
   // Task space over the TRACKING window, at the supervisor ticks.
@@ -280,8 +305,8 @@ SessionReport ComputeSessionReport(const std::vector<std::string>& parts) {
     r.deadline_misses[topic] += st.deadline_missed_total();
   }
   // Per part (a gap across two parts' boundary is not counted).
-  for (const auto& part : parts) {
-    const RecordingInfo info = Inspect(part, McapScanOptions{true, true});
+  for (part_index = 0; part_index < parts.size(); ++part_index) {
+    const RecordingInfo info = Inspect(parts[part_index], scan_options(true, 0.5));
     for (const auto& ch : info.channels) {
       if (!ch.loss_analysed) continue;
       r.missing[ch.topic] += ch.missing;
@@ -524,7 +549,7 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
   {
     std::ofstream m(dir + "/report.md");
     if (!m) throw std::runtime_error("cannot write " + dir + "/report.md");
-    m << "# Session report\n\n";
+    m << "# Session report\n\n![summary: facts, RMSE, events, errors, path](summary.png)\n\n";
     for (const auto& [k, v] : session) m << "- " << k << ": " << v << "\n";
     m << "- recording: `" << r.recording << "`" << (r.complete_file ? "" : " (INCOMPLETE FILE)")
       << "\n- simulated time " << Num(r.sim_time_s) << " s, wall time " << Num(r.wall_time_s)
@@ -584,14 +609,16 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
     if (r.faults.empty() && r.takeovers.empty()) m << "none\n";
     for (const auto& f : r.faults) m << "- " << f << "\n";
     for (const auto& t : r.takeovers) m << "- take-over (no FaultEvent): " << t << "\n";
-    m << "\n## Plots\n\npose_tracking.png, pose_error.png, leg_lengths.png, valve_voltages.png, "
-         "path_3d.png\n";
+    m << "\n## Plots\n\nsummary.png, pose_tracking.png, pose_error.png, leg_lengths.png, "
+         "valve_voltages.png, path_3d.png (the tracking window shaded, faults, HOLD, take-overs "
+         "and operator commands marked: events.csv; what each marks: plots.json)\n";
   }
+  WriteEventsCsv(r.events, dir + "/events.csv");
   {
     std::ofstream p(dir + "/pose.csv");
-    p << "time_s";
+    p << "time_s [s]";
     for (const char* w : {"desired", "true", "measured"})
-      for (const char* a : kAxes) p << "," << w << "_" << a;
+      for (int i = 0; i < 6; ++i) p << "," << w << "_" << kAxes[i] << (i < 3 ? " [m]" : " [rad]");
     p << "\n";
     char buf[32];
     for (const auto& row : r.pose_rows) {
@@ -604,9 +631,14 @@ void WriteSessionReport(const SessionReport& r, const std::string& dir) {
   }
   {
     std::ofstream l(dir + "/legs.csv");
-    l << "time_s";
-    for (const char* w : {"desired_length_m_", "measured_length_m_", "valve_v_", "friction_scale_"})
-      for (int i = 1; i <= 6; ++i) l << "," << w << i;
+    l << "time_s [s]";
+    for (const char* w : {"desired_length_m_%d [m]", "measured_length_m_%d [m]", "valve_v_%d [V]",
+                          "friction_scale_%d [1]"})
+      for (int i = 1; i <= 6; ++i) {
+        char name[40];
+        std::snprintf(name, sizeof name, w, i);
+        l << "," << name;
+      }
     l << "\n";
     char buf[32];
     for (const auto& row : r.leg_rows) {

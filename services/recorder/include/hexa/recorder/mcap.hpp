@@ -182,6 +182,9 @@ struct McapScanOptions {
   // true: read everything up to the first defect, skip chunks with bad CRC, report in result.
   bool tolerant = false;
   bool verify_crcs = true;
+  // Called after each record of the data section (a chunk, or a message outside chunks) with
+  // the bytes read so far and the file size: progress for a long read.
+  std::function<void(uint64_t bytes_read, uint64_t file_size)> progress;
 };
 
 struct McapScanResult {

@@ -66,6 +66,11 @@ struct Utf8Repairs {
 
 // Decodes messages with the schemas embedded in the file (never the compiled-in types), so any
 // protobuf MCAP file can be inspected and files written by older builds still decode.
+// "" when the recording's message type `recorded` has the fields (numbers, names, types) of the
+// same type compiled into this build, nested types included; else one line naming the fields
+// only in this build, only in the recording, and changed. Types this build does not know: "".
+std::string SchemaDifference(const google::protobuf::Descriptor& recorded);
+
 class ProtoDecoder {
  public:
   ProtoDecoder();
@@ -87,6 +92,9 @@ class ProtoDecoder {
   // "channel 'T': N message(s) with invalid UTF-8 in string fields (first: sequence S),
   // repaired on read (invalid bytes read as U+FFFD)", one line per channel.
   std::vector<std::string> RepairProblems() const;
+  // One line per recorded schema whose fields differ from the same type compiled into this
+  // build (SchemaDifference): the recording was made by another build.
+  const std::vector<std::string>& schema_differences() const { return schema_differences_; }
 
  private:
   struct SchemaEntry {
@@ -105,6 +113,7 @@ class ProtoDecoder {
   std::unique_ptr<google::protobuf::DynamicMessageFactory> factory_;
   std::vector<std::string> channel_topics_;
   std::map<uint16_t, Utf8Repairs> repairs_;
+  std::vector<std::string> schema_differences_;
 };
 
 using DecodedMessageFn = std::function<void(const McapChannel&, const McapMessageView&,
@@ -220,7 +229,13 @@ struct ChannelInfo {
   std::map<std::string, std::string> metadata;
   uint64_t count = 0;
   uint64_t first_log_ns = 0, last_log_ns = 0;
-  double rate_hz = 0.0;          // (count - 1) / (last - first)
+  double rate_hz = 0.0;          // per wall (log-time) second: (count - 1) / (last - first)
+  // Per simulated second, from the messages' tick numbers (1 ms): (count - 1) / tick span.
+  // 0 when the messages carry no tick or span none. In lockstep the simulated clock runs
+  // slower or faster than the wall clock, and only this rate is the topic's own.
+  bool has_ticks = false;
+  uint64_t first_tick = 0, last_tick = 0;
+  double sim_rate_hz = 0.0;
   uint64_t max_log_gap_ns = 0;   // largest log-time gap between consecutive messages
   bool loss_analysed = false;    // periodic topic with ticks
   std::vector<StreamLoss> streams;
@@ -265,6 +280,7 @@ struct TopicFilter {
   std::vector<std::string> include;
   std::vector<std::string> exclude;
   bool Matches(const std::string& topic) const;
+  bool NamesExplicitly(const std::string& topic) const;  // an include entry equal to it
 };
 
 struct ExportResult {
@@ -272,7 +288,9 @@ struct ExportResult {
   std::vector<std::string> warnings;                    // repaired on read (invalid UTF-8)
 };
 // One CSV per topic: log_time_ns, publish_time_ns, sequence, then every field flattened
-// (nested as a.b, repeated as name[i]). All or nothing: on an error (unreadable recording,
+// (nested as a.b, repeated by component or name[i]), each header cell "name [unit]"
+// (csv_columns.hpp), and README.txt saying what each file holds. The Foxglove scene channels
+// only when `include` names them. All or nothing: on an error (unreadable recording,
 // write failure) no CSV is left behind; files appear under their names only on success.
 ExportResult ExportCsv(const std::string& path, const std::string& out_dir,
                        const TopicFilter& filter);

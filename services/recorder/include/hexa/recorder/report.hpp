@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -84,6 +85,15 @@ struct SessionReport {
     std::array<double, 6> friction_scale;  // NaN: no command, or the field not recorded
   };
   std::vector<PoseRow> pose_rows;
+  // What happened, for the plots' markers (events.csv, report_events.cpp): supervisor state
+  // changes (the tracking window, HOLD), faults, hot-standby take-overs, operator commands.
+  struct Event {
+    double time_s;      // simulated time of the tick
+    std::string kind;   // "state", "fault", "takeover", "operator"
+    int leg;            // 1..6, 0 when no leg is concerned
+    std::string label;  // short text for the plot
+  };
+  std::vector<Event> events;
   std::vector<LegRow> leg_rows;
   // Valve voltages the plant applied, per tick (from GroundTruth), for bit-exact comparisons;
   // NaN for a tick whose GroundTruth sample is not in the recording.
@@ -94,10 +104,14 @@ struct SessionReport {
 };
 
 // Throws McapError / std::runtime_error with a message naming the file on a bad recording.
-SessionReport ComputeSessionReport(const std::string& recording_path);
+// `progress` (optional) hears the fraction of the work done, 0..1: the recording is read twice
+// (the figures, then the loss analysis of hexa_recorder info), each read half of it.
+SessionReport ComputeSessionReport(const std::string& recording_path,
+                                   const std::function<void(double fraction)>& progress = {});
 // A recording split into parts (hexa_recorder record --split-*), oldest first: one report
 // over all of them, as if they were one file.
-SessionReport ComputeSessionReport(const std::vector<std::string>& parts);
+SessionReport ComputeSessionReport(const std::vector<std::string>& parts,
+                                   const std::function<void(double fraction)>& progress = {});
 
 // Writes report.json, report.md, pose.csv, legs.csv into `out_dir`.
 void WriteSessionReport(const SessionReport& report, const std::string& out_dir);
