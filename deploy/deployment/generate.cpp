@@ -28,7 +28,7 @@ std::string Fmt(double v) {
 // What each role may publish and subscribe (the access-control table of docs/security.md): only the
 // plant / I/O node publishes sensors, IMU, ground truth and the tracker's poses; only leg N's identities publish
 // ValveCommand, and only in partition LegPartition(N); only the supervisor publishes
-// setpoints and pose reports; only the operator publishes OperatorCommand; the recorder
+// setpoints and pose reports; only the operator publishes OperatorCommand (and reads NodeStatus for the answer); the recorder
 // subscribes to everything and publishes nothing but its own NodeStatus (the plant waits for
 // it). Partitions follow the loop's routing (comm/partition.hpp): the plant and the
 // supervisor write LegSensors / LegSetpoint in the default partition (supervisor, recorder)
@@ -78,6 +78,9 @@ RolePermissions PermissionsOf(Role role, int leg) {
       break;
     case deployment::OPERATOR:
       p.publish = {{kOperatorCommandTopic, {}}};
+      // NodeStatus: the supervisor's answer to a command (accepted / refused) comes in its
+      // status detail, which hexa_operator waits for (docs/exit_codes.md).
+      p.subscribe = {status};
       break;
     case deployment::BRIDGE:  // Foxglove viewer: reads everything, writes nothing
       p.subscribe = {{kLegSensorsTopic, {}}, valve_any, {kImuSampleTopic, {}},

@@ -3,7 +3,7 @@
 # --bridge-operator-input` (lockstep, combined trajectory 40 periods: the stop ends it, own domain, bridge on a
 # free port), then js/check_operator.mjs drives it with Foxglove's client library: bad inputs
 # refused, the rate limit, start and stop seen in the supervisor's state. Then: the session
-# ended by itself after the stop (exit 0), the supervisor logged both commands from the
+# ended by itself after the stop (exit 6: stopped by the operator, docs/exit_codes.md), the supervisor logged both commands from the
 # bridge, and the bridge logged what it wrote and what it refused.
 # Usage: run_operator_test.sh SRC_DIR NODE_DIR BUILD_DIR DOMAIN
 set -euo pipefail
@@ -31,7 +31,9 @@ fail=0
 rc=0
 wait "$session" || rc=$?
 echo "hexa_session exit status $rc"
-[ "$rc" -eq 0 ] || { echo "FAIL: the session did not end by itself after the stop"; tail -5 "$out/hexa_session.out"; fail=1; }
+[ "$rc" -eq 6 ] || { echo "FAIL: the session did not end as stopped by the operator (exit 6) after the stop"; tail -5 "$out/hexa_session.out"; fail=1; }
+grep -q "stopped by the operator" "$out/hexa_session.out" ||
+  { echo "FAIL: the console does not say the operator stopped the session"; fail=1; }
 grep -E "operator command #[0-9]+ (start|stop)" "$out/bridge.log" || true
 grep -E "operator command #[0-9]+: kind" "$out/supervisor.log" | head -3 || true
 grep -qE "operator command #[0-9]+ start combined written" "$out/bridge.log" || { echo "FAIL: the bridge wrote no start"; fail=1; }

@@ -20,6 +20,8 @@
 #include <exception>
 #include <memory>
 #include <string>
+#include <thread>
+#include <chrono>
 #include <vector>
 
 #include "hexa/comm/comm.hpp"
@@ -150,6 +152,8 @@ int main(int argc, char** argv) {
   cli.AddOption("value", "V", "valve voltage written", "9.88");
   cli.AddChoice("kind", {"start", "stop", "reset", "home", "shutdown"}, "operator command", "stop");
   cli.AddOption("duration", "s", "how long to write", "60");
+  cli.AddOption("start-delay", "s", "wait this long before joining the domain (a session's "
+                "launcher refuses a domain that already has participants on it)", "0");
   cli.AddOption("first-tick", "N", "valve, setpoint: the tick of the first sample, +1 per sample "
                 "(default: far ahead of any real tick)", "1000000000");
   cli.AddFlag("copy", "write back the real samples read in the partition (a replay)");
@@ -162,11 +166,13 @@ int main(int argc, char** argv) {
   const auto strength = cli.GetInt("strength", 0, 1 << 30);
   const auto value = cli.GetDouble("value", -1e9, 1e9);
   const auto duration = cli.GetDouble("duration", 0, 3600);
+  const auto start_delay = cli.GetDouble("start-delay", 0, 60);
   const auto first_tick = cli.GetInt("first-tick", 0, 1LL << 40);
-  if (!domain || !leg || !strength || !value || !duration || !first_tick) {
+  if (!domain || !leg || !strength || !value || !duration || !first_tick || !start_delay) {
     std::fprintf(stderr, "error: %s\n", cli.error().c_str());
     return 2;
   }
+  std::this_thread::sleep_for(std::chrono::duration<double>(*start_delay));
   Options o;
   o.domain = static_cast<int>(*domain);
   o.leg = static_cast<int>(*leg);

@@ -76,8 +76,10 @@ hexa::testing::SessionRun RunWithIntruder(const std::string& name, int domain,
                                           std::vector<std::string> session_args,
                                           std::vector<std::string> intruder_args) {
   const std::string log = ::testing::TempDir() + "/" + name + "_intruder.log";
+  // The launcher listens on the domain for 0.5 s before it starts anything and refuses a
+  // domain in use: the intruder joins after that, while the session starts up.
+  intruder_args.insert(intruder_args.end(), {"--start-delay", "1.0"});
   Intruder intruder(log, domain, intruder_args);
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // its writer exists first
   auto run = RunSession(name, domain, session_args);
   std::filesystem::copy_file(log, run.dir + "/intruder.log",
                              std::filesystem::copy_options::overwrite_existing);

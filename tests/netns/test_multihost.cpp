@@ -181,7 +181,8 @@ TEST_F(SecuredFiveHosts, LockstepSessionFromGeneratedUnitsIsLosslessAndBitIdenti
   // The recorder matched the six primaries' and three standbys' ValveCommand writers (reliable:
   // lockstep; SHARED ownership: the standbys' commands are recorded too) and refused nothing.
   const std::string rec_log = Slurp(s->units().LogOf("hexa-recorder"));
-  const std::regex valve_writer("\nmatched writer hexa_ValveCommand [0-9a-f]{32} reliable\n");
+  // The trailing newline is a lookahead: consecutive lines each match.
+  const std::regex valve_writer("\nmatched writer hexa_ValveCommand [0-9a-f]{32} reliable(?=\n)");
   EXPECT_EQ(std::distance(std::sregex_iterator(rec_log.begin(), rec_log.end(), valve_writer), std::sregex_iterator()), 9)
       << rec_log;
   EXPECT_EQ(rec_log.find("refused hexa_ValveCommand"), std::string::npos) << rec_log;

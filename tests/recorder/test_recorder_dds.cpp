@@ -174,7 +174,7 @@ TEST_F(RecorderDds, RecordsEveryPublishedSampleWithLossFromTicks) {
   EXPECT_EQ(by_topic["hexa_ValveCommand"]->count, 0u);
   EXPECT_EQ(by_topic["hexa_LegSensors"]->metadata.at("qos.recorder.reliability"), "reliable");
   EXPECT_EQ(by_topic["hexa_LegSensors"]->metadata.at("qos.recorder.history"), "keep_all");
-  EXPECT_EQ(by_topic["hexa_ValveCommand"]->metadata.at("qos.writer.ownership"), "exclusive");
+  EXPECT_EQ(by_topic["hexa_ValveCommand"]->metadata.at("qos.writer.ownership"), "shared");  // the plant chooses primary or standby (docs/faults.md)
   EXPECT_EQ(by_topic["hexa_LegSensors"]->metadata.at(kMetaPeriodS), "0.001");
   // publish_time is the sample's source_time_ns; fields survive DDS -> protobuf.
   uint64_t checked = 0;

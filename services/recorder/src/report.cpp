@@ -112,10 +112,11 @@ SessionReport ComputeSessionReport(const std::vector<std::string>& parts,
   std::vector<PoseSample> poses;
   std::map<std::string, rec::NodeStatus> last_status;
   uint64_t first_log = UINT64_MAX, last_log = 0;
-  // Per leg: the last tick of a primary's command, the first and count of a standby's.
-  std::array<uint64_t, 6> last_primary_tick{}, first_standby_tick{}, standby_commands{};
+  // Per leg: the last tick of a primary's command and every tick of a standby's (both write
+  // every tick while alive: the plant chooses, docs/faults.md).
+  std::array<uint64_t, 6> last_primary_tick{};
+  std::array<std::vector<uint64_t>, 6> standby_ticks;
   std::array<bool, 6> any_primary{};
-  first_standby_tick.fill(UINT64_MAX);
   EventCollector events;
 
   const auto on_message = [&](const McapChannel& ch, const McapMessageView& view,
@@ -160,14 +161,13 @@ SessionReport ComputeSessionReport(const std::vector<std::string>& parts,
           const int i = static_cast<int>(m.leg_id()) - 1;
           const auto leg = static_cast<std::size_t>(i);
           if (m.standby()) {
-            first_standby_tick[leg] = std::min<uint64_t>(first_standby_tick[leg], m.header().tick());
-            ++standby_commands[leg];
+            standby_ticks[leg].push_back(m.header().tick());
           } else {
             last_primary_tick[leg] = std::max<uint64_t>(last_primary_tick[leg], m.header().tick());
             any_primary[leg] = true;
           }
-          if (s.command[i]) return;
           events.OnValveCommand(m.leg_id(), m.header().tick(), m.standby());
+          if (s.command[i]) return;
           s.command[i] = true;
           s.command_desired_m[i] = m.desired_length_m();
           s.command_v[i] = m.valve_v();
@@ -319,17 +319,21 @@ SessionReport ComputeSessionReport(const std::vector<std::string>& parts,
       }
     }
   }
-  // A standby whose commands all come after the primary's last one took the valve over (a
-  // recorder reading with shared ownership would see both interleaved: no take-over then).
+  // A standby that wrote after the primary's last command drove the valve from then on (the
+  // plant applies the live primary, else the live standby).
   for (std::size_t leg = 0; leg < 6; ++leg) {
-    if (standby_commands[leg] == 0 || (any_primary[leg] && first_standby_tick[leg] <= last_primary_tick[leg]))
-      continue;
+    auto& ticks = standby_ticks[leg];
+    std::sort(ticks.begin(), ticks.end());
+    const auto first = any_primary[leg] ? std::upper_bound(ticks.begin(), ticks.end(), last_primary_tick[leg])
+                                        : ticks.begin();
+    if (first == ticks.end()) continue;  // the primary answered to the end
+    const auto standby_commands = static_cast<std::size_t>(ticks.end() - first);
     std::ostringstream os;
-    os << "leg " << leg + 1 << ": the hot standby drives the valve from tick " << first_standby_tick[leg]
-       << " (t = " << Fixed3(static_cast<double>(first_standby_tick[leg]) * kTickS) << " s; "
+    os << "leg " << leg + 1 << ": the hot standby drives the valve from tick " << *first
+       << " (t = " << Fixed3(static_cast<double>(*first) * kTickS) << " s; "
        << (any_primary[leg] ? "the primary's last command at tick " + std::to_string(last_primary_tick[leg])
                             : std::string("no command of the primary recorded"))
-       << "), " << standby_commands[leg] << " commands";
+       << "), " << standby_commands << " commands";
     r.takeovers.push_back(os.str());
   }
   return r;
