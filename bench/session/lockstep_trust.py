@@ -8,7 +8,7 @@ optionally `stress-ng --cpu K` beside them and one process stopped (SIGSTOP) for
     /usr/bin/python3 bench/session/lockstep_trust.py --runs 10 --stop leg3 --stop-s 0.6 --at startup
     /usr/bin/python3 bench/session/lockstep_trust.py --runs 10 --stop supervisor --stop-s 3 --at midrun
 
-The reference is the first session of the invocation run without stress and without a stop
+The reference is a session this script runs first, without stress and without a stop
 (or --reference DIR, a session directory of an earlier run). "Identical" compares the plant's
 GroundTruth of every tick (state, applied valve voltages, command ages; every field but the
 times) as exported by `hexa_recorder export`: the same simulated run, bit for bit.
