@@ -569,7 +569,7 @@ void PlantNode::TakeCommands(bool feed_barrier) {
           return SourceLivelinessOf(status.LivelinessOf(writer));
         };
         if (sources_[static_cast<std::size_t>(leg - 1)].Offer(info.publication_handle, c.standby,
-                                                              liveliness) !=
+                                                              {c.header.tick, c.valve_v}, liveliness) !=
             CommandSourceSelector::Verdict::kApply)
           continue;
         // The applying writer's compute time, older answers included: a slow primary's answers
