@@ -52,6 +52,9 @@ hexa_msg_FaultReason WireReason(SilentLegVerdict v) {
   return hexa_msg_FAULT_NONE;
 }
 
+// The longest wait between two re-asks of the supervisor within one tick.
+constexpr std::int64_t kSupervisorReaskMax_ns = 1'000'000'000;
+
 LockstepBarrierParams BarrierParams(const PlantNodeOptions& o) {
   LockstepBarrierParams p;
   p.reask_after_ns = static_cast<std::int64_t>(o.resend_after_s * 1e9);
@@ -264,6 +267,7 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
   }
   lapse_confirm_ticks_ = std::max<std::int64_t>(1, std::llround(options.common.realtime_lease_s / kTickS));
   forced_reason_.fill(hexa_msg_FAULT_NONE);
+  supervisor_reask_ = ReaskBackoff(BarrierParams(options).reask_after_ns, kSupervisorReaskMax_ns);
   waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
   waitset_.Attach(wake_.get(), kTokenWake);
   waitset_.Attach(peers_.data_condition(), kTokenPeers);
@@ -937,6 +941,7 @@ void PlantNode::AdvanceIfComplete() {
 
 void PlantNode::StartTick(int64_t now_ns) {
   tick_started_ns_ = now_ns;
+  supervisor_reask_.Begin(now_ns);
   PublishTick();
   barrier_.Begin(tick_, static_cast<LegMask>(FirstLegs(options_.expected_legs) & ~dropped_), now_ns);
   TakeCommands(true);  // answers that came in with this callback's data
@@ -961,7 +966,7 @@ void PlantNode::WatchSilence(dds_duration_t& wait) {
           PublishTick(leg);
           ++resent_samples_;
         }
-      ReaskSupervisor();
+      if (supervisor_reask_.Due(now)) ReaskSupervisor();
       break;
     case LockstepBarrier::Action::kTimeout: {
       std::string states;
