@@ -120,9 +120,12 @@ TEST(ForeignCommands, LockstepIntruderClaimingALegCannotHideItsHang) {
                                     "--user-data", "leg=3 standby=0", "--value", "9.88"});
   ASSERT_EQ(run.exit_code, 3) << Slurp(run.dir + "/session.log") << Slurp(run.dir + "/plant.log");
   ASSERT_TRUE(run.has_report);
+  // The first report names the hang at the tick leg 3 did not answer (later ones remind that
+  // its valve is still held at null).
   const auto lost = FaultsWith(run.report, "plant: leg 3", "FAULT_LIVELINESS_LOST");
-  ASSERT_EQ(lost.size(), 1u) << Faults(run.report);
+  ASSERT_FALSE(lost.empty()) << Faults(run.report);
   EXPECT_EQ(lost[0].find("plant: leg 3 tick 1000 "), 0u) << lost[0];
+  EXPECT_NE(lost[0].find("no answer to tick 1000"), std::string::npos) << lost[0];
   EXPECT_TRUE(FaultsWith(run.report, "plant:", "FAULT_COMMAND_DEADLINE_MISSED").empty())
       << "the last resort, not the hang's cause\n" << Faults(run.report);
   EXPECT_NE(Slurp(run.dir + "/intruder.log").find("written"), std::string::npos)
