@@ -18,12 +18,15 @@ namespace {
 
 constexpr dds_attach_t kTokenShutdown = 1;
 
-comm::QosParams ValveQos(const LegNodeOptions& o) {
+comm::QosParams ValveQos(const LegNodeOptions& o, const comm::ParticipantPrefix& participant_prefix) {
   comm::QosParams q = node::QosFor(o.common, comm::TopicKind::kValveCommand);
   q.ownership_strength = o.standby ? comm::kStandbyOwnershipStrength
                                    : comm::kPrimaryOwnershipStrength;
   // Which leg this writer drives, for the plant's per-leg liveliness (docs/faults.md).
-  q.user_data = comm::LegEndpointUserData(o.leg, o.standby);
+  // Signed with the session key: the plant counts this writer as the leg's before it has
+  // written anything, and a copy of the text in another process does not pass (command_auth.hpp).
+  q.user_data = comm::SignEndpointClaim(comm::InstalledCommandMac(), participant_prefix,
+                                        comm::LegEndpointUserData(o.leg, o.standby));
   return q;
 }
 
@@ -98,7 +101,8 @@ LegNode::LegNode(const LegNodeOptions& options, const config::SystemConfig& conf
                        ControlReaderQos(options, comm::TopicKind::kLegSetpoint), kSetpointRing,
                        {comm::LegPartition(options.leg)}),
       // Leg N's partition: DDS Security grants it to leg N's identities only (docs/security.md).
-      valve_writer_(participant_, valve_topic_, ValveQos(options),
+      valve_writer_(participant_, valve_topic_,
+                    ValveQos(options, comm::PrefixOfEntity(participant_.get())),
                     {comm::LegPartition(options.leg)}),
       status_(participant_, name_),
       stuck_status_(participant_, name_),
@@ -161,8 +165,7 @@ void LegNode::TakeSetpoints() {
         // supervisor never disposes; its lease lapses instead). A dispose carries no tag: it
         // counts only from a writer whose setpoints were authenticated.
         if (info.instance_state == DDS_IST_NOT_ALIVE_DISPOSED && !supervisor_finished_ &&
-            std::find(trusted_setpoint_writers_.begin(), trusted_setpoint_writers_.end(),
-                      info.publication_handle) != trusted_setpoint_writers_.end()) {
+            trusted_setpoint_writers_.Contains(info.publication_handle)) {
           supervisor_finished_ = true;
           log_->info("{}: the supervisor withdrew its setpoints (orderly end)", name_);
         }
@@ -179,11 +182,7 @@ void LegNode::TakeSetpoints() {
         continue;
       }
       if (s.leg_id != options_.leg) continue;
-      if (std::find(trusted_setpoint_writers_.begin(), trusted_setpoint_writers_.end(),
-                    info.publication_handle) == trusted_setpoint_writers_.end()) {
-        trusted_setpoint_writers_[trusted_next_] = info.publication_handle;
-        trusted_next_ = (trusted_next_ + 1) % trusted_setpoint_writers_.size();
-      }
+      trusted_setpoint_writers_.Note(info.publication_handle, trust);
       IssuedSetpoint issued;
       issued.tick = s.header.tick;
       issued.time_s = s.header.sim_time_s;
@@ -204,11 +203,11 @@ bool LegNode::SupervisorGoneNow() const {
   // Its writer left without disposing its setpoints (a supervisor ending the session disposes
   // them first), or the process the launcher started for it ended. A lapsed lease is not
   // enough: a supervisor that is stopped or not scheduled lets it lapse too, and lockstep
-  // waits for it (docs/faults.md).
+  // waits for it (docs/faults.md). Only writers whose setpoints were authenticated count: a
+  // foreign LegSetpoint writer in this leg's partition keeps no supervisor "present".
   if (options_.common.mode != node::TimeMode::kLockstep || !supervisor_seen_ || supervisor_finished_)
     return false;
-  const auto s = setpoint_reader_.Snapshot();
-  if (s.liveliness_alive_count == 0 && s.liveliness_not_alive_count == 0) return true;
+  if (trusted_setpoint_writers_.Present(setpoint_reader_.status()) == 0) return true;
   return peer_processes_.State("supervisor") == node::PeerProcessState::kEnded;
 }
 
@@ -409,6 +408,12 @@ void LegNode::TakeSensorsLockstep() {
         }
         queue_[(queue_head_ + queue_size_) % kLockstepQueue] = s;
         ++queue_size_;
+      } else if (queue_size_ > 0 && tick == queue_[queue_head_].header.tick &&
+                 waiting_logged_tick_ != tick) {
+        // The plant re-asks the tick this node cannot answer yet: say once per tick what it
+        // waits for and what its setpoint reader has seen (the evidence of a lost setpoint).
+        waiting_logged_tick_ = tick;
+        LogWaitingForSetpoint(tick);
       }  // else: a repeat of a queued tick (a re-ask while this node lags): ignored
     }
   }
@@ -418,6 +423,20 @@ void LegNode::TakeSensorsLockstep() {
     --queue_size_;
     AnswerAndReport(queue_[head]);  // the slot is only reused by a later take
   }
+}
+
+void LegNode::LogWaitingForSetpoint(std::uint64_t tick) {
+  std::uint64_t required = 0;
+  if (!RequiredSetpointTick(tick, schedule_.supervisor_every_ticks, required)) return;
+  const auto s = setpoint_reader_.Snapshot();
+  const IssuedSetpoint* newest = setpoints_.newest();
+  log_->warn("{} tick {}: re-asked while waiting for the setpoint of tick {} (newest setpoint "
+             "{}); setpoint reader: writers matched {} (alive {}, not alive {}), samples lost {} "
+             "rejected {}, refused {}; logged once per tick",
+             name_, tick, required, newest != nullptr ? static_cast<long long>(newest->tick) : -1LL,
+             s.subscription_matched_current, s.liveliness_alive_count,
+             s.liveliness_not_alive_count, s.sample_lost_total, s.sample_rejected_total,
+             refusals_.samples());
 }
 
 void LegNode::OnData(void* self) {
@@ -469,11 +488,8 @@ void LegNode::WatchControlCycle() {
 }
 
 void LegNode::RunCycle() {
-  if (!supervisor_seen_) {
-    const auto s = setpoint_reader_.Snapshot();
-    supervisor_seen_ = s.liveliness_alive_count + s.liveliness_not_alive_count > 0;
-  }
   TakeSetpoints();
+  if (!supervisor_seen_) supervisor_seen_ = trusted_setpoint_writers_.any();
   if (options_.common.mode == node::TimeMode::kRealtime) {
     TakeSensorsRealtime();
   } else {

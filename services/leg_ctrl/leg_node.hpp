@@ -75,6 +75,9 @@ class LegNode {
   void RunCycle();
   void TakeSetpoints();
   void TakeSensorsLockstep();
+  // Lockstep: a re-ask of a tick this node cannot answer yet, logged with the setpoint reader's
+  // state (which setpoint it waits for, writers, lost or refused samples).
+  void LogWaitingForSetpoint(std::uint64_t tick);
   void TakeSensorsRealtime();
   void ResendLastAnswer();
   void AnswerAndReport(const hexa_msg_LegSensors& sensors);
@@ -132,7 +135,7 @@ class LegNode {
   std::uint64_t ticks_missed_ = 0;  // lockstep: ticks that never reached this node
   bool answered_any_ = false;
   bool unwritten_answer_ = false;    // an answer was computed and not published (yet)
-  bool supervisor_seen_ = false;     // its setpoint writer has been matched
+  bool supervisor_seen_ = false;     // an authenticated setpoint of it has arrived
   bool supervisor_lost_ = false;     // SupervisorLost()
   bool supervisor_finished_ = false;  // it disposed its setpoints: the session is ending
   // Held-control fault episode (ReportControlFault).
@@ -151,8 +154,8 @@ class LegNode {
   // Setpoints from writers not of this session are refused (docs/faults.md); the writers
   // whose setpoints were authenticated (a dispose counts only from one of them).
   node::CommandRefusals refusals_;
-  std::array<dds_instance_handle_t, 4> trusted_setpoint_writers_{};
-  std::size_t trusted_next_ = 0;
+  comm::TrustedWriters trusted_setpoint_writers_;
+  std::uint64_t waiting_logged_tick_ = 0;  // lockstep: the re-asked tick last logged as waiting
 };
 
 }  // namespace hexa::leg_ctrl
