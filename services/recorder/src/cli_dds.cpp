@@ -34,6 +34,7 @@
 #include "hexa/recorder/recording.hpp"
 #include "hexa/recorder/rotation.hpp"
 #include "hexa/recorder/scene.hpp"
+#include "hexa/services/runtime.hpp"
 #include "hexa/services/scheduling.hpp"
 #include "hexa/services/service_manager.hpp"
 
@@ -389,8 +390,11 @@ int RunRecord(const std::vector<std::string>& argv) {
     if (!key) throw std::runtime_error(error + " (" + comm::kSessionKeyEnvironment + ")");
     comm::InstallSessionKey(*key);
   }
-  comm::Participant participant(ParseDomain(a));
-  comm::ShutdownGuard shutdown(participant);
+  // The service runtime: participant, shutdown guard, and the lifecycle with its NodeStatus.
+  node::CommonOptions common;
+  common.domain_id = static_cast<int>(ParseDomain(a));
+  services::Runtime runtime(common, "recorder", spdlog::default_logger());
+  const comm::Participant& participant = runtime.participant();
   RecordingWriter writer(cfg);
   writer.Open(out);
   std::vector<std::unique_ptr<TopicRecorderBase>> topics;
@@ -425,20 +429,17 @@ int RunRecord(const std::vector<std::string>& argv) {
     }
   }
   comm::WaitSet waitset(participant, topics.size() + 1);
-  waitset.Attach(shutdown.guard_condition(), 0);
+  waitset.Attach(runtime.shutdown().guard_condition(), 0);
   for (size_t i = 0; i < topics.size(); ++i)
     waitset.Attach(topics[i]->condition(), static_cast<dds_attach_t>(i + 1));
   writer.mcap().FlushChunk();  // header, schemas and channels reach the disk before any data
   // Announce ourselves: the plant waits for a RUNNING recorder before its first tick when a
-  // session asks for one (docs/architecture.md), so nothing is missed at the start.
-  comm::Topic<hexa_msg_NodeStatus> status_topic(participant);
-  comm::Writer<hexa_msg_NodeStatus> status_writer(participant, status_topic);
-  hexa_msg_NodeStatus status{};
-  std::snprintf(status.node_name, sizeof status.node_name, "recorder");
-  std::snprintf(status.detail, sizeof status.detail, "recording %zu topics", topics.size());
-  status.state = hexa_msg_NODE_RUNNING;
-  status_writer.WriteNow(status);
-  node::service_manager::Ready(status.detail);
+  // session asks for one (docs/architecture.md), so nothing is missed at the start. The
+  // recorder waits for no one: its readers take whatever comes.
+  char detail[64];
+  std::snprintf(detail, sizeof detail, "recording %zu topics", topics.size());
+  runtime.NoPeersToWaitFor();
+  runtime.Running({}, detail, detail);
   if (!quiet)
     std::fprintf(stderr, "record: domain %d, %zu topics -> %s (periodic topics %s)\n",
                  static_cast<int>(participant.domain_id()), topics.size(), out.c_str(), periodic.c_str());
@@ -453,7 +454,7 @@ int RunRecord(const std::vector<std::string>& argv) {
   // A progress line every second of wall time on stderr (hexa_session shows the newest one).
   constexpr int64_t kProgressPeriodNs = 1'000'000'000;
   int64_t next_progress_ns = start_ns + kProgressPeriodNs;
-  while (!shutdown.requested()) {
+  while (!runtime.shutdown_requested()) {
     node::service_manager::Watchdog();
     const int64_t now = comm::RealtimeNow_ns();
     if (now >= end_ns) break;
@@ -508,9 +509,7 @@ int RunRecord(const std::vector<std::string>& argv) {
     t->Drain(writer);  // what arrived before the stop
     NoteMatchedWriters(*t);
   }
-  status.state = hexa_msg_NODE_STOPPING;
-  status_writer.WriteNow(status);
-  node::service_manager::Stopping("recording closed");
+  runtime.Stop({}, detail, "recording closed");
   writer.Close();
 
   const double elapsed_s = static_cast<double>(comm::RealtimeNow_ns() - start_ns) * 1e-9;
