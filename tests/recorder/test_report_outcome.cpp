@@ -9,10 +9,10 @@
 #include <sstream>
 #include <string>
 
-#include "hexa/recorder/mcap.hpp"
-#include "hexa/recorder/recording.hpp"
-#include "hexa/recorder/report.hpp"
-#include "hexa/recorder/rotation.hpp"
+#include "hexa/recording/mcap.hpp"
+#include "hexa/recording/recording.hpp"
+#include "hexa/recording/report.hpp"
+#include "hexa/recording/rotation.hpp"
 #include "hexa/services/json.hpp"
 #include "recording.pb.h"
 #include "scratch_dir.hpp"

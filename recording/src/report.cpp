@@ -1,4 +1,4 @@
-#include "hexa/recorder/report.hpp"
+#include "hexa/recording/report.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +10,7 @@
 #include <Eigen/Geometry>
 
 #include "hexa/core/pose.hpp"
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/recording.hpp"
 #include "hexa/services/json.hpp"
 #include "report_events.hpp"
 #include "hexa/services/text.hpp"

@@ -1,7 +1,7 @@
 // MCAP writer and reader, implemented from the specification (mcap.dev/spec): little-endian
 // integers, strings and byte arrays prefixed by a uint32 length, maps and arrays prefixed by
 // their uint32 byte length, every record = opcode (1 byte) + uint64 content length + content.
-#include "hexa/recorder/mcap.hpp"
+#include "hexa/recording/mcap.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>

@@ -1,6 +1,6 @@
 // The one mapping between DDS samples and recording protobuf messages (see convert.hpp).
 // Field order follows idl/hexa.idl; every IDL field appears once in each direction.
-#include "hexa/recorder/convert.hpp"
+#include "hexa/recording/convert.hpp"
 
 #include <cstring>
 #include <limits>

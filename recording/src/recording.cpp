@@ -1,4 +1,4 @@
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/recording.hpp"
 
 #include <fnmatch.h>
 #include <sys/stat.h>
@@ -20,7 +20,7 @@
 #include <sstream>
 
 #include "hexa/core/param_checks.hpp"
-#include "hexa/recorder/csv_columns.hpp"
+#include "hexa/recording/csv_columns.hpp"
 #include "hexa/services/text.hpp"
 
 namespace hexa::recorder {

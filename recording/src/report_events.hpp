@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-#include "hexa/recorder/report.hpp"
+#include "hexa/recording/report.hpp"
 #include "recording.pb.h"
 
 namespace hexa::recorder {
