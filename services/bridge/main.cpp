@@ -30,6 +30,7 @@
 #include "hexa/recording/convert.hpp"
 #include "hexa/recording/recording.hpp"
 #include "hexa/recording/scene.hpp"
+#include "hexa/recording/topic_types.hpp"
 #include "hexa/services/cli.hpp"
 #include "hexa/services/logging.hpp"
 #include "hexa/services/scheduling.hpp"
@@ -44,8 +45,9 @@ namespace comm = hexa::comm;
 namespace recorder = hexa::recorder;
 namespace rec = hexa::rec;
 
-constexpr uint32_t kSceneChannel = 10;
-constexpr uint32_t kTransformsChannel = 11;
+// After the topic channels (1 + TopicKind).
+constexpr uint32_t kSceneChannel = 1 + comm::kTopicKindCount;
+constexpr uint32_t kTransformsChannel = kSceneChannel + 1;
 constexpr std::size_t kTake = 64;  // samples per dds_take
 
 // Channel id of a DDS topic: 1 + its TopicKind.
@@ -291,15 +293,10 @@ int main(int argc, char** argv) {
     }
 
     std::vector<std::unique_ptr<SourceBase>> sources;
-    sources.push_back(std::make_unique<Source<hexa_msg_LegSensors, rec::LegSensors>>(participant));
-    sources.push_back(std::make_unique<Source<hexa_msg_ValveCommand, rec::ValveCommand>>(participant));
-    sources.push_back(std::make_unique<Source<hexa_msg_ImuSample, rec::ImuSample>>(participant));
-    sources.push_back(std::make_unique<Source<hexa_msg_LegSetpoint, rec::LegSetpoint>>(participant));
-    sources.push_back(std::make_unique<Source<hexa_msg_PoseReport, rec::PoseReport>>(participant));
-    sources.push_back(std::make_unique<Source<hexa_msg_GroundTruth, rec::GroundTruth>>(participant));
-    sources.push_back(std::make_unique<Source<hexa_msg_OperatorCommand, rec::OperatorCommand>>(participant));
-    sources.push_back(std::make_unique<Source<hexa_msg_NodeStatus, rec::NodeStatus>>(participant));
-    sources.push_back(std::make_unique<Source<hexa_msg_FaultEvent, rec::FaultEvent>>(participant));
+    recorder::ForEachTopicType([&](auto type) {
+      using Type = decltype(type);
+      sources.push_back(std::make_unique<Source<typename Type::Dds, typename Type::Proto>>(participant));
+    });
 
     std::vector<ChannelInfo> channels;
     for (const auto& s : sources) {

@@ -120,6 +120,10 @@ TEST(SessionReportOutcome, AStandbyTakeOverIsListedWithItsTick) {
   const auto json = hexa::json::Value::parse(Slurp(dir / "report.json"));
   ASSERT_EQ(json["takeovers"].size(), 1u);
   EXPECT_EQ(json["takeovers"][0].get<std::string>().rfind("leg 3: the hot standby", 0), 0u);
+  // The plots mark the same take-over at the same tick (events.csv, one rule: takeover.hpp).
+  EXPECT_NE(Slurp(dir / "events.csv").find("0.401,takeover,3,\"leg 3 standby takes over\""),
+            std::string::npos)
+      << Slurp(dir / "events.csv");
   // A primary throughout: no take-over, "none".
   WriteSession(path, rec::SUPERVISOR_TRACKING, 0);
   WriteSessionReport(ComputeSessionReport(path), dir.string());
