@@ -61,7 +61,7 @@ void AddOptions(hexa::cli::Parser& cli) {
 }
 
 // Reads the parsed options into `o`; false with the error printed (exit_code::kUsage).
-bool ReadOptions(const hexa::cli::Parser& cli, hexa::plant_sim::PlantNodeOptions& o) {
+bool ReadOptions(hexa::cli::Parser& cli, hexa::plant_sim::PlantNodeOptions& o) {
   const auto seed = cli.GetInt("seed", 0, 1LL << 62);
   const auto legs = cli.GetInt("legs", 0, 6);
   const auto duration = cli.GetDouble("duration", 0, 1e7);

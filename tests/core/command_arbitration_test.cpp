@@ -84,6 +84,18 @@ ArbitrationOutput Tick(CommandArbitration& a, std::uint64_t tick, const Arbitrat
   return out;
 }
 
+// Real time: `ticks` ticks with every leg's writer alive and answering; the input used.
+ArbitrationInput RunAllAlive(CommandArbitration& a, std::uint64_t ticks) {
+  ArbitrationInput in;
+  in.writers_valid = true;
+  for (auto& w : in.writers) w.alive = 1;
+  for (std::uint64_t t = 0; t < ticks; ++t) {
+    AllAnswer(a, t, 6.0);
+    Tick(a, t, &in);
+  }
+  return in;
+}
+
 TEST(CommandArbitration, ValidCommandsReachTheValvesWithoutEvents) {
   CommandArbitration a(Lockstep());
   for (std::uint64_t t = 0; t < 50; ++t) {
@@ -228,13 +240,7 @@ TEST(CommandArbitration, TheStandbyTakesOverWhenThePrimaryLapsesWithoutAFault) {
 
 TEST(CommandArbitration, RealtimeLapseWithFreshCommandsIsTheHostAndTheValveFollows) {
   CommandArbitration a(Realtime());
-  ArbitrationInput in;
-  in.writers_valid = true;
-  for (auto& w : in.writers) w.alive = 1;
-  for (std::uint64_t t = 0; t < 5; ++t) {
-    AllAnswer(a, t, 6.0);
-    Tick(a, t, &in);
-  }
+  ArbitrationInput in = RunAllAlive(a, 5);
   // Leg 6's lease lapses, its commands keep coming (the host delayed the renewal).
   in.writers[5] = LegWriterCounts{0, 1, 0};
   for (std::uint64_t t = 5; t < 40; ++t) {
@@ -250,13 +256,7 @@ TEST(CommandArbitration, RealtimeLapseWithFreshCommandsIsTheHostAndTheValveFollo
 
 TEST(CommandArbitration, RealtimeLapseWithStoppedCommandsIsLivelinessLostAndTheValveCloses) {
   CommandArbitration a(Realtime());
-  ArbitrationInput in;
-  in.writers_valid = true;
-  for (auto& w : in.writers) w.alive = 1;
-  for (std::uint64_t t = 0; t < 5; ++t) {
-    AllAnswer(a, t, 6.0);
-    Tick(a, t, &in);
-  }
+  ArbitrationInput in = RunAllAlive(a, 5);
   // Leg 6 stops answering at tick 4 and its lease lapses: dead once its newest answer is a
   // lease (10 ticks) old, not before.
   in.writers[5] = LegWriterCounts{0, 1, 0};
