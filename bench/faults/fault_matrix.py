@@ -151,7 +151,7 @@ def read_csv(path):
 
 def pose_of(truth_row):
     """(position, orientation wxyz) of a GroundTruth row: columns "position_m.x" ... as
-    hexa_recorder exports them ("position_m[0]" ... in older exports)."""
+    hexa_recorder exports them, or "position_m[0]" ..."""
     def get(field, k, axis):
         return float(col(truth_row, "%s.%s" % (field, axis), "%s[%d]" % (field, k)))
     return ([get("position_m", k, a) for k, a in enumerate("xyz")],
