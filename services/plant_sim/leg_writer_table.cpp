@@ -26,10 +26,14 @@ void LegWriterTable::RefreshOne(const comm::Reader<hexa_msg_ValveCommand>& reade
     const dds_instance_handle_t h = slots[k].publication.load(std::memory_order_acquire);
     if (h == 0) break;  // slots are claimed in order
     if (r.leg[k] != 0) continue;
-    const std::optional<std::string> user_data = comm::MatchedWriterUserData(reader.get(), h);
+    // What the writer says it is counts only when the session key vouches for it, by the rule
+    // of the valve commands (comm::MatchedWriterClaim): a foreign writer that claims to be
+    // leg N's controller is not counted as one.
+    std::string claim;
+    const comm::CommandTrust trust = comm::MatchedWriterClaim(reader.get(), h, claim);
     int leg = 0;
     bool standby = false;
-    if (!user_data) {
+    if (trust == comm::CommandTrust::kUnknownWriter) {
       // Not (yet) known as a matched publication: discovery may lag the liveliness callback
       // that claimed the slot, so ask again on later refreshes; a writer still unknown after
       // 100 of them is gone (it cannot count as alive, and no leg can claim it). Not while
@@ -38,12 +42,13 @@ void LegWriterTable::RefreshOne(const comm::Reader<hexa_msg_ValveCommand>& reade
       // never completed: "legs with a live writer 5/6").
       if (r.unresolved[k] < 255) ++r.unresolved[k];
       if (may_give_up && r.unresolved[k] >= 100) r.leg[k] = -1;
-    } else if (ParseLegUserData(*user_data, leg, standby) && leg == reader_leg) {
+    } else if (comm::Trusted(trust) && ParseLegUserData(claim, leg, standby) && leg == reader_leg) {
       r.leg[k] = static_cast<std::int8_t>(leg);
       r.standby[k] = standby;
     } else {
-      // A tool's writer (replay), or one that names another leg than its partition's: not
-      // this leg's controller (RejectCommand refuses its samples).
+      // A tool's writer (replay), one that names another leg than its partition's, or one
+      // whose claim the session key does not vouch for: not this leg's controller
+      // (RejectCommand and the command check refuse its samples).
       r.leg[k] = -1;
     }
   }

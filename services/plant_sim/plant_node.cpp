@@ -231,7 +231,7 @@ void PlantNode::WatchSilence(dds_duration_t& wait) {
           PublishTick(leg);
           ++resent_samples_;
         }
-      ReaskSupervisor();
+      if (lockstep_.SupervisorReaskDue(now)) ReaskSupervisor();
       break;
     case LockstepBarrier::Action::kTimeout: {
       std::string states;

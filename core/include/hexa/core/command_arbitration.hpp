@@ -152,7 +152,8 @@ class CommandArbitration {
   bool Offer(const CommandSample& s, std::uint64_t tick, LivelinessOf&& liveliness,
              ArbitrationEvents& events) {
     const std::size_t i = static_cast<std::size_t>(s.leg - 1);
-    if (sources_[i].Offer(s.writer, s.standby, liveliness) != CommandSourceSelector::Verdict::kApply)
+    if (sources_[i].Offer(s.writer, s.standby, {s.answered_tick, s.valve_v}, liveliness) !=
+        CommandSourceSelector::Verdict::kApply)
       return false;
     return Accept(s, tick, events);
   }

@@ -23,6 +23,10 @@ namespace hexa {
 
 struct LockstepClockParams {
   LockstepBarrierParams barrier;
+  // Re-asks of the supervisor back off within a tick (the re-ask period, then doubling up to
+  // this): a supervisor that is only slow is not buried under repeated inputs
+  // (docs/faults.md, "Re-asks back off").
+  std::int64_t supervisor_reask_max_ns = 1'000'000'000;
   std::uint64_t sync_every_ticks = 0;  // 0: no recorder flow control
   std::uint64_t sync_window_ticks = 1200;
 };
@@ -30,7 +34,9 @@ struct LockstepClockParams {
 class LockstepClock {
  public:
   explicit LockstepClock(const LockstepClockParams& params = {})
-      : params_(params), barrier_(params.barrier) {}
+      : params_(params),
+        barrier_(params.barrier),
+        supervisor_reask_(params.barrier.reask_after_ns, params.supervisor_reask_max_ns) {}
 
   // What the loop does after a completed tick `tick` (the tick now to be published).
   enum class Flow : std::uint8_t {
@@ -45,7 +51,12 @@ class LockstepClock {
   std::uint64_t last_tick() const { return last_tick_; }
 
   // Tick `tick` published at `now_ns` to the legs in `awaited`.
-  void Begin(std::uint64_t tick, LegMask awaited, std::int64_t now_ns) { barrier_.Begin(tick, awaited, now_ns); }
+  void Begin(std::uint64_t tick, LegMask awaited, std::int64_t now_ns) {
+    supervisor_reask_.Begin(now_ns);
+    barrier_.Begin(tick, awaited, now_ns);
+  }
+  // At a re-ask of the legs (LockstepBarrier::Check): is the supervisor to be asked again too?
+  bool SupervisorReaskDue(std::int64_t now_ns) { return supervisor_reask_.Due(now_ns); }
   bool Answer(int leg, std::uint64_t tick) { return barrier_.Answer(leg, tick); }
   bool Release(LegMask legs) { return barrier_.Release(legs); }
   // Every awaited leg answered, the loop runs and no recorder sync holds it.
@@ -80,6 +91,7 @@ class LockstepClock {
  private:
   LockstepClockParams params_;
   LockstepBarrier barrier_;
+  ReaskBackoff supervisor_reask_;
   bool running_ = false;
   std::uint64_t last_tick_ = UINT64_MAX;
   bool sync_pending_ = false;       // the current tick is not published until the wait ends
