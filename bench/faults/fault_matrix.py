@@ -149,6 +149,15 @@ def read_csv(path):
                 for row in csv.DictReader(f)]
 
 
+def pose_of(truth_row):
+    """(position, orientation wxyz) of a GroundTruth row: columns "position_m.x" ... as
+    hexa_recorder exports them, or "position_m[0]" ..."""
+    def get(field, k, axis):
+        return float(col(truth_row, "%s.%s" % (field, axis), "%s[%d]" % (field, k)))
+    return ([get("position_m", k, a) for k, a in enumerate("xyz")],
+            [get("orientation_wxyz", k, a) for k, a in enumerate("wxyz")])
+
+
 def export(build, mcap, out_dir):
     os.makedirs(out_dir, exist_ok=True)
     subprocess.run([os.path.join(build, "services/recorder/hexa_recorder"), "export", mcap,
@@ -248,15 +257,13 @@ def analyse(build, out_dir, case, fault_at_s):
         for t in truth:
             by_tick[int(col(t, "header.tick", "tick"))] = t
         if det_tick in by_tick:
-            p0 = [float(by_tick[det_tick]["position_m[%d]" % k]) for k in range(3)]
-            q0 = [float(by_tick[det_tick]["orientation_wxyz[%d]" % k]) for k in range(4)]
+            p0, q0 = pose_of(by_tick[det_tick])
             exc, rot = 0.0, 0.0
             for n in range(det_tick, det_tick + 1001):
                 t = by_tick.get(n)
                 if t is None:
                     continue
-                p = [float(t["position_m[%d]" % k]) for k in range(3)]
-                q = [float(t["orientation_wxyz[%d]" % k]) for k in range(4)]
+                p, q = pose_of(t)
                 exc = max(exc, sum((a - b) ** 2 for a, b in zip(p, p0)) ** 0.5)
                 dot = abs(sum(a * b for a, b in zip(q, q0)))
                 rot = max(rot, 2.0 * __import__("math").acos(min(1.0, dot)))

@@ -58,7 +58,9 @@ LockstepSimulation::LockstepSimulation(const LockstepConfig& config) : config_(c
     home.R_BP.setIdentity();
     UpdateCoupling(home);
   }
-  hygiene_ = CommandHygieneParams::FromValve(config_.rig.valve, 0);
+  ArbitrationParams arbitration;
+  arbitration.hygiene = CommandHygieneParams::FromValve(config_.rig.valve, 0);
+  arbitration_ = std::make_unique<CommandArbitration>(arbitration);
   schedule_.supervisor_every_ticks = config_.supervisor_every_ticks;
 }
 
@@ -106,14 +108,23 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
   } else {
     for (std::size_t i = 0; i < kNumLegs; ++i) legs_[i]->Update(leg_in[i], leg_out_[i]);
   }
-  LegArray<double> valve_v{};
+  // The commands reach the plant's arbitration as the service's do: each leg's one writer
+  // (alive: it just answered), its answer to this tick, then the tick's arbitration.
+  ArbitrationEvents events;
   for (std::size_t i = 0; i < kNumLegs; ++i) {
-    barrier_.Answer(static_cast<int>(i) + 1, leg_out_[i].tick);
-    // Command hygiene exactly as the plant service applies it.
-    LatestCommand cmd{true, leg_out_[i].tick, leg_out_[i].valve_v};
-    const CommandCheck check = CheckCommand(cmd, tick_, hygiene_);
-    valve_v[i] = SafeValveVoltage(cmd, check, hygiene_);
+    const int leg = static_cast<int>(i) + 1;
+    CommandSample sample;
+    sample.leg = leg;
+    sample.writer = static_cast<std::uint64_t>(leg);
+    sample.answered_tick = leg_out_[i].tick;
+    sample.valve_v = leg_out_[i].valve_v;
+    if (arbitration_->Offer(sample, tick_, [](std::uint64_t) { return SourceLiveliness::kAlive; }, events))
+      barrier_.Answer(leg, leg_out_[i].tick);
   }
+  ArbitrationInput arbitration_in;
+  arbitration_in.tick = tick_;
+  arbitration_->Update(arbitration_in, arbitration_out_);
+  const LegArray<double>& valve_v = arbitration_out_.valve_v;
   applied_v_ = valve_v;
   // Every leg controller answers the tick it was given (LegController::Update): an internal
   // invariant, checked always.

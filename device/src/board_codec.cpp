@@ -15,6 +15,7 @@ const char* ToString(DeviceStatus status) {
     case DeviceStatus::kNoNewData: return "no_new_data";
     case DeviceStatus::kNotConfigured: return "not_configured";
     case DeviceStatus::kIoError: return "io_error";
+    case DeviceStatus::kFault: return "fault";
   }
   return "unknown";
 }

@@ -7,13 +7,13 @@
 #include <fstream>
 
 #include "hexa/recording/plant_truth.hpp"
+#include "hexa/services/exit_code.hpp"
 #include "hexa/services/logging.hpp"
 #include "plant_node.hpp"
 
-int main(int argc, char** argv) {
-  hexa::cli::Parser cli("hexa_plant_sim",
-                        "Simulated rig: publishes leg sensors (1 kHz), IMU (200 Hz) and ground "
-                        "truth; applies the leg controllers' valve commands.");
+namespace {
+
+void AddOptions(hexa::cli::Parser& cli) {
   hexa::node::AddCommonOptions(cli);
   cli.AddOption("profile", "name", "disturbance profile of the rig file (realistic, ideal)",
                 "realistic");
@@ -58,10 +58,10 @@ int main(int argc, char** argv) {
   cli.AddOption("fault", "kind:leg:time_s[,...]",
                 "inject rig faults (docs/faults.md): pot-stuck, pot-drift, pressure-dead (leg "
                 "1..6), imu-dropout, supply-loss (leg 0); e.g. pot-stuck:3:1.5");
-  const bool parsed = cli.Parse(argc, argv);
-  if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
+}
 
-  hexa::plant_sim::PlantNodeOptions o;
+// Reads the parsed options into `o`; false with the error printed (exit_code::kUsage).
+bool ReadOptions(hexa::cli::Parser& cli, hexa::plant_sim::PlantNodeOptions& o) {
   const auto seed = cli.GetInt("seed", 0, 1LL << 62);
   const auto legs = cli.GetInt("legs", 0, 6);
   const auto duration = cli.GetDouble("duration", 0, 1e7);
@@ -77,7 +77,7 @@ int main(int argc, char** argv) {
       !stale || !grace || !lose || !bench_load || !bench_release || !budget ||
       !overrun) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
-    return 2;
+    return false;
   }
   o.compute_budget.budget_s = *budget;
   o.compute_budget.overrun_limit = static_cast<std::uint64_t>(*overrun);
@@ -85,7 +85,7 @@ int main(int argc, char** argv) {
     const std::string error = hexa::ParsePlantFaultList(cli.Get("fault"), o.plant_faults.faults);
     if (!error.empty()) {
       std::fprintf(stderr, "error: --fault %s\n(see --help)\n", error.c_str());
-      return 2;
+      return false;
     }
   }
   o.profile = cli.Get("profile");
@@ -104,53 +104,72 @@ int main(int argc, char** argv) {
   if (o.lose_supervisor_inputs_tick >= 0 && o.lose_supervisor_inputs_tick % 5 != 0) {
     std::fprintf(stderr, "error: --lose-supervisor-inputs %lld: not a supervisor tick (a multiple "
                  "of 5)\n", static_cast<long long>(o.lose_supervisor_inputs_tick));
-    return 2;
+    return false;
   }
   o.free_fall.enabled = cli.Get("bench") == "free-fall";
   o.free_fall.load_kg = *bench_load;
   o.free_fall.release_s = *bench_release;
+  return true;
+}
 
+// Loads the rig, builds the node and runs it; the node's exit code (exit_code.hpp).
+int RunNode(const hexa::cli::Parser& cli, const hexa::plant_sim::PlantNodeOptions& o,
+            std::shared_ptr<spdlog::logger> log) {
+  hexa::comm::EnsureDdsConfig(o.common.dds_config);
+  if (!hexa::node::InstallSessionKey(o.common.session_key_path, *log)) return hexa::exit_code::kUsage;
+  auto config = hexa::node::LoadConfig(o.common.rig_path, *log);
+  if (!config) return hexa::exit_code::kRunError;
+  for (const auto& overlay : o.common.rig_overlays) {
+    log->info("rig overlay {} not applied to the plant: it simulates the rig file and profile "
+              "'{}' (overlays configure the controllers and the supervisor)", overlay, o.profile);
+  }
+  if (config->profiles.count(o.profile) == 0) {
+    std::string names;
+    for (const auto& [name, p] : config->profiles) names += " " + name;
+    log->error("--profile '{}' is not defined in {} (defined:{})", o.profile,
+               o.common.rig_path, names);
+    return hexa::exit_code::kRunError;
+  }
+  // Before the participant exists: Cyclone's threads inherit the policy (docs/platform_notes.md).
+  // 70, below the legs (80): a tick of the simulation can cost a millisecond (stiff substeps),
+  // and the plant above the legs on their CPU made their valve writers lapse
+  // (docs/measurements/deployment.md, "Where the lapses' milliseconds go"); late, the plant only slips.
+  auto latency_hold = hexa::node::ApplyScheduling(o.common, 70, *log);
+  hexa::plant_sim::PlantNode node(o, *config, log);
+  if (cli.Has("truth-out")) {
+    std::string text;
+    google::protobuf::TextFormat::PrintToString(
+        hexa::recorder::MakePlantTruth(node.plant(), config->rig_name, o.profile), &text);
+    std::ofstream out(cli.Get("truth-out"));
+    out << text;
+    if (!out) {
+      log->error("cannot write --truth-out {}", cli.Get("truth-out"));
+      return hexa::exit_code::kRunError;
+    }
+    log->info("true plant parameters written to {} (evaluation only)", cli.Get("truth-out"));
+  }
+  const int rc = node.Run();
+  // The loop is over: its teardown must not starve the processes still running (real time).
+  hexa::node::LeaveRealtimeScheduling(o.common, latency_hold, *log);
+  return rc;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  hexa::cli::Parser cli("hexa_plant_sim",
+                        "Simulated rig: publishes leg sensors (1 kHz), IMU (200 Hz) and ground "
+                        "truth; applies the leg controllers' valve commands.");
+  AddOptions(cli);
+  const bool parsed = cli.Parse(argc, argv);
+  if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
+  hexa::plant_sim::PlantNodeOptions o;
+  if (!ReadOptions(cli, o)) return hexa::exit_code::kUsage;
   auto log = hexa::logging::Init("plant", o.common.log_file, o.common.log_level);
   try {
-    hexa::comm::EnsureDdsConfig(o.common.dds_config);
-    if (!hexa::node::InstallSessionKey(o.common.session_key_path, *log)) return 2;
-    auto config = hexa::node::LoadConfig(o.common.rig_path, *log);
-    if (!config) return 1;
-    for (const auto& overlay : o.common.rig_overlays) {
-      log->info("rig overlay {} not applied to the plant: it simulates the rig file and profile "
-                "'{}' (overlays configure the controllers and the supervisor)", overlay, o.profile);
-    }
-    if (config->profiles.count(o.profile) == 0) {
-      std::string names;
-      for (const auto& [name, p] : config->profiles) names += " " + name;
-      log->error("--profile '{}' is not defined in {} (defined:{})", o.profile,
-                 o.common.rig_path, names);
-      return 1;
-    }
-    // Before the participant exists: Cyclone's threads inherit the policy (docs/platform_notes.md).
-    // 70, below the legs (80): a tick of the simulation can cost a millisecond (stiff substeps),
-    // and the plant above the legs on their CPU made their valve writers lapse
-    // (docs/measurements/deployment.md, "Where the lapses' milliseconds go"); late, the plant only slips.
-    auto latency_hold = hexa::node::ApplyScheduling(o.common, 70, *log);
-    hexa::plant_sim::PlantNode node(o, *config, log);
-    if (cli.Has("truth-out")) {
-      std::string text;
-      google::protobuf::TextFormat::PrintToString(
-          hexa::recorder::MakePlantTruth(node.plant(), config->rig_name, o.profile), &text);
-      std::ofstream out(cli.Get("truth-out"));
-      out << text;
-      if (!out) {
-        log->error("cannot write --truth-out {}", cli.Get("truth-out"));
-        return 1;
-      }
-      log->info("true plant parameters written to {} (evaluation only)", cli.Get("truth-out"));
-    }
-    const int rc = node.Run();
-    // The loop is over: its teardown must not starve the processes still running (real time).
-    hexa::node::LeaveRealtimeScheduling(o.common, latency_hold, *log);
-    return rc;
+    return RunNode(cli, o, log);
   } catch (const std::exception& e) {
     log->error("{}", e.what());
-    return 1;
+    return hexa::exit_code::kRunError;
   }
 }

@@ -1,14 +1,30 @@
 // The plant service: the simulated rig behind DDS, and the clock master. Publishes every
 // leg's sensors each 1 ms tick, the IMU every 5 ms, ground truth each tick; applies each
-// leg's valve command after command hygiene (missing, stale, NaN or out-of-range -> valve
-// at null, FaultEvent). Lockstep or real time (docs/architecture.md).
+// leg's valve command after the command arbitration (core/command_arbitration.hpp: missing,
+// stale, NaN or out-of-range -> valve at null, FaultEvent; dead legs, the interlock, the
+// host-overload rule). Lockstep or real time (docs/architecture.md).
 //
-// Threads. Lockstep: the tick advances on Cyclone's receive thread, in the ValveCommand
-// reader's data callback: when the last awaited leg has answered tick n the plant steps and
-// publishes tick n + 1 at once, with no hand-over to another thread (docs/performance.md).
-// The main thread only watches for silence (re-ask, dead legs, timeout) and shutdown. Real
-// time: the main thread ticks on the clock and takes the newest commands at each tick; no
-// thread wakes on their arrival. One mutex guards the loop state in both.
+// Parts: the command arbitration (core, pure), the lockstep clock's decisions (core
+// lockstep_clock.hpp) and the real-time clock (realtime_clock.hpp), the rig behind the device
+// seam (device/device.hpp: SimDevice, the simulation), the valve writers' table
+// (leg_writer_table.hpp), the figures of the run (run_figures.hpp). One tick is
+// read -> arbitrate -> step the device -> write (PlantNode::CompleteTick and PublishTick).
+// Files: plant_node.cpp (the loops), plant_commands.cpp (reception, dead legs, the wording of
+// fault events), plant_outputs.cpp (publishing), plant_lifecycle.cpp (start-up, status,
+// watchdog, the end-of-run report).
+//
+// Threading rule. Every member below `mutex_` is touched only with `mutex_` held, by exactly
+// one thread at a time; the members above it are set in the constructor and only read after.
+//   Lockstep: the tick advances on Cyclone's receive thread, in the ValveCommand readers'
+//   data callback (OnValveData): when the last awaited leg has answered tick n the plant steps
+//   and publishes tick n + 1 at once, with no hand-over to another thread
+//   (docs/performance.md: a hand-over costs a wake-up per tick). The main thread only watches
+//   for silence (re-ask, dead legs, timeout), waits for the recorder's acknowledgements and
+//   for shutdown, under the same lock between its waits; it never blocks while holding it.
+//   Real time: the main thread alone runs the loop; no callback is installed (the lock is held
+//   for form, uncontended), and commands are taken at each tick.
+//   The FaultEvent reader is polled, never a callback: this process writes FaultEvents with
+//   the lock held, and Cyclone may deliver a local sample inside that write.
 //
 // Dead legs (docs/faults.md): every leg controller's ValveCommand writer carries its leg in
 // USER_DATA and asserts MANUAL_BY_TOPIC liveliness from its control loop. Real time: a leg
@@ -21,7 +37,6 @@
 #pragma once
 
 #include <array>
-#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -29,17 +44,22 @@
 #include <vector>
 
 #include "hexa/comm/comm.hpp"
-#include "hexa/core/command_hygiene.hpp"
-#include "hexa/core/command_source.hpp"
+#include "hexa/core/command_arbitration.hpp"
+#include "hexa/core/lockstep_clock.hpp"
 #include "hexa/core/lockstep_protocol.hpp"
-#include "hexa/core/schedule_slips.hpp"
 #include "hexa/core/plant_faults.hpp"
 #include "hexa/core/platform_plant.hpp"
+#include "hexa/device/sim_device.hpp"
 #include "hexa/services/command_refusal.hpp"
 #include "hexa/services/node.hpp"
 #include "hexa/services/peer_processes.hpp"
+#include "leg_writer_table.hpp"
+#include "realtime_clock.hpp"
+#include "run_figures.hpp"
 
 namespace hexa::plant_sim {
+
+inline constexpr double kTickS = 0.001;  // one tick of the loop
 
 struct PlantNodeOptions {
   node::CommonOptions common;
@@ -81,133 +101,63 @@ struct PlantNodeOptions {
   FreeFallBenchParams free_fall;   // --bench free-fall: the Appendix B bench, not the platform
 };
 
-// Age of the command the plant applied at a tick, in ticks (tick - answered tick; 0 = the
-// command answered the sensors of this tick), per leg. Real time: a command older than the
-// sensor sample just before it (age >= 1) arrived too late for its tick: a late tick.
-struct CommandAgeHistogram {
-  static constexpr int kBins = 6;  // 0, 1, 2, 3-7, 8-15, >= 16
-  std::array<std::uint64_t, kBins> bins{};
-  std::uint64_t none = 0;          // no command yet
-  void Add(std::int64_t age_ticks);
-  std::uint64_t late() const;      // age >= 1
-  std::uint64_t total() const;
-};
-
-// Distribution of a duration (a lockstep tick's wall time; the real-time wake-up lateness)
-// over a whole run, in 10 us bins up to 100 ms: allocation-free after construction.
-class DurationHistogram {
- public:
-  static constexpr std::int64_t kBinNs = 10'000;
-  static constexpr std::size_t kBins = 10'000;
-  void Add(std::int64_t duration_ns);
-  std::uint64_t count() const { return count_; }
-  // Upper edge of the bin holding the q-quantile (0 < q <= 1), in seconds; 0 when empty.
-  double Quantile_s(double q) const;
-  double max_s() const { return static_cast<double>(max_ns_) * 1e-9; }
-  double mean_s() const { return count_ == 0 ? 0.0 : sum_s_ / static_cast<double>(count_); }
-
- private:
-  std::array<std::uint32_t, kBins + 1> bins_{};  // the last one: beyond 100 ms
-  std::uint64_t count_ = 0;
-  std::int64_t max_ns_ = 0;
-  double sum_s_ = 0.0;
-};
-
-// The leg controllers' ValveCommand writers as the plant's six per-leg readers see them
-// (one reader per leg partition, comm/leg_readers.hpp): which leg each writer drives (its
-// USER_DATA, "leg=N standby=S") and whether it is alive (each reader's liveliness slots,
-// comm/status.hpp). Only a writer in leg N's partition that names leg N counts for leg N; a
-// writer elsewhere or naming another leg counts for none. Refresh() resolves writers seen for
-// the first time (allocates, but only when a writer appears); Counts() reads atomics only.
-// A writer whose USER_DATA cannot be read yet (discovery lags the liveliness callback that
-// claimed its slot) is asked again on later refreshes; with `may_give_up` (the running loops)
-// it counts as gone after 100 of them, without (the start-up wait, where discovery on a loaded
-// machine can lag by seconds and no real-time loop pays for the retries) it is asked until the
-// wait ends.
-class LegWriterTable {
- public:
-  void Refresh(const comm::LegReaders<hexa_msg_ValveCommand>& readers, bool may_give_up = true);
-  LegWriterCounts Counts(int leg) const;
-  // "leg1: 1 alive (primary) ..." for the log, and the slots not resolved to a leg (yet) or
-  // given up on. Allocates.
-  std::string Describe() const;
-
- private:
-  static constexpr std::size_t kSlots = comm::StatusCounters::kMaxWriters;
-  struct PerReader {
-    const comm::StatusCounters* counters = nullptr;
-    std::array<std::int8_t, kSlots> leg{};          // 0 unresolved, -1 not this leg's writer, 1..6
-    std::array<bool, kSlots> standby{};
-    std::array<std::uint8_t, kSlots> unresolved{};  // refreshes that could not resolve the slot
-  };
-  void RefreshOne(const comm::Reader<hexa_msg_ValveCommand>& reader, int reader_leg, bool may_give_up);
-  LegArray<PerReader> readers_{};
-};
-
 class PlantNode {
  public:
   PlantNode(const PlantNodeOptions& options, const config::SystemConfig& config,
             std::shared_ptr<spdlog::logger> log);
-  // Runs until shutdown (exit 0), a peer timeout (3), a non-finite state (4), or the
-  // configured duration (0).
+  // Runs until shutdown (exit_code::kOk), peers not ready or a lockstep stall
+  // (kPlantLockstepStall), a non-finite state (kPlantNonFinite), or the configured duration.
   int Run();
-  const PlatformPlant& plant() const { return plant_; }  // e.g. for its true parameters
+  // The simulated rig (its true parameters, for evaluation).
+  const PlatformPlant& plant() const { return sim_.plant(); }
 
  private:
+  // plant_lifecycle.cpp: start-up, status, watchdog, the report at the end.
   bool WaitForPeers();
-  // Start-up: the first expected peer whose process the launcher named and that ended
-  // ("" if none); and each missing peer with its process state, for the log.
   std::string EndedPeer(const std::vector<std::string>& expected) const;
   std::string DescribeMissing(const std::vector<std::string>& missing) const;
-  // Lockstep: what leg `leg`'s controllers show (writers, processes ended or stuck).
-  SilentLegFacts LegFacts(int leg);
-  // Lockstep, recorder sync: may a sync that has stood still `blocked_ns` be given up? Never
-  // while the readers' processes (supervisor, recorder) exist (a stopped recorder is waited
-  // for); after recorder_sync_give_up_s when one ended or they are not known (another host).
-  bool SyncGiveUpDue(std::int64_t blocked_ns) const;
-  int RunLockstep(std::uint64_t last_tick);
-  int RunRealtime(std::uint64_t last_tick);
-  // Receive thread (lockstep): takes the commands and, when the tick is complete, advances.
-  static void OnValveData(void* self);
-  void AdvanceIfComplete();
-  void StartTick(std::int64_t now_ns);  // publish tick_ and await its answers
-  // Publishes the sensors of tick_ (all legs, or `only_leg` to that leg alone), and with all legs the IMU
-  // (every 5th tick) and ground truth. Batched: each reader gets one datagram.
-  void PublishTick(int only_leg = 0);
-  void ReaskSupervisor();  // lockstep: re-publishes the supervisor's inputs of s(n)
-  void TakeCommands(bool feed_barrier);
-  // A sample of another leg's key from leg `reader_leg`'s partition: refused, counted, logged.
-  void RejectCommand(int reader_leg, const hexa_msg_ValveCommand& c, const dds_sample_info_t& info);
-  // Command hygiene and one plant step; false when the plant state became non-finite.
-  bool ApplyAndStep(std::uint64_t stale_tolerance);
-  void EndTick();
-  // Dead legs: lockstep (main thread) judges the legs the barrier still awaits; real time
-  // (every tick) holds the legs without a live writer. Both publish the cause once.
-  void JudgeSilentLegs(std::int64_t now_ns);
-  // Ticks since leg i's newest answered tick (tick_ - answered); -1 before its first command.
-  std::int64_t CommandAge(std::size_t i) const;
-  // Lockstep main thread, under the lock: faults to take, gone writers, dead legs, re-asks,
-  // the overall timeout; shortens `wait` to the next check.
-  void WatchSilence(dds_duration_t& wait);
-  void CheckLinksRealtime();
-  void MarkLegDead(int leg, hexa_msg_FaultReason reason, const char* detail);
-  void ReportGoneWriters();
-  // Supervisor's sensor-consistency faults: that leg's valve is held at null (interlock).
-  void TakeFaultEvents();
-  void MonitorCompute(const hexa_msg_ValveCommand& c, dds_instance_handle_t writer);
   void PublishStatus(hexa_msg_NodeState state, const char* detail);
+  bool SyncGiveUpDue(std::int64_t blocked_ns) const;
+  void LogStart() const;
+  void LogEnd() const;
   void LogLastGoodState() const;
   void LogCommandAges() const;
   void WriteSummary(int exit_code) const;
 
+  // plant_node.cpp: the loops and the tick.
+  int RunLockstep(std::uint64_t last_tick);
+  int RunRealtime(std::uint64_t last_tick);
+  static void OnValveData(void* self);  // receive thread (lockstep)
+  void AdvanceIfComplete();
+  void StartTick(std::int64_t now_ns);  // publish tick_ and await its answers
+  // Arbitrate, step the device, end the tick; false when the device failed (non-finite).
+  bool CompleteTick(const ArbitrationInput& in);
+  void WatchSilence(dds_duration_t& wait);  // lockstep main thread, under the lock
+  void ServeRecorderSync(bool acked);       // lockstep main thread: an acknowledgement wait
+
+  // plant_outputs.cpp: sensors of tick_ (all legs, or `only_leg` alone: a re-ask), the IMU
+  // (every 5th tick), ground truth and the tracker. Batched: each reader gets one datagram.
+  void PublishTick(int only_leg = 0);
+  void ReaskSupervisor();  // lockstep: re-publishes the supervisor's inputs of s(n)
+
+  // plant_commands.cpp: reception and the arbitration's events.
+  void TakeCommands(bool feed_barrier);
+  void RejectCommand(int reader_leg, const hexa_msg_ValveCommand& c, const dds_sample_info_t& info);
+  void TakeFaultEvents();  // the supervisor's sensor-consistency faults: the interlock
+  LegArray<LegWriterCounts> WriterCounts() const;
+  SilentLegFacts LegFacts(int leg);
+  void JudgeSilentLegs(std::int64_t now_ns);  // lockstep
+  void ReportGoneWriters();                   // lockstep
+  // Publishes (with a reason) and logs each event, worded for the operator.
+  void Report(const ArbitrationEvents& events);
+
   PlantNodeOptions options_;
   config::SystemConfig config_;
   std::shared_ptr<spdlog::logger> log_;
-  PlatformPlant plant_;
-  CommandHygieneParams hygiene_;
+  device::SimDevice sim_;      // the simulated rig
+  device::Device& device_;     // the rig the loop reads and writes (sim_)
+  ArbitrationParams arbitration_params_;
   LockstepSchedule schedule_;
-  LockstepBarrier barrier_;
-  std::uint64_t last_tick_ = UINT64_MAX;
 
   comm::Participant participant_;
   comm::ShutdownGuard shutdown_;
@@ -227,62 +177,24 @@ class PlantNode {
   node::FaultPublisher faults_;
   node::PeerTracker peers_;
   comm::Topic<hexa_msg_FaultEvent> fault_topic_;
-  comm::Reader<hexa_msg_FaultEvent> fault_reader_;  // polled: never a callback (see .cpp)
+  comm::Reader<hexa_msg_FaultEvent> fault_reader_;  // polled: never a callback
   comm::WaitSet waitset_;
-
-  std::mutex mutex_;  // everything below; the receive thread and the main thread
-  std::uint64_t tick_ = 0;
-  bool running_ = false;        // lockstep: the receive thread may advance
-  bool sync_pending_ = false;   // lockstep: tick_ is not published until the recorder caught up
-  bool ack_wait_requested_ = false;  // the main thread is to start an acknowledgement wait
-  bool ack_wait_active_ = false;     // ... and is in it
-  std::uint64_t ack_wait_tick_ = 0;  // the tick at which it was requested
-  int64_t sync_blocked_since_ns_ = 0;
-  // Lockstep: leases of awaited legs lapsed while their processes were not shown dead or
-  // stuck (stopped, not scheduled): waited through, one per leg and tick, logged once per leg.
-  std::uint64_t lapses_waited_ = 0;
-  LegArray<std::uint64_t> lapse_waited_tick_{};
   node::PeerProcesses peer_processes_;  // --peer-pid: the session's processes on this host
   LegArray<std::string> leg_name_{}, standby_name_{};  // "leg3", "leg3_standby"
-  bool sync_suspended_ = false;  // a sync was given up: no blocking until a wait succeeds
-  std::uint64_t recorder_syncs_given_up_ = 0;
-  // Real time: wake-ups later than this restart the schedule (RunRealtime).
-  // Every slip is logged with its tick and kept (count, total, worst, the first 64 ticks) for
-  // the summary: a lapse's tick can be matched to the stall before it.
-  static constexpr int64_t kSlipAfter_ns = 2'000'000;
-  core::ScheduleSlips slips_{kSlipAfter_ns};
-  std::uint64_t recorder_syncs_ = 0;      // acknowledgement waits
-  std::uint64_t recorder_sync_blocks_ = 0;  // of them, the loop stopped for
-  double recorder_sync_wait_s_ = 0.0;     // time the loop stood still for them
-  int exit_code_ = -1;          // set when the run ends (>= 0)
-  LegArray<LatestCommand> latest_{};
-  LegArray<CommandEpisode> episodes_{};  // fault episodes per leg: one report each
-  // Real time: lease lapses while the leg's commands were fresh (the host, not the leg).
-  std::int64_t lapse_confirm_ticks_ = 10;      // the lease in ticks
-  std::uint64_t slip_recent_until_tick_ = 0;  // a slip of the schedule: stale tolerance after it
-  LegArray<bool> lapse_while_fresh_{};
-  std::uint64_t lapses_while_fresh_ = 0;
+
+  std::mutex mutex_;  // everything below (the threading rule above)
+  std::uint64_t tick_ = 0;
+  int exit_code_ = -1;  // set when the run ends (>= 0)
+  CommandArbitration arbitration_;
+  ArbitrationOutput arbitration_out_;
+  ArbitrationEvents events_;  // the events of a call between ticks (cleared before each)
+  device::DeviceSensors sensors_{};  // the device's newest sample
+  LockstepClock lockstep_;
+  RealtimeClock realtime_;
+  std::uint64_t slip_recent_until_tick_ = 0;  // real time: stale tolerance after a slip
   LegWriterTable writers_;
-  LegMask dropped_ = 0;                  // lockstep: legs no longer awaited (dead)
-  LegArray<bool> link_dead_{};           // no live writer now (real time) / dropped (lockstep)
-  LegArray<bool> interlock_{};           // a sensor fault of the leg reported: valve at null
-  LegArray<hexa_msg_FaultReason> forced_reason_{};  // why the valve is forced to null
-  LegArray<bool> gone_reported_{};
-  LegArray<std::uint32_t> link_alive_run_{};
-  LegArray<bool> link_armed_{};  // real time: a writer of the leg has been seen alive  // real time: ticks alive since the leg was dead
-  LegArray<WriterComputeBudgets> compute_{};  // per writer: primary and standby
-  bool imu_lost_reported_ = false;
-  bool host_overload_reported_ = false;
-  LegArray<std::uint32_t> faults_per_leg_{};
-  LegArray<CommandAgeHistogram> command_age_{};
-  hexa_msg_GroundTruth truth_sample_{};
-  node::CycleTimeWindow cycle_times_;
-  DurationHistogram tick_wall_;   // lockstep: publish -> complete; real time: wake-up lateness
-  std::int64_t loop_started_ns_ = 0;
-  std::int64_t loop_ended_ns_ = 0;
-  std::int64_t tick_started_ns_ = 0;
-  std::uint32_t overruns_ = 0;
-  std::uint64_t resent_samples_ = 0;  // lockstep: sensor samples re-published to silent legs
+  node::CommandRefusals refusals_;
+  LegArray<std::uint64_t> rejected_per_leg_{};  // samples of another leg's key, per partition
   // Lockstep: the supervisor's inputs of the newest supervisor tick (six legs' sensors and
   // the IMU), re-published with a re-ask: a leg that cannot answer may lack that tick's
   // setpoint because the supervisor lost its inputs, or the leg lost the setpoint.
@@ -290,16 +202,17 @@ class PlantNode {
   hexa_msg_ImuSample supervisor_imu_{};
   bool supervisor_inputs_valid_ = false;
   std::uint64_t supervisor_reasks_ = 0;
-  // Re-asks of the supervisor back off within a tick (the re-ask period, then doubling up to
-  // 1 s): a supervisor that is only slow is not buried under repeated inputs (docs/faults.md,
-  // "Re-asks back off").
-  ReaskBackoff supervisor_reask_{50'000'000, 1'000'000'000};
   bool supervisor_inputs_lost_ = false;  // --lose-supervisor-inputs done
-  LegArray<std::uint64_t> rejected_per_leg_{};  // samples of another leg's key, per partition
-  // Command reception (docs/faults.md, "Foreign commands"): unauthenticated samples refused
-  // and reported; per leg, which authenticated writer (primary or standby) is applied.
-  node::CommandRefusals refusals_;
-  LegArray<CommandSourceSelector> sources_{};
+  bool imu_lost_reported_ = false;
+  hexa_msg_GroundTruth truth_sample_{};
+  // Figures of the run.
+  LegArray<CommandAgeHistogram> command_age_{};
+  node::CycleTimeWindow cycle_times_;
+  DurationHistogram tick_wall_;   // lockstep: publish -> complete; real time: wake-up lateness
+  std::int64_t loop_started_ns_ = 0;
+  std::int64_t loop_ended_ns_ = 0;
+  std::int64_t tick_started_ns_ = 0;
+  std::uint64_t resent_samples_ = 0;  // lockstep: sensor samples re-published to silent legs
 };
 
 }  // namespace hexa::plant_sim

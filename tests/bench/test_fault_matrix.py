@@ -14,6 +14,22 @@ def cmd(leg, tick, standby, t_ms):
             "publish_time_ns": str(int(t_ms * 1e6))}
 
 
+class GroundTruthPose(unittest.TestCase):
+    def test_reads_the_exported_axis_columns(self):
+        # hexa_recorder export's header cells "position_m.x [m]" ..., keyed without the unit.
+        row = {"position_m.x": "0.1", "position_m.y": "-0.2", "position_m.z": "0.7",
+               "orientation_wxyz.w": "1", "orientation_wxyz.x": "0", "orientation_wxyz.y": "0.5",
+               "orientation_wxyz.z": "0"}
+        p, q = fault_matrix.pose_of(row)
+        self.assertEqual(p, [0.1, -0.2, 0.7])
+        self.assertEqual(q, [1.0, 0.0, 0.5, 0.0])
+
+    def test_reads_indexed_columns_too(self):
+        row = {"position_m[%d]" % k: str(k) for k in range(3)}
+        row.update({"orientation_wxyz[%d]" % k: str(k + 10) for k in range(4)})
+        self.assertEqual(fault_matrix.pose_of(row), ([0.0, 1.0, 2.0], [10.0, 11.0, 12.0, 13.0]))
+
+
 class TakeOver(unittest.TestCase):
     def test_is_measured_from_the_primarys_last_command(self):
         # The standby's samples at tick 0 and at tick 812 (a primary late past its deadline) came

@@ -14,7 +14,7 @@
 #include <optional>
 
 #include "hexa/core/calibration.hpp"
-#include "hexa/core/command_hygiene.hpp"
+#include "hexa/core/command_arbitration.hpp"
 #include "hexa/core/control_params.hpp"
 #include "hexa/core/controller_model.hpp"
 #include "hexa/core/leg_controller.hpp"
@@ -96,7 +96,9 @@ class LockstepSimulation {
   std::unique_ptr<PlatformPlant> plant_;
   std::unique_ptr<Supervisor> supervisor_;
   LegArray<std::unique_ptr<LegController>> legs_;
-  CommandHygieneParams hygiene_;
+  // The plant service's command arbitration (hygiene, sources, episodes), fed as it is.
+  std::unique_ptr<CommandArbitration> arbitration_;
+  ArbitrationOutput arbitration_out_;
   LockstepSchedule schedule_;
   LockstepBarrier barrier_;
   std::uint64_t tick_ = 0;

@@ -1,7 +1,7 @@
 // The plant's device seam (docs/board_protocol.md, "Host side"): what a rig I/O node needs from
 // the hardware under it, modelled on ros2_control's SystemInterface (on_configure -> read ->
-// write, a safe state, release). Implemented by the remote I/O board (remote_board_device.hpp);
-// a simulator device can implement it over core's PlatformPlant the same way.
+// write, a safe state, release). Implemented by the remote I/O board (remote_board_device.hpp)
+// and by the simulated rig (sim_device.hpp: core's PlatformPlant, one tick per write).
 //
 // Calls come from one thread, the node's control loop: ReadSensors and WriteValves neither
 // block nor allocate once configured; errors inside the loop are status codes, never
@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <string>
 
+#include "hexa/core/platform_plant.hpp"
 #include "hexa/core/rig.hpp"
 #include "hexa/core/sensor_model.hpp"
 
@@ -46,6 +47,7 @@ enum class DeviceStatus {
   kNoNewData,      // ReadSensors: nothing since the last call; `out` untouched
   kNotConfigured,  // Configure has not succeeded (or Close was called)
   kIoError,        // the transport failed (counted; the device stays configured)
+  kFault,          // the device cannot go on (the simulated state became non-finite)
 };
 
 class Device {
@@ -68,6 +70,10 @@ class Device {
   virtual void RequestEstopReset() = 0;
   // Valves to their safe state where the device can, then releases everything.
   virtual void Close() = 0;
+  // A simulated rig also knows the truth (ground truth, the external pose instrument, the
+  // true parameters): for the recording and evaluation only, never for control. nullptr for
+  // real hardware.
+  virtual const PlatformPlant* simulation() const { return nullptr; }
 };
 
 const char* ToString(DeviceStatus status);
