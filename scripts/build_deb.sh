@@ -27,6 +27,7 @@ stage() {  # stage NAME COMMAND...: one line, the command's output to the log
 }
 if command -v ccache >/dev/null && [ -z "${CMAKE_CXX_COMPILER_LAUNCHER:-}" ]; then
   export CMAKE_C_COMPILER_LAUNCHER=ccache CMAKE_CXX_COMPILER_LAUNCHER=ccache
+  export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$here}"
 fi
 stage configure cmake -S "$here" -B "$build_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DHEXA_PACKAGE_LAYOUT=ON -DHEXA_BUILD_TESTS=OFF -DHEXA_BUILD_BENCH=OFF -DCMAKE_INSTALL_PREFIX=/usr

@@ -5,6 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config
+  ccache   # scripts/build_deb.sh (and tests/package) reuse the developer build's objects
   cyclonedds-dev cyclonedds-tools
   libeigen3-dev
   libprotobuf-dev protobuf-compiler

@@ -5,10 +5,14 @@
 # unpacks it into a scratch root (dpkg -x) and runs programs from there with the packaged files.
 # Usage: check_deb.sh SOURCE_DIR BUILD_DIR [DEB]; DEB defaults to the newest
 # SOURCE_DIR/build-deb/hexataar-control_*.deb (scripts/build_deb.sh). Exit 77 (skipped) when
-# there is no package to check.
+# DEB is not given and there is no package to check; a DEB given but missing is a failure.
 set -uo pipefail
 src="$1"
 build="$2"
+if [ -n "${3:-}" ] && [ ! -f "$3" ]; then
+  echo "FAIL: no package at $3"
+  exit 1
+fi
 deb="${3:-$(ls -t "$src"/build-deb/hexataar-control_*.deb 2>/dev/null | head -n 1)}"
 if [ -z "$deb" ] || [ ! -f "$deb" ]; then
   echo "SKIP: no package; build it with scripts/build_deb.sh"

@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
       "Kinematic calibration (base / platform joints, potentiometer offset and gain) from a "
       "recorded calibration session with an external pose instrument (hexa_session "
       "--trajectory calibration --tracker). Usage: hexa_calibrate RECORDING.mcap [options]");
-  cli.AddOption("rig", "file", "rig file: the nominal model to calibrate", HEXA_DEFAULT_RIG_FILE);
+  cli.AddOption("rig", "file", "rig file: the nominal model to calibrate", hexa::config::DefaultRigFile());
   cli.AddOption("min-still", "s", "a still window: desired pose unchanged at least this long", "4");
   cli.AddOption("window", "s", "use the last this-many seconds of each still window", "2");
   cli.AddOption("noise-mm", "mm",

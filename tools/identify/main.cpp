@@ -136,7 +136,7 @@ int main(int argc, char** argv) {
                   "plots (docs/identification.md). Usage: hexa_identify RECORDING.mcap --out DIR");
   cli.AllowPositional("RECORDING.mcap", 1);
   cli.AddOption("out", "dir", "output directory");
-  cli.AddOption("rig", "file", "rig file of the recorded rig (the nominal model)", HEXA_DEFAULT_RIG_FILE);
+  cli.AddOption("rig", "file", "rig file of the recorded rig (the nominal model)", hexa::config::DefaultRigFile());
   cli.AddRepeatable("rig-overlay", "file",
                     "rig overlay on top of --rig, e.g. hexa_calibrate's kinematic calibration: its "
                     "joint positions enter the platform's inverse dynamics and its potentiometer "

@@ -24,7 +24,7 @@ int main(int argc, char** argv) {
   cli.AddOption("profile", "name", "disturbance profile of the rig file (realistic, ideal, ...)", "realistic");
   cli.AddOption("seed", "N", "plant seed", "1");
   cli.AddOption("periods", "N", "periods (0 = default)", "0");
-  cli.AddOption("rig", "file", "rig file", HEXA_DEFAULT_RIG_FILE);
+  cli.AddOption("rig", "file", "rig file", hexa::config::DefaultRigFile());
   cli.AddRepeatable("rig-overlay", "file",
                     "rig overlay for the controllers and the supervisor (the plant keeps the rig "
                     "file + profile), applied in order as the services do");
