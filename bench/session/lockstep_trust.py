@@ -98,14 +98,17 @@ def fingerprint(build, out_dir):
     r = subprocess.run([os.path.join(build, "services/recorder/hexa_recorder"), "export", rec,
                         "--out-dir", exp, "--topics", "*GroundTruth*"],
                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    files = [f for f in os.listdir(exp)] if r.returncode == 0 and os.path.isdir(exp) else []
+    # One CSV per topic (the export also writes a README.txt describing the columns).
+    files = ([f for f in os.listdir(exp) if f.endswith(".csv")]
+             if r.returncode == 0 and os.path.isdir(exp) else [])
     if len(files) != 1:
         return None
     rows = []
     with open(os.path.join(exp, files[0])) as f:
         reader = csv.reader(f)
         header = next(reader)
-        keep = [i for i, c in enumerate(header)
+        names = [c.split(" [")[0] for c in header]  # "name [unit]"
+        keep = [i for i, c in enumerate(names)
                 if not (c in ("log_time_ns", "publish_time_ns", "sequence") or "time_ns" in c)]
         for row in reader:
             rows.append(hashlib.sha256(",".join(row[i] for i in keep).encode()).hexdigest())

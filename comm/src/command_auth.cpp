@@ -26,7 +26,12 @@ static_assert(sizeof(SHA256_CTX) == 112, "CommandMac keeps SHA256_CTX states of 
 constexpr std::size_t kBlockBytes = 64;  // SHA-256 block
 
 // Topic codes in the MAC input: a tag of one topic never verifies as another's.
-enum class TopicCode : std::uint8_t { kValveCommand = 1, kLegSetpoint = 2, kOperatorCommand = 3 };
+enum class TopicCode : std::uint8_t {
+  kValveCommand = 1,
+  kLegSetpoint = 2,
+  kOperatorCommand = 3,
+  kEndpointClaim = 4,  // a writer's USER_DATA (SignEndpointClaim)
+};
 
 // The canonical MAC input: little-endian fields into a fixed buffer (no padding bytes, no
 // allocation). Every field of the sample except the tag.
@@ -122,6 +127,23 @@ bool Verify(const CommandMac& mac, const ParticipantPrefix& w, const T& sample) 
   std::uint8_t tag[kAuthTagBytes];
   mac.Tag(m.bytes(), tag);
   return CRYPTO_memcmp(tag, sample.auth_tag, kAuthTagBytes) == 0;
+}
+
+constexpr const char* kClaimTag = " auth=";
+
+// The tag of an endpoint claim as 32 lowercase hex digits.
+std::string ClaimTagHex(const CommandMac& mac, const ParticipantPrefix& w, const std::string& claim) {
+  MacInput m(w, TopicCode::kEndpointClaim);
+  m.Text(claim.c_str(), claim.size());
+  std::uint8_t tag[kAuthTagBytes];
+  mac.Tag(m.bytes(), tag);
+  static const char* kHex = "0123456789abcdef";
+  std::string hex(2 * kAuthTagBytes, '0');
+  for (std::size_t i = 0; i < kAuthTagBytes; ++i) {
+    hex[2 * i] = kHex[tag[i] >> 4];
+    hex[2 * i + 1] = kHex[tag[i] & 0xf];
+  }
+  return hex;
 }
 
 int HexDigit(char c) {
@@ -278,6 +300,54 @@ const char* ToString(CommandTrust trust) {
     case CommandTrust::kUnknownWriter: return "writer unknown to the reader";
   }
   return "?";
+}
+
+std::string SignEndpointClaim(const CommandMac* mac, const ParticipantPrefix& writer,
+                              const std::string& claim) {
+  if (mac == nullptr) return claim;
+  return claim + kClaimTag + ClaimTagHex(*mac, writer, claim);
+}
+
+CommandTrust VerifyEndpointClaim(const CommandMac* mac, const ParticipantPrefix& writer,
+                                 const std::string& user_data, std::string& claim) {
+  if (mac == nullptr) {
+    claim = user_data;
+    return CommandTrust::kUnchecked;
+  }
+  const std::size_t at = user_data.rfind(kClaimTag);
+  if (at == std::string::npos) {
+    claim = user_data;
+    return CommandTrust::kBadTag;
+  }
+  claim = user_data.substr(0, at);
+  const std::string given = user_data.substr(at + std::strlen(kClaimTag));
+  const std::string expected = ClaimTagHex(*mac, writer, claim);
+  if (given.size() != expected.size()) return CommandTrust::kBadTag;
+  return CRYPTO_memcmp(given.data(), expected.data(), expected.size()) == 0
+             ? CommandTrust::kAuthenticated
+             : CommandTrust::kBadTag;
+}
+
+CommandTrust MatchedWriterClaim(dds_entity_t reader, dds_instance_handle_t publication,
+                                std::string& claim) {
+  dds_builtintopic_endpoint_t* ep = dds_get_matched_publication_data(reader, publication);
+  if (ep == nullptr) return CommandTrust::kUnknownWriter;
+  std::string user_data;
+  void* value = nullptr;
+  size_t size = 0;
+  if (ep->qos != nullptr && dds_qget_userdata(ep->qos, &value, &size) && value != nullptr) {
+    user_data.assign(static_cast<const char*>(value), size);
+    dds_free(value);
+  }
+  const ParticipantPrefix writer = PrefixOf(ep->key);
+  dds_builtintopic_free_endpoint(ep);
+  return VerifyEndpointClaim(InstalledCommandMac(), writer, user_data, claim);
+}
+
+ParticipantPrefix PrefixOfEntity(dds_entity_t entity) {
+  dds_guid_t guid{};
+  if (dds_get_guid(entity, &guid) < 0) return {};
+  return PrefixOf(guid);
 }
 
 bool PublicationPrefixCache::Find(dds_entity_t reader, dds_instance_handle_t publication,

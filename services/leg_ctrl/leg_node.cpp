@@ -11,19 +11,21 @@
 #include <stdexcept>
 
 #include "hexa/core/lockstep_simulation.hpp"
+#include "hexa/services/exit_code.hpp"
 #include "hexa/services/service_manager.hpp"
 
 namespace hexa::leg_ctrl {
 namespace {
 
-constexpr dds_attach_t kTokenShutdown = 1;
-
-comm::QosParams ValveQos(const LegNodeOptions& o) {
+comm::QosParams ValveQos(const LegNodeOptions& o, const comm::ParticipantPrefix& participant_prefix) {
   comm::QosParams q = node::QosFor(o.common, comm::TopicKind::kValveCommand);
   q.ownership_strength = o.standby ? comm::kStandbyOwnershipStrength
                                    : comm::kPrimaryOwnershipStrength;
   // Which leg this writer drives, for the plant's per-leg liveliness (docs/faults.md).
-  q.user_data = comm::LegEndpointUserData(o.leg, o.standby);
+  // Signed with the session key: the plant counts this writer as the leg's before it has
+  // written anything, and a copy of the text in another process does not pass (command_auth.hpp).
+  q.user_data = comm::SignEndpointClaim(comm::InstalledCommandMac(), participant_prefix,
+                                        comm::LegEndpointUserData(o.leg, o.standby));
   return q;
 }
 
@@ -77,38 +79,31 @@ const char* ToString(FaultKind kind) {
 LegNode::LegNode(const LegNodeOptions& options, const config::SystemConfig& config,
                  std::shared_ptr<spdlog::logger> log)
     : options_(options),
-      log_(std::move(log)),
-      name_("leg" + std::to_string(options.leg) + (options.standby ? "_standby" : "")),
+      log_(log),
+      runtime_(options.common, NodeName(options), std::move(log)),
       controller_([&] {
         LegControllerConfig c = config::MakeLegControllerConfig(config, options.leg, options.controller);
         c.excitation = options.excitation;
         return c;
       }()),
-      participant_(static_cast<dds_domainid_t>(options.common.domain_id)),
-      shutdown_(participant_),
-      sensors_topic_(participant_),
-      setpoint_topic_(participant_),
-      valve_topic_(participant_),
+      sensors_topic_(runtime_.participant()),
+      setpoint_topic_(runtime_.participant()),
+      valve_topic_(runtime_.participant()),
       // This leg's partition only: the writers route each leg's samples to its controllers
       // (comm::LegRoutedWriter), nothing of the other legs arrives here.
-      sensors_reader_(participant_, sensors_topic_, comm::EndpointRole::kControlReader,
+      sensors_reader_(runtime_.participant(), sensors_topic_, comm::EndpointRole::kControlReader,
                       ControlReaderQos(options, comm::TopicKind::kLegSensors), kLockstepQueue,
                       {comm::LegPartition(options.leg)}),
-      setpoint_reader_(participant_, setpoint_topic_, comm::EndpointRole::kControlReader,
+      setpoint_reader_(runtime_.participant(), setpoint_topic_, comm::EndpointRole::kControlReader,
                        ControlReaderQos(options, comm::TopicKind::kLegSetpoint), kSetpointRing,
                        {comm::LegPartition(options.leg)}),
       // Leg N's partition: DDS Security grants it to leg N's identities only (docs/security.md).
-      valve_writer_(participant_, valve_topic_, ValveQos(options),
+      valve_writer_(runtime_.participant(), valve_topic_,
+                    ValveQos(options, comm::PrefixOfEntity(runtime_.participant().get())),
                     {comm::LegPartition(options.leg)}),
-      status_(participant_, name_),
-      stuck_status_(participant_, name_),
-      faults_(participant_, name_),
-      waitset_(participant_) {
-  waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
-  for (const std::string& spec : options.common.peer_pids) {
-    std::string error;
-    if (!peer_processes_.Add(spec, error)) throw std::invalid_argument(error);
-  }
+      stuck_status_(runtime_.participant(), name_),
+      faults_(runtime_.participant(), name_) {
+  cycle_.Bind<&LegNode::RunCycle>(*this);
   last_command_.leg_id = static_cast<uint8_t>(options.leg);
   base_controller_ =
       options.controller == LegControllerKind::kPi ? hexa_msg_CONTROLLER_PI : hexa_msg_CONTROLLER_BSSMC;
@@ -117,38 +112,35 @@ LegNode::LegNode(const LegNodeOptions& options, const config::SystemConfig& conf
   last_command_.friction_scale = 1.0;  // eq 14 nominal until the controller answers
 }
 
-void LegNode::PublishStatus(hexa_msg_NodeState state, const char* detail) {
-  const auto s = sensors_reader_.Snapshot();
-  status_.Publish(state, last_command_.header.tick, last_command_.header.sim_time_s,
-                  s.requested_deadline_missed_total, valve_writer_.Snapshot().liveliness_lost_total,
-                  cycles_, cycle_times_.Median(), cycle_times_.Max(), detail);
+services::StatusFigures LegNode::Figures() {
+  services::StatusFigures f;
+  f.tick = last_command_.header.tick;
+  f.sim_time_s = last_command_.header.sim_time_s;
+  f.deadline_missed = sensors_reader_.Snapshot().requested_deadline_missed_total;
+  f.liveliness_changes = valve_writer_.Snapshot().liveliness_lost_total;
+  f.cycles = cycles_;
+  f.cycle_median_s = cycle_times_.Median();
+  f.cycle_max_s = cycle_times_.Max();
+  return f;
 }
 
-bool LegNode::WaitUntilMatched() {
-  const bool lockstep = options_.common.mode == node::TimeMode::kLockstep;
-  const int64_t end = node::MonotonicNow_ns() + static_cast<int64_t>(options_.startup_timeout_s * 1e9);
-  while (!shutdown_.requested()) {
-    const bool sensors = sensors_reader_.Snapshot().subscription_matched_current >= 1;
-    const uint32_t valve_readers = valve_writer_.Snapshot().publication_matched_current;
-    const bool readers = valve_readers >= static_cast<uint32_t>(options_.valve_readers);
-    // Lockstep: tick n > 0 cannot be answered without the supervisor's setpoint s(n), and a
-    // volatile sample that arrives before this side has matched its writer is dropped (the
-    // supervisor only knows that its side matched). So this node reports RUNNING, which the
-    // plant waits for before tick 0, only once it knows the setpoint writer. Real time needs
-    // no such wait: a lost first setpoint is replaced 5 ms later.
-    const bool setpoints = !lockstep || setpoint_reader_.Snapshot().subscription_matched_current >= 1;
-    if (sensors && readers && setpoints) return true;
-    if (node::MonotonicNow_ns() > end) {
-      log_->error("peers missing after {} s: sensor writer matched: {}, valve readers matched "
-                  "{} of {} (the plant{}){}",
-                  options_.startup_timeout_s, sensors, valve_readers, options_.valve_readers,
-                  options_.valve_readers > 1 ? " and the recorder" : "",
-                  setpoints ? "" : ", setpoint writer (the supervisor) not matched");
-      return false;
-    }
-    waitset_.Wait(DDS_MSECS(20));  // match counts change without data: bounded re-check
-    valve_writer_.AssertLiveliness();
-  }
+bool LegNode::PeersMatched(std::string& missing) {
+  const bool sensors = sensors_reader_.Snapshot().subscription_matched_current >= 1;
+  const uint32_t valve_readers = valve_writer_.Snapshot().publication_matched_current;
+  const bool readers = valve_readers >= static_cast<uint32_t>(options_.valve_readers);
+  // Lockstep: tick n > 0 cannot be answered without the supervisor's setpoint s(n), and a
+  // volatile sample that arrives before this side has matched its writer is dropped (the
+  // supervisor only knows that its side matched). So this node reports RUNNING, which the
+  // plant waits for before tick 0, only once it knows the setpoint writer. Real time needs
+  // no such wait: a lost first setpoint is replaced 5 ms later.
+  const bool setpoints = !runtime_.lockstep() ||
+                         setpoint_reader_.Snapshot().subscription_matched_current >= 1;
+  if (sensors && readers && setpoints) return true;
+  missing = fmt::format("sensor writer matched: {}, valve readers matched {} of {} (the plant{}){}",
+                        sensors, valve_readers, options_.valve_readers,
+                        options_.valve_readers > 1 ? " and the recorder" : "",
+                        setpoints ? "" : ", setpoint writer (the supervisor) not matched");
+  valve_writer_.AssertLiveliness();  // the lease holds while this node starts
   return false;
 }
 
@@ -161,8 +153,7 @@ void LegNode::TakeSetpoints() {
         // supervisor never disposes; its lease lapses instead). A dispose carries no tag: it
         // counts only from a writer whose setpoints were authenticated.
         if (info.instance_state == DDS_IST_NOT_ALIVE_DISPOSED && !supervisor_finished_ &&
-            std::find(trusted_setpoint_writers_.begin(), trusted_setpoint_writers_.end(),
-                      info.publication_handle) != trusted_setpoint_writers_.end()) {
+            trusted_setpoint_writers_.Contains(info.publication_handle)) {
           supervisor_finished_ = true;
           log_->info("{}: the supervisor withdrew its setpoints (orderly end)", name_);
         }
@@ -179,11 +170,7 @@ void LegNode::TakeSetpoints() {
         continue;
       }
       if (s.leg_id != options_.leg) continue;
-      if (std::find(trusted_setpoint_writers_.begin(), trusted_setpoint_writers_.end(),
-                    info.publication_handle) == trusted_setpoint_writers_.end()) {
-        trusted_setpoint_writers_[trusted_next_] = info.publication_handle;
-        trusted_next_ = (trusted_next_ + 1) % trusted_setpoint_writers_.size();
-      }
+      trusted_setpoint_writers_.Note(info.publication_handle, trust);
       IssuedSetpoint issued;
       issued.tick = s.header.tick;
       issued.time_s = s.header.sim_time_s;
@@ -204,12 +191,12 @@ bool LegNode::SupervisorGoneNow() const {
   // Its writer left without disposing its setpoints (a supervisor ending the session disposes
   // them first), or the process the launcher started for it ended. A lapsed lease is not
   // enough: a supervisor that is stopped or not scheduled lets it lapse too, and lockstep
-  // waits for it (docs/faults.md).
+  // waits for it (docs/faults.md). Only writers whose setpoints were authenticated count: a
+  // foreign LegSetpoint writer in this leg's partition keeps no supervisor "present".
   if (options_.common.mode != node::TimeMode::kLockstep || !supervisor_seen_ || supervisor_finished_)
     return false;
-  const auto s = setpoint_reader_.Snapshot();
-  if (s.liveliness_alive_count == 0 && s.liveliness_not_alive_count == 0) return true;
-  return peer_processes_.State("supervisor") == node::PeerProcessState::kEnded;
+  if (trusted_setpoint_writers_.Present(setpoint_reader_.status()) == 0) return true;
+  return runtime_.peer_processes().State("supervisor") == node::PeerProcessState::kEnded;
 }
 
 const IssuedSetpoint* LegNode::SetpointFor(std::uint64_t tick) const {
@@ -287,7 +274,7 @@ bool LegNode::InjectFault(double sim_time_s) {
       return true;
     case FaultKind::kHang:
       // The control thread stops; only a shutdown request (or SIGKILL) ends it.
-      while (!shutdown_.requested()) SleepFor(0.05);
+      while (!runtime_.shutdown_requested()) SleepFor(0.05);
       return true;
     case FaultKind::kSlow:
       SleepFor(options_.fault.slow_extra_s);
@@ -351,7 +338,7 @@ void LegNode::ResendLastAnswer() {
 
 void LegNode::AnswerAndReport(const hexa_msg_LegSensors& s) {
   Answer(s);
-  if (cycles_ % 100 == 0) PublishStatus(hexa_msg_NODE_RUNNING, ToString(output_.status));
+  if (cycles_ % 100 == 0) runtime_.Publish(hexa_msg_NODE_RUNNING, Figures(), ToString(output_.status));
 }
 
 void LegNode::TakeSensorsRealtime() {
@@ -375,61 +362,58 @@ void LegNode::TakeSensorsLockstep() {
   // Every tick, in order: a primary gets one at a time (the plant waits for it); a hot
   // standby may be several behind and must still compute every tick, so that its state is
   // the primary's when it takes over (bit-identical hand-over).
-  while (sensors_reader_.Take() > 0) {
-    for (std::size_t k = 0; k < sensors_reader_.count(); ++k) {
-      if (!sensors_reader_.info(k).valid_data) continue;
-      const hexa_msg_LegSensors& s = sensors_reader_.sample(k);
-      if (s.leg_id != options_.leg) continue;
-      const std::uint64_t tick = s.header.tick;
-      const std::uint64_t newest_queued =
-          queue_size_ > 0 ? queue_[(queue_head_ + queue_size_ - 1) % kLockstepQueue].header.tick
-                          : 0;
-      if (answered_any_ && queue_size_ == 0 && tick == last_command_.header.tick) {
-        ResendLastAnswer();  // the plant's re-ask
-      } else if ((!answered_any_ || tick > last_command_.header.tick) &&
-                 (queue_size_ == 0 || tick > newest_queued)) {
-        // A tick that never arrived (more than the reader's depth behind, the sample was
-        // overwritten): this node's state no longer follows the primary's. Say so once.
-        const std::uint64_t expected = queue_size_ > 0 ? newest_queued + 1
-                                       : answered_any_ ? last_command_.header.tick + 1 : 0;
-        if (tick > expected) {
-          if (ticks_missed_ == 0)
-            log_->warn("{} missed ticks {}..{} (more than {} behind the plant): its state no "
-                       "longer matches the primary's", name_, expected, tick - 1, kLockstepQueue);
-          ticks_missed_ += tick - expected;
-        }
-        if (queue_size_ == kLockstepQueue) {  // the queue is full: the oldest is lost
-          if (queue_overflows_++ == 0) {
-            log_->warn("{} is more than {} ticks behind the plant: dropping tick {} (its state "
-                       "will no longer match the primary's)",
-                       name_, kLockstepQueue, queue_[queue_head_].header.tick);
-          }
-          queue_head_ = (queue_head_ + 1) % kLockstepQueue;
-          --queue_size_;
-        }
-        queue_[(queue_head_ + queue_size_) % kLockstepQueue] = s;
-        ++queue_size_;
-      }  // else: a repeat of a queued tick (a re-ask while this node lags): ignored
+  services::TakeValid(sensors_reader_, [this](const hexa_msg_LegSensors& s, std::size_t) {
+    if (s.leg_id != options_.leg) return;
+    const std::uint64_t tick = s.header.tick;
+    const std::uint64_t newest_queued = queue_.empty() ? 0 : queue_.back().header.tick;
+    if (answered_any_ && queue_.empty() && tick == last_command_.header.tick) {
+      ResendLastAnswer();  // the plant's re-ask
+      return;
     }
-  }
-  while (queue_size_ > 0 && CanAnswer(queue_[queue_head_].header.tick)) {
-    const std::size_t head = queue_head_;
-    queue_head_ = (queue_head_ + 1) % kLockstepQueue;
-    --queue_size_;
-    AnswerAndReport(queue_[head]);  // the slot is only reused by a later take
+    if ((answered_any_ && tick <= last_command_.header.tick) ||
+        (!queue_.empty() && tick <= newest_queued)) {
+      if (!queue_.empty() && tick == queue_.front().header.tick && waiting_logged_tick_ != tick) {
+        // The plant re-asks the tick this node cannot answer yet: say once per tick what it
+        // waits for and what its setpoint reader has seen (the evidence of a lost setpoint).
+        waiting_logged_tick_ = tick;
+        LogWaitingForSetpoint(tick);
+      }
+      return;  // a repeat of a queued tick (a re-ask while this node lags): ignored
+    }
+    // A tick that never arrived (more than the reader's depth behind, the sample was
+    // overwritten): this node's state no longer follows the primary's. Say so once.
+    const std::uint64_t expected = !queue_.empty() ? newest_queued + 1
+                                   : answered_any_ ? last_command_.header.tick + 1 : 0;
+    if (tick > expected) {
+      if (ticks_missed_ == 0)
+        log_->warn("{} missed ticks {}..{} (more than {} behind the plant): its state no "
+                   "longer matches the primary's", name_, expected, tick - 1, kLockstepQueue);
+      ticks_missed_ += tick - expected;
+    }
+    if (queue_.full() && queue_overflows_ == 0) {  // the oldest is lost
+      log_->warn("{} is more than {} ticks behind the plant: dropping tick {} (its state "
+                 "will no longer match the primary's)",
+                 name_, kLockstepQueue, queue_.front().header.tick);
+    }
+    if (queue_.Push(s)) ++queue_overflows_;
+  });
+  while (!queue_.empty() && CanAnswer(queue_.front().header.tick)) {
+    AnswerAndReport(queue_.Pop());  // the slot is only reused by a later take
   }
 }
 
-void LegNode::OnData(void* self) {
-  auto* node = static_cast<LegNode*>(self);
-  std::lock_guard<std::mutex> lock(node->mutex_);
-  node->RunCycleCounted();
-}
-
-void LegNode::RunCycleCounted() {
-  cycle_sequence_.fetch_add(1, std::memory_order_acq_rel);  // odd: a cycle runs
-  RunCycle();
-  cycle_sequence_.fetch_add(1, std::memory_order_acq_rel);
+void LegNode::LogWaitingForSetpoint(std::uint64_t tick) {
+  std::uint64_t required = 0;
+  if (!RequiredSetpointTick(tick, schedule_.supervisor_every_ticks, required)) return;
+  const auto s = setpoint_reader_.Snapshot();
+  const IssuedSetpoint* newest = setpoints_.newest();
+  log_->warn("{} tick {}: re-asked while waiting for the setpoint of tick {} (newest setpoint "
+             "{}); setpoint reader: writers matched {} (alive {}, not alive {}), samples lost {} "
+             "rejected {}, refused {}; logged once per tick",
+             name_, tick, required, newest != nullptr ? static_cast<long long>(newest->tick) : -1LL,
+             s.subscription_matched_current, s.liveliness_alive_count,
+             s.liveliness_not_alive_count, s.sample_lost_total, s.sample_rejected_total,
+             refusals_.samples());
 }
 
 void LegNode::WatchControlCycle() {
@@ -439,14 +423,13 @@ void LegNode::WatchControlCycle() {
   bool unpublished = false;
   std::uint64_t tick = 0;
   {
-    std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+    std::unique_lock<std::mutex> lock(cycle_.mutex(), std::try_to_lock);
     if (lock.owns_lock()) {
       unpublished = unwritten_answer_;
       tick = last_command_.header.tick;
     }
   }
-  const auto cause = cycle_watch_.Check(cycle_sequence_.load(std::memory_order_acquire),
-                                        unpublished, tick);
+  const auto cause = cycle_watch_.Check(cycle_.sequence(), unpublished, tick);
   if (cause == stuck_reported_) return;
   stuck_reported_ = cause;
   char detail[160];
@@ -469,11 +452,8 @@ void LegNode::WatchControlCycle() {
 }
 
 void LegNode::RunCycle() {
-  if (!supervisor_seen_) {
-    const auto s = setpoint_reader_.Snapshot();
-    supervisor_seen_ = s.liveliness_alive_count + s.liveliness_not_alive_count > 0;
-  }
   TakeSetpoints();
+  if (!supervisor_seen_) supervisor_seen_ = trusted_setpoint_writers_.any();
   if (options_.common.mode == node::TimeMode::kRealtime) {
     TakeSensorsRealtime();
   } else {
@@ -483,75 +463,51 @@ void LegNode::RunCycle() {
 
 void LegNode::AssertLivelinessIfIdle(std::int64_t idle_ns) {
   if (node::MonotonicNow_ns() - last_write_ns_.load(std::memory_order_relaxed) < idle_ns) return;
-  std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+  std::unique_lock<std::mutex> lock(cycle_.mutex(), std::try_to_lock);
   if (lock.owns_lock() && !unwritten_answer_) valve_writer_.AssertLiveliness();
 }
 
-int LegNode::Run() {
-  const bool realtime = options_.common.mode == node::TimeMode::kRealtime;
-  PublishStatus(hexa_msg_NODE_STARTING, "waiting for the plant");
-  if (!WaitUntilMatched()) {
-    PublishStatus(hexa_msg_NODE_FAULT, "no plant");
-    return shutdown_.requested() ? 0 : 3;
+void LegNode::RunCycleWithoutSupervisor() {
+  if (!supervisor_lost_) {
+    TakeSetpoints();  // a dispose not taken yet: the supervisor ended the session
+    supervisor_lost_ = SupervisorGoneNow();
+    if (supervisor_lost_)
+      log_->warn("{}: the supervisor is gone ({}): answering every tick with the newest "
+                 "setpoint held (tick {}), valve at null once stale", name_,
+                 runtime_.peer_processes().State("supervisor") == node::PeerProcessState::kEnded
+                     ? "its process ended"
+                     : "its setpoint writer left without disposing its setpoints",
+                 setpoints_.newest() ? setpoints_.newest()->tick : 0);
   }
-  PublishStatus(hexa_msg_NODE_RUNNING, options_.standby ? "standby" : "primary");
-  node::service_manager::Ready(options_.standby ? "standby" : "primary");
-  log_->info("{} running: leg {}, {}, {}", name_, options_.leg,
-             options_.controller == LegControllerKind::kPi           ? "PI"
-             : options_.controller == LegControllerKind::kExcitation ? "excitation + BS-SMC"
-                                                                     : "BS-SMC",
-             options_.standby ? "hot standby (ownership strength 10)" : "primary (strength 20)");
-  // From here the control cycle runs on the receive thread (callbacks first, then whatever
-  // arrived before them).
-  sensors_reader_.OnDataAvailable(&LegNode::OnData, this);
-  setpoint_reader_.OnDataAvailable(&LegNode::OnData, this);
-  OnData(this);
-  // MANUAL_BY_TOPIC liveliness (lease: 10 ms real time, 0.2 s lockstep; node.cpp QosFor) is
-  // asserted by every write; while the control path is idle this thread asserts it every
-  // quarter lease (real time: 3 ms), but only if it gets the control lock (a control cycle
-  // stuck in a callback holds it) and the cycle published every answer it computed (a silent
-  // cycle did not): otherwise the lease lapses (docs/faults.md).
-  const double lease_s = realtime ? options_.common.realtime_lease_s : options_.common.lockstep_lease_s;
-  const int64_t idle_ns = realtime ? 3'000'000 : static_cast<int64_t>(lease_s * 0.25e9);
-  const dds_duration_t wait = static_cast<dds_duration_t>(idle_ns);
-  while (!shutdown_.requested()) {
-    const dds_return_t n = waitset_.Wait(wait);
-    if (n < 0) {
-      log_->error("waitset failed: {}", dds_strretcode(n));
-      return 1;
-    }
-    if (node::service_manager::WatchdogDue()) {
-      // systemd's watchdog, fed only when the control lock is free: a cycle stuck in a
-      // callback holds it, and systemd then restarts the process.
-      std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
-      if (lock.owns_lock()) node::service_manager::Watchdog();
-    }
-    if (shutdown_.requested()) continue;
-    if (!realtime) WatchControlCycle();
-    if (!realtime && (supervisor_lost_ || SupervisorGoneNow())) {
+  if (supervisor_lost_) cycle_.RunHoldingLock();
+}
+
+bool LegNode::MainThreadLook(std::int64_t idle_ns) {
+  const dds_return_t n = runtime_.waitset().Wait(static_cast<dds_duration_t>(idle_ns));
+  if (n < 0) {
+    log_->error("waitset failed: {}", dds_strretcode(n));
+    return false;
+  }
+  if (node::service_manager::WatchdogDue()) {
+    // systemd's watchdog, fed only when the control lock is free: a cycle stuck in a
+    // callback holds it, and systemd then restarts the process.
+    std::unique_lock<std::mutex> lock(cycle_.mutex(), std::try_to_lock);
+    if (lock.owns_lock()) node::service_manager::Watchdog();
+  }
+  if (runtime_.shutdown_requested()) return true;
+  if (runtime_.lockstep()) {
+    WatchControlCycle();
+    if (supervisor_lost_ || SupervisorGoneNow()) {
       // No setpoint will arrive to trigger the cycle: answer the queued ticks from here.
-      std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
-      if (lock.owns_lock()) {
-        if (!supervisor_lost_) {
-          TakeSetpoints();  // a dispose not taken yet: the supervisor ended the session
-          supervisor_lost_ = SupervisorGoneNow();
-          if (supervisor_lost_)
-            log_->warn("{}: the supervisor is gone ({}): answering every tick with the newest "
-                       "setpoint held (tick {}), valve at null once stale", name_,
-                       peer_processes_.State("supervisor") == node::PeerProcessState::kEnded
-                           ? "its process ended"
-                           : "its setpoint writer left without disposing its setpoints",
-                       setpoints_.newest() ? setpoints_.newest()->tick : 0);
-        }
-        if (supervisor_lost_) RunCycleCounted();
-      }
+      std::unique_lock<std::mutex> lock(cycle_.mutex(), std::try_to_lock);
+      if (lock.owns_lock()) RunCycleWithoutSupervisor();
     }
-    AssertLivelinessIfIdle(idle_ns);
   }
-  // No callback may run while the counters are read and the node is torn down.
-  sensors_reader_.OnDataAvailable(nullptr, nullptr);
-  setpoint_reader_.OnDataAvailable(nullptr, nullptr);
-  std::lock_guard<std::mutex> lock(mutex_);
+  AssertLivelinessIfIdle(idle_ns);
+  return true;
+}
+
+void LegNode::LogSummary() {
   const auto sensors = sensors_reader_.Snapshot();
   log_->info("{} stopped after {} cycles (last tick {}): sensor deadline misses {}, repeated "
              "answers {}, lockstep ticks dropped {} and missed {}, failed writes {}, compute "
@@ -559,9 +515,46 @@ int LegNode::Run() {
              name_, cycles_, last_command_.header.tick, sensors.requested_deadline_missed_total,
              resent_, queue_overflows_, ticks_missed_, valve_writer_.Snapshot().write_errors_total,
              cycle_times_.Median() * 1e6, cycle_times_.Max() * 1e6);
-  PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
-  node::service_manager::Stopping("stopped");
-  return 0;
+}
+
+int LegNode::Run() {
+  runtime_.Start(Figures(), "waiting for the plant");
+  services::PeerWait wait;
+  wait.rule.timeout_s = options_.startup_timeout_s;
+  wait.matched = [this](std::string& missing) { return PeersMatched(missing); };
+  wait.processes = {"plant"};
+  if (runtime_.lockstep()) wait.processes.push_back("supervisor");
+  if (runtime_.WaitForPeers(wait) != services::PeerWaitResult::kMatched)
+    return runtime_.FailStart(Figures(), "no plant", exit_code::kPeersNotMatched);
+  const char* role = options_.standby ? "standby" : "primary";
+  runtime_.Running(Figures(), role, role);
+  log_->info("{} running: leg {}, {}, {}", name_, options_.leg,
+             options_.controller == LegControllerKind::kPi           ? "PI"
+             : options_.controller == LegControllerKind::kExcitation ? "excitation + BS-SMC"
+                                                                     : "BS-SMC",
+             options_.standby ? "hot standby (ownership strength 10)" : "primary (strength 20)");
+  // From here the control cycle runs on the receive thread (callbacks first, then whatever
+  // arrived before them).
+  cycle_.TriggerOn(sensors_reader_);
+  cycle_.TriggerOn(setpoint_reader_);
+  cycle_.Run();
+  // MANUAL_BY_TOPIC liveliness (lease: 10 ms real time, 0.2 s lockstep; node.cpp QosFor) is
+  // asserted by every write; while the control path is idle this thread asserts it every
+  // quarter lease (real time: 3 ms), but only if it gets the control lock (a control cycle
+  // stuck in a callback holds it) and the cycle published every answer it computed (a silent
+  // cycle did not): otherwise the lease lapses (docs/faults.md).
+  const int64_t idle_ns = runtime_.lockstep()
+                              ? static_cast<int64_t>(options_.common.lockstep_lease_s * 0.25e9)
+                              : 3'000'000;
+  while (!runtime_.shutdown_requested()) {
+    if (!MainThreadLook(idle_ns)) return exit_code::kRunError;
+  }
+  // No callback may run while the counters are read and the node is torn down.
+  cycle_.StopTriggers();
+  std::lock_guard<std::mutex> lock(cycle_.mutex());
+  LogSummary();
+  runtime_.Stop(Figures(), "stopped");
+  return exit_code::kOk;
 }
 
 }  // namespace hexa::leg_ctrl

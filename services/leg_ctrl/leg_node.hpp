@@ -19,15 +19,15 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
-#include <mutex>
 #include <string>
 
 #include "hexa/comm/comm.hpp"
 #include "hexa/core/leg_controller.hpp"
 #include "hexa/core/lockstep_protocol.hpp"
 #include "hexa/services/command_refusal.hpp"
+#include "hexa/services/control_cycle.hpp"
 #include "hexa/services/node.hpp"
-#include "hexa/services/peer_processes.hpp"
+#include "hexa/services/runtime.hpp"
 
 namespace hexa::leg_ctrl {
 
@@ -50,6 +50,11 @@ inline constexpr std::size_t kLockstepQueue = 1000;
 // queue holds.
 inline constexpr std::size_t kSetpointRing = 256;
 
+// SCHED_FIFO priority in real time unless --rt-priority says otherwise: the highest of the
+// loop's processes; a leg has the tightest deadline (its 10 ms liveliness lease) and the
+// shortest work (docs/measurements/deployment.md, "Where the lapses' milliseconds go").
+inline constexpr int kRealtimePriority = 80;
+
 struct LegNodeOptions {
   node::CommonOptions common;
   int leg = 1;                 // 1..6
@@ -63,6 +68,12 @@ struct LegNodeOptions {
   int valve_readers = 1;
 };
 
+// "leg3", "leg3_standby": the node's name on NodeStatus and in the log.
+std::string NodeName(const LegNodeOptions& options);
+// hexa_leg_ctrl's command line into `options`: -1 to go on, else the exit code (0 --help,
+// exit_code::kUsage with the message on stderr).
+int ParseOptions(int argc, char** argv, LegNodeOptions& options);
+
 class LegNode {
  public:
   LegNode(const LegNodeOptions& options, const config::SystemConfig& config,
@@ -70,11 +81,15 @@ class LegNode {
   int Run();
 
  private:
-  bool WaitUntilMatched();
-  static void OnData(void* self);
+  // Start-up: the plant's sensor writer and valve readers (and the recorder's), and in
+  // lockstep the supervisor's setpoint writer, matched.
+  bool PeersMatched(std::string& missing);
   void RunCycle();
   void TakeSetpoints();
   void TakeSensorsLockstep();
+  // Lockstep: a re-ask of a tick this node cannot answer yet, logged with the setpoint reader's
+  // state (which setpoint it waits for, writers, lost or refused samples).
+  void LogWaitingForSetpoint(std::uint64_t tick);
   void TakeSensorsRealtime();
   void ResendLastAnswer();
   void AnswerAndReport(const hexa_msg_LegSensors& sensors);
@@ -82,7 +97,7 @@ class LegNode {
   bool CanAnswer(std::uint64_t tick) const;
   void Answer(const hexa_msg_LegSensors& sensors);
   bool InjectFault(double sim_time_s);
-  void PublishStatus(hexa_msg_NodeState state, const char* detail);
+  services::StatusFigures Figures();
   // Lockstep: the supervisor's process is gone (its setpoint writer left without disposing
   // its setpoints, or the launcher's process id of it ended): ticks are answered with the
   // newest setpoint held, which goes stale. A lapsed lease alone is a supervisor that does not
@@ -91,48 +106,50 @@ class LegNode {
   // by the cycle.
   bool SupervisorLost() const { return supervisor_lost_; }
   bool SupervisorGoneNow() const;
-  void RunCycleCounted();  // RunCycle, with cycle_sequence_ odd while it runs
+  // Lockstep, main thread, with the control lock: once the supervisor is gone no setpoint
+  // triggers the cycle, so this thread runs it.
+  void RunCycleWithoutSupervisor();
   // Lockstep, main thread: the control cycle stuck (hang / silence) is said on NodeStatus.
   void WatchControlCycle();
   // One FaultEvent per episode of held control (bad input, stale setpoint), repeated at the
   // status rate while it lasts (docs/faults.md).
   void ReportControlFault(const hexa_msg_LegSensors& sensors);
   void AssertLivelinessIfIdle(std::int64_t idle_ns);
+  // One wake-up of the main thread: the watchdog, the stuck-cycle watch, the supervisor's
+  // loss, the idle liveliness. False when the wait set failed.
+  bool MainThreadLook(std::int64_t idle_ns);
+  void LogSummary();
 
   LegNodeOptions options_;
   std::shared_ptr<spdlog::logger> log_;
-  std::string name_;
+  services::Runtime runtime_;
+  const std::string& name_ = runtime_.name();
   LegController controller_;
-  comm::Participant participant_;
-  comm::ShutdownGuard shutdown_;
   comm::Topic<hexa_msg_LegSensors> sensors_topic_;
   comm::Topic<hexa_msg_LegSetpoint> setpoint_topic_;
   comm::Topic<hexa_msg_ValveCommand> valve_topic_;
   comm::Reader<hexa_msg_LegSensors> sensors_reader_;
   comm::Reader<hexa_msg_LegSetpoint> setpoint_reader_;
   comm::Writer<hexa_msg_ValveCommand> valve_writer_;
-  node::StatusPublisher status_;
   node::StatusPublisher stuck_status_;  // the main thread's: the cycle stuck (or no longer)
   node::FaultPublisher faults_;
-  node::PeerProcesses peer_processes_;  // --peer-pid: the supervisor's process (same host)
-  comm::WaitSet waitset_;
 
   LockstepSchedule schedule_;
-  std::mutex mutex_;  // the control state below: receive thread(s) and the main thread
+  // RunCycle on the sensor and setpoint readers' data; its mutex guards the control state
+  // below (receive thread(s) and the main thread).
+  services::ControlCycle cycle_;
   std::atomic<std::int64_t> last_write_ns_{0};
-  std::atomic<std::uint64_t> cycle_sequence_{0};  // odd while a cycle runs (ControlCycleWatch)
   ControlCycleWatch cycle_watch_;                 // main thread only
   ControlCycleWatch::Cause stuck_reported_ = ControlCycleWatch::Cause::kNone;
   SetpointRing<IssuedSetpoint, kSetpointRing> setpoints_;
   bool has_pending_ = false;         // real time: the newest unanswered sample
   hexa_msg_LegSensors pending_{};
-  std::array<hexa_msg_LegSensors, kLockstepQueue> queue_{};  // lockstep, ring
-  std::size_t queue_head_ = 0, queue_size_ = 0;
+  services::SampleQueue<hexa_msg_LegSensors, kLockstepQueue> queue_;  // lockstep
   std::uint64_t queue_overflows_ = 0;
   std::uint64_t ticks_missed_ = 0;  // lockstep: ticks that never reached this node
   bool answered_any_ = false;
   bool unwritten_answer_ = false;    // an answer was computed and not published (yet)
-  bool supervisor_seen_ = false;     // its setpoint writer has been matched
+  bool supervisor_seen_ = false;     // an authenticated setpoint of it has arrived
   bool supervisor_lost_ = false;     // SupervisorLost()
   bool supervisor_finished_ = false;  // it disposed its setpoints: the session is ending
   // Held-control fault episode (ReportControlFault).
@@ -151,8 +168,8 @@ class LegNode {
   // Setpoints from writers not of this session are refused (docs/faults.md); the writers
   // whose setpoints were authenticated (a dispose counts only from one of them).
   node::CommandRefusals refusals_;
-  std::array<dds_instance_handle_t, 4> trusted_setpoint_writers_{};
-  std::size_t trusted_next_ = 0;
+  comm::TrustedWriters trusted_setpoint_writers_;
+  std::uint64_t waiting_logged_tick_ = 0;  // lockstep: the re-asked tick last logged as waiting
 };
 
 }  // namespace hexa::leg_ctrl

@@ -52,6 +52,9 @@ hexa_msg_FaultReason WireReason(SilentLegVerdict v) {
   return hexa_msg_FAULT_NONE;
 }
 
+// The longest wait between two re-asks of the supervisor within one tick.
+constexpr std::int64_t kSupervisorReaskMax_ns = 1'000'000'000;
+
 LockstepBarrierParams BarrierParams(const PlantNodeOptions& o) {
   LockstepBarrierParams p;
   p.reask_after_ns = static_cast<std::int64_t>(o.resend_after_s * 1e9);
@@ -106,10 +109,14 @@ void LegWriterTable::RefreshOne(const comm::Reader<hexa_msg_ValveCommand>& reade
     const dds_instance_handle_t h = slots[k].publication.load(std::memory_order_acquire);
     if (h == 0) break;  // slots are claimed in order
     if (r.leg[k] != 0) continue;
-    const std::optional<std::string> user_data = comm::MatchedWriterUserData(reader.get(), h);
+    // What the writer says it is counts only when the session key vouches for it, by the rule
+    // of the valve commands (comm::MatchedWriterClaim): a foreign writer that claims to be
+    // leg N's controller is not counted as one.
+    std::string claim;
+    const comm::CommandTrust trust = comm::MatchedWriterClaim(reader.get(), h, claim);
     int leg = 0;
     bool standby = false;
-    if (!user_data) {
+    if (trust == comm::CommandTrust::kUnknownWriter) {
       // Not (yet) known as a matched publication: discovery may lag the liveliness callback
       // that claimed the slot, so ask again on later refreshes; a writer still unknown after
       // 100 of them is gone (it cannot count as alive, and no leg can claim it). Not while
@@ -118,12 +125,13 @@ void LegWriterTable::RefreshOne(const comm::Reader<hexa_msg_ValveCommand>& reade
       // never completed: "legs with a live writer 5/6").
       if (r.unresolved[k] < 255) ++r.unresolved[k];
       if (may_give_up && r.unresolved[k] >= 100) r.leg[k] = -1;
-    } else if (ParseLegUserData(*user_data, leg, standby) && leg == reader_leg) {
+    } else if (comm::Trusted(trust) && ParseLegUserData(claim, leg, standby) && leg == reader_leg) {
       r.leg[k] = static_cast<std::int8_t>(leg);
       r.standby[k] = standby;
     } else {
-      // A tool's writer (replay), or one that names another leg than its partition's: not
-      // this leg's controller (RejectCommand refuses its samples).
+      // A tool's writer (replay), one that names another leg than its partition's, or one
+      // whose claim the session key does not vouch for: not this leg's controller
+      // (RejectCommand and the command check refuse its samples).
       r.leg[k] = -1;
     }
   }
@@ -259,6 +267,7 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
   }
   lapse_confirm_ticks_ = std::max<std::int64_t>(1, std::llround(options.common.realtime_lease_s / kTickS));
   forced_reason_.fill(hexa_msg_FAULT_NONE);
+  supervisor_reask_ = ReaskBackoff(BarrierParams(options).reask_after_ns, kSupervisorReaskMax_ns);
   waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
   waitset_.Attach(wake_.get(), kTokenWake);
   waitset_.Attach(peers_.data_condition(), kTokenPeers);
@@ -564,7 +573,7 @@ void PlantNode::TakeCommands(bool feed_barrier) {
           return SourceLivelinessOf(status.LivelinessOf(writer));
         };
         if (sources_[static_cast<std::size_t>(leg - 1)].Offer(info.publication_handle, c.standby,
-                                                              liveliness) !=
+                                                              {c.header.tick, c.valve_v}, liveliness) !=
             CommandSourceSelector::Verdict::kApply)
           continue;
         // The applying writer's compute time, older answers included: a slow primary's answers
@@ -932,6 +941,7 @@ void PlantNode::AdvanceIfComplete() {
 
 void PlantNode::StartTick(int64_t now_ns) {
   tick_started_ns_ = now_ns;
+  supervisor_reask_.Begin(now_ns);
   PublishTick();
   barrier_.Begin(tick_, static_cast<LegMask>(FirstLegs(options_.expected_legs) & ~dropped_), now_ns);
   TakeCommands(true);  // answers that came in with this callback's data
@@ -956,7 +966,7 @@ void PlantNode::WatchSilence(dds_duration_t& wait) {
           PublishTick(leg);
           ++resent_samples_;
         }
-      ReaskSupervisor();
+      if (supervisor_reask_.Due(now)) ReaskSupervisor();
       break;
     case LockstepBarrier::Action::kTimeout: {
       std::string states;

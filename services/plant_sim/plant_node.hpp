@@ -290,6 +290,10 @@ class PlantNode {
   hexa_msg_ImuSample supervisor_imu_{};
   bool supervisor_inputs_valid_ = false;
   std::uint64_t supervisor_reasks_ = 0;
+  // Re-asks of the supervisor back off within a tick (the re-ask period, then doubling up to
+  // 1 s): a supervisor that is only slow is not buried under repeated inputs (docs/faults.md,
+  // "Re-asks back off").
+  ReaskBackoff supervisor_reask_{50'000'000, 1'000'000'000};
   bool supervisor_inputs_lost_ = false;  // --lose-supervisor-inputs done
   LegArray<std::uint64_t> rejected_per_leg_{};  // samples of another leg's key, per partition
   // Command reception (docs/faults.md, "Foreign commands"): unauthenticated samples refused

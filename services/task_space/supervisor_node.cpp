@@ -10,12 +10,13 @@
 #include <cstring>
 
 #include "hexa/config/csv_trajectory.hpp"
+#include "hexa/services/exit_code.hpp"
 #include "hexa/services/service_manager.hpp"
 
 namespace hexa::task_space {
 namespace {
 
-constexpr dds_attach_t kTokenShutdown = 1;
+// services::Runtime::kShutdownToken (1) is the shutdown guard's.
 constexpr dds_attach_t kTokenOperator = 2;
 constexpr dds_attach_t kTokenFault = 3;
 constexpr dds_attach_t kTokenDone = 4;
@@ -72,102 +73,94 @@ SupervisorNode::SupervisorNode(const SupervisorNodeOptions& options,
                                const config::SystemConfig& config,
                                std::shared_ptr<spdlog::logger> log)
     : options_(options),
-      log_(std::move(log)),
+      log_(log),
       supervisor_(config::MakeSupervisorRig(config), ParamsFrom(options, config),
                   PotentiometersFrom(config)),
       // The six legs' samples of a tick leave in one datagram per reader (comm/writer.hpp).
-      participant_(static_cast<dds_domainid_t>(options.common.domain_id),
-                   comm::WriteBatching::kOn),
-      shutdown_(participant_),
-      sensors_topic_(participant_),
-      imu_topic_(participant_),
-      setpoint_topic_(participant_),
-      pose_topic_(participant_),
-      operator_topic_(participant_),
-      fault_topic_(participant_),
-      sensors_reader_(participant_, sensors_topic_, comm::EndpointRole::kControlReader,
+      runtime_(options.common, "supervisor", std::move(log), comm::WriteBatching::kOn),
+      sensors_topic_(runtime_.participant()),
+      imu_topic_(runtime_.participant()),
+      setpoint_topic_(runtime_.participant()),
+      pose_topic_(runtime_.participant()),
+      operator_topic_(runtime_.participant()),
+      fault_topic_(runtime_.participant()),
+      sensors_reader_(runtime_.participant(), sensors_topic_, comm::EndpointRole::kControlReader,
                       node::QosFor(options.common, comm::TopicKind::kLegSensors), 64),
-      imu_reader_(participant_, imu_topic_, comm::EndpointRole::kControlReader,
+      imu_reader_(runtime_.participant(), imu_topic_, comm::EndpointRole::kControlReader,
                   node::QosFor(options.common, comm::TopicKind::kImuSample)),
-      operator_reader_(participant_, operator_topic_, comm::EndpointRole::kControlReader,
+      operator_reader_(runtime_.participant(), operator_topic_, comm::EndpointRole::kControlReader,
                        [&] {
                          // Named, so that hexa_operator writes once THIS reader has matched.
                          comm::QosParams q = node::QosFor(options.common, comm::TopicKind::kOperatorCommand);
                          q.user_data = comm::kSupervisorCommandReader;
                          return q;
                        }()),
-      fault_reader_(participant_, fault_topic_, comm::EndpointRole::kControlReader,
+      fault_reader_(runtime_.participant(), fault_topic_, comm::EndpointRole::kControlReader,
                     node::QosFor(options.common, comm::TopicKind::kFaultEvent), 64),
-      setpoint_writer_(participant_, setpoint_topic_,
+      setpoint_writer_(runtime_.participant(), setpoint_topic_,
                        node::QosFor(options.common, comm::TopicKind::kLegSetpoint)),
-      pose_writer_(participant_, pose_topic_,
+      pose_writer_(runtime_.participant(), pose_topic_,
                    node::QosFor(options.common, comm::TopicKind::kPoseReport)),
-      status_(participant_, "supervisor"),
-      faults_(participant_, "supervisor"),
-      done_(participant_),
-      waitset_(participant_) {
-  waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
-  waitset_.Attach(operator_reader_.data_condition(), kTokenOperator);
-  waitset_.Attach(fault_reader_.data_condition(), kTokenFault);
-  waitset_.Attach(done_.get(), kTokenDone);
+      faults_(runtime_.participant(), "supervisor"),
+      done_(runtime_.participant()) {
+  runtime_.waitset().Attach(operator_reader_.data_condition(), kTokenOperator);
+  runtime_.waitset().Attach(fault_reader_.data_condition(), kTokenFault);
+  runtime_.waitset().Attach(done_.get(), kTokenDone);
   leg_fault_.fill(FaultReason::kNone);
+  cycle_.Bind<&SupervisorNode::RunCycle>(*this);
 }
 
-void SupervisorNode::PublishStatus(hexa_msg_NodeState state, const char* detail) {
-  const auto imu = imu_reader_.Snapshot();
-  status_.Publish(state, last_run_tick_, static_cast<double>(last_run_tick_) * 0.001,
-                  imu.requested_deadline_missed_total, 0,
-                  cycles_, cycle_times_.Median(), cycle_times_.Max(), detail);
+services::StatusFigures SupervisorNode::Figures() {
+  services::StatusFigures f;
+  f.tick = last_run_tick_;
+  f.sim_time_s = static_cast<double>(last_run_tick_) * 0.001;
+  f.deadline_missed = imu_reader_.Snapshot().requested_deadline_missed_total;
+  f.cycles = cycles_;
+  f.cycle_median_s = cycle_times_.Median();
+  f.cycle_max_s = cycle_times_.Max();
+  return f;
 }
 
-bool SupervisorNode::WaitUntilMatched() {
-  const int64_t end = node::MonotonicNow_ns() + static_cast<int64_t>(options_.startup_timeout_s * 1e9);
-  while (!shutdown_.requested()) {
-    const bool sensors = sensors_reader_.Snapshot().subscription_matched_current >= 1;
-    const bool imu = imu_reader_.Snapshot().subscription_matched_current >= 1;
-    // Every leg's primary controller reads its setpoints (plus the plant in lockstep). Its
-    // reader says so in its USER_DATA: a hot standby's reader alone is not enough, since a
-    // primary without setpoints holds its leg (and its ownership of the valve) while the
-    // others move (docs/measurements/deployment.md, "A primary without setpoints").
-    bool legs = true;
-    missing_primaries_.clear();
-    for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
-      if (comm::CountMatchedReadersWithUserData(setpoint_writer_.leg(leg).get(),
-                                                comm::LegEndpointUserData(leg, false)) == 0) {
-        legs = false;
-        missing_primaries_ += (missing_primaries_.empty() ? "" : " ") + std::to_string(leg);
-      }
+hexa_msg_NodeState SupervisorNode::RunningState() const {
+  return output_.state == SupervisorState::kHold ? hexa_msg_NODE_HOLD : hexa_msg_NODE_RUNNING;
+}
+
+bool SupervisorNode::PeersMatched(std::string& missing) {
+  const bool sensors = sensors_reader_.Snapshot().subscription_matched_current >= 1;
+  const bool imu = imu_reader_.Snapshot().subscription_matched_current >= 1;
+  // Every leg's primary controller reads its setpoints (plus the plant in lockstep). Its
+  // reader says so in its USER_DATA: a hot standby's reader alone is not enough, since a
+  // primary without setpoints holds its leg (and its ownership of the valve) while the
+  // others move (docs/measurements/deployment.md, "A primary without setpoints").
+  bool legs = true;
+  missing_primaries_.clear();
+  for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
+    if (comm::CountMatchedReadersWithUserData(setpoint_writer_.leg(leg).get(),
+                                              comm::LegEndpointUserData(leg, false)) == 0) {
+      legs = false;
+      missing_primaries_ += (missing_primaries_.empty() ? "" : " ") + std::to_string(leg);
     }
-    // With a recorder: it must have matched the pose reports before the first one is written.
-    const uint32_t pose_readers = pose_writer_.Snapshot().publication_matched_current;
-    const bool poses = pose_readers >= static_cast<uint32_t>(options_.pose_readers);
-    if (sensors && imu && legs && poses) return true;
-    if (node::MonotonicNow_ns() > end) {
-      log_->error("peers not matched after {} s: sensors {}, imu {}, setpoint readers of the "
-                  "legs' primaries {}, pose readers {} of {}",
-                  options_.startup_timeout_s, sensors, imu,
-                  legs ? "all" : "missing for leg(s) " + missing_primaries_, pose_readers,
-                  options_.pose_readers);
-      return false;
-    }
-    waitset_.Wait(DDS_MSECS(20));  // match counts change without data: bounded re-check
   }
+  // With a recorder: it must have matched the pose reports before the first one is written.
+  const uint32_t pose_readers = pose_writer_.Snapshot().publication_matched_current;
+  const bool poses = pose_readers >= static_cast<uint32_t>(options_.pose_readers);
+  if (sensors && imu && legs && poses) return true;
+  missing = fmt::format("sensors {}, imu {}, setpoint readers of the legs' primaries {}, pose "
+                        "readers {} of {}", sensors, imu,
+                        legs ? "all" : "missing for leg(s) " + missing_primaries_, pose_readers,
+                        options_.pose_readers);
   return false;
 }
 
 void SupervisorNode::TakeSensors() {
-  while (sensors_reader_.Take() > 0) {
-    for (std::size_t k = 0; k < sensors_reader_.count(); ++k) {
-      if (!sensors_reader_.info(k).valid_data) continue;
-      const auto& s = sensors_reader_.sample(k);
-      if (s.leg_id < 1 || s.leg_id > kNumLegs) continue;
-      const std::size_t i = s.leg_id - 1;
-      sensor_ring_[i][sensor_ring_count_[i]++ % kSensorRing] = s;
-      if (sensors_seen_[i] && s.header.tick < sensors_[i].header.tick) continue;
-      sensors_[i] = s;
-      sensors_seen_[i] = true;
-    }
-  }
+  services::TakeValid(sensors_reader_, [&](const hexa_msg_LegSensors& s, std::size_t) {
+    if (s.leg_id < 1 || s.leg_id > kNumLegs) return;
+    const std::size_t i = s.leg_id - 1;
+    sensor_ring_[i][sensor_ring_count_[i]++ % kSensorRing] = s;
+    if (sensors_seen_[i] && s.header.tick < sensors_[i].header.tick) return;
+    sensors_[i] = s;
+    sensors_seen_[i] = true;
+  });
 }
 
 const hexa_msg_LegSensors* SupervisorNode::RingSample(std::size_t leg_index,
@@ -181,20 +174,7 @@ const hexa_msg_LegSensors* SupervisorNode::RingSample(std::size_t leg_index,
 }
 
 bool SupervisorNode::TakeImu(bool& repeated) {
-  bool fresh = false;
-  repeated = false;
-  while (imu_reader_.Take() > 0) {
-    for (std::size_t k = 0; k < imu_reader_.count(); ++k) {
-      if (!imu_reader_.info(k).valid_data) continue;
-      const auto& s = imu_reader_.sample(k);
-      if (imu_seen_ && s.header.tick == imu_.header.tick) repeated = true;
-      if (imu_seen_ && s.header.tick <= imu_.header.tick) continue;
-      imu_ = s;
-      imu_seen_ = true;
-      fresh = true;
-    }
-  }
-  return fresh;
+  return services::TakeNewest(imu_reader_, imu_, imu_seen_, repeated);
 }
 
 bool SupervisorNode::PrepareStart(const std::string& trajectory, int periods) {
@@ -236,97 +216,88 @@ void SupervisorNode::AnswerCommand(std::uint32_t sequence, const char* kind,
   last_answer_cycle_ = cycles_;
   (answer == CommandAnswer::kAccepted ? log_->info("{}", detail)
                                                         : log_->warn("{}", detail));
-  PublishStatus(output_.state == SupervisorState::kHold ? hexa_msg_NODE_HOLD : hexa_msg_NODE_RUNNING,
-                detail);
+  runtime_.Publish(RunningState(), Figures(), detail);
 }
 
 void SupervisorNode::TakeOperatorCommands() {
-  while (operator_reader_.Take() > 0) {
-    for (std::size_t k = 0; k < operator_reader_.count(); ++k) {
-      if (!operator_reader_.info(k).valid_data) continue;
-      const auto& c = operator_reader_.sample(k);
-      // Only the session's operator tools command the supervisor (docs/faults.md, "Foreign
-      // commands"): an unauthenticated command is refused and its writer reported.
-      const comm::CommandTrust trust = operator_reader_.Authenticate(k);
-      if (!comm::Trusted(trust)) {
-        log_->warn("operator command #{} (kind {}) REFUSED: {}", c.sequence, static_cast<int>(c.kind),
-                   comm::ToString(trust));
-        refusals_.Refuse(operator_reader_.get(), operator_reader_.info(k), trust,
-                         "OperatorCommand", 0, last_run_tick_, faults_, *log_);
-        continue;
-      }
-      log_->info("operator command #{}: kind {} trajectory '{}'", c.sequence,
-                 static_cast<int>(c.kind), c.trajectory);
-      // Commands take effect at the next tick; one that a newer one replaces before then is
-      // answered below, so that no operator waits for it in vain.
-      const OperatorCommandKind replaced =
-          pending_from_operator_ ? pending_command_ : OperatorCommandKind::kNone;
-      const std::uint32_t replaced_sequence = pending_sequence_;
-      switch (c.kind) {
-        case hexa_msg_OPERATOR_START: {
-          if (!supervisor_.initialized()) {
-            AnswerCommand(c.sequence, "start", CommandAnswer::kRefused,
-                          "no pose estimate yet");
-            continue;
-          }
-          const std::string traj = std::strcmp(c.trajectory, "csv") == 0 ? c.csv_path : c.trajectory;
-          PrepareStart(traj, options_.periods);
-          break;
-        }
-        case hexa_msg_OPERATOR_STOP: pending_command_ = OperatorCommandKind::kStop; break;
-        case hexa_msg_OPERATOR_RESET:
-          pending_command_ = OperatorCommandKind::kReset;
-          leg_fault_.fill(FaultReason::kNone);  // re-latched if the cause is still reported
-          system_fault_ = FaultReason::kNone;
-          break;
-        case hexa_msg_OPERATOR_HOME: pending_command_ = OperatorCommandKind::kHome; break;
-        case hexa_msg_OPERATOR_SHUTDOWN:
-          AnswerCommand(c.sequence, "shutdown", CommandAnswer::kAccepted, "");
-          shutdown_.RequestShutdown();
-          continue;
-        default:
-          AnswerCommand(c.sequence, CommandName(c.kind), CommandAnswer::kRefused,
-                        "unknown command");
-          continue;
-      }
-      if (replaced != OperatorCommandKind::kNone) {
-        char why[64];
-        std::snprintf(why, sizeof why, "replaced by command #%u before it was applied",
-                      static_cast<unsigned>(c.sequence));
-        AnswerCommand(replaced_sequence, ToString(replaced),
-                      CommandAnswer::kRefused, why);
-      }
-      pending_from_operator_ = true;
-      pending_sequence_ = c.sequence;
+  services::TakeValid(operator_reader_, [&](const hexa_msg_OperatorCommand& c, std::size_t k) {
+    // Only the session's operator tools command the supervisor (docs/faults.md, "Foreign
+    // commands"): an unauthenticated command is refused and its writer reported.
+    const comm::CommandTrust trust = operator_reader_.Authenticate(k);
+    if (!comm::Trusted(trust)) {
+      log_->warn("operator command #{} (kind {}) REFUSED: {}", c.sequence, static_cast<int>(c.kind),
+                 comm::ToString(trust));
+      refusals_.Refuse(operator_reader_.get(), operator_reader_.info(k), trust,
+                       "OperatorCommand", 0, last_run_tick_, faults_, *log_);
+      return;
     }
-  }
+    log_->info("operator command #{}: kind {} trajectory '{}'", c.sequence,
+               static_cast<int>(c.kind), c.trajectory);
+    // Commands take effect at the next tick; one that a newer one replaces before then is
+    // answered below, so that no operator waits for it in vain.
+    const OperatorCommandKind replaced =
+        pending_from_operator_ ? pending_command_ : OperatorCommandKind::kNone;
+    const std::uint32_t replaced_sequence = pending_sequence_;
+    switch (c.kind) {
+      case hexa_msg_OPERATOR_START: {
+        if (!supervisor_.initialized()) {
+          AnswerCommand(c.sequence, "start", CommandAnswer::kRefused,
+                        "no pose estimate yet");
+          return;
+        }
+        const std::string traj = std::strcmp(c.trajectory, "csv") == 0 ? c.csv_path : c.trajectory;
+        PrepareStart(traj, options_.periods);
+        break;
+      }
+      case hexa_msg_OPERATOR_STOP: pending_command_ = OperatorCommandKind::kStop; break;
+      case hexa_msg_OPERATOR_RESET:
+        pending_command_ = OperatorCommandKind::kReset;
+        leg_fault_.fill(FaultReason::kNone);  // re-latched if the cause is still reported
+        system_fault_ = FaultReason::kNone;
+        break;
+      case hexa_msg_OPERATOR_HOME: pending_command_ = OperatorCommandKind::kHome; break;
+      case hexa_msg_OPERATOR_SHUTDOWN:
+        AnswerCommand(c.sequence, "shutdown", CommandAnswer::kAccepted, "");
+        runtime_.shutdown().RequestShutdown();
+        return;
+      default:
+        AnswerCommand(c.sequence, CommandName(c.kind), CommandAnswer::kRefused,
+                      "unknown command");
+        return;
+    }
+    if (replaced != OperatorCommandKind::kNone) {
+      char why[64];
+      std::snprintf(why, sizeof why, "replaced by command #%u before it was applied",
+                    static_cast<unsigned>(c.sequence));
+      AnswerCommand(replaced_sequence, ToString(replaced),
+                    CommandAnswer::kRefused, why);
+    }
+    pending_from_operator_ = true;
+    pending_sequence_ = c.sequence;
+  });
 }
 
 void SupervisorNode::TakeFaults() {
-  while (fault_reader_.Take() > 0) {
-    for (std::size_t k = 0; k < fault_reader_.count(); ++k) {
-      if (!fault_reader_.info(k).valid_data) continue;
-      const auto& f = fault_reader_.sample(k);
-      if (std::strcmp(f.source_node, "supervisor") == 0) continue;  // our own
-      log_->warn("fault from {}: leg {} tick {} reason {}: {}", f.source_node, f.leg_id, f.tick,
-                 ToString(FromWire(f.reason)), f.detail);
-      // A refused command changed nothing: the legs follow their own controllers and the
-      // supervisor its operator. Reported, not a reason to hold.
-      if (f.reason == hexa_msg_FAULT_COMMAND_REFUSED) continue;
-      if (f.leg_id >= 1 && f.leg_id <= kNumLegs) {
-        leg_fault_[f.leg_id - 1] = FromWire(f.reason);
-      } else if (f.reason != hexa_msg_FAULT_NONE) {
-        system_fault_ = FromWire(f.reason);  // the host or the plant itself
-      }
-      if (f.reason != hexa_msg_FAULT_NONE) {
-        ReportedFault& r = reported_[f.leg_id >= 1 && f.leg_id <= kNumLegs ? f.leg_id - 1 : kNumLegs];
-        r.reason = FromWire(f.reason);
-        std::snprintf(r.source.data(), r.source.size(), "%s", f.source_node);
-        std::snprintf(r.detail.data(), r.detail.size(), "%s", f.detail);
-      }
-      if (f.reason == hexa_msg_FAULT_IMU_LOST) imu_lost_ = true;
+  services::TakeValid(fault_reader_, [&](const hexa_msg_FaultEvent& f, std::size_t) {
+    if (std::strcmp(f.source_node, "supervisor") == 0) return;  // our own
+    log_->warn("fault from {}: leg {} tick {} reason {}: {}", f.source_node, f.leg_id, f.tick,
+               ToString(FromWire(f.reason)), f.detail);
+    // A refused command changed nothing: the legs follow their own controllers and the
+    // supervisor its operator. Reported, not a reason to hold.
+    if (f.reason == hexa_msg_FAULT_COMMAND_REFUSED) return;
+    if (f.leg_id >= 1 && f.leg_id <= kNumLegs) {
+      leg_fault_[f.leg_id - 1] = FromWire(f.reason);
+    } else if (f.reason != hexa_msg_FAULT_NONE) {
+      system_fault_ = FromWire(f.reason);  // the host or the plant itself
     }
-  }
+    if (f.reason != hexa_msg_FAULT_NONE) {
+      ReportedFault& r = reported_[f.leg_id >= 1 && f.leg_id <= kNumLegs ? f.leg_id - 1 : kNumLegs];
+      r.reason = FromWire(f.reason);
+      std::snprintf(r.source.data(), r.source.size(), "%s", f.source_node);
+      std::snprintf(r.detail.data(), r.detail.size(), "%s", f.detail);
+    }
+    if (f.reason == hexa_msg_FAULT_IMU_LOST) imu_lost_ = true;
+  });
 }
 
 void SupervisorNode::FinishCommand(SupervisorState before, std::uint64_t tick, double time_s) {
@@ -398,6 +369,19 @@ void SupervisorNode::RunTick(std::uint64_t tick, double time_s) {
   // (a local take; nothing is sent).
   TakeFaults();
   const int64_t t0 = node::MonotonicNow_ns();
+  FillInput(time_s);
+  const SupervisorState state_before = output_.state;
+  supervisor_.Update(input_, output_);
+  if (pending_command_ != OperatorCommandKind::kNone) FinishCommand(state_before, tick, time_s);
+  cycle_times_.Add(static_cast<double>(node::MonotonicNow_ns() - t0) * 1e-9);
+  ++cycles_;
+  ran_once_ = true;
+  last_run_tick_ = tick;
+  Publish(tick, time_s);
+  ReactToOutput(tick, time_s);
+}
+
+void SupervisorNode::FillInput(double time_s) {
   input_ = SupervisorInput{};
   input_.time_s = time_s;
   for (std::size_t i = 0; i < kNumLegs; ++i) {
@@ -417,22 +401,16 @@ void SupervisorNode::RunTick(std::uint64_t tick, double time_s) {
   // legs' 1 kHz commands are not sent to one more process (docs/performance.md).
   input_.command = pending_command_;
   input_.start = pending_start_ ? &*pending_start_ : nullptr;
-  const SupervisorState state_before = output_.state;
-  supervisor_.Update(input_, output_);
-  if (pending_command_ != OperatorCommandKind::kNone) FinishCommand(state_before, tick, time_s);
-  cycle_times_.Add(static_cast<double>(node::MonotonicNow_ns() - t0) * 1e-9);
-  ++cycles_;
-  ran_once_ = true;
-  last_run_tick_ = tick;
-  Publish(tick, time_s);
+}
 
+void SupervisorNode::ReactToOutput(std::uint64_t tick, double time_s) {
   if (output_.fault_raised) {
     log_->error("HOLD: {} (leg {}): {}", ToString(output_.fault), output_.fault_leg,
                 output_.fault_detail.data());
     faults_.Publish(static_cast<uint8_t>(output_.fault_leg), tick,
                     static_cast<hexa_msg_FaultReason>(static_cast<int>(output_.fault)),
                     output_.fault_detail.data());
-    PublishStatus(hexa_msg_NODE_HOLD, output_.fault_detail.data());
+    runtime_.Publish(hexa_msg_NODE_HOLD, Figures(), output_.fault_detail.data());
     ReportHold(time_s);
     // With --exit-when-done the session waits in HOLD for an operator reset, then ends held.
     if (options_.exit_when_done && hold_exit_tick_ == 0) {
@@ -440,13 +418,13 @@ void SupervisorNode::RunTick(std::uint64_t tick, double time_s) {
                                    1, static_cast<std::uint64_t>(std::llround(options_.hold_timeout_s * 1000.0)));
       log_->warn("waiting up to {} s (simulated) in HOLD for an operator reset (hexa_operator "
                  "--domain {} reset); without one the service leaves held (exit {})",
-                 options_.hold_timeout_s, options_.common.domain_id, kExitHeld);
+                 options_.hold_timeout_s, options_.common.domain_id, exit_code::kSupervisorHeld);
     }
   }
   if (hold_exit_tick_ != 0 && tick >= hold_exit_tick_ && exit_code_ < 0) {
     log_->error("no operator reset within {} s in HOLD: leaving held (exit {}): {}",
-                options_.hold_timeout_s, kExitHeld, output_.fault_detail.data());
-    exit_code_ = kExitHeld;
+                options_.hold_timeout_s, exit_code::kSupervisorHeld, output_.fault_detail.data());
+    exit_code_ = exit_code::kSupervisorHeld;
   }
   if (!was_initialized_ && supervisor_.initialized()) {
     was_initialized_ = true;
@@ -474,18 +452,17 @@ void SupervisorNode::RunTick(std::uint64_t tick, double time_s) {
       exit_code_ < 0) {
     if (stopped_by_operator_) {
       log_->warn("motion ended at t = {:.3f} s by the operator's stop, before the trajectory's "
-                 "end (exit {})", time_s, kExitStoppedByOperator);
-      exit_code_ = kExitStoppedByOperator;
+                 "end (exit {})", time_s, exit_code::kStoppedByOperator);
+      exit_code_ = exit_code::kStoppedByOperator;
     } else {
       log_->info("trajectory finished at t = {:.3f} s", time_s);
-      exit_code_ = 0;
+      exit_code_ = exit_code::kOk;
     }
   }
   // The last command's answer is repeated for 1 s (200 cycles), then the state is the detail.
   const bool repeat_answer = last_answer_[0] != '\0' && cycles_ - last_answer_cycle_ <= 200;
-  if (cycles_ % 20 == 0) PublishStatus(output_.state == SupervisorState::kHold ? hexa_msg_NODE_HOLD
-                                                                             : hexa_msg_NODE_RUNNING,
-                                       repeat_answer ? last_answer_ : ToString(output_.state));
+  if (cycles_ % 20 == 0)
+    runtime_.Publish(RunningState(), Figures(), repeat_answer ? last_answer_ : ToString(output_.state));
 }
 
 void SupervisorNode::Publish(std::uint64_t tick, double time_s) {
@@ -528,12 +505,6 @@ void SupervisorNode::RepublishSetpoints() {
   if (setpoint_republishes_++ == 0)
     log_->info("lockstep re-ask of tick {}: its setpoints published again (logged once)",
                last_run_tick_);
-}
-
-void SupervisorNode::OnData(void* self) {
-  auto* node = static_cast<SupervisorNode*>(self);
-  std::lock_guard<std::mutex> lock(node->mutex_);
-  node->RunCycle();
 }
 
 bool SupervisorNode::SensorsOfTick(std::uint64_t m) {
@@ -595,58 +566,73 @@ void SupervisorNode::RunCycle() {
   if (exit_code_ >= 0) done_.Set();
 }
 
-int SupervisorNode::Run() {
-  const bool realtime = options_.common.mode == node::TimeMode::kRealtime;
-  PublishStatus(hexa_msg_NODE_STARTING, "waiting for peers");
-  if (!WaitUntilMatched()) {
-    PublishStatus(hexa_msg_NODE_FAULT, "peers not matched");
-    return shutdown_.requested() ? 0 : 3;
+void SupervisorNode::MainThreadLook() {
+  const bool realtime = !runtime_.lockstep();
+  TakeOperatorCommands();
+  TakeFaults();
+  // Lockstep without the IMU: the tick it awaits may already be here (its data callback
+  // ran before the plant's FAULT_IMU_LOST arrived).
+  if (imu_lost_ && !realtime) RunCycle();
+  // Real time: the IMU is due every 5 ms; 10 ms without one counts a miss and the state
+  // machine runs on what it has (it holds after the configured count).
+  constexpr int64_t kImuDue_ns = 10'000'000;
+  if (realtime && ran_once_ && node::MonotonicNow_ns() - last_imu_mono_ns_ > kImuDue_ns) {
+    ++imu_misses_consecutive_;
+    last_imu_mono_ns_ = node::MonotonicNow_ns();
+    // Once the plant reported the IMU lost: on the legs' newest samples, so that time goes
+    // on without it (the hold, and the exit 1 s after it, must still come).
+    if (imu_lost_ && sensors_seen_[0] && sensors_[0].header.tick > last_run_tick_) {
+      RunTick(sensors_[0].header.tick, sensors_[0].header.sim_time_s);
+    } else {
+      RunTick(last_run_tick_, imu_.header.sim_time_s);
+    }
   }
-  PublishStatus(hexa_msg_NODE_RUNNING, "idle");
-  node::service_manager::Ready("idle");
+}
+
+void SupervisorNode::LogSummary() {
+  log_->info("supervisor stopped after {} cycles (state {}), compute median {:.1f} us max {:.1f} us, "
+             "failed writes {}, setpoints re-published {} times (lockstep re-asks), largest "
+             "leg-length consistency residual {:.2f} mm (limit {:.1f} mm, docs/faults.md)",
+             cycles_, ToString(output_.state), cycle_times_.Median() * 1e6,
+             cycle_times_.Max() * 1e6, setpoint_writer_.write_errors_total(),
+             setpoint_republishes_, supervisor_.max_consistency_residual_m() * 1e3,
+             supervisor_.params().length_consistency_limit_m * 1e3);
+}
+
+int SupervisorNode::Run() {
+  const bool realtime = !runtime_.lockstep();
+  runtime_.Start(Figures(), "waiting for peers");
+  services::PeerWait wait;
+  wait.rule.timeout_s = options_.startup_timeout_s;
+  wait.matched = [this](std::string& missing) { return PeersMatched(missing); };
+  wait.processes = {"plant", "leg1", "leg2", "leg3", "leg4", "leg5", "leg6"};
+  if (options_.pose_readers > 0) wait.processes.push_back("recorder");
+  if (runtime_.WaitForPeers(wait) != services::PeerWaitResult::kMatched)
+    return runtime_.FailStart(Figures(), "peers not matched", exit_code::kPeersNotMatched);
+  runtime_.Running(Figures(), "idle", "idle");
   autostart_pending_ = options_.autostart;
   log_->info("supervisor running ({}, outer loop {}, feed-forward {}, estimator {})",
              realtime ? "real time" : "lockstep", options_.outer_loop ? "on" : "off",
              supervisor_.params().feedforward_enabled ? "on" : "off",
              options_.least_squares ? "six-leg least squares" : "GQFK (eq 47)");
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<std::mutex> lock(cycle_.mutex());
     last_imu_mono_ns_ = node::MonotonicNow_ns();
-    sensors_reader_.OnDataAvailable(&SupervisorNode::OnData, this);
-    imu_reader_.OnDataAvailable(&SupervisorNode::OnData, this);
-    RunCycle();  // what arrived before the callbacks
+    cycle_.TriggerOn(sensors_reader_);
+    cycle_.TriggerOn(imu_reader_);
+    cycle_.RunHoldingLock();  // what arrived before the callbacks
   }
-  // Real time: the IMU is due every 5 ms; 10 ms without one counts a miss and the state
-  // machine runs on what it has (it holds after the configured count).
-  const dds_duration_t wait = realtime ? DDS_MSECS(10) : DDS_SECS(1);
-  const int64_t imu_due_ns = 10'000'000;
-  while (!shutdown_.requested()) {
-    const dds_return_t n = waitset_.Wait(wait);
-    if (n < 0) return 1;
-    std::lock_guard<std::mutex> lock(mutex_);
+  const dds_duration_t wait_timeout = realtime ? DDS_MSECS(10) : DDS_SECS(1);
+  while (!runtime_.shutdown_requested()) {
+    if (runtime_.waitset().Wait(wait_timeout) < 0) return exit_code::kRunError;
+    std::lock_guard<std::mutex> lock(cycle_.mutex());
     node::service_manager::Watchdog();  // the control lock is ours: the cycle is not stuck
     if (exit_code_ >= 0) break;
-    TakeOperatorCommands();
-    TakeFaults();
-    // Lockstep without the IMU: the tick it awaits may already be here (its data callback
-    // ran before the plant's FAULT_IMU_LOST arrived).
-    if (imu_lost_ && !realtime) RunCycle();
-    if (realtime && ran_once_ && node::MonotonicNow_ns() - last_imu_mono_ns_ > imu_due_ns) {
-      ++imu_misses_consecutive_;
-      last_imu_mono_ns_ = node::MonotonicNow_ns();
-      // Once the plant reported the IMU lost: on the legs' newest samples, so that time goes
-      // on without it (the hold, and the exit 1 s after it, must still come).
-      if (imu_lost_ && sensors_seen_[0] && sensors_[0].header.tick > last_run_tick_) {
-        RunTick(sensors_[0].header.tick, sensors_[0].header.sim_time_s);
-      } else {
-        RunTick(last_run_tick_, imu_.header.sim_time_s);
-      }
-    }
+    MainThreadLook();
     if (exit_code_ >= 0) break;
   }
-  sensors_reader_.OnDataAvailable(nullptr, nullptr);
-  imu_reader_.OnDataAvailable(nullptr, nullptr);
-  std::lock_guard<std::mutex> lock(mutex_);
+  cycle_.StopTriggers();
+  std::lock_guard<std::mutex> lock(cycle_.mutex());
   // An orderly end, said at once: the legs see their setpoint disposed (not a lapsed lease:
   // a crash never disposes) and the plant sees STOPPING, before this process's teardown,
   // which can take a while (a reliable writer lingers for a reader that does not
@@ -656,16 +642,9 @@ int SupervisorNode::Run() {
     key.leg_id = static_cast<uint8_t>(i + 1);
     setpoint_writer_.Dispose(key);
   }
-  PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
-  node::service_manager::Stopping("stopped");
-  log_->info("supervisor stopped after {} cycles (state {}), compute median {:.1f} us max {:.1f} us, "
-             "failed writes {}, setpoints re-published {} times (lockstep re-asks), largest "
-             "leg-length consistency residual {:.2f} mm (limit {:.1f} mm, docs/faults.md)",
-             cycles_, ToString(output_.state), cycle_times_.Median() * 1e6,
-             cycle_times_.Max() * 1e6, setpoint_writer_.write_errors_total(),
-             setpoint_republishes_, supervisor_.max_consistency_residual_m() * 1e3,
-             supervisor_.params().length_consistency_limit_m * 1e3);
-  return exit_code_ < 0 ? 0 : exit_code_;
+  runtime_.Stop(Figures(), "stopped");
+  LogSummary();
+  return exit_code_ < 0 ? exit_code::kOk : exit_code_;
 }
 
 }  // namespace hexa::task_space

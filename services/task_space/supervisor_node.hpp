@@ -12,7 +12,6 @@
 #include <array>
 #include <cstdint>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 
@@ -20,15 +19,14 @@
 #include "hexa/comm/comm.hpp"
 #include "hexa/core/supervisor.hpp"
 #include "hexa/services/command_refusal.hpp"
+#include "hexa/services/control_cycle.hpp"
 #include "hexa/services/node.hpp"
+#include "hexa/services/runtime.hpp"
 
 namespace hexa::task_space {
 
-// Exit codes of hexa_task_space besides 0 (trajectory finished, or shutdown), 1 (error) and
-// 2 (usage): docs/exit_codes.md.
-inline constexpr int kExitPeersNotMatched = 3;
-inline constexpr int kExitHeld = 5;                // --exit-when-done: HOLD, no reset in time
-inline constexpr int kExitStoppedByOperator = 6;   // --exit-when-done: `stop` ended the motion
+// SCHED_FIFO priority in real time unless --rt-priority says otherwise (below the legs').
+inline constexpr int kRealtimePriority = 75;
 
 struct SupervisorNodeOptions {
   node::CommonOptions common;
@@ -41,7 +39,7 @@ struct SupervisorNodeOptions {
   bool feedforward = true;  // false: no inverse-dynamics feed-forward (whatever the rig file says)
   double startup_timeout_s = 30.0;
   // --exit-when-done: simulated time to wait in HOLD for an operator reset before leaving with
-  // kExitHeld. A reset within it resumes: the platform leaves HOLD and, with autostart, the
+  // exit_code::kSupervisorHeld. A reset within it resumes: the platform leaves HOLD and, with autostart, the
   // trajectory starts again from where it was held.
   double hold_timeout_s = 30.0;
   // When not empty: one line naming the fault and its cause is written here (atomically) when
@@ -54,6 +52,10 @@ struct SupervisorNodeOptions {
   double crash_at_s = -1.0;
 };
 
+// hexa_task_space's command line into `options`: -1 to go on, else the exit code (0 --help,
+// exit_code::kUsage with the message on stderr).
+int ParseOptions(int argc, char** argv, SupervisorNodeOptions& options);
+
 class SupervisorNode {
  public:
   SupervisorNode(const SupervisorNodeOptions& options, const config::SystemConfig& config,
@@ -61,16 +63,26 @@ class SupervisorNode {
   int Run();
 
  private:
-  bool WaitUntilMatched();
+  // Start-up: the plant's sensor and IMU writers, every leg's primary setpoint reader and the
+  // pose readers asked for, matched.
+  bool PeersMatched(std::string& missing);
   void TakeSensors();
   // Takes the IMU samples; true if a newer one came. `repeated`: the newest tick came again
   // (a lockstep re-ask from the plant).
   bool TakeImu(bool& repeated);
   void TakeOperatorCommands();
   void TakeFaults();
-  static void OnData(void* self);
   void RunCycle();
+  // One wake-up of the main thread (operator commands, faults, IMU misses in real time), with
+  // the control lock held.
+  void MainThreadLook();
+  // One supervisor tick: read (faults, samples) -> core Supervisor::Update -> write
+  // (setpoints, pose report) -> the service's reaction to the output.
   void RunTick(std::uint64_t tick, double time_s);
+  void FillInput(double time_s);
+  // Hold (FaultEvent, NodeStatus HOLD, the hold report), the --exit-when-done decisions, the
+  // pose estimate's arrival, autostart, the periodic NodeStatus.
+  void ReactToOutput(std::uint64_t tick, double time_s);
   void Publish(std::uint64_t tick, double time_s);
   // Lockstep re-ask of tick last_run_tick_: its setpoints again (a leg may have lost them).
   void RepublishSetpoints();
@@ -83,13 +95,15 @@ class SupervisorNode {
   // The one-line description of the hold (fault, leg, who reported it and why) to the log and,
   // with --hold-report, to that file.
   void ReportHold(double time_s);
-  void PublishStatus(hexa_msg_NodeState state, const char* detail);
+  services::StatusFigures Figures();
+  // The running state on NodeStatus: HOLD while held, else RUNNING.
+  hexa_msg_NodeState RunningState() const;
+  void LogSummary();
 
   SupervisorNodeOptions options_;
   std::shared_ptr<spdlog::logger> log_;
   Supervisor supervisor_;
-  comm::Participant participant_;
-  comm::ShutdownGuard shutdown_;
+  services::Runtime runtime_;
   comm::Topic<hexa_msg_LegSensors> sensors_topic_;
   comm::Topic<hexa_msg_ImuSample> imu_topic_;
   comm::Topic<hexa_msg_LegSetpoint> setpoint_topic_;
@@ -102,12 +116,11 @@ class SupervisorNode {
   comm::Reader<hexa_msg_FaultEvent> fault_reader_;
   comm::LegRoutedWriter<hexa_msg_LegSetpoint> setpoint_writer_;
   comm::Writer<hexa_msg_PoseReport> pose_writer_;
-  node::StatusPublisher status_;
   node::FaultPublisher faults_;
   comm::GuardCondition done_;  // set by the cycle when the service should exit
-  comm::WaitSet waitset_;
 
-  std::mutex mutex_;  // everything below
+  // RunCycle on the IMU and leg-sensor readers' data; its mutex guards everything below.
+  services::ControlCycle cycle_;
   std::int64_t last_imu_mono_ns_ = 0;  // real time: when the last IMU sample was taken
   LegArray<hexa_msg_LegSensors> sensors_{};
   bool imu_lost_ = false;  // the plant reported FAULT_IMU_LOST: lockstep runs without it

@@ -348,7 +348,8 @@ TEST_F(CommProcess, SharedOwnershipReaderAppliesThePrimaryThenItsStandbyAfterKil
       if (!reader.info(i).valid_data) continue;
       const auto& s = reader.sample(i);
       c.weak_received += s.standby ? 1 : 0;
-      if (selector.Offer(reader.info(i).publication_handle, s.standby, liveliness) !=
+      if (selector.Offer(reader.info(i).publication_handle, s.standby, {s.header.tick, s.valve_v},
+                         liveliness) !=
           hexa::CommandSourceSelector::Verdict::kApply)
         continue;
       if (s.standby) {

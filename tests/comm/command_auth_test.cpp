@@ -1,6 +1,7 @@
 // Command authentication (comm/command_auth.hpp): the MAC is HMAC-SHA256 truncated, a tag
 // binds every field and the writer's participant, and the key file is checked.
 #include "hexa/comm/command_auth.hpp"
+#include "hexa/comm/trusted_writers.hpp"
 
 #include <openssl/hmac.h>
 #include <sys/stat.h>
@@ -143,6 +144,74 @@ TEST(CommandAuth, AKeyFileIsWrittenPrivateReadBackAndCheckedWithClearErrors) {
   EXPECT_NE(error.find("character 64"), std::string::npos) << error;
   EXPECT_FALSE(ReadSessionKey(dir + "/none.key", error));
   EXPECT_NE(error.find("No such file"), std::string::npos) << error;
+}
+
+}  // namespace
+
+namespace {
+
+// A writer's USER_DATA claim ("leg=3 standby=0") counts only with the session key's tag for
+// that writer's participant: the plant's count of each leg's writers and the intruder test
+// (tests/integration/test_foreign_commands.cpp) rest on it.
+TEST(CommandAuth, AnEndpointClaimVerifiesOnlyForItsKeyItsParticipantAndItsText) {
+  const CommandMac mac(KeyOf(1));
+  const ParticipantPrefix writer = PrefixOfByte(0x42);
+  const std::string user_data = SignEndpointClaim(&mac, writer, "leg=3 standby=0");
+  EXPECT_EQ(user_data.rfind("leg=3 standby=0 auth=", 0), 0u) << user_data;
+  EXPECT_EQ(user_data.size(), std::string("leg=3 standby=0 auth=").size() + 2 * kAuthTagBytes);
+  std::string claim;
+  EXPECT_EQ(VerifyEndpointClaim(&mac, writer, user_data, claim), CommandTrust::kAuthenticated);
+  EXPECT_EQ(claim, "leg=3 standby=0");
+  const CommandMac other_key(KeyOf(2));
+  EXPECT_EQ(VerifyEndpointClaim(&other_key, writer, user_data, claim), CommandTrust::kBadTag)
+      << "another session's key";
+  EXPECT_EQ(VerifyEndpointClaim(&mac, PrefixOfByte(0x43), user_data, claim), CommandTrust::kBadTag)
+      << "the USER_DATA copied into another participant's writer";
+  std::string forged = user_data;
+  forged[4] = '4';  // "leg=4 ..." with leg 3's tag
+  EXPECT_EQ(VerifyEndpointClaim(&mac, writer, forged, claim), CommandTrust::kBadTag);
+  EXPECT_EQ(VerifyEndpointClaim(&mac, writer, "leg=3 standby=0", claim), CommandTrust::kBadTag)
+      << "no tag at all";
+  EXPECT_EQ(VerifyEndpointClaim(&mac, writer, user_data.substr(0, user_data.size() - 1), claim),
+            CommandTrust::kBadTag) << "a truncated tag";
+  // Without a session key nothing is checked: the claim is the whole text, as before keys.
+  EXPECT_EQ(SignEndpointClaim(nullptr, writer, "leg=3 standby=0"), "leg=3 standby=0");
+  EXPECT_EQ(VerifyEndpointClaim(nullptr, writer, "leg=3 standby=0", claim), CommandTrust::kUnchecked);
+  EXPECT_EQ(claim, "leg=3 standby=0");
+}
+
+// A leg controller judges the supervisor present by its trusted setpoint writers only: a
+// foreign writer that stays alive keeps no one present once the trusted one has left.
+TEST(CommandAuth, OnlyWritersWithAuthenticatedSamplesCountAsPresent) {
+  StatusCounters status;
+  auto change = [&status](dds_instance_handle_t writer, int alive_change, int not_alive_change) {
+    dds_liveliness_changed_status_t s{};
+    s.alive_count_change = alive_change;
+    s.not_alive_count_change = not_alive_change;
+    s.last_publication_handle = writer;
+    status.OnLivelinessChanged(s);
+  };
+  constexpr dds_instance_handle_t kSupervisor = 101, kIntruder = 202;
+  change(kSupervisor, 1, 0);
+  change(kIntruder, 1, 0);
+  TrustedWriters trusted;
+  EXPECT_FALSE(trusted.any());
+  EXPECT_EQ(trusted.Present(status), 0u) << "nothing authenticated yet";
+  trusted.Note(kIntruder, CommandTrust::kBadTag);
+  trusted.Note(kIntruder, CommandTrust::kUnknownWriter);
+  EXPECT_FALSE(trusted.any());
+  trusted.Note(kSupervisor, CommandTrust::kAuthenticated);
+  EXPECT_TRUE(trusted.Contains(kSupervisor));
+  EXPECT_FALSE(trusted.Contains(kIntruder));
+  EXPECT_EQ(trusted.Present(status), 1u);
+  change(kSupervisor, -1, 1);  // its lease lapsed: still matched, still present
+  EXPECT_EQ(trusted.Present(status), 1u);
+  change(kSupervisor, 0, -1);  // its writer left
+  EXPECT_EQ(trusted.Present(status), 0u) << "the intruder's live writer must not count";
+  // Without a session key every writer's samples are unchecked, hence trusted.
+  TrustedWriters unchecked;
+  unchecked.Note(kIntruder, CommandTrust::kUnchecked);
+  EXPECT_EQ(unchecked.Present(status), 1u);
 }
 
 }  // namespace

@@ -149,6 +149,7 @@ TEST_F(ExitCodePage, ServicesTableMatchesTheHeader) {
               {{"`hexa_plant_sim`", ec::kPlantLockstepStall, "lockstep"},
                {"`hexa_plant_sim`", ec::kPlantNonFinite, "non-finite"},
                {"`hexa_task_space`", ec::kPeersNotMatched, "peers not matched"},
+               {"`hexa_leg_ctrl`", ec::kPeersNotMatched, "peers not matched"},
                {"`hexa_task_space`", ec::kSupervisorHeld, "held the platform"},
                {"`hexa_task_space`", ec::kStoppedByOperator, "`stop`"}});
 }

@@ -107,6 +107,31 @@ TEST(ForeignCommands, LockstepValveIntruderIsRefusedReportedAndTrackingIsBitIden
       << "the intruder answered no tick: the test would show nothing";
 }
 
+// The intruder's valve writer claims to be leg 3's controller (USER_DATA "leg=3 standby=0",
+// strength 1000) and stays alive, writing every 1 ms, while leg 3's real controller hangs at
+// t = 1 s. The plant counts a writer as leg 3's only when the session key vouches for its
+// claim: leg 3 has no live writer, and the hang is named as without the intruder (liveliness
+// lost at tick 1000), not left to the 10 s last resort behind the intruder's live writer.
+TEST(ForeignCommands, LockstepIntruderClaimingALegCannotHideItsHang) {
+  std::vector<std::string> args = LockstepArgs();
+  args.insert(args.end(), {"--fault", "3:hang:1.0"});
+  const auto run = RunWithIntruder("foreign_claim_hang_ls", 67, args,
+                                   {"--topic", "valve", "--leg", "3", "--strength", "1000",
+                                    "--user-data", "leg=3 standby=0", "--value", "9.88"});
+  ASSERT_EQ(run.exit_code, 3) << Slurp(run.dir + "/session.log") << Slurp(run.dir + "/plant.log");
+  ASSERT_TRUE(run.has_report);
+  // The first report names the hang at the tick leg 3 did not answer (later ones remind that
+  // its valve is still held at null).
+  const auto lost = FaultsWith(run.report, "plant: leg 3", "FAULT_LIVELINESS_LOST");
+  ASSERT_FALSE(lost.empty()) << Faults(run.report);
+  EXPECT_EQ(lost[0].find("plant: leg 3 tick 1000 "), 0u) << lost[0];
+  EXPECT_NE(lost[0].find("no answer to tick 1000"), std::string::npos) << lost[0];
+  EXPECT_TRUE(FaultsWith(run.report, "plant:", "FAULT_COMMAND_DEADLINE_MISSED").empty())
+      << "the last resort, not the hang's cause\n" << Faults(run.report);
+  EXPECT_NE(Slurp(run.dir + "/intruder.log").find("written"), std::string::npos)
+      << "the intruder wrote nothing: the test would show nothing";
+}
+
 // A replay: the intruder reads leg 3's real commands (tag included) and writes them back
 // from its own participant, faster than the plant re-asks. The tag binds the writer's
 // participant: refused all the same.

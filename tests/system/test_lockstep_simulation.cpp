@@ -1,4 +1,6 @@
 // The whole system in one process (same protocol as the DDS lockstep session).
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "hexa/core/lockstep_simulation.hpp"
@@ -103,6 +105,29 @@ TEST(LockstepProtocol, ReleasedLegsAreNoLongerAwaited) {
   b.Begin(8, static_cast<LegMask>(FirstLegs(6) & ~LegBit(3) & ~LegBit(6)), 10);
   for (int leg : {1, 2, 4}) EXPECT_FALSE(b.Answer(leg, 8));
   EXPECT_TRUE(b.Answer(5, 8));
+}
+
+// The supervisor's re-asks within one tick back off: the first after the re-ask period (a
+// sample lost on the way is asked for again as soon as before), then after 100, 200, 400,
+// 800 ms and every 1 s. Polled every 50 ms (as the plant's barrier does) over the 10 s last
+// resort: 13 re-asks instead of the 199 of a fixed 50 ms period that buried a starved
+// supervisor under repeated inputs (docs/faults.md, "Re-asks back off").
+TEST(LockstepProtocol, SupervisorReasksBackOffWithinATick) {
+  constexpr std::int64_t kMs = 1'000'000;
+  ReaskBackoff r(50 * kMs, 1000 * kMs);
+  r.Begin(0);
+  std::vector<std::int64_t> due;
+  for (std::int64_t t = 50 * kMs; t < 10'000 * kMs; t += 50 * kMs)
+    if (r.Due(t)) due.push_back(t / kMs);
+  const std::vector<std::int64_t> expected{50, 150, 350, 750, 1550, 2550, 3550, 4550,
+                                           5550, 6550, 7550, 8550, 9550};
+  EXPECT_EQ(due, expected);
+  // A new tick starts the schedule again.
+  r.Begin(20'000 * kMs);
+  EXPECT_FALSE(r.Due(20'049 * kMs));
+  EXPECT_TRUE(r.Due(20'050 * kMs));
+  EXPECT_FALSE(r.Due(20'100 * kMs));
+  EXPECT_TRUE(r.Due(20'150 * kMs));
 }
 
 LockstepConfig Config(std::uint64_t seed) {

@@ -12,5 +12,6 @@
 #include "hexa/comm/status.hpp"
 #include "hexa/comm/time.hpp"
 #include "hexa/comm/topic.hpp"
+#include "hexa/comm/trusted_writers.hpp"
 #include "hexa/comm/waitset.hpp"
 #include "hexa/comm/writer.hpp"

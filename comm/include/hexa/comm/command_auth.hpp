@@ -95,6 +95,28 @@ enum class CommandTrust : std::uint8_t {
 const char* ToString(CommandTrust trust);
 inline bool Trusted(CommandTrust t) { return t == CommandTrust::kAuthenticated || t == CommandTrust::kUnchecked; }
 
+// Endpoint claims: what a writer says of itself in its USER_DATA ("leg=3 standby=0": the
+// plant counts it as leg 3's primary before it has written anything) counts only when the
+// session key vouches for it, by the rule of the command samples: the claim is followed by
+// " auth=" and 32 hex digits, the HMAC tag of (the writer's participant GUID prefix, a code
+// of its own, the claim). A process that copies a controller's USER_DATA, tag included, and
+// creates a writer with it in its own participant does not pass.
+// The USER_DATA a writer of participant `writer` offers for `claim`: the claim and its tag;
+// the claim as it is without a key (nothing is checked then). Allocates: set-up only.
+std::string SignEndpointClaim(const CommandMac* mac, const ParticipantPrefix& writer,
+                              const std::string& claim);
+// Checks a matched writer's USER_DATA: `claim` is the text before the tag. kAuthenticated
+// when the tag verifies, kUnchecked without a key (`claim` is then all of `user_data`),
+// kBadTag when the tag is missing or does not verify.
+CommandTrust VerifyEndpointClaim(const CommandMac* mac, const ParticipantPrefix& writer,
+                                 const std::string& user_data, std::string& claim);
+// The same for a writer matched by `reader` (its USER_DATA and its GUID from discovery):
+// kUnknownWriter when the reader does not know the publication (yet). Allocates.
+CommandTrust MatchedWriterClaim(dds_entity_t reader, dds_instance_handle_t publication,
+                                std::string& claim);
+// The GUID prefix of an entity's participant (any entity of it); zeros on error.
+ParticipantPrefix PrefixOfEntity(dds_entity_t entity);
+
 // Publication handle -> GUID prefix of the writers a reader has received from. Fixed size:
 // a lookup (allocating) only for a writer not seen before; when full, the oldest entry goes.
 class PublicationPrefixCache {

@@ -1,0 +1,68 @@
+// hexa_task_space's command line: the common service options and the supervisor's own.
+#include "hexa/services/runtime.hpp"
+#include "supervisor_node.hpp"
+
+namespace hexa::task_space {
+
+int ParseOptions(int argc, char** argv, SupervisorNodeOptions& o) {
+  cli::Parser cli("hexa_task_space",
+                  "Task-space supervisor: trajectories, pose estimate (IMU + GQFK, eq 47), "
+                  "Jacobian outer loop (eq 48), safety state machine; 5 ms.\n"
+                  "Exit status: 0 the trajectory finished (--exit-when-done) or shutdown, "
+                  "1 error, 2 bad arguments, 3 peers not matched at start-up, 5 held and not "
+                  "reset within --hold-timeout, 6 the operator's stop ended the motion "
+                  "before the trajectory's end (docs/exit_codes.md).");
+  node::AddCommonOptions(cli);
+  cli.AddOption("trajectory", "name|file.csv",
+                "trajectory for --autostart: x y z roll pitch yaw combined, or a CSV file",
+                "combined");
+  cli.AddOption("periods", "N", "periods to track (0 = the trajectory's default)", "0");
+  cli.AddFlag("autostart", "start the trajectory as soon as the pose is known");
+  cli.AddFlag("exit-when-done",
+              "exit 0 when the trajectory has finished; 6 when an operator's stop ended it; in "
+              "HOLD wait --hold-timeout for an operator reset, then exit 5");
+  cli.AddOption("hold-timeout", "s",
+                "--exit-when-done: simulated seconds to wait in HOLD for an operator reset "
+                "(real time: wall seconds; lockstep: at the machine's pace); a reset resumes "
+                "(with --autostart the trajectory starts again from the held pose)", "30");
+  cli.AddOption("hold-report", "file",
+                "write one line naming the fault and its cause here when the platform is held "
+                "(removed on reset)");
+  cli.AddFlag("no-outer-loop", "disable the task-space outer loop");
+  cli.AddFlag("no-feedforward",
+              "no platform inverse-dynamics feed-forward on the leg setpoints (paper-faithful)");
+  cli.AddFlag("least-squares", "six-leg least-squares position estimate instead of GQFK");
+  cli.AddOption("startup-timeout", "s", "peers must match within this", "30");
+  cli.AddOption("pose-readers", "N",
+                "readers of the pose reports to match before running (1 with a recorder, so "
+                "that the recording has the first report)", "0");
+  cli.AddChoice("fault", {"none", "crash"},
+                "fault injection (docs/faults.md): crash = SIGKILL at --fault-at", "none");
+  cli.AddOption("fault-at", "s", "simulated time at which the fault starts", "0");
+  const bool parsed = cli.Parse(argc, argv);
+  if (int rc = cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
+  const auto periods = cli.GetInt("periods", 0, 1000);
+  const auto startup = cli.GetDouble("startup-timeout", 0.1, 3600);
+  const auto pose_readers = cli.GetInt("pose-readers", 0, 16);
+  const auto fault_at = cli.GetDouble("fault-at", 0, 1e7);
+  const auto hold_timeout = cli.GetDouble("hold-timeout", 0.001, 1e6);
+  if (!node::ReadCommonOptions(cli, o.common) || !periods || !startup || !pose_readers ||
+      !fault_at || !hold_timeout) {
+    return services::UsageError(cli);
+  }
+  o.trajectory = cli.Get("trajectory");
+  o.periods = static_cast<int>(*periods);
+  o.autostart = cli.Flag("autostart");
+  o.exit_when_done = cli.Flag("exit-when-done");
+  o.outer_loop = !cli.Flag("no-outer-loop");
+  o.least_squares = cli.Flag("least-squares");
+  o.feedforward = !cli.Flag("no-feedforward");
+  o.startup_timeout_s = *startup;
+  o.hold_timeout_s = *hold_timeout;
+  if (cli.Has("hold-report")) o.hold_report_path = cli.Get("hold-report");
+  o.pose_readers = static_cast<int>(*pose_readers);
+  if (cli.Get("fault") == "crash") o.crash_at_s = *fault_at;
+  return -1;
+}
+
+}  // namespace hexa::task_space
