@@ -28,8 +28,8 @@
 #include <thread>
 #include <vector>
 
-#include "hexa/recorder/recording.hpp"
-#include "hexa/recorder/report.hpp"
+#include "hexa/recording/recording.hpp"
+#include "hexa/recording/report.hpp"
 #include "hexa/services/cli.hpp"
 #include "hexa/services/json.hpp"
 #include "lab_session.hpp"

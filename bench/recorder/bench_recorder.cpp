@@ -14,8 +14,8 @@
 #include <cstdlib>
 #include <string>
 
-#include "hexa/recorder/convert.hpp"
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/convert.hpp"
+#include "hexa/recording/recording.hpp"
 
 namespace hexa::recorder {
 namespace {

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "hexa/comm/command_auth.hpp"
+#include "hexa/recording/topic_types.hpp"
 #include "hexa/services/exit_code.hpp"
 
 namespace hexa::bridge {
@@ -74,15 +75,10 @@ BridgeNode::BridgeNode(const BridgeOptions& options, std::shared_ptr<spdlog::log
     forwarder_ = std::make_unique<OperatorForwarder>(participant, operator_wake_, log_);
     waitset_.Attach(operator_wake_.get(), kOperatorToken);
   }
-  AddSource<hexa_msg_LegSensors, rec::LegSensors>(sources_, participant);
-  AddSource<hexa_msg_ValveCommand, rec::ValveCommand>(sources_, participant);
-  AddSource<hexa_msg_ImuSample, rec::ImuSample>(sources_, participant);
-  AddSource<hexa_msg_LegSetpoint, rec::LegSetpoint>(sources_, participant);
-  AddSource<hexa_msg_PoseReport, rec::PoseReport>(sources_, participant);
-  AddSource<hexa_msg_GroundTruth, rec::GroundTruth>(sources_, participant);
-  AddSource<hexa_msg_OperatorCommand, rec::OperatorCommand>(sources_, participant);
-  AddSource<hexa_msg_NodeStatus, rec::NodeStatus>(sources_, participant);
-  AddSource<hexa_msg_FaultEvent, rec::FaultEvent>(sources_, participant);
+  recorder::ForEachTopicType([&](auto type) {
+    using Type = decltype(type);
+    AddSource<typename Type::Dds, typename Type::Proto>(sources_, participant);
+  });
   server_ = std::make_unique<Server>(options.server, Channels(), log_);
   server_->OnDemandChange([this] { demand_.Set(true); });
   if (forwarder_) {

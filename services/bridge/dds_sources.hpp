@@ -13,15 +13,16 @@
 #include "hexa/comm/comm.hpp"
 #include "hexa/comm/qos.hpp"
 #include "hexa/comm/time.hpp"
-#include "hexa/recorder/convert.hpp"
-#include "hexa/recorder/recording.hpp"
-#include "hexa/recorder/scene.hpp"
+#include "hexa/recording/convert.hpp"
+#include "hexa/recording/recording.hpp"
+#include "hexa/recording/scene.hpp"
 #include "ws_server.hpp"
 
 namespace hexa::bridge {
 
-inline constexpr uint32_t kSceneChannel = 10;
-inline constexpr uint32_t kTransformsChannel = 11;
+// After the topic channels (1 + TopicKind).
+inline constexpr uint32_t kSceneChannel = 1 + comm::kTopicKindCount;
+inline constexpr uint32_t kTransformsChannel = kSceneChannel + 1;
 inline constexpr std::size_t kTake = 64;  // samples per dds_take
 
 // Channel id of a DDS topic: 1 + its TopicKind.

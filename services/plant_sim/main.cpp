@@ -6,7 +6,7 @@
 
 #include <fstream>
 
-#include "hexa/recorder/plant_truth.hpp"
+#include "hexa/recording/plant_truth.hpp"
 #include "hexa/services/logging.hpp"
 #include "plant_node.hpp"
 

@@ -16,7 +16,7 @@
 
 #include "deployment.hpp"
 #include "generate.hpp"
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/recording.hpp"
 #include "process_group.hpp"
 #include "scratch_dir.hpp"
 

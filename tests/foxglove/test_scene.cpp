@@ -10,7 +10,7 @@
 
 #include "hexa/core/platform_plant.hpp"
 #include "hexa/core/scene.hpp"
-#include "hexa/recorder/scene.hpp"
+#include "hexa/recording/scene.hpp"
 #include "protocol.hpp"
 #include "ws_server.hpp"
 #include "recording.pb.h"

@@ -11,8 +11,8 @@
 #include <cstdint>
 #include <string>
 
-#include "hexa/recorder/mcap.hpp"
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/mcap.hpp"
+#include "hexa/recording/recording.hpp"
 
 namespace {
 // One in-memory file reused for every input: the reader takes a path.

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "hexa/recorder/convert.hpp"
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/convert.hpp"
+#include "hexa/recording/recording.hpp"
 
 // libprotobuf logs every string that is not UTF-8 while parsing (the reader repairs them):
 // silenced, it would drown libFuzzer's output.

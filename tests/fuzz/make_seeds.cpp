@@ -6,8 +6,8 @@
 #include <fstream>
 #include <string>
 
-#include "hexa/recorder/convert.hpp"
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/convert.hpp"
+#include "hexa/recording/recording.hpp"
 #include "recording.pb.h"
 
 namespace rec = hexa::rec;

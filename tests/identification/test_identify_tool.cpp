@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "hexa/config/rig_config.hpp"
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/recording.hpp"
 #include "recording.pb.h"
 #include "recording_input.hpp"
 

@@ -17,7 +17,7 @@
 
 #include "hexa/config/rig_config.hpp"
 #include "hexa/core/lockstep_simulation.hpp"
-#include "hexa/recorder/report.hpp"
+#include "hexa/recording/report.hpp"
 #include "process_group.hpp"
 #include "scratch_dir.hpp"
 

@@ -14,7 +14,7 @@
 
 #include <gtest/gtest.h>
 
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/recording.hpp"
 #include "process_group.hpp"
 #include "scratch_dir.hpp"
 #include "session_util.hpp"

@@ -18,8 +18,8 @@
 
 #include <gtest/gtest.h>
 
-#include "hexa/recorder/recording.hpp"
-#include "hexa/recorder/report.hpp"
+#include "hexa/recording/recording.hpp"
+#include "hexa/recording/report.hpp"
 #include "lab_session.hpp"
 #include "session_util.hpp"
 

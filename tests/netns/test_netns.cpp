@@ -13,7 +13,7 @@
 
 #include <gtest/gtest.h>
 
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/recording.hpp"
 #include "process_group.hpp"
 #include "scratch_dir.hpp"
 

@@ -8,7 +8,7 @@
 #include <map>
 #include <string>
 
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/recording.hpp"
 #include "recording.pb.h"
 
 namespace hexa::recorder::test {

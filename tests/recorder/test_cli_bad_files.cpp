@@ -11,8 +11,8 @@
 #include <sstream>
 #include <vector>
 
-#include "hexa/recorder/mcap.hpp"
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/mcap.hpp"
+#include "hexa/recording/recording.hpp"
 #include "synth.hpp"
 
 #ifndef HEXA_RECORDER_BIN

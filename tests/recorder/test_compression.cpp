@@ -11,8 +11,8 @@
 #include <random>
 #include <sstream>
 
-#include "hexa/recorder/mcap.hpp"
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/mcap.hpp"
+#include "hexa/recording/recording.hpp"
 #include "synth.hpp"
 
 namespace hexa::recorder {

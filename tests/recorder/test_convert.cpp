@@ -4,7 +4,7 @@
 
 #include <cstring>
 
-#include "hexa/recorder/convert.hpp"
+#include "hexa/recording/convert.hpp"
 
 namespace hexa::recorder {
 namespace {

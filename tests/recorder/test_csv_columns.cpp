@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
-#include "hexa/recorder/csv_columns.hpp"
-#include "hexa/recorder/mcap.hpp"
-#include "hexa/recorder/recording.hpp"
-#include "hexa/recorder/report.hpp"
+#include "hexa/recording/csv_columns.hpp"
+#include "hexa/recording/mcap.hpp"
+#include "hexa/recording/recording.hpp"
+#include "hexa/recording/report.hpp"
 #include "identification.pb.h"
 #include "recording.pb.h"
 #include "scratch_dir.hpp"

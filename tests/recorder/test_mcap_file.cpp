@@ -15,9 +15,9 @@
 #include <random>
 #include <sstream>
 
-#include "hexa/recorder/mcap.hpp"
-#include "hexa/recorder/recording.hpp"
-#include "hexa/recorder/report.hpp"
+#include "hexa/recording/mcap.hpp"
+#include "hexa/recording/recording.hpp"
+#include "hexa/recording/report.hpp"
 #include "hexa/services/json.hpp"
 #include "recording.pb.h"
 #include "synth.hpp"

@@ -21,8 +21,8 @@
 #include "hexa/comm/topic.hpp"
 #include "hexa/comm/waitset.hpp"
 #include "hexa/comm/writer.hpp"
-#include "hexa/recorder/convert.hpp"
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/convert.hpp"
+#include "hexa/recording/recording.hpp"
 
 #ifndef HEXA_RECORDER_BIN
 #error "HEXA_RECORDER_BIN must name the hexa_recorder executable"

@@ -9,10 +9,10 @@
 #include <sstream>
 #include <string>
 
-#include "hexa/recorder/mcap.hpp"
-#include "hexa/recorder/recording.hpp"
-#include "hexa/recorder/report.hpp"
-#include "hexa/recorder/rotation.hpp"
+#include "hexa/recording/mcap.hpp"
+#include "hexa/recording/recording.hpp"
+#include "hexa/recording/report.hpp"
+#include "hexa/recording/rotation.hpp"
 #include "hexa/services/json.hpp"
 #include "recording.pb.h"
 #include "scratch_dir.hpp"
@@ -120,6 +120,10 @@ TEST(SessionReportOutcome, AStandbyTakeOverIsListedWithItsTick) {
   const auto json = hexa::json::Value::parse(Slurp(dir / "report.json"));
   ASSERT_EQ(json["takeovers"].size(), 1u);
   EXPECT_EQ(json["takeovers"][0].get<std::string>().rfind("leg 3: the hot standby", 0), 0u);
+  // The plots mark the same take-over at the same tick (events.csv, one rule: takeover.hpp).
+  EXPECT_NE(Slurp(dir / "events.csv").find("0.401,takeover,3,\"leg 3 standby takes over\""),
+            std::string::npos)
+      << Slurp(dir / "events.csv");
   // A primary throughout: no take-over, "none".
   WriteSession(path, rec::SUPERVISOR_TRACKING, 0);
   WriteSessionReport(ComputeSessionReport(path), dir.string());

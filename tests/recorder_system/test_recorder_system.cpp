@@ -27,7 +27,7 @@
 #include "hexa/config/rig_config.hpp"
 #include "hexa/core/leg_controller.hpp"
 #include "hexa/core/lockstep_simulation.hpp"
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/recording.hpp"
 #include "process_group.hpp"
 #include "recording.pb.h"
 

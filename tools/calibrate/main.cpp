@@ -23,7 +23,7 @@
 #include "calibration_fit.hpp"
 #include "hexa/config/rig_config.hpp"
 #include "hexa/core/platform_plant.hpp"
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/recording.hpp"
 #include "hexa/services/progress.hpp"
 #include "hexa/services/cli.hpp"
 #include "recording.pb.h"

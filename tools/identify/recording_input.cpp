@@ -7,7 +7,7 @@
 #include <limits>
 #include <map>
 
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/recording.hpp"
 
 namespace hexa::identify {
 namespace {

@@ -9,7 +9,7 @@
 
 #include "hexa/config/csv_trajectory.hpp"
 #include "hexa/core/teach.hpp"
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/recording.hpp"
 #include "hexa/services/cli.hpp"
 #include "recording.pb.h"
 

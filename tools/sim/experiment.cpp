@@ -4,8 +4,8 @@
 #include <cstdio>
 
 #include "hexa/core/excitation.hpp"
-#include "hexa/recorder/plant_truth.hpp"
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/plant_truth.hpp"
+#include "hexa/recording/recording.hpp"
 #include "recording.pb.h"
 
 namespace hexa::sim {

@@ -175,10 +175,10 @@ bool Runtime::Publish(hexa_msg_NodeState state, const StatusFigures& figures, co
   return true;
 }
 
-void Runtime::Stop(const StatusFigures& figures, const char* detail) {
+void Runtime::Stop(const StatusFigures& figures, const char* detail, const char* stopping_status) {
   Enter(Phase::kStopping);
   PublishStatus(hexa_msg_NODE_STOPPING, figures, detail);
-  node::service_manager::Stopping(detail);
+  node::service_manager::Stopping(stopping_status != nullptr ? stopping_status : detail);
 }
 
 }  // namespace hexa::services

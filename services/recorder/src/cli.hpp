@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "hexa/recorder/mcap.hpp"
+#include "hexa/recording/mcap.hpp"
 
 namespace hexa::recorder {
 struct SceneOptions;

@@ -9,7 +9,7 @@
 #include <sstream>
 
 #include "cli.hpp"
-#include "hexa/recorder/plant_truth.hpp"
+#include "hexa/recording/plant_truth.hpp"
 
 namespace hexa::recorder::cli {
 namespace {

@@ -5,7 +5,7 @@
 #include <sstream>
 
 #include "cli.hpp"
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/recording.hpp"
 
 namespace hexa::recorder::cli {
 

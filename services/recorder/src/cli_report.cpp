@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "cli.hpp"
-#include "hexa/recorder/report.hpp"
+#include "hexa/recording/report.hpp"
 #include "hexa/services/progress.hpp"
 
 namespace hexa::recorder::cli {

@@ -7,7 +7,7 @@
 
 #include "cli.hpp"
 #include "hexa/config/rig_config.hpp"
-#include "hexa/recorder/scene.hpp"
+#include "hexa/recording/scene.hpp"
 #include "recording.pb.h"
 
 namespace hexa::recorder::cli {

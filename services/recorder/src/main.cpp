@@ -10,7 +10,7 @@
 #include <google/protobuf/stubs/logging.h>
 
 #include "cli.hpp"
-#include "hexa/recorder/mcap.hpp"
+#include "hexa/recording/mcap.hpp"
 
 namespace {
 constexpr const char* kUsage =

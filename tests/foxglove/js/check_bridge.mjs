@@ -81,7 +81,7 @@ try {
   console.log(`channels: ${[...a.channels.values()].map((c) => `${c.id}:${c.topic}(${c.schemaName})`).join(" ")}`);
   for (const t of ["hexa_LegSensors", "hexa_ValveCommand", "hexa_GroundTruth", "hexa_PoseReport",
                    "hexa_ImuSample", "hexa_LegSetpoint", "hexa_NodeStatus", "hexa_FaultEvent",
-                   "hexa_OperatorCommand", "hexa_Scene", "hexa_FrameTransforms"]) {
+                   "hexa_OperatorCommand", "hexa_TrackerPose", "hexa_Scene", "hexa_FrameTransforms"]) {
     check(a.channels.has(t), `channel ${t} advertised`);
   }
   const types = new Map();

@@ -123,8 +123,10 @@ class Runtime {
   // While running: NodeStatus RUNNING, HOLD or FAULT (the node's own state and detail). False,
   // and nothing published, for a state the phase does not allow (lifecycle.hpp MayPublish).
   bool Publish(hexa_msg_NodeState state, const StatusFigures& figures, const char* detail);
-  // kStopping: NodeStatus STOPPING with `detail`, systemd STOPPING=1.
-  void Stop(const StatusFigures& figures, const char* detail);
+  // kStopping: NodeStatus STOPPING with `detail`, systemd STOPPING=1 with `stopping_status`
+  // (nullptr: `detail`).
+  void Stop(const StatusFigures& figures, const char* detail,
+            const char* stopping_status = nullptr);
 
   // The NodeStatus writer (tests); StatusTopic::kPublished only.
   comm::Writer<hexa_msg_NodeStatus>& status_writer() { return status_->writer(); }

@@ -30,15 +30,6 @@ std::string CsvText(const std::string& s) {
 
 }  // namespace
 
-void EventCollector::OnValveCommand(std::uint32_t leg, std::uint64_t tick, bool standby) {
-  if (standby) {
-    standby_ticks_[leg].push_back(tick);
-  } else {
-    auto& last = last_primary_tick_[leg];
-    last = std::max(last, tick);
-  }
-}
-
 void EventCollector::OnFault(const rec::FaultEvent& f) {
   const auto key = std::make_tuple(f.source_node(), f.leg_id(), static_cast<int>(f.reason()));
   if (!fault_keys_.insert(key).second) return;
@@ -48,7 +39,7 @@ void EventCollector::OnFault(const rec::FaultEvent& f) {
                      label + " (" + f.source_node() + ")"});
 }
 
-std::vector<SessionReport::Event> EventCollector::Finish() {
+std::vector<SessionReport::Event> EventCollector::Finish(const std::vector<Takeover>& takeovers) {
   std::vector<SessionReport::Event> out;
   std::stable_sort(poses_.begin(), poses_.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -59,15 +50,9 @@ std::vector<SessionReport::Event> EventCollector::Finish() {
     out.push_back({static_cast<double>(tick) * kTickS, "state", 0, StateName(s)});
   }
   out.insert(out.end(), faults_.begin(), faults_.end());
-  for (auto& [leg, ticks] : standby_ticks_) {
-    const auto primary = last_primary_tick_.find(leg);
-    std::sort(ticks.begin(), ticks.end());
-    const auto first = primary == last_primary_tick_.end()
-                           ? ticks.begin()
-                           : std::upper_bound(ticks.begin(), ticks.end(), primary->second);
-    if (first == ticks.end()) continue;  // the primary answered to the end
-    out.push_back({static_cast<double>(*first) * kTickS, "takeover", static_cast<int>(leg),
-                   "leg " + std::to_string(leg) + " standby takes over"});
+  for (const Takeover& t : takeovers) {
+    out.push_back({static_cast<double>(t.first_standby_tick) * kTickS, "takeover",
+                   static_cast<int>(t.leg), "leg " + std::to_string(t.leg) + " standby takes over"});
   }
   // An operator command carries its wall-clock send time only: it is placed at the first tick
   // the plant wrote at or after it.

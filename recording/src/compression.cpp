@@ -2,7 +2,7 @@
 
 #include <zstd.h>
 
-#include "hexa/recorder/mcap.hpp"
+#include "hexa/recording/mcap.hpp"
 
 namespace hexa::recorder {
 

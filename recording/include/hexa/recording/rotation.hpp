@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "hexa/recorder/mcap.hpp"
+#include "hexa/recording/mcap.hpp"
 
 namespace hexa::recorder {
 

@@ -16,7 +16,7 @@
 #include "foxglove/SceneUpdate.pb.h"
 #include "hexa/core/rig.hpp"
 #include "hexa/core/scene.hpp"
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/recording.hpp"
 
 namespace hexa::recorder {
 

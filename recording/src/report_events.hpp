@@ -11,7 +11,8 @@
 #include <utility>
 #include <vector>
 
-#include "hexa/recorder/report.hpp"
+#include "hexa/recording/report.hpp"
+#include "hexa/recording/takeover.hpp"
 #include "recording.pb.h"
 
 namespace hexa::recorder {
@@ -19,10 +20,6 @@ namespace hexa::recorder {
 class EventCollector {
  public:
   void OnPose(std::uint64_t tick, int state) { poses_.emplace_back(tick, state); }
-  // The take-over is a hot standby's first command after its primary's last one (a standby's
-  // sample can reach the recorder earlier: at tick 0, or when the primary is late past its
-  // deadline and exclusive ownership lets the next sample in from any live writer).
-  void OnValveCommand(std::uint32_t leg, std::uint64_t tick, bool standby);
   void OnFault(const rec::FaultEvent& fault);
   void OnOperator(const rec::OperatorCommand& command) {
     operator_commands_.emplace_back(command.source_time_ns(), command.kind());
@@ -30,13 +27,12 @@ class EventCollector {
   void OnTruth(std::uint64_t tick, std::int64_t source_time_ns) {
     truth_times_.emplace_back(source_time_ns, tick);
   }
-  // The events in time order. Faults: the first of each (source, leg, reason) only.
-  std::vector<SessionReport::Event> Finish();
+  // The events in time order, with a mark per take-over (TakeoverDetector, takeover.hpp).
+  // Faults: the first of each (source, leg, reason) only.
+  std::vector<SessionReport::Event> Finish(const std::vector<Takeover>& takeovers);
 
  private:
   std::vector<std::pair<std::uint64_t, int>> poses_;
-  std::map<std::uint32_t, std::uint64_t> last_primary_tick_;
-  std::map<std::uint32_t, std::vector<std::uint64_t>> standby_ticks_;
   std::vector<SessionReport::Event> faults_;
   std::set<std::tuple<std::string, std::uint32_t, int>> fault_keys_;
   std::vector<std::pair<std::int64_t, int>> operator_commands_;

@@ -1,4 +1,4 @@
-#include "hexa/recorder/csv_columns.hpp"
+#include "hexa/recording/csv_columns.hpp"
 
 #include <array>
 #include <map>

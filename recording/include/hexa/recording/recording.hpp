@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "hexa/recorder/mcap.hpp"
+#include "hexa/recording/mcap.hpp"
 
 namespace hexa::recorder {
 

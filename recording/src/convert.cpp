@@ -1,11 +1,12 @@
 // The one mapping between DDS samples and recording protobuf messages (see convert.hpp).
 // Field order follows idl/hexa.idl; every IDL field appears once in each direction.
-#include "hexa/recorder/convert.hpp"
+#include "hexa/recording/convert.hpp"
 
 #include <cstring>
 #include <limits>
 #include <string>
 
+#include "hexa/recording/topic_types.hpp"
 #include "hexa/services/text.hpp"
 
 namespace hexa::recorder {
@@ -300,23 +301,15 @@ bool FromProto(const rec::FaultEvent& in, hexa_msg_FaultEvent& out) {
 
 // ---------------------------------------------------------------- registry
 const std::vector<WireType>& WireTypes() {
-  static const std::vector<WireType> types = {
-      MakeWireType<hexa_msg_LegSensors, rec::LegSensors>("LegSensors", &hexa_msg_LegSensors_desc),
-      MakeWireType<hexa_msg_ValveCommand, rec::ValveCommand>("ValveCommand",
-                                                             &hexa_msg_ValveCommand_desc),
-      MakeWireType<hexa_msg_ImuSample, rec::ImuSample>("ImuSample", &hexa_msg_ImuSample_desc),
-      MakeWireType<hexa_msg_LegSetpoint, rec::LegSetpoint>("LegSetpoint",
-                                                           &hexa_msg_LegSetpoint_desc),
-      MakeWireType<hexa_msg_PoseReport, rec::PoseReport>("PoseReport", &hexa_msg_PoseReport_desc),
-      MakeWireType<hexa_msg_GroundTruth, rec::GroundTruth>("GroundTruth",
-                                                           &hexa_msg_GroundTruth_desc),
-      MakeWireType<hexa_msg_TrackerPose, rec::TrackerPose>("TrackerPose",
-                                                           &hexa_msg_TrackerPose_desc),
-      MakeWireType<hexa_msg_OperatorCommand, rec::OperatorCommand>(
-          "OperatorCommand", &hexa_msg_OperatorCommand_desc),
-      MakeWireType<hexa_msg_NodeStatus, rec::NodeStatus>("NodeStatus", &hexa_msg_NodeStatus_desc),
-      MakeWireType<hexa_msg_FaultEvent, rec::FaultEvent>("FaultEvent", &hexa_msg_FaultEvent_desc),
-  };
+  static const std::vector<WireType> types = [] {
+    std::vector<WireType> all;
+    ForEachTopicType([&all](auto type) {
+      using Type = decltype(type);
+      all.push_back(MakeWireType<typename Type::Dds, typename Type::Proto>(
+          Type::Proto::descriptor()->name(), Type::descriptor()));
+    });
+    return all;
+  }();
   return types;
 }
 

@@ -211,6 +211,8 @@ struct McapVisitor {
 
 // Linear reader: walks the data section record by record (never trusting a length before
 // checking it against the file size), then validates the summary and footer.
+class McapScanner;  // one Scan's state (mcap_reader.cpp)
+
 class McapReader {
  public:
   McapReader();
@@ -226,6 +228,7 @@ class McapReader {
   const std::string& path() const { return path_; }
 
  private:
+  friend class McapScanner;
   void ReadAt(uint64_t offset, void* out, size_t size);
 
   std::string path_;

@@ -1,4 +1,4 @@
-#include "hexa/recorder/rotation.hpp"
+#include "hexa/recording/rotation.hpp"
 
 #include <cerrno>
 #include <cstdio>

@@ -1,4 +1,4 @@
-#include "hexa/recorder/scene.hpp"
+#include "hexa/recording/scene.hpp"
 
 #include <cmath>
 #include <cstdio>

@@ -1,12 +1,12 @@
-#include "hexa/recorder/plant_truth.hpp"
+#include "hexa/recording/plant_truth.hpp"
 
 #include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <map>
 
-#include "hexa/recorder/mcap.hpp"
-#include "hexa/recorder/recording.hpp"
+#include "hexa/recording/mcap.hpp"
+#include "hexa/recording/recording.hpp"
 
 namespace hexa::recorder {
 namespace {
