@@ -89,7 +89,21 @@ std::string FormatIpv4(unsigned a) {
   return buf;
 }
 
-void Validate(const Deployment& d, Checker& c) {
+// Where each role runs (host names), for the checks across hosts.
+struct Census {
+  std::map<int, std::vector<std::string>> primaries, standbys;  // per leg
+  std::vector<std::string> plants, supervisors, recorders, operators, bridges;
+};
+
+// A host's DDS address and prefix length.
+struct Dds {
+  unsigned address;
+  int prefix;
+  int host;
+};
+
+// The deployment's own fields: name, domain, mode, security, timing, paths.
+void ValidateSettings(const Deployment& d, Checker& c) {
   const Lines& L = c.lines_;
   if (!ValidName(d.name()))
     c.Error(L.Of("name"), "name",
@@ -139,119 +153,110 @@ void Validate(const Deployment& d, Checker& c) {
     if (!path->empty() && path->front() != '/')
       c.Error(0, "paths", "'" + *path + "' must be an absolute path");
   }
-  if (d.host_size() == 0) {
-    c.Error(0, "", "no host: a deployment needs at least one 'host { ... }'");
-    return;
-  }
+}
 
-  std::map<std::string, int> host_names;
-  std::map<unsigned, std::string> addresses;  // address -> "host/iface"
-  struct Dds {
-    unsigned address;
-    int prefix;
-    int host;
-  };
-  std::vector<Dds> dds;
-  // Per role / leg: where it runs.
-  std::map<int, std::vector<std::string>> primaries, standbys;
-  std::vector<std::string> plants, supervisors, recorders, operators, bridges;
-  for (int h = 0; h < d.host_size(); ++h) {
-    const Host& host = d.host(h);
-    const std::string where = HostWhere(host, h);
-    if (!ValidName(host.name()))
-      c.Error(L.OfHost(h), where,
-              "name '" + host.name() + "' must be 1..32 characters of a-z 0-9 '-'");
-    if (auto [it, fresh] = host_names.emplace(host.name(), h); !fresh)
-      c.Error(L.OfHost(h), where,
-              "duplicate host name (also host[" + std::to_string(it->second) + "])");
-    if (host.interface_size() == 0)
-      c.Error(L.OfHost(h), where, "no interface: list the host's network interfaces");
-    std::set<std::string> iface_names;
-    const deployment::Interface* dds_iface = nullptr;
-    for (int i = 0; i < host.interface_size(); ++i) {
-      const auto& ifc = host.interface(i);
-      const int line = L.OfHostField(h, "interface", i);
-      const std::string iw = where + " interface[" + std::to_string(i) + "]";
-      if (ifc.name() == host.dds_interface()) dds_iface = &ifc;
-      if (!ValidInterfaceName(ifc.name()))
-        c.Error(line, iw, "name '" + ifc.name() + "' is not an interface name (1..15 of A-Z a-z 0-9 . - _)");
-      if (!iface_names.insert(ifc.name()).second)
-        c.Error(line, iw, "interface '" + ifc.name() + "' listed twice");
-      unsigned a = 0;
-      int prefix = 0;
-      if (!ParseIpv4Cidr(ifc.address(), a, prefix)) {
-        c.Error(line, iw, "address '" + ifc.address() +
-                              "' is not an IPv4 address with prefix length (e.g. 10.10.0.3/24; decimal "
-                              "numbers without leading zeros)");
-        continue;
-      }
-      const unsigned mask = prefix == 0 ? 0u : ~0u << (32 - prefix);
-      if (prefix < 32 && prefix > 0 && ((a & ~mask) == 0 || (a & ~mask) == (~mask)))
-        c.Error(line, iw, "address '" + ifc.address() + "' is the network or broadcast address of its subnet");
-      const std::string owner = host.name() + "/" + ifc.name();
-      if (auto [it, fresh] = addresses.emplace(a, owner); !fresh)
-        c.Error(line, iw, "address " + FormatIpv4(a) + " is also on " + it->second);
+// A host's interfaces and its DDS interface: names, addresses (unique across the deployment).
+void ValidateInterfaces(const Host& host, int h, Checker& c,
+                        std::map<unsigned, std::string>& addresses, std::vector<Dds>& dds) {
+  const Lines& L = c.lines_;
+  const std::string where = HostWhere(host, h);
+  std::set<std::string> iface_names;
+  const deployment::Interface* dds_iface = nullptr;
+  for (int i = 0; i < host.interface_size(); ++i) {
+    const auto& ifc = host.interface(i);
+    const int line = L.OfHostField(h, "interface", i);
+    const std::string iw = where + " interface[" + std::to_string(i) + "]";
+    if (ifc.name() == host.dds_interface()) dds_iface = &ifc;
+    if (!ValidInterfaceName(ifc.name()))
+      c.Error(line, iw, "name '" + ifc.name() + "' is not an interface name (1..15 of A-Z a-z 0-9 . - _)");
+    if (!iface_names.insert(ifc.name()).second)
+      c.Error(line, iw, "interface '" + ifc.name() + "' listed twice");
+    unsigned a = 0;
+    int prefix = 0;
+    if (!ParseIpv4Cidr(ifc.address(), a, prefix)) {
+      c.Error(line, iw, "address '" + ifc.address() +
+                            "' is not an IPv4 address with prefix length (e.g. 10.10.0.3/24; decimal "
+                            "numbers without leading zeros)");
+      continue;
     }
-    if (host.dds_interface().empty()) {
-      c.Error(L.OfHost(h), where, "dds_interface is not set (the interface that carries DDS)");
-    } else if (dds_iface == nullptr) {
-      std::string names;
-      for (const auto& n : iface_names) names += (names.empty() ? "" : ", ") + n;
-      c.Error(L.OfHostField(h, "dds_interface"), where,
-              "dds_interface '" + host.dds_interface() + "' is on no interface of this host (" +
-                  (names.empty() ? std::string("none listed") : names) + ")");
-    } else {
-      unsigned a = 0;
-      int prefix = 0;
-      if (ParseIpv4Cidr(dds_iface->address(), a, prefix)) dds.push_back({a, prefix, h});
-    }
-    if (host.process_size() == 0)
-      c.Error(L.OfHost(h), where, "no process: a host runs at least one process");
-    std::set<std::string> nodes_here;
-    for (int p = 0; p < host.process_size(); ++p) {
-      const Process& pr = host.process(p);
-      const int line = L.OfHostField(h, "process", p);
-      const std::string pw = where + " process[" + std::to_string(p) + "]";
-      if (pr.role() == deployment::ROLE_UNSPECIFIED) {
-        c.Error(line, pw, "role is not set (PLANT SUPERVISOR LEG RECORDER OPERATOR BRIDGE)");
-        continue;
-      }
-      // The text format takes any number for an open enum: a role without a unit template
-      // would become a unit with an empty ExecStart=.
-      if (!deployment::Role_IsValid(pr.role())) {
-        c.Error(line, pw, "role " + std::to_string(static_cast<int>(pr.role())) +
-                              " is not one of PLANT SUPERVISOR LEG RECORDER OPERATOR BRIDGE (1..6)");
-        continue;
-      }
-      if (pr.role() == deployment::LEG) {
-        if (pr.leg() < 1 || pr.leg() > 6) {
-          c.Error(line, pw, "leg " + std::to_string(pr.leg()) + " out of range (limit 1..6)");
-          continue;
-        }
-        (pr.standby() ? standbys : primaries)[static_cast<int>(pr.leg())].push_back(host.name());
-      } else {
-        if (pr.leg() != 0)
-          c.Error(line, pw, std::string("leg is set on a ") + ToString(pr.role()) +
-                                " process (only LEG processes have a leg)");
-        if (pr.standby())
-          c.Error(line, pw, std::string("standby is set on a ") + ToString(pr.role()) +
-                                " process (only LEG processes can be standbys)");
-      }
-      if (pr.role() == deployment::PLANT) plants.push_back(host.name());
-      if (pr.role() == deployment::SUPERVISOR) supervisors.push_back(host.name());
-      if (pr.role() == deployment::RECORDER) recorders.push_back(host.name());
-      if (pr.role() == deployment::OPERATOR) operators.push_back(host.name());
-      if (pr.role() == deployment::BRIDGE) bridges.push_back(host.name());
-      if (pr.rt_priority() > 99)
-        c.Error(line, pw, "rt_priority " + std::to_string(pr.rt_priority()) + " (limit 1..99)");
-      if (pr.has_cpu() && (pr.cpu() < 0 || pr.cpu() > 1023))
-        c.Error(line, pw, "cpu " + std::to_string(pr.cpu()) + " (limit 0..1023)");
-      if (!pr.executable().empty() && pr.executable().front() != '/')
-        c.Error(line, pw, "executable '" + pr.executable() + "' must be an absolute path");
-      if (!nodes_here.insert(NodeName(pr)).second)
-        c.Error(line, pw, "'" + NodeName(pr) + "' appears twice on this host");
-    }
+    const unsigned mask = prefix == 0 ? 0u : ~0u << (32 - prefix);
+    if (prefix < 32 && prefix > 0 && ((a & ~mask) == 0 || (a & ~mask) == (~mask)))
+      c.Error(line, iw, "address '" + ifc.address() + "' is the network or broadcast address of its subnet");
+    const std::string owner = host.name() + "/" + ifc.name();
+    if (auto [it, fresh] = addresses.emplace(a, owner); !fresh)
+      c.Error(line, iw, "address " + FormatIpv4(a) + " is also on " + it->second);
   }
+  if (host.dds_interface().empty()) {
+    c.Error(L.OfHost(h), where, "dds_interface is not set (the interface that carries DDS)");
+  } else if (dds_iface == nullptr) {
+    std::string names;
+    for (const auto& n : iface_names) names += (names.empty() ? "" : ", ") + n;
+    c.Error(L.OfHostField(h, "dds_interface"), where,
+            "dds_interface '" + host.dds_interface() + "' is on no interface of this host (" +
+                (names.empty() ? std::string("none listed") : names) + ")");
+  } else {
+    unsigned a = 0;
+    int prefix = 0;
+    if (ParseIpv4Cidr(dds_iface->address(), a, prefix)) dds.push_back({a, prefix, h});
+  }
+}
+
+// A host's processes: role, leg, standby, priority, CPU, executable; counted in `census`.
+void ValidateProcesses(const Host& host, int h, Checker& c, Census& census) {
+  const Lines& L = c.lines_;
+  const std::string where = HostWhere(host, h);
+  auto& [primaries, standbys, plants, supervisors, recorders, operators, bridges] = census;
+  if (host.process_size() == 0)
+    c.Error(L.OfHost(h), where, "no process: a host runs at least one process");
+  std::set<std::string> nodes_here;
+  for (int p = 0; p < host.process_size(); ++p) {
+    const Process& pr = host.process(p);
+    const int line = L.OfHostField(h, "process", p);
+    const std::string pw = where + " process[" + std::to_string(p) + "]";
+    if (pr.role() == deployment::ROLE_UNSPECIFIED) {
+      c.Error(line, pw, "role is not set (PLANT SUPERVISOR LEG RECORDER OPERATOR BRIDGE)");
+      continue;
+    }
+    // The text format takes any number for an open enum: a role without a unit template
+    // would become a unit with an empty ExecStart=.
+    if (!deployment::Role_IsValid(pr.role())) {
+      c.Error(line, pw, "role " + std::to_string(static_cast<int>(pr.role())) +
+                            " is not one of PLANT SUPERVISOR LEG RECORDER OPERATOR BRIDGE (1..6)");
+      continue;
+    }
+    if (pr.role() == deployment::LEG) {
+      if (pr.leg() < 1 || pr.leg() > 6) {
+        c.Error(line, pw, "leg " + std::to_string(pr.leg()) + " out of range (limit 1..6)");
+        continue;
+      }
+      (pr.standby() ? standbys : primaries)[static_cast<int>(pr.leg())].push_back(host.name());
+    } else {
+      if (pr.leg() != 0)
+        c.Error(line, pw, std::string("leg is set on a ") + ToString(pr.role()) +
+                              " process (only LEG processes have a leg)");
+      if (pr.standby())
+        c.Error(line, pw, std::string("standby is set on a ") + ToString(pr.role()) +
+                              " process (only LEG processes can be standbys)");
+    }
+    if (pr.role() == deployment::PLANT) plants.push_back(host.name());
+    if (pr.role() == deployment::SUPERVISOR) supervisors.push_back(host.name());
+    if (pr.role() == deployment::RECORDER) recorders.push_back(host.name());
+    if (pr.role() == deployment::OPERATOR) operators.push_back(host.name());
+    if (pr.role() == deployment::BRIDGE) bridges.push_back(host.name());
+    if (pr.rt_priority() > 99)
+      c.Error(line, pw, "rt_priority " + std::to_string(pr.rt_priority()) + " (limit 1..99)");
+    if (pr.has_cpu() && (pr.cpu() < 0 || pr.cpu() > 1023))
+      c.Error(line, pw, "cpu " + std::to_string(pr.cpu()) + " (limit 0..1023)");
+    if (!pr.executable().empty() && pr.executable().front() != '/')
+      c.Error(line, pw, "executable '" + pr.executable() + "' must be an absolute path");
+    if (!nodes_here.insert(NodeName(pr)).second)
+      c.Error(line, pw, "'" + NodeName(pr) + "' appears twice on this host");
+  }
+}
+
+// One primary per leg (a standby at most, on another host), one plant and one supervisor.
+void ValidateCensus(Census& census, Checker& c) {
+  auto& [primaries, standbys, plants, supervisors, recorders, operators, bridges] = census;
   auto list = [](const std::vector<std::string>& v) {
     std::string s;
     for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
@@ -285,6 +290,11 @@ void Validate(const Deployment& d, Checker& c) {
                                   list(*hosts) + "); the system has exactly " +
                                   (need ? "one" : "zero or one"));
   }
+}
+
+// The hosts' DDS addresses: one control network, and no loopback among several hosts.
+void ValidateDdsNetworks(const Deployment& d, const std::vector<Dds>& dds, Checker& c) {
+  const Lines& L = c.lines_;
   // Every DDS address must be on the network of every other host's DDS interface: the
   // generated configuration sends unicast to the peers' addresses with DontRoute.
   for (const Dds& a : dds) {
@@ -311,6 +321,36 @@ void Validate(const Deployment& d, Checker& c) {
     }
   }
 }
+
+void Validate(const Deployment& d, Checker& c) {
+  const Lines& L = c.lines_;
+  ValidateSettings(d, c);
+  if (d.host_size() == 0) {
+    c.Error(0, "", "no host: a deployment needs at least one 'host { ... }'");
+    return;
+  }
+  std::map<std::string, int> host_names;
+  std::map<unsigned, std::string> addresses;  // address -> "host/iface"
+  std::vector<Dds> dds;
+  Census census;
+  for (int h = 0; h < d.host_size(); ++h) {
+    const Host& host = d.host(h);
+    const std::string where = HostWhere(host, h);
+    if (!ValidName(host.name()))
+      c.Error(L.OfHost(h), where,
+              "name '" + host.name() + "' must be 1..32 characters of a-z 0-9 '-'");
+    if (auto [it, fresh] = host_names.emplace(host.name(), h); !fresh)
+      c.Error(L.OfHost(h), where,
+              "duplicate host name (also host[" + std::to_string(it->second) + "])");
+    if (host.interface_size() == 0)
+      c.Error(L.OfHost(h), where, "no interface: list the host's network interfaces");
+    ValidateInterfaces(host, h, c, addresses, dds);
+    ValidateProcesses(host, h, c, census);
+  }
+  ValidateCensus(census, c);
+  ValidateDdsNetworks(d, dds, c);
+}
+
 
 LoadedDeployment Finish(Deployment d, const std::string& name, const Lines& lines,
                         std::vector<std::string> parse_errors) {

@@ -10,6 +10,8 @@
 #include "hexa/comm/command_auth.hpp"
 #include "hexa/comm/partition.hpp"
 #include "hexa/comm/qos.hpp"
+#include "hexa/services/exit_code.hpp"
+#include "session_layout.hpp"
 
 namespace hexa::deploy {
 namespace {
@@ -25,100 +27,6 @@ std::string Fmt(double v) {
   return os.str();
 }
 
-// What each role may publish and subscribe (the access-control table of docs/security.md): only the
-// plant / I/O node publishes sensors, IMU, ground truth and the tracker's poses; only leg N's identities publish
-// ValveCommand, and only in partition LegPartition(N); only the supervisor publishes
-// setpoints and pose reports; only the operator publishes OperatorCommand (and reads NodeStatus for the answer); the recorder
-// subscribes to everything and publishes nothing but its own NodeStatus (the plant waits for
-// it). Partitions follow the loop's routing (comm/partition.hpp): the plant and the
-// supervisor write LegSensors / LegSetpoint in the default partition (supervisor, recorder)
-// and in each leg's partition; leg N reads them in its own partition only, so a leg identity
-// cannot even subscribe to another leg's sensors or setpoints.
-struct TopicRule {
-  std::string_view topic;
-  // Empty: the default partition only (no <partitions> element). "" in the list: the
-  // default partition next to others (an empty <partition/>).
-  std::vector<std::string> partitions;
-};
-struct RolePermissions {
-  std::vector<TopicRule> publish, subscribe;
-};
-
-RolePermissions PermissionsOf(Role role, int leg) {
-  using namespace hexa::comm;
-  const TopicRule status{kNodeStatusTopic, {}}, faults{kFaultEventTopic, {}};
-  const std::string any_leg = "hexa.leg*";  // LegPartition(1..6)
-  const TopicRule valve_any{kValveCommandTopic, {"", any_leg}};  // per-leg readers, the recorder
-  RolePermissions p;
-  switch (role) {
-    case deployment::PLANT:
-      // TrackerPose: the external pose instrument of a calibration session (--tracker); the
-      // plant creates its writer in every session.
-      p.publish = {{kLegSensorsTopic, {"", any_leg}}, {kImuSampleTopic, {}}, {kGroundTruthTopic, {}},
-                   {kTrackerPoseTopic, {}}, status, faults};
-      // FaultEvent: the supervisor's FAULT_SENSOR_INCONSISTENT closes that leg's valve
-      // (the plant's interlock, docs/faults.md).
-      p.subscribe = {valve_any, {kLegSetpointTopic, {}}, status, faults};
-      break;
-    case deployment::LEG:
-      // FaultEvent: the leg reports its own held-control episodes (bad input, stale setpoint).
-      p.publish = {{kValveCommandTopic, {LegPartition(leg)}}, status, faults};
-      p.subscribe = {{kLegSensorsTopic, {LegPartition(leg)}}, {kLegSetpointTopic, {LegPartition(leg)}}};
-      break;
-    case deployment::SUPERVISOR:
-      p.publish = {{kLegSetpointTopic, {"", any_leg}}, {kPoseReportTopic, {}}, status, faults};
-      p.subscribe = {{kLegSensorsTopic, {}}, {kImuSampleTopic, {}}, {kOperatorCommandTopic, {}},
-                     faults, valve_any};
-      break;
-    case deployment::RECORDER:
-      p.publish = {status};
-      p.subscribe = {{kLegSensorsTopic, {}}, valve_any, {kImuSampleTopic, {}},
-                     {kLegSetpointTopic, {}}, {kPoseReportTopic, {}}, {kGroundTruthTopic, {}},
-                     {kTrackerPoseTopic, {}}, {kOperatorCommandTopic, {}}, status, faults};
-      break;
-    case deployment::OPERATOR:
-      p.publish = {{kOperatorCommandTopic, {}}};
-      // NodeStatus: the supervisor's answer to a command (accepted / refused) comes in its
-      // status detail, which hexa_operator waits for (docs/exit_codes.md).
-      p.subscribe = {status};
-      break;
-    case deployment::BRIDGE:  // Foxglove viewer: reads everything, writes nothing
-      p.subscribe = {{kLegSensorsTopic, {}}, valve_any, {kImuSampleTopic, {}},
-                     {kLegSetpointTopic, {}}, {kPoseReportTopic, {}}, {kGroundTruthTopic, {}},
-                     {kTrackerPoseTopic, {}}, {kOperatorCommandTopic, {}}, status, faults};
-      break;
-    default:
-      break;
-  }
-  return p;
-}
-
-std::string IsoTime(std::time_t t) {
-  char buf[32];
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S", &tm);
-  return buf;
-}
-
-std::string RulesXml(const std::vector<TopicRule>& rules, const char* kind, const char* indent) {
-  // Group by partition set so that each <publish>/<subscribe> block has one.
-  std::map<std::vector<std::string>, std::vector<std::string_view>> by_partitions;
-  for (const auto& r : rules) by_partitions[r.partitions].push_back(r.topic);
-  std::ostringstream os;
-  for (const auto& [partitions, topics] : by_partitions) {
-    os << indent << "<" << kind << ">\n" << indent << "  <topics>\n";
-    for (auto t : topics) os << indent << "    <topic>" << t << "</topic>\n";
-    os << indent << "  </topics>\n";
-    if (!partitions.empty()) {
-      os << indent << "  <partitions>";
-      for (const auto& part : partitions) os << "<partition>" << part << "</partition>";
-      os << "</partitions>\n";
-    }
-    os << indent << "</" << kind << ">\n";
-  }
-  return os.str();
-}
 
 bool WriteFile(const fs::path& path, const std::string& text, GenerateResult& result,
                fs::perms perms = fs::perms::owner_read | fs::perms::owner_write |
@@ -166,17 +74,25 @@ bool HostHasControlProcess(const Host& host) {
   return false;
 }
 
-int DefaultPriority(Role role) {
-  switch (role) {
-    // The legs highest: the tightest deadline (10 ms lease) and the shortest work; a plant or
-    // supervisor above them on their CPU made them lapse (docs/measurements/deployment.md, "Where the
-    // lapses' milliseconds go"). The same defaults as the services' own.
-    case deployment::PLANT: return 70;        // hexa_plant_sim: late, its schedule slips
-    case deployment::LEG: return 80;          // hexa_leg_ctrl
-    case deployment::SUPERVISOR: return 75;   // hexa_task_space
-    case deployment::RECORDER: return 50;     // below the loop; starved, it loses samples
-    default: return 0;
-  }
+// The session's layout as this deployment runs it (deploy/session): the same processes, role
+// arguments, reader counts, priorities and recorder QoS as hexa_session's.
+session::SessionOptions LayoutOptionsOf(const Deployment& d) {
+  session::SessionOptions o;
+  o.realtime = d.mode() == deployment::REALTIME;
+  o.recorder = HasRole(d, deployment::RECORDER);
+  o.stale_ticks = d.timing().stale_ticks();
+  for (const auto& h : d.host())
+    for (const auto& p : h.process())
+      if (p.role() == deployment::LEG && p.standby() && p.leg() >= 1 && p.leg() <= 6)
+        o.standby[static_cast<std::size_t>(p.leg() - 1)] = true;
+  return o;
+}
+
+// Real time: the SCHED_FIFO priority the unit gives (CPUSchedulingPriority=): the process's
+// own rt_priority, else the layout's.
+int RtPriorityOf(const deployment::Process& p, const session::ProcessSpec& spec) {
+  return p.rt_priority() != 0 ? static_cast<int>(p.rt_priority())
+                              : session::DefaultRtPriority(spec.role);
 }
 
 }  // namespace
@@ -260,152 +176,37 @@ std::string CycloneXml(const Deployment& d, const Host& host, const HostPaths& p
   return os.str();
 }
 
-namespace {
-const char* ProtectionName(deployment::Protection p) {
-  switch (p) {
-    case deployment::NONE: return "NONE";
-    case deployment::SIGN: return "SIGN";
-    default: return "ENCRYPT";  // ENCRYPT, and an unset field (ApplyDefaults not called)
-  }
-}
-}  // namespace
-
-std::string GovernanceXml(const Deployment& d) {
-  const auto& sec = d.security();
-  const char* metadata = ProtectionName(sec.metadata_protection());
-  const char* loop = ProtectionName(sec.loop_metadata_protection() == deployment::PROTECTION_UNSPECIFIED
-                                        ? sec.metadata_protection()
-                                        : sec.loop_metadata_protection());
-  std::ostringstream os;
-  os << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-     << "<!-- Governance of deployment '" << d.name() << "' (generated by hexa_deploy). Domain "
-     << d.domain_id() << ": only authenticated participants join; discovery and liveliness\n"
-     << "     are protected; every topic is access-controlled for reading and writing, its data\n"
-     << "     are encrypted on the wire, its metadata (submessages) protected: " << metadata
-     << " (the 1 kHz loop topics: " << loop << "). -->\n"
-     << "<dds xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
-        "xsi:noNamespaceSchemaLocation=\"http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_governance.xsd\">\n"
-     << "  <domain_access_rules>\n"
-     << "    <domain_rule>\n"
-     << "      <domains><id>" << d.domain_id() << "</id></domains>\n"
-     << "      <allow_unauthenticated_participants>false</allow_unauthenticated_participants>\n"
-     << "      <enable_join_access_control>true</enable_join_access_control>\n"
-     << "      <discovery_protection_kind>" << ProtectionName(sec.discovery_protection())
-     << "</discovery_protection_kind>\n"
-     << "      <liveliness_protection_kind>" << ProtectionName(sec.liveliness_protection())
-     << "</liveliness_protection_kind>\n"
-     << "      <rtps_protection_kind>NONE</rtps_protection_kind>\n"
-     << "      <topic_access_rules>\n";
-  // The first rule whose expression matches a topic applies (DDS Security 9.4.1.2.7): the
-  // 1 kHz loop topics first when their metadata protection differs.
-  auto rule = [&](std::string_view expression, const char* metadata_kind) {
-    os << "        <topic_rule>\n"
-       << "          <topic_expression>" << expression << "</topic_expression>\n"
-       << "          <enable_discovery_protection>true</enable_discovery_protection>\n"
-       << "          <enable_liveliness_protection>true</enable_liveliness_protection>\n"
-       << "          <enable_read_access_control>true</enable_read_access_control>\n"
-       << "          <enable_write_access_control>true</enable_write_access_control>\n"
-       << "          <metadata_protection_kind>" << metadata_kind << "</metadata_protection_kind>\n"
-       << "          <data_protection_kind>ENCRYPT</data_protection_kind>\n"
-       << "        </topic_rule>\n";
-  };
-  if (std::string_view(loop) != metadata)
-    for (auto topic : {comm::kLegSensorsTopic, comm::kValveCommandTopic, comm::kGroundTruthTopic}) rule(topic, loop);
-  rule("*", metadata);
-  os << "      </topic_access_rules>\n"
-     << "    </domain_rule>\n"
-     << "  </domain_access_rules>\n"
-     << "</dds>\n";
-  return os.str();
-}
-
-std::string PermissionsXml(const Deployment& d, const std::string& node, Role role, int leg,
-                           std::time_t now) {
-  const RolePermissions p = PermissionsOf(role, leg);
-  const std::time_t from = now - 3600;  // an hour of clock skew between boards
-  const std::time_t to = now + static_cast<std::time_t>(d.security().certificate_days()) * 86400;
-  std::ostringstream os;
-  os << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-     << "<!-- Permissions of '" << node << "' (" << ToString(role) << ") in deployment '"
-     << d.name() << "' (generated by hexa_deploy). -->\n"
-     << "<dds xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
-        "xsi:noNamespaceSchemaLocation=\"http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_permissions.xsd\">\n"
-     << "  <permissions>\n"
-     << "    <grant name=\"" << node << "\">\n"
-     << "      <subject_name>" << SubjectOf(d, node) << "</subject_name>\n"
-     << "      <validity>\n"
-     << "        <not_before>" << IsoTime(from) << "</not_before>\n"
-     << "        <not_after>" << IsoTime(to) << "</not_after>\n"
-     << "      </validity>\n"
-     << "      <allow_rule>\n"
-     << "        <domains><id>" << d.domain_id() << "</id></domains>\n"
-     << RulesXml(p.publish, "publish", "        ")
-     << RulesXml(p.subscribe, "subscribe", "        ")
-     << "      </allow_rule>\n"
-     << "      <default>DENY</default>\n"
-     << "    </grant>\n"
-     << "  </permissions>\n"
-     << "</dds>\n";
-  return os.str();
-}
 
 std::vector<std::string> CommandLine(const Deployment& d, const ProcessPlan& plan,
                                      const HostPaths& paths) {
   const auto& p = plan.process;
-  const std::string bin = d.bin_dir() + "/";
+  const session::SessionLayout layout = session::BuildSessionLayout(LayoutOptionsOf(d));
+  const session::ProcessSpec* spec = plan.has_unit ? layout.Find(plan.node) : nullptr;
+  if (spec == nullptr) return {};
+  const std::string exe = p.executable().empty() ? d.bin_dir() + "/" + spec->binary : p.executable();
   const std::string dds_config = paths.config_dir + "/cyclonedds.xml";
-  const bool recorder = HasRole(d, deployment::RECORDER);
   const std::string domain = std::to_string(d.domain_id());
-  const std::string startup = Fmt(d.timing().startup_timeout_s());
-  std::vector<std::string> argv;
   // Real time: the SCHED_FIFO priority the unit gives (CPUSchedulingPriority=), also asked
   // for by the process itself (it would otherwise use its own default).
-  const int prio = p.rt_priority() != 0 ? static_cast<int>(p.rt_priority()) : DefaultPriority(p.role());
+  const std::string prio = std::to_string(RtPriorityOf(p, *spec));
   const bool realtime = d.mode() == deployment::REALTIME;
-  auto common = [&] {
-    argv.insert(argv.end(), {"--domain", domain, "--mode", ToString(d.mode()), "--rig",
-                             d.rig_file(), "--dds-config", dds_config, "--lockstep-timeout",
-                             Fmt(d.timing().lockstep_timeout_s())});
-    if (realtime) argv.insert(argv.end(), {"--rt-priority", std::to_string(prio)});
-  };
-  switch (p.role()) {
-    case deployment::PLANT:
-      argv = {p.executable().empty() ? bin + "hexa_plant_sim" : p.executable()};
-      common();
-      argv.insert(argv.end(), {"--legs", "6", "--supervisor", "--stale-ticks",
-                               std::to_string(d.timing().stale_ticks()), "--startup-timeout",
-                               startup});
-      if (recorder) argv.push_back("--expect-recorder");
-      break;
-    case deployment::LEG:
-      argv = {p.executable().empty() ? bin + "hexa_leg_ctrl" : p.executable()};
-      common();
-      argv.insert(argv.end(), {"--leg", std::to_string(p.leg()), "--valve-readers",
-                               recorder ? "2" : "1", "--startup-timeout", startup});
-      if (p.standby()) argv.push_back("--standby");
-      break;
-    case deployment::SUPERVISOR:
-      argv = {p.executable().empty() ? bin + "hexa_task_space" : p.executable()};
-      common();
-      argv.insert(argv.end(), {"--startup-timeout", startup});
-      if (recorder) argv.insert(argv.end(), {"--pose-readers", "1"});
-      break;
-    case deployment::RECORDER: {
-      // One file per start: the shell names it by the UTC time (exec keeps the PID, so
-      // Type=notify still hears the recorder itself).
-      std::string cmd = "exec " + (p.executable().empty() ? bin + "hexa_recorder" : p.executable()) +
-                        " record --output " + d.record_dir() +
-                        "/session-$(date -u +%Y%m%d-%H%M%S).mcap --domain " + domain +
-                        " --dds-config " + dds_config;
-      // Real time: the periodic topics best effort, so that no control writer repairs what
-      // the recorder's link drops (docs/measurements/deployment.md, "The lossy recorder link").
-      if (realtime) cmd += " --rt-priority " + std::to_string(prio) + " --periodic-reliability best-effort";
-      for (const auto& a : p.arg()) cmd += " " + a;
-      return {"/bin/sh", "-c", cmd};
-    }
-    default:
-      return {};
+  if (spec->role == session::Role::kRecorder) {
+    // One file per start: the shell names it by the UTC time (exec keeps the PID, so
+    // Type=notify still hears the recorder itself).
+    std::string cmd = "exec " + exe + " " + spec->verb + " --output " + d.record_dir() +
+                      "/session-$(date -u +%Y%m%d-%H%M%S).mcap --domain " + domain +
+                      " --dds-config " + dds_config;
+    if (realtime) cmd += " --rt-priority " + prio;
+    for (const auto& a : spec->args) cmd += " " + a;
+    for (const auto& a : p.arg()) cmd += " " + a;
+    return {"/bin/sh", "-c", cmd};
   }
+  std::vector<std::string> argv{exe, "--domain", domain, "--mode", ToString(d.mode()), "--rig",
+                                d.rig_file(), "--dds-config", dds_config, "--lockstep-timeout",
+                                Fmt(d.timing().lockstep_timeout_s())};
+  if (realtime) argv.insert(argv.end(), {"--rt-priority", prio});
+  argv.insert(argv.end(), spec->args.begin(), spec->args.end());
+  argv.insert(argv.end(), {"--startup-timeout", Fmt(d.timing().startup_timeout_s())});
   for (const auto& a : p.arg()) argv.push_back(a);
   return argv;
 }
@@ -518,11 +319,13 @@ std::string UnitFileText(const Deployment& d, const ProcessPlan& plan, const Hos
     const char* delay = p.role() == deployment::LEG ? "500ms" : p.role() == deployment::PLANT ? "2s" : "1s";
     os << "Restart=on-failure\nRestartSec=" << delay << "\n";
   }
-  os << "RestartPreventExitStatus=2\n";
+  os << "RestartPreventExitStatus=" << exit_code::kUsage << "\n";
   // Resources for real time: the services also call sched_setscheduler + mlockall
   // themselves before creating the participant (Cyclone's threads inherit the policy).
   os << "LimitMEMLOCK=infinity\n";
-  const int prio = p.rt_priority() != 0 ? static_cast<int>(p.rt_priority()) : DefaultPriority(p.role());
+  const session::SessionLayout layout = session::BuildSessionLayout(LayoutOptionsOf(d));
+  const session::ProcessSpec* spec = layout.Find(plan.node);
+  const int prio = spec != nullptr ? RtPriorityOf(p, *spec) : static_cast<int>(p.rt_priority());
   if (realtime && prio > 0) {
     os << "CPUSchedulingPolicy=fifo\n"
        << "CPUSchedulingPriority=" << prio << "\n"

@@ -13,6 +13,7 @@
 #include "deployment.hpp"
 #include "generate.hpp"
 #include "hexa/services/cli.hpp"
+#include "hexa/services/exit_code.hpp"
 #include "security_check.hpp"
 
 namespace {
@@ -32,7 +33,7 @@ int PrintErrors(const LoadedDeployment& l) {
   for (const auto& e : l.errors) std::fprintf(stderr, "%s\n", e.c_str());
   std::fprintf(stderr, "hexa_deploy: %zu error%s: deployment rejected\n", l.errors.size(),
                l.errors.size() == 1 ? "" : "s");
-  return 1;
+  return hexa::exit_code::kRunError;
 }
 
 void PrintPlan(const hexa::deployment::Deployment& d) {
@@ -54,13 +55,13 @@ int Check(int argc, char** argv) {
   if (int rc = hexa::cli::HandleParseResult(cli, cli.Parse(argc, argv)); rc >= 0) return rc;
   if (cli.positional().size() != 1) {
     std::fprintf(stderr, "error: expected exactly one deployment file\n(see --help)\n");
-    return 2;
+    return hexa::exit_code::kUsage;
   }
   const auto l = LoadDeployment(cli.positional()[0]);
   if (!l.ok) return PrintErrors(l);
   std::printf("OK ");
   PrintPlan(l.deployment);
-  return 0;
+  return hexa::exit_code::kOk;
 }
 
 int GenerateCommand(int argc, char** argv) {
@@ -74,7 +75,7 @@ int GenerateCommand(int argc, char** argv) {
   if (int rc = hexa::cli::HandleParseResult(cli, cli.Parse(argc, argv)); rc >= 0) return rc;
   if (cli.positional().size() != 1 || !cli.Has("out")) {
     std::fprintf(stderr, "error: expected a deployment file and --out DIR\n(see --help)\n");
-    return 2;
+    return hexa::exit_code::kUsage;
   }
   const std::string path = cli.positional()[0];
   const auto l = LoadDeployment(path);
@@ -87,14 +88,14 @@ int GenerateCommand(int argc, char** argv) {
   const auto r = Generate(l.deployment, text.str(), cli.Get("out"), options);
   if (!r.ok) {
     std::fprintf(stderr, "hexa_deploy: error: %s\n", r.error.c_str());
-    return 1;
+    return hexa::exit_code::kRunError;
   }
   PrintPlan(l.deployment);
   std::printf("wrote %zu files under %s\n", r.files.size(), cli.Get("out").c_str());
   if (l.deployment.security().enabled())
     std::printf("next: deploy/make_security.sh %s   (CA, identities, signed governance and "
                 "permissions)\n", cli.Get("out").c_str());
-  return 0;
+  return hexa::exit_code::kOk;
 }
 
 int VerifySecurity(int argc, char** argv) {
@@ -108,7 +109,7 @@ int VerifySecurity(int argc, char** argv) {
   if (int rc = hexa::cli::HandleParseResult(cli, cli.Parse(argc, argv)); rc >= 0) return rc;
   if (!cli.Has("dds-config")) {
     std::fprintf(stderr, "error: --dds-config is required\n(see --help)\n");
-    return 2;
+    return hexa::exit_code::kUsage;
   }
   std::optional<std::string> identity;
   if (cli.Has("identity")) identity = cli.Get("identity");
@@ -117,17 +118,17 @@ int VerifySecurity(int argc, char** argv) {
     const auto d = cli.GetInt("domain", 0, kMaxDomainId);
     if (!d) {
       std::fprintf(stderr, "error: %s\n", cli.error().c_str());
-      return 2;
+      return hexa::exit_code::kUsage;
     }
     domain = static_cast<int>(*d);
   }
   const auto r = VerifyDdsConfigSecurity(cli.Get("dds-config"), identity, domain, std::time(nullptr));
   if (!r.ok) {
     for (const auto& e : r.errors) std::fprintf(stderr, "hexa_deploy: security error: %s\n", e.c_str());
-    return 1;
+    return hexa::exit_code::kRunError;
   }
   std::printf("OK %s\n", r.summary.c_str());
-  return 0;
+  return hexa::exit_code::kOk;
 }
 
 }  // namespace
@@ -142,5 +143,5 @@ int main(int argc, char** argv) {
   if (command == "generate") return GenerateCommand(argc - 1, argv + 1);
   if (command == "verify-security") return VerifySecurity(argc - 1, argv + 1);
   std::fprintf(stderr, "error: unknown command '%s'\n%s", command.c_str(), kUsage);
-  return 2;
+  return hexa::exit_code::kUsage;
 }

@@ -31,58 +31,8 @@ std::string Quoted(const std::string& s) {
   return out + "\"";
 }
 
-}  // namespace
-
-int RunToCompletion(ProcessGroup& group, const std::string& name,
-                    const std::vector<std::string>& argv, const std::string& log,
-                    std::chrono::seconds timeout, const std::map<std::string, std::string>& env) {
-  ChildSpec s;
-  s.name = name;
-  s.argv = argv;
-  s.env = env;
-  s.log_path = log;
-  std::string err;
-  if (group.Start(s, err) < 0) return -1;
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  while (std::chrono::steady_clock::now() < end) {
-    const auto ev = group.WaitEvent(std::chrono::milliseconds(500));
-    if (ev.kind == ProcessGroup::Event::kChildExited && ev.exit.name == name)
-      return ev.exit.signal != 0 ? 128 + ev.exit.signal : ev.exit.exit_code;
-    if (ev.kind == ProcessGroup::Event::kInterrupted) break;
-  }
-  group.Stop(name, std::chrono::milliseconds(2000));
-  return -1;
-}
-
-std::unique_ptr<LabSession> LabSession::Create(const LabSessionOptions& o, std::string& error) {
-  std::unique_ptr<LabSession> s(new LabSession());
-  s->options_ = o;
-  fs::create_directories(o.work_dir);
-  // The layout: the built-in one, or a deployment file's hosts and processes.
-  std::optional<deployment::Deployment> layout;
-  if (!o.layout_file.empty()) {
-    LoadedDeployment loaded = LoadDeployment(o.layout_file);
-    if (!loaded.ok) {
-      error = "layout " + o.layout_file + ":";
-      for (const auto& e : loaded.errors) error += " " + e;
-      return nullptr;
-    }
-    layout = std::move(loaded.deployment);
-  }
-  std::vector<std::string> hosts;
-  if (layout) {
-    for (const auto& h : layout->host()) hosts.push_back(h.name());
-  } else {
-    hosts = {"io-sup", "legs-a", "legs-b"};
-    if (o.standbys) hosts.push_back("standby-b");
-    hosts.push_back("recorder");
-  }
-  std::vector<std::string> all_hosts = hosts;
-  all_hosts.insert(all_hosts.end(), o.extra_hosts.begin(), o.extra_hosts.end());
-  s->lab_ = NetnsLab::Create(o.tag, all_hosts, o.subnet, error);
-  if (!s->lab_) return nullptr;
-
-  // The binaries, where the deployment says they are.
+// The binaries, where the deployment says they are (OUT/bin of the lab's work directory).
+bool LinkBinaries(const LabSessionOptions& o, std::string& error) {
   const fs::path bin = fs::path(o.work_dir) / "bin";
   fs::create_directories(bin);
   for (const auto& [name, path] : o.binaries) {
@@ -91,14 +41,15 @@ std::unique_ptr<LabSession> LabSession::Create(const LabSessionOptions& o, std::
     fs::create_symlink(path, bin / name, ec);
     if (ec) {
       error = "cannot link " + (bin / name).string() + ": " + ec.message();
-      return nullptr;
+      return false;
     }
   }
-  fs::create_directories(fs::path(o.work_dir) / "rec");
-  if (o.audit) fs::create_directories(fs::path(o.work_dir) / "audit");
+  return true;
+}
 
-  // The deployment description, in the lab's names and addresses.
-  std::ostringstream d;
+// The deployment description's settings, in the lab's paths.
+void WriteSettings(std::ostringstream& d, const LabSessionOptions& o) {
+  const fs::path bin = fs::path(o.work_dir) / "bin";
   d << "# Written by the lab session (deploy/lab/lab_session.cpp) for its network namespaces.\n"
     << "name: \"lab\"\n"
     << "domain_id: " << o.domain << "\n"
@@ -117,8 +68,15 @@ std::unique_ptr<LabSession> LabSession::Create(const LabSessionOptions& o, std::
   if (o.lockstep_timeout_s > 0) d << " lockstep_timeout_s: " << Fmt(o.lockstep_timeout_s);
   if (o.stale_ticks > 0) d << " stale_ticks: " << o.stale_ticks;
   d << " startup_timeout_s: " << Fmt(o.startup_timeout_s) << " }\n";
+}
+
+// The hosts and their processes, in the lab's names and addresses: the built-in layout, or
+// a deployment file's hosts. `start_order`: the hosts, the recorder's first.
+void WriteHosts(std::ostringstream& d, const LabSessionOptions& o, const NetnsLab& lab,
+                const std::optional<deployment::Deployment>& layout,
+                std::vector<std::string>& start_order) {
   auto host_block = [&](const std::string& name, const std::string& processes) {
-    const LabHost& h = s->lab_->host(name);
+    const LabHost& h = lab.host(name);
     d << "host {\n  name: \"" << name << "\"\n  interface { name: \"" << h.veth
       << "\" address: \"" << h.address << "\" }\n  dds_interface: \"" << h.veth << "\"\n"
       << processes << "}\n";
@@ -176,8 +134,69 @@ std::unique_ptr<LabSession> LabSession::Create(const LabSessionOptions& o, std::
     if (o.standbys) other_hosts.push_back("standby-b");
     other_hosts.push_back("io-sup");
   }
-  s->hosts_ = recorder_hosts;
-  s->hosts_.insert(s->hosts_.end(), other_hosts.begin(), other_hosts.end());
+  start_order = recorder_hosts;
+  start_order.insert(start_order.end(), other_hosts.begin(), other_hosts.end());
+}
+
+}  // namespace
+
+int RunToCompletion(ProcessGroup& group, const std::string& name,
+                    const std::vector<std::string>& argv, const std::string& log,
+                    std::chrono::seconds timeout, const std::map<std::string, std::string>& env) {
+  ChildSpec s;
+  s.name = name;
+  s.argv = argv;
+  s.env = env;
+  s.log_path = log;
+  std::string err;
+  if (group.Start(s, err) < 0) return -1;
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < end) {
+    const auto ev = group.WaitEvent(std::chrono::milliseconds(500));
+    if (ev.kind == ProcessGroup::Event::kChildExited && ev.exit.name == name)
+      return ev.exit.signal != 0 ? 128 + ev.exit.signal : ev.exit.exit_code;
+    if (ev.kind == ProcessGroup::Event::kInterrupted) break;
+  }
+  group.Stop(name, std::chrono::milliseconds(2000));
+  return -1;
+}
+
+std::unique_ptr<LabSession> LabSession::Create(const LabSessionOptions& o, std::string& error) {
+  std::unique_ptr<LabSession> s(new LabSession());
+  s->options_ = o;
+  fs::create_directories(o.work_dir);
+  // The layout: the built-in one, or a deployment file's hosts and processes.
+  std::optional<deployment::Deployment> layout;
+  if (!o.layout_file.empty()) {
+    LoadedDeployment loaded = LoadDeployment(o.layout_file);
+    if (!loaded.ok) {
+      error = "layout " + o.layout_file + ":";
+      for (const auto& e : loaded.errors) error += " " + e;
+      return nullptr;
+    }
+    layout = std::move(loaded.deployment);
+  }
+  std::vector<std::string> hosts;
+  if (layout) {
+    for (const auto& h : layout->host()) hosts.push_back(h.name());
+  } else {
+    hosts = {"io-sup", "legs-a", "legs-b"};
+    if (o.standbys) hosts.push_back("standby-b");
+    hosts.push_back("recorder");
+  }
+  std::vector<std::string> all_hosts = hosts;
+  all_hosts.insert(all_hosts.end(), o.extra_hosts.begin(), o.extra_hosts.end());
+  s->lab_ = NetnsLab::Create(o.tag, all_hosts, o.subnet, error);
+  if (!s->lab_) return nullptr;
+
+  if (!LinkBinaries(o, error)) return nullptr;
+  fs::create_directories(fs::path(o.work_dir) / "rec");
+  if (o.audit) fs::create_directories(fs::path(o.work_dir) / "audit");
+
+  // The deployment description, in the lab's names and addresses.
+  std::ostringstream d;
+  WriteSettings(d, o);
+  WriteHosts(d, o, *s->lab_, layout, s->hosts_);
   s->deployment_text_ = d.str();
   const std::string file = (fs::path(o.work_dir) / "deployment.textproto").string();
   std::ofstream(file) << s->deployment_text_;

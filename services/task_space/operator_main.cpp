@@ -9,6 +9,7 @@
 #include "command_answer.hpp"
 #include "hexa/comm/comm.hpp"
 #include "hexa/services/cli.hpp"
+#include "hexa/services/exit_code.hpp"
 #include "hexa/services/logging.hpp"
 #include "hexa/services/node.hpp"
 #include "hexa/services/text.hpp"
@@ -55,7 +56,7 @@ int main(int argc, char** argv) {
   if (!domain || !wait_s || !linger_s || !answer_wait_s || cli.positional().size() != 1) {
     std::fprintf(stderr, "error: %s\n(see --help)\n",
                  cli.error().empty() ? "exactly one command is required" : cli.error().c_str());
-    return 2;
+    return hexa::exit_code::kUsage;
   }
   const std::string what = cli.positional()[0];
   hexa_msg_OperatorCommand cmd{};
@@ -67,7 +68,7 @@ int main(int argc, char** argv) {
   else {
     std::fprintf(stderr, "error: unknown command '%s' (start stop reset home shutdown)\n",
                  what.c_str());
-    return 2;
+    return hexa::exit_code::kUsage;
   }
   // A CSV path must reach the supervisor exactly: refuse what the wire cannot carry unchanged
   // (OperatorCommand.csv_path is an IDL string<256>, recorded as a proto3 string: UTF-8).
@@ -77,7 +78,7 @@ int main(int argc, char** argv) {
                  "error: --trajectory '%s': a CSV path must be valid UTF-8 without control "
                  "characters and at most %zu bytes (it is %zu bytes)\n",
                  hexa::text::Excerpt(traj).c_str(), sizeof(cmd.csv_path) - 1, traj.size());
-    return 2;
+    return hexa::exit_code::kUsage;
   }
   auto log = hexa::logging::Init("operator");
   try {
@@ -85,7 +86,7 @@ int main(int argc, char** argv) {
     if (cli.Has("dds-config")) dds = cli.Get("dds-config");
     hexa::comm::EnsureDdsConfig(dds);
     if (!hexa::node::InstallSessionKey(cli.Has("session-key") ? cli.Get("session-key") : "", *log))
-      return 2;
+      return hexa::exit_code::kUsage;
     hexa::comm::Participant participant(static_cast<dds_domainid_t>(*domain));
     hexa::comm::Topic<hexa_msg_OperatorCommand> topic(participant);
     hexa::comm::Writer<hexa_msg_OperatorCommand> writer(participant, topic);
@@ -115,7 +116,7 @@ int main(int argc, char** argv) {
       if (hexa::node::MonotonicNow_ns() > end) {
         log->error("no supervisor on domain {} within {} s ({} other reader(s) of the command topic matched)",
                    *domain, *wait_s, writer.Snapshot().publication_matched_current);
-        return 1;
+        return hexa::exit_code::kRunError;
       }
       ws.Wait(DDS_MSECS(20));
     }
@@ -133,11 +134,11 @@ int main(int argc, char** argv) {
       log->error("sent {} to domain {} but it was NOT acknowledged by every matched reader "
                  "({} matched) within 2 s after the {} s linger: the supervisor may not have it",
                  what, *domain, matched, *linger_s);
-      return 3;
+      return hexa::exit_code::kNotAnswered;
     }
     if (any_reader) {
       log->info("sent {} to domain {} ({} reader(s) matched, acknowledged)", what, *domain, matched);
-      return 0;
+      return hexa::exit_code::kOk;
     }
     // The supervisor's answer to this command (its sequence number).
     using hexa::task_space::CommandAnswer;
@@ -155,11 +156,11 @@ int main(int argc, char** argv) {
           const CommandAnswer answer = hexa::task_space::ParseCommandAnswer(detail, cmd.sequence);
           if (answer == CommandAnswer::kAccepted) {
             log->info("sent {} to domain {}: the supervisor {}", what, *domain, detail);
-            return 0;
+            return hexa::exit_code::kOk;
           }
           if (answer != CommandAnswer::kNone) {
             log->error("sent {} to domain {}: the supervisor {} (exit 4)", what, *domain, detail);
-            return 4;
+            return hexa::exit_code::kRefused;
           }
         }
       }
@@ -169,9 +170,9 @@ int main(int argc, char** argv) {
     log->error("sent {} to domain {} and it was acknowledged, but the supervisor did not answer "
                "within {} s (--answer-wait; it answers once it runs, at its next tick): it may "
                "not have acted on it (exit 3)", what, *domain, *answer_wait_s);
-    return 3;
+    return hexa::exit_code::kNotAnswered;
   } catch (const std::exception& e) {
     log->error("{}", e.what());
-    return 1;
+    return hexa::exit_code::kRunError;
   }
 }
