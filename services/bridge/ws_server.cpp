@@ -127,164 +127,12 @@ void Server::Start() {
   ws.init_asio();
   ws.set_reuse_addr(true);
   ws.set_max_message_size(config_.max_client_message_bytes);
-  // Handshake: the client must offer the Foxglove subprotocol.
-  // Handshake: the client must offer the Foxglove subprotocol, and there must be room.
-  ws.set_validate_handler([this](Hdl hdl) {
-    auto con = impl_->ws.get_con_from_hdl(hdl);
-    const auto& offered = con->get_requested_subprotocols();
-    if (std::find(offered.begin(), offered.end(), kSubprotocol) == offered.end()) {
-      log_->warn("refused a WebSocket handshake from {}: subprotocol {} not offered",
-                 con->get_remote_endpoint(), kSubprotocol);
-      con->set_status(websocketpp::http::status_code::bad_request);
-      return false;
-    }
-    std::lock_guard<std::mutex> lock(impl_->clients_mutex);
-    if (impl_->clients.size() >= config_.max_clients) {
-      const uint64_t n = ++refused_connections_;
-      // Every refusal is answered; the log says so for the first ten and then every 100th.
-      if (n <= 10 || n % 100 == 0)
-        log_->warn("refused a connection from {}: {} clients connected, the limit "
-                   "(--max-clients); {} refused so far", con->get_remote_endpoint(),
-                   impl_->clients.size(), n);
-      con->set_status(websocketpp::http::status_code::service_unavailable);
-      con->set_body("hexa_bridge: too many clients (limit " +
-                    std::to_string(config_.max_clients) + ")\n");
-      return false;
-    }
-    con->select_subprotocol(kSubprotocol);
-    Impl::Client& c = impl_->clients[hdl];
-    c.operator_limiter = RateLimiter(config_.operator_input_rate_hz, config_.operator_input_burst);
-    c.stats.id = impl_->next_client_id++;
-    c.stats.remote = con->get_remote_endpoint();
-    return true;
-  });
-  ws.set_open_handler([this](Hdl hdl) {
-    auto con = impl_->ws.get_con_from_hdl(hdl);
-    asio::error_code nodelay_ec;  // small frames go out at once (best effort)
-    con->get_socket().set_option(asio::ip::tcp::no_delay(true), nodelay_ec);
-    ClientStats c;
-    std::size_t connected = 0;
-    {
-      std::lock_guard<std::mutex> lock(impl_->clients_mutex);
-      auto it = impl_->clients.find(hdl);
-      if (it == impl_->clients.end()) return;
-      c = it->second.stats;
-      connected = impl_->clients.size();
-    }
-    log_->info("client {} connected from {} ({} of at most {})", c.id, c.remote, connected,
-               config_.max_clients);
-    websocketpp::lib::error_code ec;
-    impl_->ws.send(hdl, ServerInfoJson(config_.name, std::to_string(bound_port_), config_.operator_input),
-                   websocketpp::frame::opcode::text, ec);
-    if (!ec)
-      impl_->ws.send(hdl, AdvertiseJson(channels_), websocketpp::frame::opcode::text, ec);
-  });
-  auto closed = [this](Hdl hdl, const char* how) {
-    Impl::Client c;
-    bool demand_changed = false;
-    {
-      std::lock_guard<std::mutex> lock(impl_->clients_mutex);
-      auto it = impl_->clients.find(hdl);
-      if (it == impl_->clients.end()) return;
-      c = std::move(it->second);
-      impl_->clients.erase(it);
-      queued_bytes_ -= c.stats.queued_bytes;
-      impl_->trim_due = true;
-      impl_->last_departure = std::chrono::steady_clock::now();
-    }
-    c.queue = {};
-    for (const auto& [channel, sub] : c.channel_subscription) {
-      if (channel < watchers_.size() && watchers_[channel]->fetch_sub(1) == 1) demand_changed = true;
-    }
-    log_->info("client {} ({}) {}: sent {} messages ({} bytes), dropped {} (queue full), "
-               "queue peak {} bytes", c.stats.id, c.stats.remote, how, c.stats.sent,
-               c.stats.sent_bytes, c.stats.dropped, c.stats.queued_peak_bytes);
-    if (demand_changed && on_demand_) on_demand_();
-  };
-  ws.set_close_handler([closed](Hdl hdl) { closed(hdl, "closed"); });
-  ws.set_fail_handler([closed](Hdl hdl) { closed(hdl, "failed"); });
+  ws.set_validate_handler([this](Hdl hdl) { return OnHandshake(hdl); });
+  ws.set_open_handler([this](Hdl hdl) { OnOpen(hdl); });
+  ws.set_close_handler([this](Hdl hdl) { OnClosed(hdl, "closed"); });
+  ws.set_fail_handler([this](Hdl hdl) { OnClosed(hdl, "failed"); });
   ws.set_message_handler([this](Hdl hdl, WsServer::message_ptr msg) {
-    auto protocol_error = [&](const std::string& why) {
-      ++protocol_errors_;
-      uint64_t id = 0;
-      {
-        std::lock_guard<std::mutex> lock(impl_->clients_mutex);
-        auto it = impl_->clients.find(hdl);
-        if (it != impl_->clients.end()) id = it->second.stats.id;
-      }
-      log_->warn("client {}: protocol error: {}; closing the connection", id, why);
-      websocketpp::lib::error_code ec;
-      impl_->ws.send(hdl, StatusJson(StatusLevel::kError, "protocol error: " + why),
-                     websocketpp::frame::opcode::text, ec);
-      impl_->ws.close(hdl, websocketpp::close::status::protocol_error,
-                      why.substr(0, 120), ec);
-    };
-    if (msg->get_opcode() != websocketpp::frame::opcode::text) {
-      if (!config_.operator_input) {
-        protocol_error("binary messages from clients are not accepted (no clientPublish capability)");
-        return;
-      }
-      const ClientMessageData data = ParseClientBinary(msg->get_payload());
-      if (!data.ok) {
-        protocol_error(data.error);
-        return;
-      }
-      OnClientBinary(hdl, msg->get_payload());
-      return;
-    }
-    const ClientRequest req = ParseClientText(msg->get_payload(), config_.operator_input);
-    if (req.kind == ClientRequest::Kind::kError) {
-      protocol_error(req.error);
-      return;
-    }
-    if (req.kind == ClientRequest::Kind::kAdvertise || req.kind == ClientRequest::Kind::kUnadvertise) {
-      OnClientChannels(hdl, req);
-      return;
-    }
-    std::string warning;
-    bool demand_changed = false;
-    {
-      std::lock_guard<std::mutex> lock(impl_->clients_mutex);
-      auto it = impl_->clients.find(hdl);
-      if (it == impl_->clients.end()) return;
-      Impl::Client& c = it->second;
-      if (req.kind == ClientRequest::Kind::kSubscribe) {
-        for (const auto& [sub, channel] : req.subscriptions) {
-          const bool known = std::any_of(channels_.begin(), channels_.end(),
-                                         [&](const ChannelInfo& ch) { return ch.id == channel; });
-          if (!known) {
-            warning += "subscription " + std::to_string(sub) + ": no channel " +
-                       std::to_string(channel) + "; ";
-          } else if (c.subscription_channel.count(sub)) {
-            warning += "subscription id " + std::to_string(sub) + " is already in use; ";
-          } else if (c.channel_subscription.count(channel)) {
-            warning += "channel " + std::to_string(channel) + " is already subscribed; ";
-          } else {
-            c.subscription_channel[sub] = channel;
-            c.channel_subscription[channel] = sub;
-            if (watchers_[channel]->fetch_add(1) == 0) demand_changed = true;
-          }
-        }
-      } else {
-        for (uint32_t sub : req.unsubscribe_ids) {
-          auto s = c.subscription_channel.find(sub);
-          if (s == c.subscription_channel.end()) {
-            warning += "no subscription " + std::to_string(sub) + "; ";
-            continue;
-          }
-          c.channel_subscription.erase(s->second);
-          if (watchers_[s->second]->fetch_sub(1) == 1) demand_changed = true;
-          c.subscription_channel.erase(s);
-        }
-      }
-      c.stats.subscriptions = c.subscription_channel.size();
-    }
-    if (!warning.empty()) {
-      websocketpp::lib::error_code ec;
-      impl_->ws.send(hdl, StatusJson(StatusLevel::kWarning, warning),
-                     websocketpp::frame::opcode::text, ec);
-    }
-    if (demand_changed && on_demand_) on_demand_();
+    OnMessage(hdl, msg->get_payload(), msg->get_opcode() == websocketpp::frame::opcode::text);
   });
 
   websocketpp::lib::error_code ec;
@@ -311,6 +159,174 @@ void Server::Start() {
       log_->error("WebSocket I/O thread stopped: {}", e.what());
     }
   });
+}
+
+// Handshake: the client must offer the Foxglove subprotocol, and there must be room.
+bool Server::OnHandshake(const std::weak_ptr<void>& hdl) {
+  auto con = impl_->ws.get_con_from_hdl(hdl);
+  const auto& offered = con->get_requested_subprotocols();
+  if (std::find(offered.begin(), offered.end(), kSubprotocol) == offered.end()) {
+    log_->warn("refused a WebSocket handshake from {}: subprotocol {} not offered",
+               con->get_remote_endpoint(), kSubprotocol);
+    con->set_status(websocketpp::http::status_code::bad_request);
+    return false;
+  }
+  std::lock_guard<std::mutex> lock(impl_->clients_mutex);
+  if (impl_->clients.size() >= config_.max_clients) {
+    const uint64_t n = ++refused_connections_;
+    // Every refusal is answered; the log says so for the first ten and then every 100th.
+    if (n <= 10 || n % 100 == 0)
+      log_->warn("refused a connection from {}: {} clients connected, the limit "
+                 "(--max-clients); {} refused so far", con->get_remote_endpoint(),
+                 impl_->clients.size(), n);
+    con->set_status(websocketpp::http::status_code::service_unavailable);
+    con->set_body("hexa_bridge: too many clients (limit " +
+                  std::to_string(config_.max_clients) + ")\n");
+    return false;
+  }
+  con->select_subprotocol(kSubprotocol);
+  Impl::Client& c = impl_->clients[hdl];
+  c.operator_limiter = RateLimiter(config_.operator_input_rate_hz, config_.operator_input_burst);
+  c.stats.id = impl_->next_client_id++;
+  c.stats.remote = con->get_remote_endpoint();
+  return true;
+}
+
+void Server::OnOpen(const std::weak_ptr<void>& hdl) {
+  auto con = impl_->ws.get_con_from_hdl(hdl);
+  asio::error_code nodelay_ec;  // small frames go out at once (best effort)
+  con->get_socket().set_option(asio::ip::tcp::no_delay(true), nodelay_ec);
+  ClientStats c;
+  std::size_t connected = 0;
+  {
+    std::lock_guard<std::mutex> lock(impl_->clients_mutex);
+    auto it = impl_->clients.find(hdl);
+    if (it == impl_->clients.end()) return;
+    c = it->second.stats;
+    connected = impl_->clients.size();
+  }
+  log_->info("client {} connected from {} ({} of at most {})", c.id, c.remote, connected,
+             config_.max_clients);
+  websocketpp::lib::error_code ec;
+  impl_->ws.send(hdl, ServerInfoJson(config_.name, std::to_string(bound_port_), config_.operator_input),
+                 websocketpp::frame::opcode::text, ec);
+  if (!ec)
+    impl_->ws.send(hdl, AdvertiseJson(channels_), websocketpp::frame::opcode::text, ec);
+}
+
+void Server::OnClosed(const std::weak_ptr<void>& hdl, const char* how) {
+  Impl::Client c;
+  bool demand_changed = false;
+  {
+    std::lock_guard<std::mutex> lock(impl_->clients_mutex);
+    auto it = impl_->clients.find(hdl);
+    if (it == impl_->clients.end()) return;
+    c = std::move(it->second);
+    impl_->clients.erase(it);
+    queued_bytes_ -= c.stats.queued_bytes;
+    impl_->trim_due = true;
+    impl_->last_departure = std::chrono::steady_clock::now();
+  }
+  c.queue = {};
+  for (const auto& [channel, sub] : c.channel_subscription) {
+    if (channel < watchers_.size() && watchers_[channel]->fetch_sub(1) == 1) demand_changed = true;
+  }
+  log_->info("client {} ({}) {}: sent {} messages ({} bytes), dropped {} (queue full), "
+             "queue peak {} bytes", c.stats.id, c.stats.remote, how, c.stats.sent,
+             c.stats.sent_bytes, c.stats.dropped, c.stats.queued_peak_bytes);
+  if (demand_changed && on_demand_) on_demand_();
+}
+
+// A message the protocol does not allow: counted, answered with an error status, and the
+// connection closed.
+void Server::ProtocolError(const std::weak_ptr<void>& hdl, const std::string& why) {
+  ++protocol_errors_;
+  uint64_t id = 0;
+  {
+    std::lock_guard<std::mutex> lock(impl_->clients_mutex);
+    auto it = impl_->clients.find(hdl);
+    if (it != impl_->clients.end()) id = it->second.stats.id;
+  }
+  log_->warn("client {}: protocol error: {}; closing the connection", id, why);
+  websocketpp::lib::error_code ec;
+  impl_->ws.send(hdl, StatusJson(StatusLevel::kError, "protocol error: " + why),
+                 websocketpp::frame::opcode::text, ec);
+  impl_->ws.close(hdl, websocketpp::close::status::protocol_error,
+                  why.substr(0, 120), ec);
+}
+
+void Server::OnMessage(const std::weak_ptr<void>& hdl, const std::string& payload, bool text) {
+  if (!text) {
+    if (!config_.operator_input) {
+      ProtocolError(hdl, "binary messages from clients are not accepted (no clientPublish capability)");
+      return;
+    }
+    const ClientMessageData data = ParseClientBinary(payload);
+    if (!data.ok) {
+      ProtocolError(hdl, data.error);
+      return;
+    }
+    OnClientBinary(hdl, payload);
+    return;
+  }
+  const ClientRequest req = ParseClientText(payload, config_.operator_input);
+  if (req.kind == ClientRequest::Kind::kError) {
+    ProtocolError(hdl, req.error);
+    return;
+  }
+  if (req.kind == ClientRequest::Kind::kAdvertise || req.kind == ClientRequest::Kind::kUnadvertise) {
+    OnClientChannels(hdl, req);
+    return;
+  }
+  OnSubscriptionRequest(hdl, req);
+}
+
+// subscribe / unsubscribe: the client's subscriptions and the channels' demand.
+void Server::OnSubscriptionRequest(const std::weak_ptr<void>& hdl, const ClientRequest& req) {
+  std::string warning;
+  bool demand_changed = false;
+  {
+    std::lock_guard<std::mutex> lock(impl_->clients_mutex);
+    auto it = impl_->clients.find(hdl);
+    if (it == impl_->clients.end()) return;
+    Impl::Client& c = it->second;
+    if (req.kind == ClientRequest::Kind::kSubscribe) {
+      for (const auto& [sub, channel] : req.subscriptions) {
+        const bool known = std::any_of(channels_.begin(), channels_.end(),
+                                       [&](const ChannelInfo& ch) { return ch.id == channel; });
+        if (!known) {
+          warning += "subscription " + std::to_string(sub) + ": no channel " +
+                     std::to_string(channel) + "; ";
+        } else if (c.subscription_channel.count(sub)) {
+          warning += "subscription id " + std::to_string(sub) + " is already in use; ";
+        } else if (c.channel_subscription.count(channel)) {
+          warning += "channel " + std::to_string(channel) + " is already subscribed; ";
+        } else {
+          c.subscription_channel[sub] = channel;
+          c.channel_subscription[channel] = sub;
+          if (watchers_[channel]->fetch_add(1) == 0) demand_changed = true;
+        }
+      }
+    } else {
+      for (uint32_t sub : req.unsubscribe_ids) {
+        auto s = c.subscription_channel.find(sub);
+        if (s == c.subscription_channel.end()) {
+          warning += "no subscription " + std::to_string(sub) + "; ";
+          continue;
+        }
+        c.channel_subscription.erase(s->second);
+        if (watchers_[s->second]->fetch_sub(1) == 1) demand_changed = true;
+        c.subscription_channel.erase(s);
+      }
+    }
+    c.stats.subscriptions = c.subscription_channel.size();
+  }
+  if (!warning.empty()) {
+    websocketpp::lib::error_code ec;
+    impl_->ws.send(hdl, StatusJson(StatusLevel::kWarning, warning),
+                   websocketpp::frame::opcode::text, ec);
+  }
+  if (demand_changed && on_demand_) on_demand_();
 }
 
 void Server::Stop() {

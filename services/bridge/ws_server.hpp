@@ -127,6 +127,12 @@ class Server {
   void ReturnFreedMemory();
   // I/O thread: a client's binary message (operator input) and a status to one client that is
   // dropped when the client does not read (its socket holds 64 KiB already).
+  bool OnHandshake(const std::weak_ptr<void>& hdl);
+  void OnOpen(const std::weak_ptr<void>& hdl);
+  void OnClosed(const std::weak_ptr<void>& hdl, const char* how);
+  void OnMessage(const std::weak_ptr<void>& hdl, const std::string& payload, bool text);
+  void ProtocolError(const std::weak_ptr<void>& hdl, const std::string& why);
+  void OnSubscriptionRequest(const std::weak_ptr<void>& hdl, const ClientRequest& req);
   void OnClientBinary(const std::weak_ptr<void>& hdl, const std::string& frame);
   void OnClientChannels(const std::weak_ptr<void>& hdl, const ClientRequest& req);
   void SendStatus(const std::weak_ptr<void>& hdl, StatusLevel level, const std::string& message);
