@@ -74,9 +74,16 @@ bool HostHasControlProcess(const Host& host) {
   return false;
 }
 
-// The session's layout as this deployment runs it (deploy/session): the same processes, role
-// arguments, reader counts, priorities and recorder QoS as hexa_session's.
-session::SessionOptions LayoutOptionsOf(const Deployment& d) {
+// Real time: the SCHED_FIFO priority the unit gives (CPUSchedulingPriority=): the process's
+// own rt_priority, else the layout's.
+int RtPriorityOf(const deployment::Process& p, const session::ProcessSpec& spec) {
+  return p.rt_priority() != 0 ? static_cast<int>(p.rt_priority())
+                              : session::DefaultRtPriority(spec.role);
+}
+
+}  // namespace
+
+session::SessionOptions SessionOptionsOf(const Deployment& d) {
   session::SessionOptions o;
   o.realtime = d.mode() == deployment::REALTIME;
   o.recorder = HasRole(d, deployment::RECORDER);
@@ -87,15 +94,6 @@ session::SessionOptions LayoutOptionsOf(const Deployment& d) {
         o.standby[static_cast<std::size_t>(p.leg() - 1)] = true;
   return o;
 }
-
-// Real time: the SCHED_FIFO priority the unit gives (CPUSchedulingPriority=): the process's
-// own rt_priority, else the layout's.
-int RtPriorityOf(const deployment::Process& p, const session::ProcessSpec& spec) {
-  return p.rt_priority() != 0 ? static_cast<int>(p.rt_priority())
-                              : session::DefaultRtPriority(spec.role);
-}
-
-}  // namespace
 
 std::string CycloneXml(const Deployment& d, const Host& host, const HostPaths& paths) {
   const auto& iface = DdsInterface(host);
@@ -180,7 +178,7 @@ std::string CycloneXml(const Deployment& d, const Host& host, const HostPaths& p
 std::vector<std::string> CommandLine(const Deployment& d, const ProcessPlan& plan,
                                      const HostPaths& paths) {
   const auto& p = plan.process;
-  const session::SessionLayout layout = session::BuildSessionLayout(LayoutOptionsOf(d));
+  const session::SessionLayout layout = session::BuildSessionLayout(SessionOptionsOf(d));
   const session::ProcessSpec* spec = plan.has_unit ? layout.Find(plan.node) : nullptr;
   if (spec == nullptr) return {};
   const std::string exe = p.executable().empty() ? d.bin_dir() + "/" + spec->binary : p.executable();
@@ -323,7 +321,7 @@ std::string UnitFileText(const Deployment& d, const ProcessPlan& plan, const Hos
   // Resources for real time: the services also call sched_setscheduler + mlockall
   // themselves before creating the participant (Cyclone's threads inherit the policy).
   os << "LimitMEMLOCK=infinity\n";
-  const session::SessionLayout layout = session::BuildSessionLayout(LayoutOptionsOf(d));
+  const session::SessionLayout layout = session::BuildSessionLayout(SessionOptionsOf(d));
   const session::ProcessSpec* spec = layout.Find(plan.node);
   const int prio = spec != nullptr ? RtPriorityOf(p, *spec) : static_cast<int>(p.rt_priority());
   if (realtime && prio > 0) {

@@ -18,8 +18,14 @@
 #include <vector>
 
 #include "deployment.hpp"
+#include "session_layout.hpp"
 
 namespace hexa::deploy {
+
+// The session's layout options as this deployment runs it (deploy/session): the same
+// processes, role arguments, reader counts, priorities and recorder QoS as hexa_session's.
+// No CPUs: each process's `cpu` is the deployment's.
+session::SessionOptions SessionOptionsOf(const deployment::Deployment& d);
 
 // Paths as a process on the host sees them.
 struct HostPaths {

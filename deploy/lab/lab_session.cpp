@@ -5,10 +5,11 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
-#include <optional>
 #include <sstream>
 
 #include "deployment.hpp"
+#include "generate.hpp"
+#include "session_layout.hpp"
 #include "hexa/services/scheduling.hpp"
 
 namespace hexa::deploy {
@@ -70,69 +71,97 @@ void WriteSettings(std::ostringstream& d, const LabSessionOptions& o) {
   d << " startup_timeout_s: " << Fmt(o.startup_timeout_s) << " }\n";
 }
 
-// The hosts and their processes, in the lab's names and addresses: the built-in layout, or
-// a deployment file's hosts. `start_order`: the hosts, the recorder's first.
+// The built-in five hosts: where each process of the session's layout runs.
+std::string BuiltInHostOf(const session::ProcessSpec& p) {
+  switch (p.role) {
+    case session::Role::kRecorder: return "recorder";
+    case session::Role::kPlant:
+    case session::Role::kSupervisor: return "io-sup";
+    case session::Role::kLeg: return p.standby ? "standby-b" : p.leg <= 3 ? "legs-a" : "legs-b";
+    case session::Role::kBridge: break;
+  }
+  return "";
+}
+
+deployment::Role DeploymentRoleOf(session::Role role) {
+  switch (role) {
+    case session::Role::kPlant: return deployment::PLANT;
+    case session::Role::kSupervisor: return deployment::SUPERVISOR;
+    case session::Role::kLeg: return deployment::LEG;
+    case session::Role::kRecorder: return deployment::RECORDER;
+    case session::Role::kBridge: return deployment::BRIDGE;
+  }
+  return deployment::ROLE_UNSPECIFIED;
+}
+
+// The built-in layout as a deployment's hosts and processes: the session's layout
+// (deploy/session: the processes hexa_session runs, with a recorder, and standbys of legs
+// 4-6 when asked for) on the five hosts, and the operator's identity beside the supervisor.
+deployment::Deployment BuiltInLayout(const LabSessionOptions& o) {
+  session::SessionOptions options;
+  options.realtime = o.realtime;
+  if (o.standbys) options.standby = {false, false, false, true, true, true};
+  deployment::Deployment d;
+  auto host = [&d](const std::string& name) {
+    for (auto& h : *d.mutable_host())
+      if (h.name() == name) return &h;
+    deployment::Host* h = d.add_host();
+    h->set_name(name);
+    return h;
+  };
+  for (const auto& spec : session::BuildSessionLayout(options).processes) {
+    deployment::Host* h = host(BuiltInHostOf(spec));
+    deployment::Process* p = h->add_process();
+    p->set_role(DeploymentRoleOf(spec.role));
+    if (spec.role == session::Role::kLeg) {
+      p->set_leg(static_cast<unsigned>(spec.leg));
+      p->set_standby(spec.standby);
+    }
+    if (spec.role == session::Role::kSupervisor) h->add_process()->set_role(deployment::OPERATOR);
+  }
+  return d;
+}
+
+// The hosts and their processes of `layout` (built-in or a deployment file's), in the lab's
+// names and addresses, each process with the CPU the one-machine session gives it
+// (hexa_session's "auto" CPU options: the plant and the primary legs on this machine's last
+// allowed CPU, the rest on its first). `start_order`: the hosts, the recorder's first.
 void WriteHosts(std::ostringstream& d, const LabSessionOptions& o, const NetnsLab& lab,
-                const std::optional<deployment::Deployment>& layout,
-                std::vector<std::string>& start_order) {
-  auto host_block = [&](const std::string& name, const std::string& processes) {
-    const LabHost& h = lab.host(name);
-    d << "host {\n  name: \"" << name << "\"\n  interface { name: \"" << h.veth
-      << "\" address: \"" << h.address << "\" }\n  dds_interface: \"" << h.veth << "\"\n"
-      << processes << "}\n";
-  };
-  auto args = [](const std::vector<std::string>& a) {
-    std::string out;
-    for (const auto& x : a) out += " arg: " + Quoted(x);
-    return out;
-  };
-  // The one-machine session's placement (hexa_session's "auto" CPU options).
+                const deployment::Deployment& layout, std::vector<std::string>& start_order) {
   const std::vector<int> allowed = sched::AllowedCpus();
   const bool place = o.cpu_placement && allowed.size() >= 2;
-  const std::string control = place ? " cpu: " + std::to_string(allowed.back()) : "";
-  const std::string other = place ? " cpu: " + std::to_string(allowed.front()) : "";
-  auto legs = [&](int first, const std::string& extra, const std::string& cpu) {
-    std::string out;
-    for (int leg = first; leg < first + 3; ++leg)
-      out += "  process { role: LEG leg: " + std::to_string(leg) + extra + cpu + " }\n";
-    return out;
-  };
-  std::vector<std::string> recorder_hosts, other_hosts;  // start order: recorder first
-  if (layout) {
-    for (const auto& h : layout->host()) {
-      std::string processes;
-      bool has_recorder = false;
-      for (const auto& p : h.process()) {
-        const bool is_control = p.role() == deployment::PLANT ||
-                                (p.role() == deployment::LEG && !p.standby() && !(o.split_legs_b && h.name() == "legs-b"));
-        std::string line = std::string("  process { role: ") + ToString(p.role());
-        if (p.role() == deployment::LEG) {
-          line += " leg: " + std::to_string(p.leg());
-          if (p.standby()) line += " standby: true";
-        }
-        if (p.role() != deployment::OPERATOR) line += is_control ? control : other;
-        std::vector<std::string> extra(p.arg().begin(), p.arg().end());
-        if (p.role() == deployment::PLANT) extra.insert(extra.end(), o.plant_args.begin(), o.plant_args.end());
-        if (p.role() == deployment::SUPERVISOR)
-          extra.insert(extra.end(), o.supervisor_args.begin(), o.supervisor_args.end());
-        processes += line + args(extra) + " }\n";
-        has_recorder = has_recorder || p.role() == deployment::RECORDER;
-      }
-      host_block(h.name(), processes);
-      (has_recorder ? recorder_hosts : other_hosts).push_back(h.name());
+  session::SessionOptions placement = SessionOptionsOf(layout);
+  if (place) {
+    placement.cpus_control = std::to_string(allowed.back());
+    placement.cpus_standby = placement.cpus_supervisor = placement.cpus_recorder =
+        std::to_string(allowed.front());
+  }
+  const session::SessionLayout placed = session::BuildSessionLayout(placement);
+  std::vector<std::string> recorder_hosts, other_hosts;
+  for (const auto& h : layout.host()) {
+    const LabHost& lab_host = lab.host(h.name());
+    d << "host {\n  name: \"" << h.name() << "\"\n  interface { name: \"" << lab_host.veth
+      << "\" address: \"" << lab_host.address << "\" }\n  dds_interface: \"" << lab_host.veth
+      << "\"\n";
+    bool has_recorder = false;
+    for (const auto& p : h.process()) {
+      d << "  process { role: " << ToString(p.role());
+      if (p.role() == deployment::LEG) d << " leg: " << p.leg() << (p.standby() ? " standby: true" : "");
+      const session::ProcessSpec* spec = placed.Find(NodeName(p));
+      std::string cpu = spec != nullptr ? spec->cpus : "";
+      if (place && o.split_legs_b && h.name() == "legs-b" && p.role() == deployment::LEG)
+        cpu = std::to_string(allowed.front());
+      if (!cpu.empty()) d << " cpu: " << cpu;
+      std::vector<std::string> args(p.arg().begin(), p.arg().end());
+      if (p.role() == deployment::PLANT) args.insert(args.end(), o.plant_args.begin(), o.plant_args.end());
+      if (p.role() == deployment::SUPERVISOR)
+        args.insert(args.end(), o.supervisor_args.begin(), o.supervisor_args.end());
+      for (const auto& a : args) d << " arg: " << Quoted(a);
+      d << " }\n";
+      has_recorder = has_recorder || p.role() == deployment::RECORDER;
     }
-  } else {
-    host_block("io-sup", "  process { role: PLANT" + control + args(o.plant_args) +
-                             " }\n  process { role: SUPERVISOR" + other + args(o.supervisor_args) +
-                             " }\n  process { role: OPERATOR }\n");
-    host_block("legs-a", legs(1, "", control));
-    host_block("legs-b", legs(4, "", o.split_legs_b ? other : control));
-    if (o.standbys) host_block("standby-b", legs(4, " standby: true", other));
-    host_block("recorder", "  process { role: RECORDER" + other + " }\n");
-    recorder_hosts = {"recorder"};
-    other_hosts = {"legs-a", "legs-b"};
-    if (o.standbys) other_hosts.push_back("standby-b");
-    other_hosts.push_back("io-sup");
+    d << "}\n";
+    (has_recorder ? recorder_hosts : other_hosts).push_back(h.name());
   }
   start_order = recorder_hosts;
   start_order.insert(start_order.end(), other_hosts.begin(), other_hosts.end());
@@ -166,8 +195,10 @@ std::unique_ptr<LabSession> LabSession::Create(const LabSessionOptions& o, std::
   s->options_ = o;
   fs::create_directories(o.work_dir);
   // The layout: the built-in one, or a deployment file's hosts and processes.
-  std::optional<deployment::Deployment> layout;
-  if (!o.layout_file.empty()) {
+  deployment::Deployment layout;
+  if (o.layout_file.empty()) {
+    layout = BuiltInLayout(o);
+  } else {
     LoadedDeployment loaded = LoadDeployment(o.layout_file);
     if (!loaded.ok) {
       error = "layout " + o.layout_file + ":";
@@ -177,13 +208,7 @@ std::unique_ptr<LabSession> LabSession::Create(const LabSessionOptions& o, std::
     layout = std::move(loaded.deployment);
   }
   std::vector<std::string> hosts;
-  if (layout) {
-    for (const auto& h : layout->host()) hosts.push_back(h.name());
-  } else {
-    hosts = {"io-sup", "legs-a", "legs-b"};
-    if (o.standbys) hosts.push_back("standby-b");
-    hosts.push_back("recorder");
-  }
+  for (const auto& h : layout.host()) hosts.push_back(h.name());
   std::vector<std::string> all_hosts = hosts;
   all_hosts.insert(all_hosts.end(), o.extra_hosts.begin(), o.extra_hosts.end());
   s->lab_ = NetnsLab::Create(o.tag, all_hosts, o.subnet, error);

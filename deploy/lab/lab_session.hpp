@@ -4,7 +4,8 @@
 // unit (UnitLauncher). Used by the multi-host tests (tests/netns) and the deployment
 // benchmark (bench/deployment).
 //
-// Hosts (the reference five-host layout):  io-sup     plant + supervisor (+ operator identity)
+// Hosts (the reference five-host layout; its processes are the session's layout,
+// deploy/session):             io-sup     plant + supervisor (+ operator identity)
 //                              legs-a     legs 1-3
 //                              legs-b     legs 4-6
 //                              standby-b  hot standbys of legs 4-6 (optional)
