@@ -1,7 +1,7 @@
 // The coupled leg feedback study (studies/coupled_leg_feedback) through the lockstep
-// simulation's leg-runner hook: the figures of two paper sessions, pinned to the values the
-// study produced when its code lived inside LockstepSimulation (the move must not change a
-// study's result), and the hook with the system's runner equal, to the bit, to no hook.
+// simulation's leg-runner hook: the figures of two paper sessions pinned to their known values
+// (to 1e-12 relative: any change of the study's arithmetic shows), and the hook with the
+// system's runner equal, to the bit, to no hook.
 #include <gtest/gtest.h>
 
 #include "coupled_leg_feedback.hpp"
