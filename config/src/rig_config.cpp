@@ -27,7 +27,6 @@
 namespace hexa::config {
 
 namespace gp = google::protobuf;
-using internal::CollectingErrors;
 using internal::CountLines;
 using internal::ElementSelector;
 using internal::FormatDouble;
@@ -57,71 +56,6 @@ namespace {
 
 // The one block a rig file may leave out (proto/rig.proto): a rig without an I/O board.
 constexpr const char* kOptionalTopLevelBlock = "board";
-
-struct PresenceContext {
-  const std::string& file;
-  int eof_line;
-  std::vector<ConfigIssue>& issues;
-};
-
-// Stage 2: every singular field present, every floating-point value finite.
-void CheckPresence(const gp::Message& msg, const ParseInfoTree* tree, const std::string& path,
-                   const Location& block, PresenceContext& ctx) {
-  const gp::Descriptor* d = msg.GetDescriptor();
-  const gp::Reflection* r = msg.GetReflection();
-  for (int i = 0; i < d->field_count(); ++i) {
-    const gp::FieldDescriptor* fd = d->field(i);
-    const std::string field_path = path.empty() ? fd->name() : path + "." + fd->name();
-    const bool is_message = fd->cpp_type() == gp::FieldDescriptor::CPPTYPE_MESSAGE;
-    if (fd->is_repeated()) {
-      if (!is_message) continue;
-      for (int k = 0; k < r->FieldSize(msg, fd); ++k) {
-        const gp::Message& element = r->GetRepeatedMessage(msg, fd, k);
-        const Location loc = tree ? FromRange(tree->GetLocationRange(fd, k)) : Location{};
-        CheckPresence(element, tree ? tree->GetTreeForNested(fd, k) : nullptr,
-                      path.empty() ? fd->name() + ElementSelector(element, k)
-                                   : path + "." + fd->name() + ElementSelector(element, k),
-                      loc, ctx);
-      }
-      continue;
-    }
-    const Location loc = tree ? FromRange(tree->GetLocationRange(fd, -1)) : Location{};
-    if (!r->HasField(msg, fd) && path.empty() && fd->name() == kOptionalTopLevelBlock) continue;
-    if (!r->HasField(msg, fd)) {
-      ConfigIssue issue;
-      issue.file = ctx.file;
-      issue.field = field_path;
-      issue.value = "(absent)";
-      issue.limit = "every field must be written";
-      if (path.empty()) {
-        issue.line = ctx.eof_line;
-        issue.column = 1;
-        issue.message = std::string("required ") + (is_message ? "block" : "field") + " '" + fd->name() +
-                        "' is missing from the file";
-      } else {
-        issue.line = block.line;
-        issue.column = block.column;
-        issue.message = std::string("required ") + (is_message ? "block" : "field") + " '" + fd->name() +
-                        "' is missing from block '" + path + "' (lines " + std::to_string(block.line) + "-" +
-                        std::to_string(block.end_line) + ")";
-      }
-      ctx.issues.push_back(std::move(issue));
-      continue;
-    }
-    if (is_message) {
-      CheckPresence(r->GetMessage(msg, fd), tree ? tree->GetTreeForNested(fd, -1) : nullptr, field_path, loc,
-                    ctx);
-    } else if (fd->cpp_type() == gp::FieldDescriptor::CPPTYPE_DOUBLE ||
-               fd->cpp_type() == gp::FieldDescriptor::CPPTYPE_FLOAT) {
-      const double v = fd->cpp_type() == gp::FieldDescriptor::CPPTYPE_DOUBLE ? r->GetDouble(msg, fd)
-                                                                            : r->GetFloat(msg, fd);
-      if (!std::isfinite(v)) {
-        ctx.issues.push_back({ctx.file, loc.line, loc.column, field_path, "value must be a finite number",
-                              FormatDouble(v), "finite"});
-      }
-    }
-  }
-}
 
 Eigen::Vector3d FromPb(const pb::Vector3& v) { return {v.x(), v.y(), v.z()}; }
 void ToPb(const Eigen::Vector3d& v, pb::Vector3* out) {
@@ -446,21 +380,11 @@ ConfigResult ParseSystemConfig(const std::string& text, const std::string& displ
   try {
     pb::RigFile file;
     ParseInfoTree tree;
-    CollectingErrors errors;
-    gp::TextFormat::Parser parser;
-    parser.RecordErrorsTo(&errors);
-    parser.WriteLocationsTo(&tree);
-    if (!parser.ParseFromString(text, &file)) {
-      std::vector<ConfigIssue> issues;
-      for (const auto& e : errors.errors) issues.push_back(internal::ParserIssue(e, display_name, pb::RigFile::descriptor()));
-      if (issues.empty()) issues.push_back({display_name, 1, 1, "", "text format parse failed", "", ""});
-      return Fail(std::move(issues));
-    }
+    std::vector<ConfigIssue> issues;
+    if (!internal::ParseTextFormat(text, display_name, file, tree, issues)) return Fail(std::move(issues));
     const int eof_line = CountLines(text);
 
-    std::vector<ConfigIssue> issues;
-    PresenceContext ctx{display_name, eof_line, issues};
-    CheckPresence(file, &tree, "", Location{1, 1, eof_line}, ctx);
+    internal::CheckEveryFieldWritten(file, tree, display_name, eof_line, kOptionalTopLevelBlock, issues);
     if (!issues.empty()) return Fail(std::move(issues));
 
     CheckStructure(file, tree, display_name, eof_line, issues);

@@ -298,20 +298,11 @@ OverlayResult ParseRigOverlay(const std::string& text, const std::string& displa
   try {
     pb::RigOverlay file;
     ParseInfoTree tree;
-    internal::CollectingErrors errors;
-    gp::TextFormat::Parser parser;
-    parser.RecordErrorsTo(&errors);
-    parser.WriteLocationsTo(&tree);
-    if (!parser.ParseFromString(text, &file)) {
-      std::vector<ConfigIssue> issues;
-      for (const auto& e : errors.errors) {
-        issues.push_back(internal::ParserIssue(e, display_name, pb::RigOverlay::descriptor()));
-      }
-      if (issues.empty()) issues.push_back({display_name, 1, 1, "", "text format parse failed", "", ""});
+    std::vector<ConfigIssue> issues;
+    if (!internal::ParseTextFormat(text, display_name, file, tree, issues)) {
       return FailOverlay(std::move(issues));
     }
     const int eof_line = internal::CountLines(text);
-    std::vector<ConfigIssue> issues;
     CheckFinite(file, &tree, "", display_name, issues);
     if (!file.has_rig_name() || file.rig_name().empty()) {
       issues.push_back({display_name, eof_line, 1, "rig_name",
@@ -381,11 +372,8 @@ ConfigResult ApplyRigOverlay(const SystemConfig& base, const RigOverlay& overlay
   ParseInfoTree tree;
   bool have_tree = false;
   if (!text.empty()) {
-    gp::TextFormat::Parser parser;
-    internal::CollectingErrors ignored;
-    parser.RecordErrorsTo(&ignored);
-    parser.WriteLocationsTo(&tree);
-    have_tree = parser.ParseFromString(text, &parsed);
+    std::vector<ConfigIssue> ignored;  // the overlay was parsed (and its errors told) before
+    have_tree = internal::ParseTextFormat(text, file, parsed, tree, ignored);
   }
   auto locate = [&](ConfigIssue& issue) {
     issue.file = file;

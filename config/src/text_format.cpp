@@ -1,8 +1,11 @@
-// Protobuf text-format helpers shared by the rig-file and rig-overlay loaders.
+// Protobuf text-format helpers shared by the rig-file, rig-overlay and washout-file loaders.
 #include "text_format.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <regex>
+
+#include "internal.hpp"
 
 namespace hexa::config::internal {
 
@@ -54,6 +57,18 @@ Location FromRange(const gp::TextFormat::ParseLocationRange& range) {
 
 void CollectingErrors::AddError(int line, gp::io::ColumnNumber column, const std::string& message) {
   errors.push_back({line, column, message});
+}
+
+bool ParseTextFormat(const std::string& text, const std::string& display_name, gp::Message& message,
+                     gp::TextFormat::ParseInfoTree& tree, std::vector<ConfigIssue>& issues) {
+  CollectingErrors errors;
+  gp::TextFormat::Parser parser;
+  parser.RecordErrorsTo(&errors);
+  parser.WriteLocationsTo(&tree);
+  if (parser.ParseFromString(text, &message)) return true;
+  for (const auto& e : errors.errors) issues.push_back(ParserIssue(e, display_name, message.GetDescriptor()));
+  if (issues.empty()) issues.push_back({display_name, 1, 1, "", "text format parse failed", "", ""});
+  return false;
 }
 
 // Turns the parser's "Message type "X" has no field named "y"." into an issue with the
@@ -180,6 +195,82 @@ Location Locate(const gp::Message& root, const ParseInfoTree& root_tree, const s
     tree = tree->GetTreeForNested(fd, index);
   }
   return best;
+}
+
+namespace {
+
+struct PresenceContext {
+  const std::string& file;
+  int eof_line;
+  const std::string& optional_top_level_block;
+  std::vector<ConfigIssue>& issues;
+};
+
+void CheckPresence(const gp::Message& msg, const ParseInfoTree* tree, const std::string& path,
+                   const Location& block, PresenceContext& ctx) {
+  const gp::Descriptor* d = msg.GetDescriptor();
+  const gp::Reflection* r = msg.GetReflection();
+  for (int i = 0; i < d->field_count(); ++i) {
+    const gp::FieldDescriptor* fd = d->field(i);
+    const std::string field_path = path.empty() ? fd->name() : path + "." + fd->name();
+    const bool is_message = fd->cpp_type() == gp::FieldDescriptor::CPPTYPE_MESSAGE;
+    if (fd->is_repeated()) {
+      if (!is_message) continue;
+      for (int k = 0; k < r->FieldSize(msg, fd); ++k) {
+        const gp::Message& element = r->GetRepeatedMessage(msg, fd, k);
+        const Location loc = tree ? FromRange(tree->GetLocationRange(fd, k)) : Location{};
+        CheckPresence(element, tree ? tree->GetTreeForNested(fd, k) : nullptr,
+                      path.empty() ? fd->name() + ElementSelector(element, k)
+                                   : path + "." + fd->name() + ElementSelector(element, k),
+                      loc, ctx);
+      }
+      continue;
+    }
+    const Location loc = tree ? FromRange(tree->GetLocationRange(fd, -1)) : Location{};
+    if (!r->HasField(msg, fd) && path.empty() && fd->name() == ctx.optional_top_level_block) continue;
+    if (!r->HasField(msg, fd)) {
+      ConfigIssue issue;
+      issue.file = ctx.file;
+      issue.field = field_path;
+      issue.value = "(absent)";
+      issue.limit = "every field must be written";
+      if (path.empty()) {
+        issue.line = ctx.eof_line;
+        issue.column = 1;
+        issue.message = std::string("required ") + (is_message ? "block" : "field") + " '" + fd->name() +
+                        "' is missing from the file";
+      } else {
+        issue.line = block.line;
+        issue.column = block.column;
+        issue.message = std::string("required ") + (is_message ? "block" : "field") + " '" + fd->name() +
+                        "' is missing from block '" + path + "' (lines " + std::to_string(block.line) + "-" +
+                        std::to_string(block.end_line) + ")";
+      }
+      ctx.issues.push_back(std::move(issue));
+      continue;
+    }
+    if (is_message) {
+      CheckPresence(r->GetMessage(msg, fd), tree ? tree->GetTreeForNested(fd, -1) : nullptr, field_path, loc,
+                    ctx);
+    } else if (fd->cpp_type() == gp::FieldDescriptor::CPPTYPE_DOUBLE ||
+               fd->cpp_type() == gp::FieldDescriptor::CPPTYPE_FLOAT) {
+      const double v = fd->cpp_type() == gp::FieldDescriptor::CPPTYPE_DOUBLE ? r->GetDouble(msg, fd)
+                                                                            : r->GetFloat(msg, fd);
+      if (!std::isfinite(v)) {
+        ctx.issues.push_back({ctx.file, loc.line, loc.column, field_path, "value must be a finite number",
+                              FormatDouble(v), "finite"});
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void CheckEveryFieldWritten(const gp::Message& message, const ParseInfoTree& tree, const std::string& file,
+                            int eof_line, const std::string& optional_top_level_block,
+                            std::vector<ConfigIssue>& issues) {
+  PresenceContext ctx{file, eof_line, optional_top_level_block, issues};
+  CheckPresence(message, &tree, "", Location{1, 1, eof_line}, ctx);
 }
 
 }  // namespace hexa::config::internal

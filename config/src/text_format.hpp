@@ -1,6 +1,7 @@
-// Protobuf text-format helpers shared by the rig-file and rig-overlay loaders (not
-// installed): parser errors turned into ConfigIssues with "did you mean", line lookup of a
-// field path through the parser's ParseInfoTree.
+// Protobuf text-format helpers shared by the rig-file, rig-overlay and washout-file loaders
+// (not installed): the parser's set-up with its errors turned into ConfigIssues with "did you
+// mean", the every-field-written check, line lookup of a field path through the parser's
+// ParseInfoTree.
 #pragma once
 
 #include <google/protobuf/descriptor.h>
@@ -41,6 +42,24 @@ class CollectingErrors : public google::protobuf::io::ErrorCollector {
 // guess; other parser errors become "syntax error: ...".
 ConfigIssue ParserIssue(const CollectingErrors::Error& e, const std::string& file,
                         const google::protobuf::Descriptor* root);
+
+// Parses `text` (protobuf text format) into `message`, the parser's field locations into
+// `tree`. On a parse error: false, with one issue per parser error in `issues` (ParserIssue
+// under `message`'s type; "text format parse failed" when the parser gave none).
+bool ParseTextFormat(const std::string& text, const std::string& display_name,
+                     google::protobuf::Message& message,
+                     google::protobuf::TextFormat::ParseInfoTree& tree,
+                     std::vector<ConfigIssue>& issues);
+
+// Every singular field of every block written (nothing takes a silent default) and every
+// floating-point value finite, in `message` parsed from `file` (ParseTextFormat) with its
+// locations in `tree`; `optional_top_level_block` ("" for none) may be absent. One issue per
+// field, at its line (a missing one: at its block's first line, or at `eof_line`).
+void CheckEveryFieldWritten(const google::protobuf::Message& message,
+                            const google::protobuf::TextFormat::ParseInfoTree& tree,
+                            const std::string& file, int eof_line,
+                            const std::string& optional_top_level_block,
+                            std::vector<ConfigIssue>& issues);
 
 int CountLines(const std::string& text);
 

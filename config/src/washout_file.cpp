@@ -11,42 +11,9 @@ namespace hexa::config {
 namespace {
 
 namespace gp = google::protobuf;
-using internal::CollectingErrors;
 using internal::FromRange;
 using internal::Location;
 using ParseInfoTree = gp::TextFormat::ParseInfoTree;
-
-// Every (non-repeated) field of every block must be written: nothing takes a silent default.
-void CheckPresence(const gp::Message& msg, const ParseInfoTree* tree, const std::string& path,
-                   const Location& block, const std::string& file, int eof_line,
-                   std::vector<ConfigIssue>& issues) {
-  const gp::Descriptor* d = msg.GetDescriptor();
-  const gp::Reflection* r = msg.GetReflection();
-  for (int i = 0; i < d->field_count(); ++i) {
-    const gp::FieldDescriptor* fd = d->field(i);
-    const std::string field_path = path.empty() ? fd->name() : path + "." + fd->name();
-    const bool is_message = fd->cpp_type() == gp::FieldDescriptor::CPPTYPE_MESSAGE;
-    if (!r->HasField(msg, fd)) {
-      ConfigIssue issue;
-      issue.file = file;
-      issue.field = field_path;
-      issue.value = "(absent)";
-      issue.limit = "every field must be written";
-      issue.line = path.empty() ? eof_line : block.line;
-      issue.column = path.empty() ? 1 : block.column;
-      issue.message = std::string("required ") + (is_message ? "block" : "field") + " '" +
-                      fd->name() + "' is missing from " +
-                      (path.empty() ? std::string("the file") : "block '" + path + "'");
-      issues.push_back(std::move(issue));
-      continue;
-    }
-    if (is_message) {
-      const Location loc = tree ? FromRange(tree->GetLocationRange(fd, -1)) : Location{};
-      CheckPresence(r->GetMessage(msg, fd), tree ? tree->GetTreeForNested(fd, -1) : nullptr,
-                    field_path, loc, file, eof_line, issues);
-    }
-  }
-}
 
 WashoutTranslationParams FromPb(const pb::WashoutTranslationChannel& c) {
   return {c.scale(), c.input_limit_m_s2(), c.frequency_rad_s(), c.damping(),
@@ -84,21 +51,9 @@ WashoutFileResult Fail(std::vector<ConfigIssue> issues) {
 WashoutFileResult ParseWashoutFile(const std::string& text, const std::string& display_name) {
   pb::WashoutFile file;
   ParseInfoTree tree;
-  CollectingErrors errors;
-  gp::TextFormat::Parser parser;
-  parser.RecordErrorsTo(&errors);
-  parser.WriteLocationsTo(&tree);
-  if (!parser.ParseFromString(text, &file)) {
-    std::vector<ConfigIssue> issues;
-    for (const auto& e : errors.errors) {
-      issues.push_back(internal::ParserIssue(e, display_name, pb::WashoutFile::descriptor()));
-    }
-    if (issues.empty()) issues.push_back({display_name, 1, 1, "", "text format parse failed", "", ""});
-    return Fail(std::move(issues));
-  }
   std::vector<ConfigIssue> issues;
-  CheckPresence(file, &tree, "", Location{1, 1, internal::CountLines(text)}, display_name,
-                internal::CountLines(text), issues);
+  if (!internal::ParseTextFormat(text, display_name, file, tree, issues)) return Fail(std::move(issues));
+  internal::CheckEveryFieldWritten(file, tree, display_name, internal::CountLines(text), "", issues);
   if (!issues.empty()) return Fail(std::move(issues));
   WashoutFileResult result;
   result.config = Translate(file);

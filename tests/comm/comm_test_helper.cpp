@@ -1,6 +1,6 @@
 // Helper processes for the comm integration tests (tests/comm/comm_process_test.cpp), one
 // mode per role:
-//   pub-all       publish every topic of idl/hexa.idl with Make<T>(seq), seq = 0, 1, ...
+//   pub-all       publish every topic type (recording/topic_types.hpp) with Make<T>(seq), seq = 0, 1, ...
 //   sub-all       receive every topic, compare every field with Make<T>(SeqOf(sample))
 //   pub-legs      LegSensors legs 1..6 at a period; SIGUSR1 toggles a pause of one leg
 //   pub-valve     ValveCommand of one leg with an ownership strength (hot standby tests)
@@ -16,11 +16,14 @@
 #include <cstdio>
 #include <cstdlib>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <tuple>
+#include <vector>
 
 #include "hexa/comm/comm.hpp"
+#include "hexa/recording/topic_types.hpp"
 #include "wire_samples.hpp"
 
 namespace {
@@ -77,6 +80,28 @@ void SleepUntil(timespec& next, int64_t period_ns) {
   }
 }
 
+// One topic of every topic type (recording/topic_types.hpp, the one list): its writer of
+// Make<T>(seq), or its reader that checks every sample against Make<T>(SeqOf(sample)).
+class AnyWriter {
+ public:
+  virtual ~AnyWriter() = default;
+  virtual dds_return_t Write(uint64_t seq) = 0;
+};
+
+template <typename T>
+class TypedWriter final : public AnyWriter {
+ public:
+  TypedWriter(const Participant& p, const QosParams& params) : topic_(p), writer_(p, topic_, params) {}
+  dds_return_t Write(uint64_t seq) override {
+    T sample = t::Make<T>(seq);
+    return writer_.WriteNow(sample);
+  }
+
+ private:
+  Topic<T> topic_;
+  Writer<T> writer_;
+};
+
 int PubAll(const Args& a) {
   Participant p = Start(a);
   ShutdownGuard guard(p);
@@ -85,24 +110,10 @@ int PubAll(const Args& a) {
   // Reliable writers on every topic (the lockstep QoS): sub-all reads with the default,
   // reliable recorder QoS, which a real-time (best-effort) periodic writer does not match.
   params.lockstep = true;
-  Topic<hexa_msg_LegSensors> t1(p);
-  Topic<hexa_msg_ValveCommand> t2(p);
-  Topic<hexa_msg_ImuSample> t3(p);
-  Topic<hexa_msg_LegSetpoint> t4(p);
-  Topic<hexa_msg_PoseReport> t5(p);
-  Topic<hexa_msg_GroundTruth> t6(p);
-  Topic<hexa_msg_OperatorCommand> t7(p);
-  Topic<hexa_msg_NodeStatus> t8(p);
-  Topic<hexa_msg_FaultEvent> t9(p);
-  Writer<hexa_msg_LegSensors> w1(p, t1, params);
-  Writer<hexa_msg_ValveCommand> w2(p, t2, params);
-  Writer<hexa_msg_ImuSample> w3(p, t3, params);
-  Writer<hexa_msg_LegSetpoint> w4(p, t4, params);
-  Writer<hexa_msg_PoseReport> w5(p, t5, params);
-  Writer<hexa_msg_GroundTruth> w6(p, t6, params);
-  Writer<hexa_msg_OperatorCommand> w7(p, t7, params);
-  Writer<hexa_msg_NodeStatus> w8(p, t8, params);
-  Writer<hexa_msg_FaultEvent> w9(p, t9, params);
+  std::vector<std::unique_ptr<AnyWriter>> writers;
+  hexa::recorder::ForEachTopicType([&](auto type) {
+    writers.push_back(std::make_unique<TypedWriter<typename decltype(type)::Dds>>(p, params));
+  });
   Say("READY");
   const int64_t period_ns = static_cast<int64_t>(a.Num("period-ms", 20) * 1e6);
   const double max_s = a.Num("max-s", 20);
@@ -111,21 +122,12 @@ int PubAll(const Args& a) {
   const int64_t start_ns = MonotonicNow_ns();
   for (uint64_t seq = 0; !guard.requested(); ++seq) {
     if (MonotonicNow_ns() - start_ns > static_cast<int64_t>(max_s * 1e9)) return 0;
-    auto s1 = t::Make<hexa_msg_LegSensors>(seq);
-    auto s2 = t::Make<hexa_msg_ValveCommand>(seq);
-    auto s3 = t::Make<hexa_msg_ImuSample>(seq);
-    auto s4 = t::Make<hexa_msg_LegSetpoint>(seq);
-    auto s5 = t::Make<hexa_msg_PoseReport>(seq);
-    auto s6 = t::Make<hexa_msg_GroundTruth>(seq);
-    auto s7 = t::Make<hexa_msg_OperatorCommand>(seq);
-    auto s8 = t::Make<hexa_msg_NodeStatus>(seq);
-    auto s9 = t::Make<hexa_msg_FaultEvent>(seq);
-    const dds_return_t rc = w1.WriteNow(s1) | w2.WriteNow(s2) | w3.WriteNow(s3) |
-                            w4.WriteNow(s4) | w5.WriteNow(s5) | w6.WriteNow(s6) |
-                            w7.WriteNow(s7) | w8.WriteNow(s8) | w9.WriteNow(s9);
-    if (rc != DDS_RETCODE_OK) {
-      Say("WRITE_ERROR " + std::to_string(rc));
-      return 1;
+    for (auto& writer : writers) {
+      const dds_return_t rc = writer->Write(seq);
+      if (rc != DDS_RETCODE_OK) {
+        Say("WRITE_ERROR " + std::to_string(rc));
+        return 1;
+      }
     }
     SleepUntil(next, period_ns);
   }
@@ -133,72 +135,65 @@ int PubAll(const Args& a) {
 }
 
 struct TopicTally {
-  explicit TopicTally(const char* topic_name) : name(topic_name) {}
-  const char* name;
+  std::string name;
   uint64_t received = 0;
   uint64_t mismatches = 0;
   uint64_t bad_timestamps = 0;
   std::string first_diff;
 };
 
+class AnyReader {
+ public:
+  virtual ~AnyReader() = default;
+  virtual dds_entity_t data_condition() const = 0;
+  virtual void Check() = 0;
+  TopicTally tally;
+};
+
 template <typename T>
-void Check(Reader<T>& reader, TopicTally& tally) {
-  if (reader.Take() <= 0) return;
-  for (std::size_t i = 0; i < reader.count(); ++i) {
-    const dds_sample_info_t& info = reader.info(i);
-    if (!info.valid_data) continue;
-    const T& got = reader.sample(i);
-    ++tally.received;
-    const std::string diff = t::Diff(got, t::Make<T>(t::SeqOf(got)));
-    if (!diff.empty()) {
-      if (tally.first_diff.empty()) tally.first_diff = diff;
-      ++tally.mismatches;
-    }
-    // The sample's own source time must be the DDS source timestamp (dds_write_ts).
-    if (t::SourceTimeOf(got) != info.source_timestamp || info.source_timestamp <= 0) {
-      ++tally.bad_timestamps;
+class TypedReader final : public AnyReader {
+ public:
+  TypedReader(const Participant& p, EndpointRole role, const char* type_name)
+      : topic_(p), reader_(p, topic_, role) {
+    tally.name = type_name;
+  }
+  dds_entity_t data_condition() const override { return reader_.data_condition(); }
+  void Check() override {
+    if (reader_.Take() <= 0) return;
+    for (std::size_t i = 0; i < reader_.count(); ++i) {
+      const dds_sample_info_t& info = reader_.info(i);
+      if (!info.valid_data) continue;
+      const T& got = reader_.sample(i);
+      ++tally.received;
+      const std::string diff = t::Diff(got, t::Make<T>(t::SeqOf(got)));
+      if (!diff.empty()) {
+        if (tally.first_diff.empty()) tally.first_diff = diff;
+        ++tally.mismatches;
+      }
+      // The sample's own source time must be the DDS source timestamp (dds_write_ts).
+      if (t::SourceTimeOf(got) != info.source_timestamp || info.source_timestamp <= 0) {
+        ++tally.bad_timestamps;
+      }
     }
   }
-}
+
+ private:
+  Topic<T> topic_;
+  Reader<T> reader_;
+};
 
 int SubAll(const Args& a) {
   Participant p = Start(a);
   ShutdownGuard guard(p);
-  const EndpointRole role = EndpointRole::kRecorderReader;
-  Topic<hexa_msg_LegSensors> t1(p);
-  Topic<hexa_msg_ValveCommand> t2(p);
-  Topic<hexa_msg_ImuSample> t3(p);
-  Topic<hexa_msg_LegSetpoint> t4(p);
-  Topic<hexa_msg_PoseReport> t5(p);
-  Topic<hexa_msg_GroundTruth> t6(p);
-  Topic<hexa_msg_OperatorCommand> t7(p);
-  Topic<hexa_msg_NodeStatus> t8(p);
-  Topic<hexa_msg_FaultEvent> t9(p);
-  Reader<hexa_msg_LegSensors> r1(p, t1, role);
-  Reader<hexa_msg_ValveCommand> r2(p, t2, role);
-  Reader<hexa_msg_ImuSample> r3(p, t3, role);
-  Reader<hexa_msg_LegSetpoint> r4(p, t4, role);
-  Reader<hexa_msg_PoseReport> r5(p, t5, role);
-  Reader<hexa_msg_GroundTruth> r6(p, t6, role);
-  Reader<hexa_msg_OperatorCommand> r7(p, t7, role);
-  Reader<hexa_msg_NodeStatus> r8(p, t8, role);
-  Reader<hexa_msg_FaultEvent> r9(p, t9, role);
+  std::vector<std::unique_ptr<AnyReader>> readers;
+  hexa::recorder::ForEachTopicType([&](auto type) {
+    readers.push_back(std::make_unique<TypedReader<typename decltype(type)::Dds>>(
+        p, EndpointRole::kRecorderReader, type.descriptor()->m_typename));
+  });
   WaitSet ws(p, 16);
   ws.Attach(guard.guard_condition(), 0);
-  ws.Attach(r1.data_condition(), 1);
-  ws.Attach(r2.data_condition(), 2);
-  ws.Attach(r3.data_condition(), 3);
-  ws.Attach(r4.data_condition(), 4);
-  ws.Attach(r5.data_condition(), 5);
-  ws.Attach(r6.data_condition(), 6);
-  ws.Attach(r7.data_condition(), 7);
-  ws.Attach(r8.data_condition(), 8);
-  ws.Attach(r9.data_condition(), 9);
-  TopicTally tallies[9] = {TopicTally("LegSensors"),      TopicTally("ValveCommand"),
-                           TopicTally("ImuSample"),       TopicTally("LegSetpoint"),
-                           TopicTally("PoseReport"),      TopicTally("GroundTruth"),
-                           TopicTally("OperatorCommand"), TopicTally("NodeStatus"),
-                           TopicTally("FaultEvent")};
+  for (std::size_t i = 0; i < readers.size(); ++i)
+    ws.Attach(readers[i]->data_condition(), static_cast<dds_attach_t>(i + 1));
   Say("READY");
   const uint64_t min_per_topic = static_cast<uint64_t>(a.Num("min-per-topic", 5));
   const dds_time_t give_up = dds_time() + static_cast<dds_time_t>(a.Num("max-s", 20) * 1e9);
@@ -206,21 +201,16 @@ int SubAll(const Args& a) {
   while (!guard.requested() && !complete) {
     const dds_return_t n = ws.WaitUntil(give_up);
     if (n == 0) break;  // timeout
-    Check(r1, tallies[0]);
-    Check(r2, tallies[1]);
-    Check(r3, tallies[2]);
-    Check(r4, tallies[3]);
-    Check(r5, tallies[4]);
-    Check(r6, tallies[5]);
-    Check(r7, tallies[6]);
-    Check(r8, tallies[7]);
-    Check(r9, tallies[8]);
     complete = true;
-    for (const TopicTally& tally : tallies) complete = complete && tally.received >= min_per_topic;
+    for (auto& reader : readers) {
+      reader->Check();
+      complete = complete && reader->tally.received >= min_per_topic;
+    }
   }
   bool clean = true;
-  for (const TopicTally& tally : tallies) {
-    Say(std::string("RESULT ") + tally.name + " received=" + std::to_string(tally.received) +
+  for (const auto& reader : readers) {
+    const TopicTally& tally = reader->tally;
+    Say("RESULT " + tally.name + " received=" + std::to_string(tally.received) +
         " mismatches=" + std::to_string(tally.mismatches) +
         " bad_timestamps=" + std::to_string(tally.bad_timestamps) +
         (tally.first_diff.empty() ? "" : " first_diff=" + tally.first_diff));

@@ -132,6 +132,15 @@ inline hexa_msg_GroundTruth Make(uint64_t seq) {
 }
 
 template <>
+inline hexa_msg_TrackerPose Make(uint64_t seq) {
+  hexa_msg_TrackerPose s{};
+  Header(s.header, seq);
+  for (int i = 0; i < 3; ++i) s.position_m[i] = V(seq, 10 + i);
+  for (int i = 0; i < 4; ++i) s.orientation_wxyz[i] = V(seq, 20 + i);
+  return s;
+}
+
+template <>
 inline hexa_msg_OperatorCommand Make(uint64_t seq) {
   hexa_msg_OperatorCommand s{};
   s.sequence = static_cast<uint32_t>(seq + 3000000000u);
@@ -177,6 +186,7 @@ inline uint64_t SeqOf(const hexa_msg_ImuSample& s) { return SeqOf(s.header); }
 inline uint64_t SeqOf(const hexa_msg_LegSetpoint& s) { return SeqOf(s.header); }
 inline uint64_t SeqOf(const hexa_msg_PoseReport& s) { return SeqOf(s.header); }
 inline uint64_t SeqOf(const hexa_msg_GroundTruth& s) { return SeqOf(s.header); }
+inline uint64_t SeqOf(const hexa_msg_TrackerPose& s) { return SeqOf(s.header); }
 inline uint64_t SeqOf(const hexa_msg_NodeStatus& s) { return SeqOf(s.header); }
 inline uint64_t SeqOf(const hexa_msg_OperatorCommand& s) { return s.sequence - 3000000000u; }
 inline uint64_t SeqOf(const hexa_msg_FaultEvent& s) { return s.tick - (uint64_t{1} << 45); }
@@ -275,6 +285,13 @@ inline std::string Diff(const hexa_msg_GroundTruth& g, const hexa_msg_GroundTrut
   c.Array("rod_pressure_pa", g.rod_pressure_pa, w.rod_pressure_pa);
   c.Array("spool_position_m", g.spool_position_m, w.spool_position_m);
   c.Array("applied_valve_v", g.applied_valve_v, w.applied_valve_v);
+  return c.diff;
+}
+inline std::string Diff(const hexa_msg_TrackerPose& g, const hexa_msg_TrackerPose& w) {
+  Comparer c;
+  c.Header(g.header, w.header);
+  c.Array("position_m", g.position_m, w.position_m);
+  c.Array("orientation_wxyz", g.orientation_wxyz, w.orientation_wxyz);
   return c.diff;
 }
 inline std::string Diff(const hexa_msg_OperatorCommand& g, const hexa_msg_OperatorCommand& w) {

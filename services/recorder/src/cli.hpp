@@ -45,11 +45,17 @@ struct Args {
 Args ParseArgs(const std::vector<std::string>& argv, const std::set<std::string>& value_options,
                const std::set<std::string>& flag_options);
 
+// Prints `text` when --help was given; true then (the verb returns kExitOk).
+bool PrintHelp(const Args& a, const char* text);
+// Throws a UsageError "expected <what>" unless there are exactly `n` positional arguments.
+void NeedPositionals(const Args& a, size_t n, const char* what);
+
 // --compression none|zstd (default zstd), as every writing subcommand takes it.
 McapCompression ParseCompressionOption(const Args& a);
 // --zstd-level 1..19 (default McapWriterConfig's).
 int ParseZstdLevelOption(const Args& a);
 
+// One file per verb: cli_<verb>.cpp.
 int RunInfo(const std::vector<std::string>& argv);
 int RunExport(const std::vector<std::string>& argv);
 int RunRecover(const std::vector<std::string>& argv);
