@@ -248,7 +248,6 @@ session::SessionOptions LayoutOptionsOf(const Options& o) {
   s.recorder = o.recorder;
   s.bridge = o.bridge;
   s.standby.fill(o.standby);
-  s.plant_waits_for_standbys = o.standby;
   s.rt_sched = o.rt_sched;
   s.stale_ticks = o.stale_ticks;
   s.cpus_control = o.cpus_control;

@@ -1,5 +1,7 @@
 #include "session_layout.hpp"
 
+#include <algorithm>
+
 namespace hexa::session {
 
 const ProcessSpec* SessionLayout::Find(const std::string& name) const {
@@ -17,7 +19,7 @@ std::vector<std::string> SessionLayout::Names() const {
 int DefaultRtPriority(Role role) {
   switch (role) {
     // The legs highest: the tightest deadline (10 ms lease) and the shortest work; a plant or
-    // supervisor above them on their CPU made them lapse (docs/measurements/deployment.md,
+    // supervisor above them on their CPU made them lapse (docs/measurements/deployment_lapses.md,
     // "Where the lapses' milliseconds go"). The same defaults as the services' own.
     case Role::kPlant: return 70;       // hexa_plant_sim: late, its schedule slips
     case Role::kLeg: return 80;         // hexa_leg_ctrl
@@ -51,7 +53,7 @@ ProcessSpec Recorder(const SessionOptions& o) {
                           o.cpus_recorder);
   p.verb = "record";
   // Real time: the periodic topics best effort, as the controllers read them, so that no
-  // control writer repairs what the recorder's link drops (docs/measurements/deployment.md,
+  // control writer repairs what the recorder's link drops (docs/measurements/deployment_recorder_link.md,
   // "The lossy recorder link").
   if (o.realtime) {
     p.periodic_reliability = "best-effort";
@@ -104,7 +106,12 @@ SessionLayout BuildSessionLayout(const SessionOptions& o) {
   plant.args = {"--legs", "6", "--supervisor", "--stale-ticks", std::to_string(o.stale_ticks)};
   plant.expect_recorder = o.recorder;
   if (o.recorder) plant.args.push_back("--expect-recorder");
-  if (o.plant_waits_for_standbys) plant.args.push_back("--expect-standbys");
+  // A standby must see tick 0: lockstep does not wait for it later, and one that missed ticks
+  // no longer computes its primary's commands. The plant's --expect-standbys waits for a
+  // standby of every leg; with standbys on only some legs it cannot wait for them, and their
+  // processes must be running before the plant's (docs/deployment.md, "Hot standbys").
+  if (std::all_of(o.standby.begin(), o.standby.end(), [](bool s) { return s; }))
+    plant.args.push_back("--expect-standbys");
   for (const auto& p : procs)
     if (p.role != Role::kBridge) plant.peers.push_back(p.name);
   procs.push_back(plant);

@@ -18,9 +18,9 @@ struct SessionOptions {
   bool realtime = false;       // lockstep otherwise
   bool recorder = true;        // hexa_recorder records the session
   bool bridge = false;         // hexa_bridge (Foxglove) watches it
-  std::array<bool, 6> standby{};  // legs 1..6 that have a hot-standby controller
-  // The plant waits for one live standby per leg before tick 0 (--expect-standbys).
-  bool plant_waits_for_standbys = false;
+  // Legs 1..6 that have a hot-standby controller. With a standby on every leg the plant waits
+  // for all six before tick 0 (--expect-standbys), so that each standby sees every tick.
+  std::array<bool, 6> standby{};
   bool rt_sched = true;        // real time: the processes run SCHED_FIFO
   long long stale_ticks = 15;  // ticks a leg's command may lag before the plant closes its valve
   // CPU lists ("0-1", "3"; empty: any CPU).

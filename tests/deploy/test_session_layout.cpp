@@ -142,18 +142,13 @@ TEST_P(SessionLayoutTest, LauncherAndGeneratedUnitsRunTheSameProcesses) {
     ASSERT_FALSE(unit.empty());
     EXPECT_EQ(Basename(child.argv[0]), spec->binary);
     EXPECT_EQ(Basename(unit[0]), spec->binary);
-    // The layout's role arguments, word for word, in both; but for one: the one-machine
-    // session's plant waits for a standby per leg before tick 0 (all six start with it),
-    // where a deployment may give only some legs a standby and its units start on their own
-    // (SessionOptions::plant_waits_for_standbys).
+    // The layout's role arguments, word for word, in both; with a standby on every leg the
+    // plant waits for them before tick 0 in both.
     EXPECT_TRUE(Contains(child.argv, spec->args));
-    Argv unit_args = spec->args;
-    unit_args.erase(std::remove(unit_args.begin(), unit_args.end(), "--expect-standbys"),
-                    unit_args.end());
-    EXPECT_TRUE(Contains(unit, unit_args));
+    EXPECT_TRUE(Contains(unit, spec->args));
     if (spec->role == hexa::session::Role::kPlant) {
       EXPECT_EQ(Contains(child.argv, {"--expect-standbys"}), c.standby);
-      EXPECT_FALSE(Contains(unit, {"--expect-standbys"}));
+      EXPECT_EQ(Contains(unit, {"--expect-standbys"}), c.standby);
     }
     if (!spec->verb.empty()) {
       EXPECT_EQ(child.argv.at(1), spec->verb);
@@ -217,6 +212,40 @@ TEST(SessionLayout, StartOrderPeersAndPriorities) {
   EXPECT_EQ(layout.Find("bridge")->rt_priority, 0);
   o.rt_sched = false;  // --no-rt-sched: SCHED_OTHER everywhere
   for (const auto& p : hexa::session::BuildSessionLayout(o).processes) EXPECT_EQ(p.rt_priority, 0) << p.name;
+}
+
+// The plant's --expect-standbys waits for a standby of every leg: a deployment (either
+// mode) with a standby on each of the six legs writes it into the plant's unit; one with
+// standbys on legs 4-6 only (the plant could never see leg 1's) does not.
+TEST(SessionLayout, ThePlantUnitWaitsForStandbysOnlyWhenEveryLegHasOne) {
+  for (const bool realtime : {false, true}) {
+    for (const int first_standby : {1, 4}) {
+      SCOPED_TRACE(std::string(realtime ? "realtime" : "lockstep") + ", standbys of legs " +
+                   std::to_string(first_standby) + "-6");
+      std::ostringstream os;
+      os << "name: \"standbys\"\ndomain_id: 7\nmode: " << (realtime ? "REALTIME" : "LOCKSTEP")
+         << "\nrig_file: \"/etc/hexa/rig.textproto\"\n"
+         << "host { name: \"a\" interface { name: \"eth1\" address: \"10.10.0.1/24\" }"
+         << " dds_interface: \"eth1\" process { role: PLANT } process { role: SUPERVISOR }";
+      for (int leg = 1; leg <= 6; ++leg) os << " process { role: LEG leg: " << leg << " }";
+      os << " }\nhost { name: \"b\" interface { name: \"eth1\" address: \"10.10.0.2/24\" }"
+         << " dds_interface: \"eth1\"";
+      for (int leg = first_standby; leg <= 6; ++leg)
+        os << " process { role: LEG leg: " << leg << " standby: true }";
+      os << " }\n";
+      const auto loaded = hexa::deploy::ParseDeployment(os.str(), "standbys.textproto");
+      ASSERT_TRUE(loaded.ok) << (loaded.errors.empty() ? "" : loaded.errors.front());
+      bool found = false;
+      for (const auto& plan : hexa::deploy::PlanProcesses(loaded.deployment)) {
+        if (plan.node != "plant") continue;
+        found = true;
+        const Argv argv =
+            hexa::deploy::CommandLine(loaded.deployment, plan, hexa::deploy::HostPaths{"/etc/hexa"});
+        EXPECT_EQ(Contains(argv, {"--expect-standbys"}), first_standby == 1);
+      }
+      EXPECT_TRUE(found);
+    }
+  }
 }
 
 }  // namespace
