@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Attributes the datagrams a lossy link dropped to the DDS writers whose samples they carried,
-and lays them beside what the recorder says it missed (docs/measurements/deployment.md, "The lossy
+and lays them beside what the recorder says it missed (docs/measurements/deployment_recorder_link.md, "The lossy
 recorder link").
 
   dropped_datagrams.py --pcap LOGS/dropped.pcap --recorder-log LOGS/hexa-recorder.log
