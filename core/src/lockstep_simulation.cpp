@@ -42,6 +42,7 @@ LockstepSimulation::LockstepSimulation(const LockstepConfig& config) : config_(c
                                     : ControllerModel::FromRig(config_.rig, config_.leg_controller);
   LegArray<PotentiometerCalibrationParams> potentiometer{};
   for (std::size_t i = 0; i < kNumLegs; ++i) potentiometer[i] = model.legs[i].potentiometer;
+  potentiometer_ = potentiometer;
   supervisor_ = std::make_unique<Supervisor>(model.SupervisorRig(config_.rig), config_.supervisor,
                                              potentiometer);
   for (std::size_t i = 0; i < kNumLegs; ++i) {
@@ -105,6 +106,8 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
   }
   if (config_.coupled_leg_feedback) {
     RunLegsCoupled(leg_in);
+  } else if (config_.platform_observer_velocity) {
+    RunLegsWithPlatformObserver(leg_in);
   } else {
     for (std::size_t i = 0; i < kNumLegs; ++i) legs_[i]->Update(leg_in[i], leg_out_[i]);
   }
@@ -136,6 +139,32 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
   const PlantStatus status = plant_->Step(valve_v, config_.tick_s);
   if (status == PlantStatus::kOk) ++tick_;
   return status;
+}
+
+void LockstepSimulation::RunLegsWithPlatformObserver(const LegArray<LegControllerInput>& in) {
+  if (!platform_observer_) {
+    PlatformStateObserverConfig c = PlatformStateObserverConfig::FromRig(supervisor_->rig());
+    c.disturbance_rate_m_s3 = config_.platform_observer_disturbance_rate_m_s3;
+    platform_observer_.emplace(c);
+  }
+  PlatformStateObserverInput obs_in;
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    const double mid_m = supervisor_->rig().cylinder.mid_stroke_length_m;
+    obs_in.length_m[i] = mid_m + (in[i].length_m - mid_m - potentiometer_[i].offset_m) / potentiometer_[i].gain;
+    obs_in.cap_pressure_pa[i] = in[i].cap_pressure_pa;
+    obs_in.rod_pressure_pa[i] = in[i].rod_pressure_pa;
+  }
+  const auto& q = plant_before_.imu.q_BP_measured;
+  obs_in.orientation_wxyz = {q.w(), q.x(), q.y(), q.z()};
+  PlatformStateObserverOutput obs;
+  platform_observer_->Update(obs_in, obs);
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    if (obs.valid) {
+      legs_[i]->Update(in[i], leg_out_[i], obs.velocity_m_s[i]);
+    } else {
+      legs_[i]->Update(in[i], leg_out_[i]);
+    }
+  }
 }
 
 void LockstepSimulation::UpdateCoupling(const Pose& pose) {

@@ -22,6 +22,7 @@
 #include "hexa/core/metrics.hpp"
 #include "hexa/core/platform_dynamics.hpp"
 #include "hexa/core/platform_plant.hpp"
+#include "hexa/core/platform_state_observer.hpp"
 #include "hexa/core/supervisor.hpp"
 
 namespace hexa {
@@ -61,6 +62,12 @@ struct LockstepConfig {
   // (M_ls = V diag(m_k) V^T): modes heavier than m_ref get the single-mass loop, lighter ones
   // keep the uncoupled gain.
   bool coupled_raise_only = false;
+  // Study (docs/controller.md "Platform state observer"; false = the system): every tick a
+  // PlatformStateObserver of the supervisor's rig runs on the plant's sensor outputs (the
+  // legs' calibrated lengths, pressures, the IMU) and each BS-SMC's feedback part takes its leg
+  // velocity from it instead of eq 40. In process only.
+  bool platform_observer_velocity = false;
+  double platform_observer_disturbance_rate_m_s3 = PlatformStateObserverConfig{}.disturbance_rate_m_s3;
   double tick_s = 0.001;
   int supervisor_every_ticks = 5;
   void Validate() const;  // throws std::invalid_argument naming the field and value
@@ -113,6 +120,10 @@ class LockstepSimulation {
   Matrix6d coupling_inverse_mass_ = Matrix6d::Identity();  // M_ls^-1 (the observers' force)
   LegArray<double> coupling_mass_kg_{};
   void UpdateCoupling(const Pose& pose);
+  // platform_observer_velocity: the observer and the legs' potentiometer calibrations.
+  std::optional<PlatformStateObserver> platform_observer_;
+  LegArray<PotentiometerCalibrationParams> potentiometer_{};
+  void RunLegsWithPlatformObserver(const LegArray<LegControllerInput>& in);
   void RunLegsCoupled(const LegArray<LegControllerInput>& in);
 };
 
