@@ -806,6 +806,11 @@ void ZSplit(const hexa::LockstepConfig& config, PaperMotion motion, int periods)
   double sq_true = 0.0, sq_lin = 0.0, sq_diff = 0.0;
   std::array<double, 6> sq_mode{}, cross_mode{}, sq_leg_mode{}, sq_home{}, sq_leak{};
   long n = 0;
+  std::vector<double> t_s, heave_m;  // the desired motion's heave coordinate V_heave^T l_d
+  int heave = 0;
+  for (int k = 0; k < 6; ++k) {
+    if (std::abs((j_home_inv * v.col(k))[2]) > std::abs((j_home_inv * v.col(heave))[2])) heave = k;
+  }
   ForEachTrackingTick(sim, start, config.rig.geometry,
                       [&](const hexa::PlatformPlantOutput& p, double, const hexa::TrajectorySample& d,
                           const hexa::LegArray<double>&, const hexa::LegArray<double>&) {
@@ -817,6 +822,10 @@ void ZSplit(const hexa::LockstepConfig& config, PaperMotion motion, int periods)
     Eigen::Vector<double, 6> e;
     for (int i = 0; i < 6; ++i) e[i] = p.truth.length_m[i] - ld[i];
     const double z_true = p.truth.pose.p_BP_B_m.z() - d.pose.p_BP_B_m.z();
+    t_s.push_back(static_cast<double>(n) * config.tick_s);
+    double h = 0.0;
+    for (int i = 0; i < 6; ++i) h += v(i, heave) * ld[static_cast<std::size_t>(i)];
+    heave_m.push_back(h);
     const double z_lin = (j_inv * e)[2];
     sq_true += z_true * z_true;
     sq_lin += z_lin * z_lin;
@@ -850,6 +859,18 @@ void ZSplit(const hexa::LockstepConfig& config, PaperMotion motion, int periods)
                 sq_lin > 0 ? cross_mode[k] / sq_lin : 0.0, 100 * std::sqrt(sq_home[k] / dn),
                 100 * std::sqrt(sq_leak[k] / dn));
   }
+  // The desired legs' common (heave) motion: its amplitude at 1-5 x the motion's frequency.
+  const double w = MotionOmega(motion);
+  std::printf("desired heave coordinate, amplitude mm at 1-5 x f:");
+  for (int hk = 1; hk <= 5; ++hk) {
+    double a = 0.0, b = 0.0;
+    for (std::size_t s = 0; s < t_s.size(); ++s) {
+      a += heave_m[s] * std::sin(hk * w * t_s[s]);
+      b += heave_m[s] * std::cos(hk * w * t_s[s]);
+    }
+    std::printf(" %.4f", 1000.0 * 2.0 * std::hypot(a, b) / static_cast<double>(t_s.size()));
+  }
+  std::printf("\n");
 }
 
 

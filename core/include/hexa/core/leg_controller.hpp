@@ -134,7 +134,7 @@ class LegController {
   explicit LegController(const LegControllerConfig& config);  // validates (throws)
 
   void Update(const LegControllerInput& input, LegControllerOutput& output);
-  // Study (LockstepConfig::platform_observer_velocity): as Update, the BS-SMC's feedback part
+  // Study (studies/platform_observer_feedback): as Update, the BS-SMC's feedback part
   // with `feedback_velocity_m_s` (BsSmcInput::feedback_velocity_m_s) as the leg's velocity.
   void Update(const LegControllerInput& input, LegControllerOutput& output, double feedback_velocity_m_s);
 
