@@ -1,6 +1,8 @@
 // hexa_operator: sends one operator command to the supervisor (reliable, keep-all).
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <thread>
 #include <cstring>
 #include <exception>
@@ -12,6 +14,7 @@
 #include "hexa/services/exit_code.hpp"
 #include "hexa/services/logging.hpp"
 #include "hexa/services/node.hpp"
+#include "hexa/services/operator_motion_wire.hpp"
 #include "hexa/services/text.hpp"
 
 namespace {
@@ -22,8 +25,9 @@ namespace exit_code = hexa::exit_code;
 struct Request {
   int domain = 0;
   double wait_s = 0, linger_s = 0, answer_wait_s = 0;
-  std::string what;  // start stop reset home shutdown
+  std::string what;  // start stop reset home shutdown jog goal
   bool any_reader = false;
+  double jog_duration_s = 0, jog_rate_hz = 0;  // jog: how long and how often to send it
   hexa_msg_OperatorCommand cmd{};
 };
 
@@ -48,7 +52,82 @@ void AddOptions(hexa::cli::Parser& cli) {
   cli.AddOption("answer-wait", "s",
                 "how long to wait for the supervisor's answer (accepted / refused) after the "
                 "command was acknowledged; it answers at its next 5 ms tick", "2");
-  cli.AllowPositional("start|stop|reset|home|shutdown", 1);
+  cli.AddChoice("frame", {"work", "tool"},
+                "jog: the twist's axes: work (fixed to the base; the base frame unless a work "
+                "frame is set) or tool (turning with the platform)", "work");
+  cli.AddOption("velocity-m-s", "vx,vy,vz",
+                "jog: the pivot's velocity in the frame's axes, m/s (the supervisor limits each axis "
+                "to its jog speed, 0.05 m/s by default)", "0,0,0");
+  cli.AddOption("angular-velocity-rad-s", "wx,wy,wz",
+                "jog: the angular velocity in the frame's axes, rad/s (0.2 rad/s by default)", "0,0,0");
+  cli.AddOption("duration-s", "s",
+                "jog: how long to keep sending it; then nothing more is sent and the supervisor's "
+                "dead-man (0.25 s) brings the platform to rest", "1");
+  cli.AddOption("rate-hz", "hz", "jog: how often to send it (at least 10 Hz: the dead-man is 0.25 s)",
+                "50");
+  cli.AddOption("position-m", "x,y,z", "goal: the platform's position in the base frame, m");
+  cli.AddOption("rpy-deg", "roll,pitch,yaw",
+                "goal: the platform's orientation, degrees (R = Rz(yaw) Ry(pitch) Rx(roll))", "0,0,0");
+  cli.AddOption("quaternion", "w,x,y,z", "goal: the orientation as a unit quaternion instead of --rpy-deg");
+  cli.AllowPositional("start|stop|reset|home|shutdown|jog|goal", 1);
+}
+
+// "a,b,c" -> N finite numbers; false with `error` naming the option.
+template <std::size_t N>
+bool ParseList(const std::string& option, const std::string& text, double (&out)[N], std::string& error) {
+  std::size_t pos = 0;
+  for (std::size_t k = 0; k < N; ++k) {
+    const std::size_t comma = text.find(',', pos);
+    const std::string item = text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+    char* end = nullptr;
+    out[k] = std::strtod(item.c_str(), &end);
+    if (item.empty() || end == item.c_str() || *end != '\0' || !std::isfinite(out[k]) ||
+        (k + 1 < N) == (comma == std::string::npos)) {
+      error = "--" + option + " '" + text + "': expected " + std::to_string(N) +
+              " finite numbers separated by commas";
+      return false;
+    }
+    pos = comma + 1;
+  }
+  return true;
+}
+
+// The jog's or the goal's fields from the command line (checked as the supervisor checks them).
+bool ReadMotion(hexa::cli::Parser& cli, Request& r, std::string& error) {
+  hexa_msg_OperatorCommand& cmd = r.cmd;
+  char why[160] = "";
+  if (r.what == "jog") {
+    const auto duration = cli.GetDouble("duration-s", 0, 3600);
+    const auto rate = cli.GetDouble("rate-hz", 10, 1000);
+    if (!duration || !rate) return (error = cli.error(), false);
+    r.jog_duration_s = *duration;
+    r.jog_rate_hz = *rate;
+    cmd.jog_frame = cli.Get("frame") == "tool" ? hexa_msg_JOG_FRAME_TOOL : hexa_msg_JOG_FRAME_WORK;
+    if (!ParseList("velocity-m-s", cli.Get("velocity-m-s"), cmd.jog_velocity_m_s, error) ||
+        !ParseList("angular-velocity-rad-s", cli.Get("angular-velocity-rad-s"),
+                   cmd.jog_angular_velocity_rad_s, error))
+      return false;
+    hexa::JogRequest jog;
+    if (!hexa::wire::JogFromWire(cmd, jog, why)) return (error = why, false);
+    return true;
+  }
+  if (!cli.Has("position-m")) return (error = "goal needs --position-m x,y,z", false);
+  if (!ParseList("position-m", cli.Get("position-m"), cmd.goal_position_m, error)) return false;
+  if (cli.Has("quaternion")) {
+    if (!ParseList("quaternion", cli.Get("quaternion"), cmd.goal_orientation_wxyz, error)) return false;
+  } else {
+    double rpy_deg[3];
+    if (!ParseList("rpy-deg", cli.Get("rpy-deg"), rpy_deg, error)) return false;
+    const Eigen::Vector3d rpy_rad = Eigen::Vector3d(rpy_deg[0], rpy_deg[1], rpy_deg[2]) * (M_PI / 180.0);
+    const Eigen::Quaterniond q(hexa::RotationFromRollPitchYaw(rpy_rad));
+    cmd.goal_orientation_wxyz[0] = q.w();
+    cmd.goal_orientation_wxyz[1] = q.x();
+    cmd.goal_orientation_wxyz[2] = q.y();
+    cmd.goal_orientation_wxyz[3] = q.z();
+  }
+  hexa::Pose goal;
+  if (!hexa::wire::GoalFromWire(cmd, goal, why)) return (error = why, false);
+  return true;
 }
 
 // Reads the command line into `r`: -1 to go on, else the exit code (help, usage error).
@@ -77,10 +156,19 @@ int ReadRequest(hexa::cli::Parser& cli, int argc, char** argv, Request& r) {
   else if (what == "reset") cmd.kind = hexa_msg_OPERATOR_RESET;
   else if (what == "home") cmd.kind = hexa_msg_OPERATOR_HOME;
   else if (what == "shutdown") cmd.kind = hexa_msg_OPERATOR_SHUTDOWN;
+  else if (what == "jog") cmd.kind = hexa_msg_OPERATOR_JOG;
+  else if (what == "goal") cmd.kind = hexa_msg_OPERATOR_GOAL;
   else {
-    std::fprintf(stderr, "error: unknown command '%s' (start stop reset home shutdown)\n",
+    std::fprintf(stderr, "error: unknown command '%s' (start stop reset home shutdown jog goal)\n",
                  what.c_str());
     return exit_code::kUsage;
+  }
+  if (what == "jog" || what == "goal") {
+    std::string error;
+    if (!ReadMotion(cli, r, error)) {
+      std::fprintf(stderr, "error: %s\n(see --help)\n", error.c_str());
+      return exit_code::kUsage;
+    }
   }
   // A CSV path must reach the supervisor exactly: refuse what the wire cannot carry unchanged
   // (OperatorCommand.csv_path is an IDL string<256>, recorded as a proto3 string: UTF-8).
@@ -178,12 +266,37 @@ int AwaitAnswer(const Request& r, const hexa::comm::Participant& participant,
   return exit_code::kNotAnswered;
 }
 
+// After the first jog was accepted: the same jog every 1 / rate until the duration is over,
+// then nothing (the supervisor's dead-man brings the platform to rest).
+int StreamJog(Request& r, hexa::comm::Writer<hexa_msg_OperatorCommand>& writer, spdlog::logger& log) {
+  const auto period = std::chrono::duration<double>(1.0 / r.jog_rate_hz);
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(r.jog_duration_s);
+  auto next = std::chrono::steady_clock::now();
+  int sent = 1;
+  while ((next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(period)) < end) {
+    std::this_thread::sleep_until(next);
+    ++r.cmd.sequence;
+    writer.WriteNow(r.cmd);
+    ++sent;
+  }
+  dds_wait_for_acks(writer.get(), DDS_SECS(2));
+  log.info("jog: {} messages in {:.3f} s, then let go (the dead-man stops the platform)", sent,
+           r.jog_duration_s);
+  return exit_code::kOk;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   hexa::cli::Parser cli("hexa_operator",
                         "Sends an operator command to the supervisor: hexa_operator [options] "
-                        "start|stop|reset|home|shutdown\n"
+                        "start|stop|reset|home|shutdown|jog|goal\n"
+                        "  jog: a twist of the pivot (--velocity-m-s, --angular-velocity-rad-s, "
+                        "--frame) sent every 1/--rate-hz for --duration-s; at rest 0.25 s (the "
+                        "dead-man) plus the braking time after the last one.\n"
+                        "  goal: the platform's pose in the base frame (--position-m, --rpy-deg "
+                        "or --quaternion), reached by a jerk-limited motion; refused (exit 4, "
+                        "the reason logged) when it or the path to it leaves the soft limits.\n"
                         "Exit status: 0 the supervisor accepted the command (with --to any-reader: "
                         "acknowledged by every matched reader), 1 no supervisor (with --to "
                         "any-reader: no reader) matched within --wait (or a DDS error), 2 bad "
@@ -215,7 +328,9 @@ int main(int argc, char** argv) {
         participant, status_topic, hexa::comm::EndpointRole::kControlReader, status_qos, 64);
     r.cmd.sequence = static_cast<uint32_t>(hexa::comm::RealtimeNow_ns() & 0xffffffff);
     if (int rc = SendAcknowledged(r, participant, writer, *log); rc >= 0) return rc;
-    return AwaitAnswer(r, participant, status_reader, *log);
+    const int rc = AwaitAnswer(r, participant, status_reader, *log);
+    if (rc != exit_code::kOk || r.what != "jog") return rc;
+    return StreamJog(r, writer, *log);
   } catch (const std::exception& e) {
     log->error("{}", e.what());
     return exit_code::kRunError;
