@@ -127,7 +127,7 @@ void SupervisorNode::TakeOperatorCommands() {
       case hexa_msg_OPERATOR_HOME: pending_command_ = OperatorCommandKind::kHome; break;
       case hexa_msg_OPERATOR_JOG:
       case hexa_msg_OPERATOR_GOAL:
-        if (!TakeMotionCommand(c)) return;
+        if (!TakeMotionCommand(c, operator_reader_.info(k).publication_handle)) return;
         break;
       case hexa_msg_OPERATOR_SHUTDOWN:
         AnswerCommand(c.sequence, "shutdown", CommandAnswer::kAccepted, "");
@@ -150,7 +150,7 @@ void SupervisorNode::TakeOperatorCommands() {
   });
 }
 
-bool SupervisorNode::TakeMotionCommand(const hexa_msg_OperatorCommand& c) {
+bool SupervisorNode::TakeMotionCommand(const hexa_msg_OperatorCommand& c, dds_instance_handle_t writer) {
   char why[160] = "";
   if (c.kind == hexa_msg_OPERATOR_JOG) {
     JogRequest jog;
@@ -158,14 +158,19 @@ bool SupervisorNode::TakeMotionCommand(const hexa_msg_OperatorCommand& c) {
       AnswerCommand(c.sequence, "jog", CommandAnswer::kRefused, why);
       return false;
     }
-    ++jog_messages_;
-    if (pending_command_ == OperatorCommandKind::kJog) {
+    // A writer's stream of jog messages is answered once, at its first: a new writer (another
+    // hexa_operator, the bridge) is told whether its jog was taken, even while another jogs.
+    const bool new_writer = writer != jog_writer_;
+    if (pending_command_ == OperatorCommandKind::kJog && !new_writer) {
       pending_jog_ = jog;  // the newest twist; the pending one's answer still goes to its sender
       return false;
     }
-    if (pending_command_ != OperatorCommandKind::kNone) return false;  // that command goes first
+    if (pending_command_ != OperatorCommandKind::kNone && pending_command_ != OperatorCommandKind::kJog)
+      return false;  // that command goes first
     pending_jog_ = jog;
     pending_command_ = OperatorCommandKind::kJog;
+    answer_jog_ = new_writer;
+    jog_writer_ = writer;
     return true;
   }
   Pose goal;
@@ -187,7 +192,8 @@ void SupervisorNode::FinishCommand(SupervisorState before, std::uint64_t tick, d
   const CommandResult result = output_.command_result;
   const bool accepted = result == CommandResult::kAccepted;
   if (cmd == OperatorCommandKind::kJog && accepted) last_jog_time_s_ = time_s;
-  if (cmd == OperatorCommandKind::kJog && accepted && before == SupervisorState::kJogging) {
+  if (cmd == OperatorCommandKind::kJog && accepted && before == SupervisorState::kJogging &&
+      !answer_jog_) {
     pending_from_operator_ = false;  // the jog goes on: nothing to answer
     return;
   }

@@ -102,6 +102,7 @@ bool ReadMotion(hexa::cli::Parser& cli, Request& r, std::string& error) {
     if (!duration || !rate) return (error = cli.error(), false);
     r.jog_duration_s = *duration;
     r.jog_rate_hz = *rate;
+    r.linger_s = 0;  // the stream follows at once: a linger would let the dead-man stop it
     cmd.jog_frame = cli.Get("frame") == "tool" ? hexa_msg_JOG_FRAME_TOOL : hexa_msg_JOG_FRAME_WORK;
     if (!ParseList("velocity-m-s", cli.Get("velocity-m-s"), cmd.jog_velocity_m_s, error) ||
         !ParseList("angular-velocity-rad-s", cli.Get("angular-velocity-rad-s"),
@@ -231,6 +232,44 @@ int SendAcknowledged(Request& r, const hexa::comm::Participant& participant,
   return -1;
 }
 
+// Takes the status samples that came; the supervisor's answer to command `sequence` if one of
+// them holds it (its NodeStatus detail), else kNone.
+hexa::task_space::CommandAnswer PollAnswer(hexa::comm::Reader<hexa_msg_NodeStatus>& status_reader,
+                                           std::uint32_t sequence, std::string& detail) {
+  using hexa::task_space::CommandAnswer;
+  while (status_reader.Take() > 0) {
+    for (std::size_t k = 0; k < status_reader.count(); ++k) {
+      if (!status_reader.info(k).valid_data) continue;
+      const auto& st = status_reader.sample(k);
+      if (std::strcmp(st.node_name, "supervisor") != 0) continue;
+      const CommandAnswer answer = hexa::task_space::ParseCommandAnswer(st.detail, sequence);
+      if (answer != CommandAnswer::kNone) {
+        detail = st.detail;
+        return answer;
+      }
+    }
+  }
+  return CommandAnswer::kNone;
+}
+
+// The exit code for an answer (kNone: none within --answer-wait), logged.
+int ExitForAnswer(const Request& r, hexa::task_space::CommandAnswer answer, const std::string& detail,
+                  spdlog::logger& log) {
+  using hexa::task_space::CommandAnswer;
+  if (answer == CommandAnswer::kAccepted) {
+    log.info("sent {} to domain {}: the supervisor {}", r.what, r.domain, detail);
+    return exit_code::kOk;
+  }
+  if (answer != CommandAnswer::kNone) {
+    log.error("sent {} to domain {}: the supervisor {} (exit 4)", r.what, r.domain, detail);
+    return exit_code::kRefused;
+  }
+  log.error("sent {} to domain {} and it was acknowledged, but the supervisor did not answer "
+            "within {} s (--answer-wait; it answers once it runs, at its next tick): it may "
+            "not have acted on it (exit 3)", r.what, r.domain, r.answer_wait_s);
+  return exit_code::kNotAnswered;
+}
+
 // The supervisor's answer to this command (its sequence number) in its NodeStatus detail.
 int AwaitAnswer(const Request& r, const hexa::comm::Participant& participant,
                 hexa::comm::Reader<hexa_msg_NodeStatus>& status_reader, spdlog::logger& log) {
@@ -239,50 +278,50 @@ int AwaitAnswer(const Request& r, const hexa::comm::Participant& participant,
   answer_ws.Attach(status_reader.data_condition(), 1);
   const int64_t answer_end =
       hexa::node::MonotonicNow_ns() + static_cast<int64_t>(r.answer_wait_s * 1e9);
+  std::string detail;
   for (;;) {
-    while (status_reader.Take() > 0) {
-      for (std::size_t k = 0; k < status_reader.count(); ++k) {
-        if (!status_reader.info(k).valid_data) continue;
-        const auto& st = status_reader.sample(k);
-        if (std::strcmp(st.node_name, "supervisor") != 0) continue;
-        const std::string detail = st.detail;
-        const CommandAnswer answer = hexa::task_space::ParseCommandAnswer(detail, r.cmd.sequence);
-        if (answer == CommandAnswer::kAccepted) {
-          log.info("sent {} to domain {}: the supervisor {}", r.what, r.domain, detail);
-          return exit_code::kOk;
-        }
-        if (answer != CommandAnswer::kNone) {
-          log.error("sent {} to domain {}: the supervisor {} (exit 4)", r.what, r.domain, detail);
-          return exit_code::kRefused;
-        }
-      }
-    }
-    if (hexa::node::MonotonicNow_ns() > answer_end) break;
+    const CommandAnswer answer = PollAnswer(status_reader, r.cmd.sequence, detail);
+    if (answer != CommandAnswer::kNone) return ExitForAnswer(r, answer, detail, log);
+    if (hexa::node::MonotonicNow_ns() > answer_end) return ExitForAnswer(r, answer, detail, log);
     answer_ws.Wait(DDS_MSECS(20));
   }
-  log.error("sent {} to domain {} and it was acknowledged, but the supervisor did not answer "
-            "within {} s (--answer-wait; it answers once it runs, at its next tick): it may "
-            "not have acted on it (exit 3)", r.what, r.domain, r.answer_wait_s);
-  return exit_code::kNotAnswered;
 }
 
-// After the first jog was accepted: the same jog every 1 / rate until the duration is over,
-// then nothing (the supervisor's dead-man brings the platform to rest).
-int StreamJog(Request& r, hexa::comm::Writer<hexa_msg_OperatorCommand>& writer, spdlog::logger& log) {
-  const auto period = std::chrono::duration<double>(1.0 / r.jog_rate_hz);
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(r.jog_duration_s);
-  auto next = std::chrono::steady_clock::now();
+// A jog: its first message was acknowledged; the same jog every 1 / rate until the duration is
+// over, then nothing (the supervisor's dead-man brings the platform to rest). The stream does not
+// wait for the supervisor's answer to the first message (the dead-man would stop the platform
+// meanwhile): the answer is looked for between messages, and a refusal ends the stream.
+int StreamJog(Request& r, hexa::comm::Writer<hexa_msg_OperatorCommand>& writer,
+              hexa::comm::Reader<hexa_msg_NodeStatus>& status_reader, spdlog::logger& log) {
+  using hexa::task_space::CommandAnswer;
+  using Clock = std::chrono::steady_clock;
+  const std::uint32_t first = r.cmd.sequence;
+  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / r.jog_rate_hz));
+  const auto start = Clock::now();
+  const auto end = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(r.jog_duration_s));
+  const auto answer_end = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(r.answer_wait_s));
+  CommandAnswer answer = CommandAnswer::kNone;
+  std::string detail;
   int sent = 1;
-  while ((next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(period)) < end) {
+  for (auto next = start + period;; next += period) {
+    if (answer == CommandAnswer::kNone) answer = PollAnswer(status_reader, first, detail);
+    if (answer == CommandAnswer::kRefused || answer == CommandAnswer::kRejected) break;
+    if (answer == CommandAnswer::kNone && Clock::now() > answer_end) break;
+    if (next >= end) {
+      if (answer != CommandAnswer::kNone) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the stream is over; the answer is due
+      continue;
+    }
     std::this_thread::sleep_until(next);
     ++r.cmd.sequence;
     writer.WriteNow(r.cmd);
     ++sent;
   }
   dds_wait_for_acks(writer.get(), DDS_SECS(2));
-  log.info("jog: {} messages in {:.3f} s, then let go (the dead-man stops the platform)", sent,
-           r.jog_duration_s);
-  return exit_code::kOk;
+  log.info("jog: {} message(s) in {:.3f} s, then let go (the supervisor's dead-man stops the "
+           "platform)", sent, std::chrono::duration<double>(Clock::now() - start).count());
+  r.cmd.sequence = first;
+  return ExitForAnswer(r, answer, detail, log);
 }
 
 }  // namespace
@@ -328,9 +367,8 @@ int main(int argc, char** argv) {
         participant, status_topic, hexa::comm::EndpointRole::kControlReader, status_qos, 64);
     r.cmd.sequence = static_cast<uint32_t>(hexa::comm::RealtimeNow_ns() & 0xffffffff);
     if (int rc = SendAcknowledged(r, participant, writer, *log); rc >= 0) return rc;
-    const int rc = AwaitAnswer(r, participant, status_reader, *log);
-    if (rc != exit_code::kOk || r.what != "jog") return rc;
-    return StreamJog(r, writer, *log);
+    if (r.what == "jog") return StreamJog(r, writer, status_reader, *log);
+    return AwaitAnswer(r, participant, status_reader, *log);
   } catch (const std::exception& e) {
     log->error("{}", e.what());
     return exit_code::kRunError;

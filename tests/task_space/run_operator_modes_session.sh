@@ -50,9 +50,11 @@ wait_log() {  # wait_log PATTERN COUNT: until supervisor.log holds COUNT lines m
   return 1
 }
 
-run jog_x 0 jog --velocity-m-s 0.04,0,0 --duration-s 1.5 --rate-hz 50
+# Short (wall time; lockstep runs faster than real time here): let go well before the box's
+# x = +0.1 m, so that the braking is what is measured.
+run jog_x 0 jog --velocity-m-s 0.04,0,0 --duration-s 0.5 --rate-hz 50
 check "wait_log 'jog at rest at t' 1" "the jog came to rest (supervisor.log)"
-run jog_tool 0 jog --frame tool --velocity-m-s 0,0.03,0 --duration-s 1 --rate-hz 50
+run jog_tool 0 jog --frame tool --velocity-m-s 0,0.03,0 --duration-s 0.5 --rate-hz 50
 check "wait_log 'jog at rest at t' 2" "the tool-frame jog came to rest"
 add() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.6f", a + b }'; }
 gx=$(add "$rx" 0.02); gy=$(add "$ry" -0.015); gz=$(add "$rz" 0.01)
@@ -66,9 +68,10 @@ run goal_not_unit 2 goal --position-m "$gx,$gy,$gz" --quaternion 1,0,0,0.1
 check "grep -q 'not a unit quaternion' '$out/op_goal_not_unit.log'" "a non-unit quaternion is refused before sending"
 run jog_absurd 2 jog --velocity-m-s 5,0,0
 sleep 1
-run shutdown 0 shutdown
+# Ends the session (its answer may be lost as the supervisor leaves: exit 0 or 3).
+"$op" --domain "$domain" --wait 30 shutdown > "$out/op_shutdown.log" 2>&1 || true
 rc=0; wait "$session" || rc=$?
-echo "hexa_session exit status $rc"
+check "[ $rc -eq 0 ]" "hexa_session ends 0 after the shutdown (got $rc)"
 
 grep -E "jog at rest|goal motion at rest|goal started|goal #|refused" "$out/supervisor.log" || true
 # Ground truth: pose.csv (time, desired, true, measured); the supervisor's log gives the times.
@@ -102,21 +105,30 @@ print(f"jog +x: from t = {t0:.3f} s, last message t = {last_t:.3f} s, at rest {a
       f"{moved[2]*1e3:.2f}) mm; after the last message setpoint {1e3*(d_rest[0]-d_last[0]):.2f} mm, "
       f"truth {1e3*(p_rest[0]-p_last[0]):.2f} mm (bound 15.2 mm)")
 expect(after_s <= 0.515 + 1e-9, "the jog was at rest within the dead-man time plus braking")
-expect(moved[0] > 0.04 and math.hypot(moved[1], moved[2]) < 0.1 * moved[0], "the jog moved the platform along +x")
+expect(moved[0] > 0.01 and math.hypot(moved[1], moved[2]) < 0.15 * moved[0], "the jog moved the platform along +x")
+expect(d_last[0] < 0.1 - 0.0152, "let go before the box limit (what stopped it is the braking)")
 expect(d_rest[0] - d_last[0] <= 0.0152 + 1e-6, "setpoint travel after the last message within the braking bound")
 expect(p_rest[0] - p_last[0] <= 0.0152 + 0.004, "truth travel after the last message within the bound + 4 mm")
-# Goal: the platform within 8 mm / 8 mrad of it (the estimator's static offset included).
+# Goal: the platform's move within 4 mm of the one asked, and at rest on the goal within the
+# estimator's static offset from the truth (measured at the goal's start) + 4 mm, 8 mrad.
 g = re.search(r"goal #[0-9]+: \(([-0-9.]+), ([-0-9.]+), ([-0-9.]+)\) m, \(([-0-9.]+), ([-0-9.]+), ([-0-9.]+)\) rad", log)
 goal = [float(g.group(k)) for k in range(1, 7)]
-gr = re.search(r"goal motion at rest at t = ([0-9.]+) s", log)
-tg = float(gr.group(1))
-true_g = at(tg + 0.5, TRUE)
-des_g = at(tg, DES)
+tg0 = float(re.search(r"goal started at t = ([0-9.]+) s", log).group(1))
+tg = float(re.search(r"goal motion at rest at t = ([0-9.]+) s", log).group(1))
+true0, des0 = at(tg0, TRUE), at(tg0, DES)
+true_g, des_g = at(tg + 0.5, TRUE), at(tg, DES)
+offset = math.dist(true0[:3], des0[:3])
+asked = [goal[k] - des0[k] for k in range(3)]
+moved = [true_g[k] - true0[k] for k in range(3)]
+err_move = math.dist(asked, moved)
 err_p = math.dist(true_g[:3], goal[:3]); err_r = max(abs(true_g[k] - goal[k]) for k in range(3, 6))
-print(f"goal: setpoint at rest {1e3*math.dist(des_g[:3], goal[:3]):.4f} mm from it; truth 0.5 s later "
-      f"{err_p*1e3:.2f} mm, {err_r*1e3:.2f} mrad (tolerance 8 mm, 8 mrad)")
+print(f"goal: planned from t = {tg0:.3f} s, at rest t = {tg:.3f} s; setpoint {1e3*math.dist(des_g[:3], goal[:3]):.4f} mm "
+      f"from it; platform 0.5 s later {err_p*1e3:.2f} mm, {err_r*1e3:.2f} mrad from it (static offset of "
+      f"the estimate from the truth before: {offset*1e3:.2f} mm); move {1e3*math.hypot(*asked):.2f} mm asked, "
+      f"{err_move*1e3:.2f} mm off")
 expect(math.dist(des_g[:3], goal[:3]) < 1e-4, "the setpoint ended on the goal (to the log's 0.1 mm)")
-expect(err_p < 0.008 and err_r < 0.008, "the platform reached the goal within 8 mm and 8 mrad")
+expect(err_move < 0.004, "the platform's move within 4 mm of the one asked")
+expect(err_p < offset + 0.004 and err_r < 0.008, "the platform at rest on the goal within the static offset + 4 mm, 8 mrad")
 sys.exit(0 if ok else 1)
 EOF
 echo "operator_modes_session: $([ $fail -eq 0 ] && echo PASSED || echo FAILED)"
