@@ -8,8 +8,8 @@
 //    trajectory on stop; meanwhile the supervisor stays IDLE;
 // 3. 1000 messages at once (stop, which changes nothing while IDLE): at most the
 //    burst (10) pass, the rest is refused for rate with a status;
-// 4. jog (+x, work frame, 20 Hz for 1.5 s): the supervisor JOGGING, the desired pose moving
-//    along +x, back to IDLE after the client lets go; a tool-frame jog likewise; bad jogs and
+// 4. jog (+x, work frame, 20 Hz until the platform moved 10 mm): the supervisor JOGGING, the
+//    desired pose moving along +x, back to IDLE after the client lets go; a tool-frame jog likewise; bad jogs and
 //    goals refused (absent field, non-unit quaternion, absurd); a goal 2 cm / 1 cm away:
 //    GOAL, then IDLE on it; a goal outside the soft limits: refused by the supervisor (IDLE);
 // 5. start (combined): the supervisor leaves IDLE (BLENDING, then TRACKING); an info status
@@ -122,24 +122,32 @@ try {
   check(forwarded + refusedCount === 1000, `every message forwarded or counted as refused (${forwarded} + ${refusedCount})`);
 
   // ---- 4: jog and goal ---------------------------------------------------------------------
-  const jogFor = async (ms, text) => {
+  // Jog messages every 50 ms until `done()` (or 60 s): the session runs in lockstep, whose
+  // simulated time may pass slower or faster than the wall clock, so the jog is held until the
+  // platform has moved rather than for a wall-clock time; then let go.
+  const jogUntil = async (done, text, what) => {
     const t0 = Date.now();
-    while (Date.now() - t0 < ms) {
+    while (!done() && Date.now() - t0 < 60000) {
       client.sendMessage(op, enc.encode(text));
       await sleep(50);
     }
+    check(done(), what);
   };
   const x0 = c.desired[0];
-  await jogFor(1500, '{"command":"jog","velocity_m_s":[0.03,0,0],"angular_velocity_rad_s":[0,0,0]}');
-  check(c.states.includes("JOGGING"), `jog: the supervisor JOGGING (${c.states.join(" -> ")})`);
-  await until(() => state() === "IDLE", 30000, "the supervisor IDLE after the jog was let go");
+  await jogUntil(() => c.states.includes("JOGGING") && c.desired[0] - x0 > 0.01,
+                 '{"command":"jog","velocity_m_s":[0.03,0,0],"angular_velocity_rad_s":[0,0,0]}',
+                 "jog +x: the supervisor JOGGING and the desired pose 10 mm along +x");
+  await until(() => state() === "IDLE", 60000, "the supervisor IDLE after the jog was let go");
   const dx = c.desired[0] - x0;
-  console.log(`jog +x 3 cm/s for 1.5 s (wall time): desired x moved ${(dx * 1e3).toFixed(2)} mm`);
-  check(dx > 0.005, `the jog moved the platform along +x (${(dx * 1e3).toFixed(2)} mm)`);
+  console.log(`jog +x 3 cm/s: IDLE again after the client let go; desired x moved ${(dx * 1e3).toFixed(2)} mm, ` +
+              `y ${((c.desired[1]) * 1e3).toFixed(2)} mm`);
+  check(dx > 0.01 && dx < 0.05, `the jog moved the platform along +x and stopped (${(dx * 1e3).toFixed(2)} mm)`);
   const y0 = c.desired[1];
-  await jogFor(1000, '{"command":"jog","frame":"tool","velocity_m_s":[0,0.03,0],"angular_velocity_rad_s":[0,0,0]}');
-  await until(() => state() === "IDLE", 30000, "IDLE after the tool-frame jog");
-  check(c.desired[1] - y0 > 0.005, `the tool-frame jog moved it along +y (${((c.desired[1] - y0) * 1e3).toFixed(2)} mm)`);
+  const jogging = c.states.length;
+  await jogUntil(() => c.states.slice(jogging).includes("JOGGING") && c.desired[1] - y0 > 0.01,
+                 '{"command":"jog","frame":"tool","velocity_m_s":[0,0.03,0],"angular_velocity_rad_s":[0,0,0]}',
+                 "tool-frame jog +y: JOGGING and 10 mm along +y");
+  await until(() => state() === "IDLE", 60000, "IDLE after the tool-frame jog");
   await refused(send('{"command":"jog","velocity_m_s":[0,0,0]}'), "a jog without its angular velocity", "'angular_velocity_rad_s' is absent");
   await refused(send('{"command":"jog","velocity_m_s":[0,1e400,0],"angular_velocity_rad_s":[0,0,0]}'), "a jog of 1e400 m/s", "refused");
   await refused(send('{"command":"goal","position_m":[0,0,0.45]}'), "a goal without its orientation", "'orientation_wxyz' is absent");
