@@ -22,7 +22,7 @@ namespace exit_code = hexa::exit_code;
 struct Request {
   int domain = 0;
   double wait_s = 0, linger_s = 0, answer_wait_s = 0;
-  std::string what;  // start stop reset home shutdown
+  std::string what;  // start stop reset home shutdown estop
   bool any_reader = false;
   hexa_msg_OperatorCommand cmd{};
 };
@@ -48,7 +48,7 @@ void AddOptions(hexa::cli::Parser& cli) {
   cli.AddOption("answer-wait", "s",
                 "how long to wait for the supervisor's answer (accepted / refused) after the "
                 "command was acknowledged; it answers at its next 5 ms tick", "2");
-  cli.AllowPositional("start|stop|reset|home|shutdown", 1);
+  cli.AllowPositional("start|stop|reset|home|shutdown|estop", 1);
 }
 
 // Reads the command line into `r`: -1 to go on, else the exit code (help, usage error).
@@ -77,8 +77,9 @@ int ReadRequest(hexa::cli::Parser& cli, int argc, char** argv, Request& r) {
   else if (what == "reset") cmd.kind = hexa_msg_OPERATOR_RESET;
   else if (what == "home") cmd.kind = hexa_msg_OPERATOR_HOME;
   else if (what == "shutdown") cmd.kind = hexa_msg_OPERATOR_SHUTDOWN;
+  else if (what == "estop") cmd.kind = hexa_msg_OPERATOR_ESTOP;
   else {
-    std::fprintf(stderr, "error: unknown command '%s' (start stop reset home shutdown)\n",
+    std::fprintf(stderr, "error: unknown command '%s' (start stop reset home shutdown estop)\n",
                  what.c_str());
     return exit_code::kUsage;
   }

@@ -48,6 +48,7 @@ const char* CommandName(hexa_msg_OperatorCommandKind kind) {
     case hexa_msg_OPERATOR_RESET: return "reset";
     case hexa_msg_OPERATOR_HOME: return "home";
     case hexa_msg_OPERATOR_SHUTDOWN: return "shutdown";
+    case hexa_msg_OPERATOR_ESTOP: return "estop";
   }
   return "unknown";
 }
@@ -259,6 +260,12 @@ void SupervisorNode::TakeOperatorCommands() {
       case hexa_msg_OPERATOR_SHUTDOWN:
         AnswerCommand(c.sequence, "shutdown", CommandAnswer::kAccepted, "");
         runtime_.shutdown().RequestShutdown();
+        return;
+      case hexa_msg_OPERATOR_ESTOP:
+        // The plant latches it in the rig and reports FAULT_ESTOP, on which this holds
+        // (docs/faults.md, "Emergency stop"); held already at once, in case that report is late.
+        system_fault_ = FaultReason::kEstop;
+        AnswerCommand(c.sequence, "estop", CommandAnswer::kAccepted, "the plant latches the e-stop");
         return;
       default:
         AnswerCommand(c.sequence, CommandName(c.kind), CommandAnswer::kRefused,
