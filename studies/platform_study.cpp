@@ -44,6 +44,7 @@
 #include <vector>
 
 #include "calibrate_in_process.hpp"
+#include "coupled_leg_feedback.hpp"
 #include "hexa/config/rig_config.hpp"
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
@@ -62,6 +63,21 @@ struct Key {
   const char* name;
   std::function<void(hexa::LockstepConfig&, double)> set;
 };
+
+// Coupled leg feedback (studies/coupled_leg_feedback, docs/measurements/control.md).
+struct CoupledKey {
+  const char* name;
+  std::function<void(hexa::study::CoupledLegFeedbackParams&, double)> set;
+};
+
+std::vector<CoupledKey> CoupledKeys() {
+  return {
+      {"coupled", [](auto& c, double v) { c.enabled = v != 0.0; }},
+      {"coupled_mref", [](auto& c, double v) { c.reference_mass_kg = v; }},
+      {"coupled_obsv", [](auto& c, double v) { c.observer_velocity = v != 0.0; }},
+      {"coupled_raise", [](auto& c, double v) { c.raise_only = v != 0.0; }},
+  };
+}
 
 std::vector<Key> Keys() {
   return {
@@ -90,11 +106,6 @@ std::vector<Key> Keys() {
       {"ol_gate", [](auto& c, double v) { c.supervisor.outer_loop.gate_leg_speed_m_s = v; }},
       {"lead", [](auto& c, double v) { c.supervisor.setpoint_lead_s = v; }},
       {"ff", [](auto& c, double v) { c.supervisor.feedforward_enabled = v != 0.0; }},
-      // Coupled leg feedback (LockstepConfig::coupled_leg_feedback, docs/measurements/control.md).
-      {"coupled", [](auto& c, double v) { c.coupled_leg_feedback = v != 0.0; }},
-      {"coupled_mref", [](auto& c, double v) { c.coupled_reference_mass_kg = v; }},
-      {"coupled_obsv", [](auto& c, double v) { c.coupled_observer_velocity = v != 0.0; }},
-      {"coupled_raise", [](auto& c, double v) { c.coupled_raise_only = v != 0.0; }},
       // Feedback part's rate in phi_dot: fraction alpha and low-pass tau_fb.
       {"fb_alpha", [](auto& c, double v) { c.leg_controller.bssmc.feedback_rate_fraction = v; }},
       {"fb_tau", [](auto& c, double v) { c.leg_controller.bssmc.feedback_rate_time_constant_s = v; }},
@@ -742,7 +753,7 @@ void Reversals(const hexa::LockstepConfig& config, PaperMotion motion, int perio
 // or, with the feedback rate in phi_dot, ((a + beta tf) s + beta) / ((tf s + 1)(s + beta)),
 // tau = spool filter + valve spool + the velocity estimate's group delay. Crossover and phase
 // margin (docs/measurements/control.md "Per-leg lag and leg 2's overshoot on combined").
-void Modes(const hexa::LockstepConfig& config) {
+void Modes(const hexa::LockstepConfig& config, const hexa::study::CoupledLegFeedbackParams& coupled) {
   const hexa::RigParams& rig = config.rig;
   hexa::Pose home;
   home.p_BP_B_m = rig.geometry.home_position_m;
@@ -776,23 +787,22 @@ void Modes(const hexa::LockstepConfig& config) {
   std::printf("mode mass kg | task direction (x y z m, roll pitch yaw rad per unit) | crossover Hz | phase margin deg\n");
   // Coupled leg feedback (coupled=1): the feedback acts through W = M_ls / M, i.e. with gain
   // (m_k / M) c on mode k: every mode's loop is that of a single mass M.
-  const double m_ref = config.coupled_reference_mass_kg > 0.0 ? config.coupled_reference_mass_kg
-                                                               : b.effective_mass_kg;
-  if (config.coupled_leg_feedback) {
+  const double m_ref = coupled.reference_mass_kg > 0.0 ? coupled.reference_mass_kg : b.effective_mass_kg;
+  if (coupled.enabled) {
     // W at home and the gain of independent, equal noise on the six feedback parts to one
     // leg's applied feedback: the Euclidean norm of W's row (1 uncoupled).
     const Eigen::Vector<double, 6> raised =
-        config.coupled_raise_only ? eig.eigenvalues().cwiseMax(m_ref) : eig.eigenvalues();
+        coupled.raise_only ? eig.eigenvalues().cwiseMax(m_ref) : eig.eigenvalues();
     const hexa::Matrix6d w = eig.eigenvectors() * raised.asDiagonal() * eig.eigenvectors().transpose() / m_ref;
     std::printf("coupled leg feedback: modes %s m_ref = %.3f kg get the loop of that mass; W row 1: "
                 "%.3f %.3f %.3f %.3f %.3f %.3f, noise gain (row norm) %.2f\n",
-                config.coupled_raise_only ? "heavier than" : "all, with", m_ref, w(0, 0), w(0, 1),
+                coupled.raise_only ? "heavier than" : "all, with", m_ref, w(0, 0), w(0, 1),
                 w(0, 2), w(0, 3), w(0, 4), w(0, 5), w.row(0).norm());
   }
   for (int k = 0; k < 6; ++k) {
-    const double m = !config.coupled_leg_feedback ? eig.eigenvalues()[k]
-                     : config.coupled_raise_only    ? std::min(m_ref, eig.eigenvalues()[k])
-                                                    : m_ref;
+    const double m = !coupled.enabled   ? eig.eigenvalues()[k]
+                     : coupled.raise_only ? std::min(m_ref, eig.eigenvalues()[k])
+                                          : m_ref;
     auto gain = [&](double w) { return c / (m * w) * std::abs(path(w)); };
     double lo = 1e-3, hi = 1e5;  // |L| falls monotonically with w (|path| <= 1 + a / (beta tf))
     for (int it = 0; it < 200; ++it) {
@@ -820,6 +830,8 @@ int main(int argc, char** argv) {
   bool trace = false, fit = false, legs = false, modes = false, reversals = false, calibrate = false;
   std::optional<hexa::config::SystemConfig> loaded_rig;
   const auto keys = Keys();
+  const auto coupled_keys = CoupledKeys();
+  hexa::study::CoupledLegFeedbackParams coupled;
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
     auto next = [&]() -> std::string { return a + 1 < argc ? argv[++a] : std::string(); };
@@ -880,11 +892,18 @@ int main(int argc, char** argv) {
           found = true;
         }
       }
+      for (const auto& key : coupled_keys) {
+        if (k == key.name) {
+          key.set(coupled, std::strtod(arg.c_str() + eq + 1, nullptr));
+          found = true;
+        }
+      }
       if (!found) return Usage();
     } else {
       return Usage();
     }
   }
+  config.leg_runner = hexa::study::CoupledLegRunnerFactory(coupled);
   if (calibrate) {
     if (!loaded_rig) {
       std::fprintf(stderr, "--calibrate needs --rig\n");
@@ -915,7 +934,7 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (modes) {
-    Modes(config);
+    Modes(config, coupled);
     return 0;
   }
   double score = 0.0;

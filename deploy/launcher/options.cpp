@@ -94,9 +94,11 @@ void AddSessionOptions(hexa::cli::Parser& cli) {
 // Where and how the processes run: CPUs, scheduling, the bridge, security, leases, faults.
 void AddProcessOptions(hexa::cli::Parser& cli) {
   cli.AddOption("cpus-control", "list|auto|none",
-                "pin the plant, the leg controllers and the supervisor to these CPUs; auto: the "
-                "last CPU this process may use, when it may use two or more (the loop's wake-ups "
-                "then stay on one CPU: docs/performance.md)", "auto");
+                "pin the plant, the leg controllers and the supervisor to these CPUs; auto: in "
+                "real time the last CPU this process may use, when it may use two or more (the "
+                "loop's wake-ups then stay on one CPU: docs/performance.md), in lockstep none "
+                "(pinned at normal priority, real-time loops on that CPU starve them: "
+                "docs/measurements/faults.md)", "auto");
   cli.AddOption("cpus-recorder", "list|auto|none",
                 "pin the recorder to these CPUs; auto: the other CPUs when --cpus-control is auto",
                 "auto");
@@ -165,8 +167,14 @@ void AddProcessOptions(hexa::cli::Parser& cli) {
 // --cpus-*: CPU lists, "auto" or "none" (docs/performance.md).
 bool ParseCpus(const hexa::cli::Parser& cli, Options& o) {
   {
-    // auto: the control loop on the last allowed CPU, the recorder on the others.
-    const hexa::sched::CpuSplit split = hexa::sched::AutoCpuSplit();
+    // auto: in real time, the control loop on the last allowed CPU, the recorder on the
+    // others. In lockstep, no pinning: the processes run at normal priority, and pinned to one
+    // CPU they could not move off it when real-time loops (this machine's other sessions pin
+    // to the same CPU at SCHED_FIFO) take it: a tick then waits past the 10 s last resort and
+    // a secured start-up past 30 s (docs/measurements/faults.md, "Lockstep beside real-time
+    // load").
+    const hexa::sched::CpuSplit split =
+        o.mode == "realtime" ? hexa::sched::AutoCpuSplit() : hexa::sched::CpuSplit{};
     if (cli.Get("cpus-control") == "auto") o.cpus_control = hexa::sched::FormatCpuList(split.control);
     if (cli.Get("cpus-recorder") == "auto")
       o.cpus_recorder = cli.Get("cpus-control") == "auto" ? hexa::sched::FormatCpuList(split.others) : "";
