@@ -5,7 +5,11 @@
 
 Usage: check_session_plots.py BUILD_DIR CASE DOMAIN [OUT_DIR]
 CASE: default | fault (--fault 3:garbage:1.0) | takeover (--standby --fault 2:crash:1.5) |
-      realtime (--mode realtime). Run inside a network namespace (DDS on loopback)."""
+      realtime (--mode realtime). Run inside a network namespace (DDS on loopback).
+
+A real-time session either completes (exit 0) or, when the machine stalls a process beyond a
+rate tolerance, holds (exit 3). Completing in real time is a benchmark's claim
+(bench/session/), not this test's: here both outcomes must be plotted as they happened."""
 import csv
 import json
 import os
@@ -22,7 +26,7 @@ CASES = {
     "default": ([], 0),
     "fault": (["--fault", "3:garbage:1.0"], 3),
     "takeover": (["--standby", "--fault", "2:crash:1.5"], 0),
-    "realtime": (["--mode", "realtime"], 0),
+    "realtime": (["--mode", "realtime"], (0, 3)),
 }
 failures = []
 
@@ -76,8 +80,10 @@ def main():
            "--timeout", "400"] + args
     print("running:", " ".join(cmd))
     r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    if not check(r.returncode == want_exit, f"hexa_session exit {r.returncode}, expected {want_exit}"):
+    wanted = want_exit if isinstance(want_exit, tuple) else (want_exit,)
+    if not check(r.returncode in wanted, f"hexa_session exit {r.returncode}, expected {want_exit}"):
         print(r.stdout[-3000:])
+    held = r.returncode == 3
     for name in PNGS + ["plots.json", "events.csv", "report.json"]:
         check(os.path.exists(os.path.join(out, name)), f"{name} written")
     if failures:
@@ -109,7 +115,17 @@ def main():
     faults, holds = marks(tracking, "fault"), marks(tracking, "hold")
     takeovers = marks(tracking, "takeover")
 
-    if case in ("default", "realtime"):
+    if case == "realtime" and held:
+        print("note: the real-time session held (a process stalled beyond a rate tolerance on "
+              "this machine): checking that the plots show the HOLD as the session reported it")
+        hold_states = [e["time_s"] for e in states if e["label"] == "HOLD"]
+        check(len(holds) == 1 and hold_states and abs(holds[0]["time_s"] - hold_states[0]) < 1e-9,
+              f"one HOLD marked, at the supervisor's HOLD report ({holds}, {hold_states[:1]})")
+        check(faults and 0 <= holds[0]["time_s"] - faults[0]["time_s"] <= 0.05,
+              f"the fault that caused it marked within 50 ms before the HOLD ({faults[:1]})")
+        check(states[-1]["label"] == "HOLD", f"ends in HOLD ({[e['label'] for e in states]})")
+        check(report["session"].get("mode") == "realtime", "mode in the report's session facts")
+    elif case in ("default", "realtime"):
         check(not faults and not holds and not takeovers,
               f"no fault, HOLD or take-over marked ({len(faults)}, {len(holds)}, {len(takeovers)})")
         end = [e["time_s"] for e in states if e["time_s"] > windows[0][0]]
@@ -146,7 +162,7 @@ def main():
               f"leg 2's take-over marked within 100 ms after 1.5 s ({takeovers})")
         check(not holds, "no HOLD")
         check(states[-1]["label"] == "IDLE" and len(windows) == 1, "the session tracked to the end")
-    if case == "realtime":
+    if case == "realtime" and windows:
         check(report["sim_time_s"] > windows[0][1] - 0.01, "the window lies within the recording")
     print(f"{case}: {len(failures)} failure(s); outputs in {out}")
     if not failures and len(sys.argv) <= 4:
