@@ -81,6 +81,14 @@ void AddSessionOptions(hexa::cli::Parser& cli) {
   cli.AddFlag("tracker", "the plant publishes the external pose instrument (hexa_TrackerPose, for "
                          "hexa_calibrate; use with --trajectory calibration)");
   cli.AddFlag("standby", "also start a hot-standby controller per leg");
+  cli.AddChoice("device", {"sim", "board"},
+                "the rig behind the plant: sim (the plant simulates it) or board (the session also "
+                "runs hexa_board_emulator on 127.0.0.1 at a free UDP port, stepped once per command "
+                "in lockstep, on the wall clock in real time, and the plant drives it over the "
+                "board protocol: docs/board_protocol.md)", "sim");
+  cli.AddRepeatable("board-arg", "arg",
+                    "--device board: an argument passed on to hexa_board_emulator as given (e.g. "
+                    "--board-arg=--estop-open --board-arg=2500:4000)");
 }
 
 // Where and how the processes run: CPUs, scheduling, the bridge, security, leases, faults.
@@ -319,6 +327,20 @@ bool CheckWhatRuns(const hexa::cli::Parser& cli, Options& o) {
       std::fprintf(stderr, "error: rig overlay '%s' does not exist\n", overlay.c_str());
       return false;
     }
+  }
+  o.device = cli.Get("device");
+  o.board_extra_args = cli.GetAll("board-arg");
+  if (o.device == "board") {
+    // What only a simulating plant can do: its truth, its instruments, its injected faults.
+    const char* sim_only = o.is_experiment() ? "--experiment" : o.tracker ? "--tracker"
+                           : cli.Has("plant-fault") ? "--plant-fault" : nullptr;
+    if (sim_only != nullptr) {
+      std::fprintf(stderr, "error: %s needs --device sim (the plant's own simulation)\n", sim_only);
+      return false;
+    }
+  } else if (!o.board_extra_args.empty()) {
+    std::fprintf(stderr, "error: --board-arg is for --device board\n");
+    return false;
   }
   for (const auto& [what, path] : {std::pair{"rig file", o.rig}, {"DDS config", o.dds_config}}) {
     if (!fs::exists(path)) {
