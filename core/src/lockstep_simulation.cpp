@@ -1,8 +1,5 @@
 #include "hexa/core/lockstep_simulation.hpp"
 
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
-
 #include <cstdio>
 #include <cstdlib>
 #include <optional>
@@ -15,11 +12,6 @@ void LockstepConfig::Validate() const {
   if (!(tick_s > 0.0 && tick_s <= 0.01)) {
     throw std::invalid_argument("LockstepConfig.tick_s = " + std::to_string(tick_s) +
                                 " s: must be in (0, 0.01]");
-  }
-  if (!(coupled_reference_mass_kg >= 0.0 && coupled_reference_mass_kg < 1000.0)) {
-    throw std::invalid_argument("LockstepConfig.coupled_reference_mass_kg = " +
-                                std::to_string(coupled_reference_mass_kg) +
-                                " kg: must be in [0, 1000) (0: the BS-SMC's effective mass)");
   }
   if (supervisor_every_ticks < 1) {
     throw std::invalid_argument("LockstepConfig.supervisor_every_ticks = " +
@@ -47,17 +39,10 @@ LockstepSimulation::LockstepSimulation(const LockstepConfig& config) : config_(c
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     LegControllerConfig leg = LegControllerConfig::FromModel(model, i, config_.controller);
     leg.excitation = config_.excitation[i];
-    coupling_mass_kg_[i] = config_.coupled_reference_mass_kg > 0.0
-                               ? config_.coupled_reference_mass_kg
-                               : leg.params.bssmc.effective_mass_kg;
     legs_[i] = std::make_unique<LegController>(leg);
   }
-  if (config_.coupled_leg_feedback) {
-    Pose home;
-    home.p_BP_B_m = supervisor_->rig().geometry.home_position_m;
-    home.R_BP.setIdentity();
-    UpdateCoupling(home);
-  }
+  leg_runner_ = config_.leg_runner ? config_.leg_runner(*supervisor_, legs_)
+                                   : std::make_unique<IndependentLegRunner>();
   ArbitrationParams arbitration;
   arbitration.hygiene = CommandHygieneParams::FromValve(config_.rig.valve, 0);
   arbitration_ = std::make_unique<CommandArbitration>(arbitration);
@@ -90,9 +75,6 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
       setpoints_[i].Add(IssuedSetpoint{tick_, now_s, sup_out_.setpoint[i]});
   }
 
-  if (config_.coupled_leg_feedback && supervisor_ran_ && sup_out_.estimate.status == KinStatus::kOk)
-    UpdateCoupling(sup_out_.estimate.pose);
-
   // Legs: sensor sample of this tick, the setpoint the protocol assigns to it.
   LegArray<LegControllerInput> leg_in{};
   for (std::size_t i = 0; i < kNumLegs; ++i) {
@@ -106,11 +88,7 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
     in.supply_pressure_pa = s.supply_pressure_pa;
     SetSetpointInput(setpoints_[i].ForTick(tick_, schedule_.supervisor_every_ticks), in);
   }
-  if (config_.coupled_leg_feedback) {
-    RunLegsCoupled(leg_in);
-  } else {
-    for (std::size_t i = 0; i < kNumLegs; ++i) legs_[i]->Update(leg_in[i], leg_out_[i]);
-  }
+  leg_runner_->Run(supervisor_ran_ ? &sup_out_ : nullptr, legs_, leg_in, leg_out_);
   // The commands reach the plant's arbitration as the service's do: each leg's one writer
   // (alive: it just answered), its answer to this tick, then the tick's arbitration.
   ArbitrationEvents events;
@@ -141,57 +119,11 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
   return status;
 }
 
-void LockstepSimulation::UpdateCoupling(const Pose& pose) {
-  Matrix6d m_ls;
-  if (LegSpaceMassMatrix(supervisor_->rig().geometry,
-                         PlatformInertialParams::FromRig(supervisor_->rig()), pose,
-                         m_ls) != KinStatus::kOk) {
-    return;  // keep the last matrix
-  }
-  for (std::size_t i = 0; i < kNumLegs; ++i) {
-    const int ii = static_cast<int>(i);
-    if (config_.coupled_raise_only) {
-      const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(m_ls);
-      const Vector6d raised = eig.eigenvalues().cwiseMax(coupling_mass_kg_[i]);
-      const Matrix6d shaped = eig.eigenvectors() * raised.asDiagonal() * eig.eigenvectors().transpose();
-      coupling_.row(ii) = shaped.row(ii) / coupling_mass_kg_[i];
-    } else {
-      coupling_.row(ii) = m_ls.row(ii) / coupling_mass_kg_[i];
-    }
-  }
-  coupling_inverse_mass_ = m_ls.ldlt().solve(Matrix6d::Identity());
-}
-
-void LockstepSimulation::RunLegsCoupled(const LegArray<LegControllerInput>& in) {
-  // Two passes (docs/measurements/control.md "Coupled leg feedback"): every leg's own feedback part,
-  // then each running BS-SMC completes with sum_j W_ij f_j over the legs that run it (a
-  // holding leg contributes nothing).
-  // The observers see the legs' accelerations on the coupled platform: m_obs (M_ls^-1 F)_i.
-  Vector6d force_n;
-  for (std::size_t i = 0; i < kNumLegs; ++i) {
-    const NominalLegModel& m = legs_[i]->config().model;
-    force_n[static_cast<int>(i)] = in[i].cap_pressure_pa * m.cylinder.cap_area_m2 -
-                                   in[i].rod_pressure_pa * m.cylinder.annulus_area_m2 -
-                                   m.air.atmosphere_pressure_pa * m.cylinder.rod_area_m2;
-  }
-  const Vector6d acceleration_m_s2 = coupling_inverse_mass_ * force_n;
-  LegArray<std::optional<BsSmcFeedback>> own{};
-  for (std::size_t i = 0; i < kNumLegs; ++i) {
-    const double m_obs = legs_[i]->config().params.bssmc.observer_mass_kg;
-    own[i] = legs_[i]->BeginCoupled(in[i], leg_out_[i], m_obs * acceleration_m_s2[static_cast<int>(i)],
-                                    config_.coupled_observer_velocity);
-  }
-  for (std::size_t i = 0; i < kNumLegs; ++i) {
-    if (!own[i]) continue;
-    BsSmcFeedback mixed;
-    for (std::size_t j = 0; j < kNumLegs; ++j) {
-      if (!own[j]) continue;
-      const double w = coupling_(static_cast<int>(i), static_cast<int>(j));
-      mixed.force_n += w * own[j]->force_n;
-      mixed.rate_n_s += w * own[j]->rate_n_s;
-    }
-    legs_[i]->FinishCoupled(mixed, leg_out_[i]);
-  }
+void IndependentLegRunner::Run(const SupervisorOutput* /*supervisor_output*/,
+                               LegArray<std::unique_ptr<LegController>>& legs,
+                               const LegArray<LegControllerInput>& in,
+                               LegArray<LegControllerOutput>& out) {
+  for (std::size_t i = 0; i < kNumLegs; ++i) legs[i]->Update(in[i], out[i]);
 }
 
 PaperSessionResult RunPaperSession(const LockstepConfig& config, PaperMotion motion,

@@ -72,6 +72,8 @@ const char* ToString(FaultReason reason) {
     case FaultReason::kSensorInconsistent: return "FAULT_SENSOR_INCONSISTENT";
     case FaultReason::kImuLost: return "FAULT_IMU_LOST";
     case FaultReason::kCommandRefused: return "FAULT_COMMAND_REFUSED";
+    case FaultReason::kEstop: return "FAULT_ESTOP";
+    case FaultReason::kBoardLink: return "FAULT_BOARD_LINK";
   }
   return "?";
 }

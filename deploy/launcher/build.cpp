@@ -2,7 +2,14 @@
 // arguments hexa_deploy generate writes units for) with this machine's paths, log files and
 // the launcher's options; and what must be ready before they start (the DDS domain, the
 // security files, the session key).
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -109,6 +116,25 @@ void LogPlan(const Options& o, const Launch& launch, spdlog::logger& log) {
   }
 }
 
+// A UDP port of 127.0.0.1 free now (the kernel's choice), for the board emulator; 0 and
+// `error` when none can be had.
+int FreeLoopbackUdpPort(std::string& error) {
+  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t len = sizeof a;
+  int port = 0;
+  if (fd >= 0 && bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
+      getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) == 0) {
+    port = ntohs(a.sin_port);
+  } else {
+    error = std::string("no free UDP port on 127.0.0.1: ") + std::strerror(errno);
+  }
+  if (fd >= 0) close(fd);
+  return port;
+}
+
 void Append(std::vector<std::string>& argv, const std::vector<std::string>& more) {
   argv.insert(argv.end(), more.begin(), more.end());
 }
@@ -210,6 +236,18 @@ ChildSpec Supervisor(const ProcessSpec& p, const Options& o, const Launch& launc
   return s;
 }
 
+// The emulated I/O board: the rig file's plant and board calibration, the session's profile
+// and seed (the same physics the plant would simulate).
+ChildSpec Board(const ProcessSpec& p, const Options& o, const Launch& launch) {
+  ChildSpec s = ChildOf(p, o, launch);
+  Append(s.argv, {"--rig", o.rig, "--profile", o.profile, "--seed", std::to_string(o.seed)});
+  Append(s.argv, p.args);
+  if (p.rt_priority > 0) Append(s.argv, {"--rt-priority", std::to_string(p.rt_priority)});
+  if (!p.cpus.empty()) Append(s.argv, {"--cpus", p.cpus});
+  Append(s.argv, o.board_extra_args);
+  return s;
+}
+
 ChildSpec Plant(const ProcessSpec& p, const Options& o, const Launch& launch) {
   ChildSpec s = ChildOf(p, o, launch);
   Append(s.argv, {"--profile", o.profile, "--seed", std::to_string(o.seed)});
@@ -256,6 +294,7 @@ session::SessionOptions LayoutOptionsOf(const Options& o) {
   s.cpus_supervisor = o.cpus_supervisor;
   s.cpus_recorder = o.cpus_recorder;
   s.cpus_bridge = o.cpus_bridge;
+  s.board_port = o.device == "board" ? o.board_port : 0;
   return s;
 }
 
@@ -274,6 +313,16 @@ int PrepareSession(Options& o, Launch& launch, spdlog::logger& log) {
            o.bridge ? (o.cpus_bridge.empty() ? "any" : o.cpus_bridge) : "");
   for (const auto& overlay : o.rig_overlays)
     log.info("rig overlay for the controllers and the supervisor: {}", overlay);
+  if (o.device == "board") {
+    std::string error;
+    o.board_port = FreeLoopbackUdpPort(error);
+    if (o.board_port == 0) {
+      log.error("--device board: {}", error);
+      return exit_code::kRunError;
+    }
+    log.info("device: the I/O board emulated by hexa_board_emulator on UDP 127.0.0.1:{} ({})",
+             o.board_port, o.mode == "realtime" ? "wall clock, 1 kHz" : "stepped once per command");
+  }
   launch.layout = session::BuildSessionLayout(LayoutOptionsOf(o));
   launch.env = {{"CYCLONEDDS_URI", "file://" + o.dds_config}};
   if (int rc = SecureSession(o, launch, log); rc != kContinue) return rc;
@@ -298,6 +347,7 @@ std::vector<ChildSpec> BuildChildren(const Options& o, const Launch& launch) {
       case Role::kLeg: children.push_back(Leg(p, o, launch)); break;
       case Role::kSupervisor: children.push_back(Supervisor(p, o, launch)); break;
       case Role::kPlant: children.push_back(Plant(p, o, launch)); break;
+      case Role::kBoard: children.push_back(Board(p, o, launch)); break;
     }
   }
   return children;

@@ -49,6 +49,9 @@ struct Options {
   std::string record_split_mb, record_split_s, record_keep_files;
   std::vector<std::string> rig_overlays;      // absolute paths, for the legs and the supervisor
   std::vector<std::string> plant_extra_args;  // --plant-arg, passed on as given
+  std::string device = "sim";                 // "board": hexa_board_emulator behind the plant
+  std::vector<std::string> board_extra_args;  // --board-arg, passed on as given
+  int board_port = 0;                         // the emulator's UDP port (PrepareSession)
   std::string experiment = "none";            // "identify": docs/identification.md
   std::vector<int> excite_legs;
   std::string excite_legs_text;

@@ -81,14 +81,24 @@ void AddSessionOptions(hexa::cli::Parser& cli) {
   cli.AddFlag("tracker", "the plant publishes the external pose instrument (hexa_TrackerPose, for "
                          "hexa_calibrate; use with --trajectory calibration)");
   cli.AddFlag("standby", "also start a hot-standby controller per leg");
+  cli.AddChoice("device", {"sim", "board"},
+                "the rig behind the plant: sim (the plant simulates it) or board (the session also "
+                "runs hexa_board_emulator on 127.0.0.1 at a free UDP port, stepped once per command "
+                "in lockstep, on the wall clock in real time, and the plant drives it over the "
+                "board protocol: docs/board_protocol.md)", "sim");
+  cli.AddRepeatable("board-arg", "arg",
+                    "--device board: an argument passed on to hexa_board_emulator as given (e.g. "
+                    "--board-arg=--estop-open --board-arg=2500:4000)");
 }
 
 // Where and how the processes run: CPUs, scheduling, the bridge, security, leases, faults.
 void AddProcessOptions(hexa::cli::Parser& cli) {
   cli.AddOption("cpus-control", "list|auto|none",
-                "pin the plant, the leg controllers and the supervisor to these CPUs; auto: the "
-                "last CPU this process may use, when it may use two or more (the loop's wake-ups "
-                "then stay on one CPU: docs/performance.md)", "auto");
+                "pin the plant, the leg controllers and the supervisor to these CPUs; auto: in "
+                "real time the last CPU this process may use, when it may use two or more (the "
+                "loop's wake-ups then stay on one CPU: docs/performance.md), in lockstep none "
+                "(pinned at normal priority, real-time loops on that CPU starve them: "
+                "docs/measurements/faults.md)", "auto");
   cli.AddOption("cpus-recorder", "list|auto|none",
                 "pin the recorder to these CPUs; auto: the other CPUs when --cpus-control is auto",
                 "auto");
@@ -157,8 +167,14 @@ void AddProcessOptions(hexa::cli::Parser& cli) {
 // --cpus-*: CPU lists, "auto" or "none" (docs/performance.md).
 bool ParseCpus(const hexa::cli::Parser& cli, Options& o) {
   {
-    // auto: the control loop on the last allowed CPU, the recorder on the others.
-    const hexa::sched::CpuSplit split = hexa::sched::AutoCpuSplit();
+    // auto: in real time, the control loop on the last allowed CPU, the recorder on the
+    // others. In lockstep, no pinning: the processes run at normal priority, and pinned to one
+    // CPU they could not move off it when real-time loops (this machine's other sessions pin
+    // to the same CPU at SCHED_FIFO) take it: a tick then waits past the 10 s last resort and
+    // a secured start-up past 30 s (docs/measurements/faults.md, "Lockstep beside real-time
+    // load").
+    const hexa::sched::CpuSplit split =
+        o.mode == "realtime" ? hexa::sched::AutoCpuSplit() : hexa::sched::CpuSplit{};
     if (cli.Get("cpus-control") == "auto") o.cpus_control = hexa::sched::FormatCpuList(split.control);
     if (cli.Get("cpus-recorder") == "auto")
       o.cpus_recorder = cli.Get("cpus-control") == "auto" ? hexa::sched::FormatCpuList(split.others) : "";
@@ -311,6 +327,20 @@ bool CheckWhatRuns(const hexa::cli::Parser& cli, Options& o) {
       std::fprintf(stderr, "error: rig overlay '%s' does not exist\n", overlay.c_str());
       return false;
     }
+  }
+  o.device = cli.Get("device");
+  o.board_extra_args = cli.GetAll("board-arg");
+  if (o.device == "board") {
+    // What only a simulating plant can do: its truth, its instruments, its injected faults.
+    const char* sim_only = o.is_experiment() ? "--experiment" : o.tracker ? "--tracker"
+                           : cli.Has("plant-fault") ? "--plant-fault" : nullptr;
+    if (sim_only != nullptr) {
+      std::fprintf(stderr, "error: %s needs --device sim (the plant's own simulation)\n", sim_only);
+      return false;
+    }
+  } else if (!o.board_extra_args.empty()) {
+    std::fprintf(stderr, "error: --board-arg is for --device board\n");
+    return false;
   }
   for (const auto& [what, path] : {std::pair{"rig file", o.rig}, {"DDS config", o.dds_config}}) {
     if (!fs::exists(path)) {

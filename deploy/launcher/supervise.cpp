@@ -118,7 +118,8 @@ void SessionWatch::OnChildExited(const ChildExit& e, double elapsed_s, SessionEn
   end.exits.push_back(e);
   const bool is_leg = e.name.rfind("leg", 0) == 0;
   const bool plant_stopped = e.exit_code == exit_code::kPlantLockstepStall ||
-                             e.exit_code == exit_code::kPlantNonFinite;
+                             e.exit_code == exit_code::kPlantNonFinite ||
+                             e.exit_code == exit_code::kPlantDeviceLost;
   if (o_.is_experiment() && e.name == "plant" && e.signal == 0 && e.exit_code == exit_code::kOk) {
     log_.info("plant reached the end of the experiment after {:.1f} s wall", elapsed_s);
     end.completed = true;
@@ -132,6 +133,12 @@ void SessionWatch::OnChildExited(const ChildExit& e, double elapsed_s, SessionEn
   } else if (o_.standby && is_leg && e.name.find("_standby") == std::string::npos &&
              group_.Running(e.name + "_standby")) {
     log_.warn("{}; its hot standby {}_standby takes over the valve", e.Describe(), e.name);
+  } else if (e.name == "board") {
+    // The rig's I/O board gone (--device board): the plant reports the lost link
+    // (FAULT_BOARD_LINK) and ticks on so that the supervisor holds; the hold decides the end.
+    log_.error("{}: the I/O board emulator is gone; the plant reports the lost board and the "
+               "supervisor holds; its last log lines:\n{}", e.Describe(),
+               TailOf(o_.out_dir + "/board.console.log", 5));
   } else if (e.name == "bridge") {
     // A viewer, not part of the control loop: the session goes on without it.
     log_.error("{}; the session goes on without the Foxglove bridge; its last log "

@@ -24,6 +24,9 @@ int DefaultRtPriority(Role role) {
     case Role::kSupervisor: return 75;  // hexa_task_space
     case Role::kRecorder: return 50;    // below the loop; starved, it loses samples
     case Role::kBridge: return 0;       // a viewer: never above the loop
+    // The emulated board does the physics each 1 ms tick that a simulating plant does: the
+    // plant's priority, which a board-driving plant hardly needs.
+    case Role::kBoard: return 70;       // hexa_board_emulator
   }
   return 0;
 }
@@ -83,6 +86,15 @@ SessionLayout BuildSessionLayout(const SessionOptions& o) {
   // process id; the plant last, knowing every other control process's and the recorder's.
   SessionLayout layout;
   auto& procs = layout.processes;
+  if (o.board_port > 0) {
+    // First: it must listen before the plant starts (the plant's bring-up asks it to answer).
+    // Off the control CPU: a real board is hardware of its own.
+    ProcessSpec board = Process(o, Role::kBoard, "board", "hexa_board_emulator", "device/emulator",
+                                o.cpus_recorder);
+    board.args = {"--bind", "127.0.0.1", "--port", std::to_string(o.board_port), "--clock",
+                  o.realtime ? "wall" : "step"};
+    procs.push_back(board);
+  }
   if (o.recorder) procs.push_back(Recorder(o));
   if (o.bridge) {
     procs.push_back(Process(o, Role::kBridge, "bridge", "hexa_bridge", "services/bridge",
@@ -102,11 +114,14 @@ SessionLayout BuildSessionLayout(const SessionOptions& o) {
   ProcessSpec plant = Process(o, Role::kPlant, "plant", "hexa_plant_sim", "services/plant_sim",
                               o.cpus_control);
   plant.args = {"--legs", "6", "--supervisor", "--stale-ticks", std::to_string(o.stale_ticks)};
+  if (o.board_port > 0)
+    plant.args.insert(plant.args.end(), {"--device", "board", "--board-address",
+                                         "127.0.0.1:" + std::to_string(o.board_port)});
   plant.expect_recorder = o.recorder;
   if (o.recorder) plant.args.push_back("--expect-recorder");
   if (o.plant_waits_for_standbys) plant.args.push_back("--expect-standbys");
   for (const auto& p : procs)
-    if (p.role != Role::kBridge) plant.peers.push_back(p.name);
+    if (p.role != Role::kBridge && p.role != Role::kBoard) plant.peers.push_back(p.name);
   procs.push_back(plant);
   return layout;
 }

@@ -12,7 +12,7 @@
 
 namespace hexa::session {
 
-enum class Role { kPlant, kSupervisor, kLeg, kRecorder, kBridge };
+enum class Role { kPlant, kSupervisor, kLeg, kRecorder, kBridge, kBoard };
 
 struct SessionOptions {
   bool realtime = false;       // lockstep otherwise
@@ -23,6 +23,10 @@ struct SessionOptions {
   bool plant_waits_for_standbys = false;
   bool rt_sched = true;        // real time: the processes run SCHED_FIFO
   long long stale_ticks = 15;  // ticks a leg's command may lag before the plant closes its valve
+  // The rig behind the plant: its own simulation, or a remote I/O board. With board_port > 0
+  // the session runs hexa_board_emulator on 127.0.0.1:board_port (lockstep: stepped once per
+  // command; real time: on the wall clock) and the plant drives it over UDP.
+  int board_port = 0;
   // CPU lists ("0-1", "3"; empty: any CPU).
   std::string cpus_control;     // the plant and the primary legs
   std::string cpus_standby;     // the hot standbys
@@ -55,7 +59,8 @@ struct ProcessSpec {
 };
 
 struct SessionLayout {
-  std::vector<ProcessSpec> processes;  // in start order: recorder, bridge, supervisor, legs, plant
+  // In start order: board emulator, recorder, bridge, supervisor, legs, plant.
+  std::vector<ProcessSpec> processes;
   const ProcessSpec* Find(const std::string& name) const;
   std::vector<std::string> Names() const;
 };

@@ -22,6 +22,7 @@
 #include "hexa/device/udp_socket.hpp"
 #include "hexa/services/cli.hpp"
 #include "hexa/services/logging.hpp"
+#include "hexa/services/scheduling.hpp"
 
 namespace {
 
@@ -35,6 +36,8 @@ struct Options {
   bool step = false;
   double duration_s = 0.0, idle_exit_s = 0.0;
   std::vector<hexa::device::EstopOpenWindow> estop_open;
+  int rt_priority = 0;
+  std::string cpus;
 };
 
 bool ParseWindow(const std::string& text, hexa::device::EstopOpenWindow& w) {
@@ -61,6 +64,8 @@ int ParseOptions(int argc, char** argv, Options& o) {
   p.AddRepeatable("estop-open", "FROM:TO", "open the e-stop loop during board ticks [FROM, TO)");
   p.AddOption("duration-s", "S", "stop after this many seconds of board time (0: never)", "0");
   p.AddOption("idle-exit-s", "S", "step: stop when no datagram came for this long (0: never)", "0");
+  p.AddOption("rt-priority", "N", "wall clock: run SCHED_FIFO at this priority (0: normal scheduling)", "0");
+  p.AddOption("cpus", "LIST", "pin the emulator to these CPUs (\"1\", \"0-1\"; empty: any)", "");
   const int r = hexa::cli::HandleParseResult(p, p.Parse(argc, argv));
   if (r >= 0) return r;
   o.rig = p.Get("rig");
@@ -72,12 +77,16 @@ int ParseOptions(int argc, char** argv, Options& o) {
   const auto port = p.GetInt("port", 0, 65535);
   const auto duration = p.GetDouble("duration-s", 0.0, 1e6);
   const auto idle = p.GetDouble("idle-exit-s", 0.0, 1e6);
+  const auto rt_priority = p.GetInt("rt-priority", 0, 98);
+  o.cpus = p.Get("cpus");
   for (const std::string& w : p.GetAll("estop-open")) {
     hexa::device::EstopOpenWindow window;
     if (!ParseWindow(w, window)) p.Fail("--estop-open: expected FROM:TO ticks with FROM < TO, got '" + w + "'");
     o.estop_open.push_back(window);
   }
-  if (!seed || !port || !duration || !idle || !p.error().empty()) return hexa::cli::HandleParseResult(p, false);
+  if (!seed || !port || !duration || !idle || !rt_priority || !p.error().empty())
+    return hexa::cli::HandleParseResult(p, false);
+  o.rt_priority = static_cast<int>(*rt_priority);
   o.seed = static_cast<std::uint64_t>(*seed);
   o.port = static_cast<int>(*port);
   o.duration_s = *duration;
@@ -233,6 +242,18 @@ int main(int argc, char** argv) {
   if (!o.port_file.empty()) std::ofstream(o.port_file) << ntohs(bound.sin_port) << "\n";
   log->info("listening on UDP {} ({} clock, {}, watchdog {} ms)", ToString(bound), o.step ? "step" : "wall", summary,
             std::lround(config.calibration.watchdog_timeout_s * 1000.0));
+  // A board keeps its 1 ms tick whatever the host does: scheduling as asked, best effort.
+  std::string message;
+  if (!o.cpus.empty()) {
+    std::vector<int> cpus;
+    if (!hexa::sched::ParseCpuList(o.cpus, cpus)) {
+      log->error("--cpus '{}': expected a CPU list (1, 0,1, 0-1)", o.cpus);
+      return 2;
+    }
+    if (!hexa::sched::SetCpuAffinity(cpus, message)) log->warn("{}", message);
+  }
+  if (o.rt_priority > 0 && !hexa::sched::SetRealtime(o.rt_priority, message)) log->warn("{}", message);
+  else if (o.rt_priority > 0) log->info("{}", message);
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
 

@@ -24,6 +24,7 @@ DeviceStatus SimDevice::ReadSensors(DeviceSensors& out) {
   out.safety = DeviceSafety{};
   out.safety.estop_latched = estop_latched_;
   out.safety.valves_safe = estop_latched_;
+  out.safety.estop_by_host = estop_latched_;  // its only source: LatchEstop
   return DeviceStatus::kOk;
 }
 

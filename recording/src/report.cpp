@@ -193,19 +193,26 @@ void ComputeTaskSpace(std::vector<PoseSample>& poses, const std::vector<TickSlot
   // Task space over the TRACKING window, at the supervisor ticks.
   std::sort(poses.begin(), poses.end(), [](const auto& a, const auto& b) { return a.tick < b.tick; });
   AxisErrorAccumulator vs_truth, vs_measured;
+  // A plant that simulates nothing (a remote I/O board) publishes no ground truth: the rows
+  // then carry NaN for it, and only the measured pose has a tracking error.
+  const bool any_truth = std::any_of(ticks.begin(), ticks.end(), [](const TickSlot& s) { return s.truth; });
+  std::array<double, 6> no_truth;
+  no_truth.fill(std::nan(""));
   for (const auto& p : poses) {
-    if (p.tick < ticks.size() && ticks[p.tick].truth) {
-      r.pose_rows.push_back({p.tick * kTickS, p.desired, ticks[p.tick].truth_pose, p.estimated});
+    const bool truth = p.tick < ticks.size() && ticks[p.tick].truth;
+    if (truth || (!any_truth && p.tick < ticks.size())) {
+      r.pose_rows.push_back({p.tick * kTickS, p.desired, truth ? ticks[p.tick].truth_pose : no_truth, p.estimated});
       if (p.state == 2) {
-        vs_truth.Add(ToVec(p.desired), ToVec(ticks[p.tick].truth_pose));
+        if (truth) vs_truth.Add(ToVec(p.desired), ToVec(ticks[p.tick].truth_pose));
         vs_measured.Add(ToVec(p.desired), ToVec(p.estimated));
       }
     }
   }
   if (!poses.empty()) r.final_supervisor_state = SupervisorStateName(poses.back().state);
-  r.pose_samples_tracking = vs_truth.count();
+  r.pose_samples_tracking = any_truth ? vs_truth.count() : vs_measured.count();
   r.rmse_vs_truth = vs_truth.Rmse();
   r.relative_vs_truth = vs_truth.RelativeError();
+  if (!any_truth) r.rmse_vs_truth.fill(std::nan(""));  // unknown, not zero
   r.rmse_vs_measured = vs_measured.Rmse();
   r.relative_vs_measured = vs_measured.RelativeError();
 
@@ -223,6 +230,7 @@ void ComputeJointSpace(const std::vector<PoseSample>& poses, const std::vector<T
   std::vector<double> latencies;
   std::size_t pose_index = 0;
   int state = -1;
+  const bool have_truth = std::any_of(ticks.begin(), ticks.end(), [](const TickSlot& s) { return s.truth; });
   for (uint64_t tick = 0; tick < ticks.size(); ++tick) {
     while (pose_index < poses.size() && poses[pose_index].tick <= tick) state = poses[pose_index++].state;
     const TickSlot& s = ticks[tick];
@@ -252,6 +260,7 @@ void ComputeJointSpace(const std::vector<PoseSample>& poses, const std::vector<T
       any = any || s.sensor[i] || s.command[i];
     }
     if (any) r.leg_rows.push_back(row);
+    if (any && !have_truth) r.sim_time_s = tick * kTickS;  // no ground truth: the sensors' ticks
     if (any_command) {
       std::array<double, 6> none;
       none.fill(std::nan(""));

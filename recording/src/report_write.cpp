@@ -273,7 +273,7 @@ void WritePoseCsv(const SessionReport& r, const std::string& path) {
     std::snprintf(buf, sizeof buf, "%.3f", row.time_s);
     p << buf;
     for (const auto* arr : {&row.desired, &row.truth, &row.measured})
-      for (double v : *arr) p << "," << Num(v);
+      for (double v : *arr) p << "," << (std::isnan(v) ? "nan" : Num(v));
     p << "\n";
   }
 }

@@ -1,5 +1,6 @@
 // hexa_plant_sim: the simulated HexaTaar rig and clock master (docs/architecture.md).
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 
 #include <google/protobuf/text_format.h>
@@ -55,9 +56,38 @@ void AddOptions(hexa::cli::Parser& cli) {
                 "which a cycle overruns", "0.0005");
   cli.AddOption("compute-overrun-cycles", "N",
                 "consecutive overrunning cycles of a leg that make a FAULT_COMPUTE_OVERRUN", "20");
+  cli.AddChoice("device", {"sim", "board"},
+                "the rig behind the plant's device seam: sim (simulated here) or board (a remote "
+                "I/O board over UDP, docs/board_protocol.md: hexa_board_emulator or hardware)",
+                "sim");
+  cli.AddOption("board-address", "HOST:PORT",
+                "--device board: the board's dotted IPv4 address and UDP port, e.g. 127.0.0.1:5005");
+  cli.AddOption("board-timeout", "s",
+                "--device board: the board must answer a command within this (bring-up; lockstep: "
+                "every tick)", "2");
+  cli.AddOption("board-lost-ticks", "N",
+                "--device board, real time: ticks without an intact sensor frame after which the "
+                "link is lost (FAULT_BOARD_LINK, exit 7)", "20");
   cli.AddOption("fault", "kind:leg:time_s[,...]",
                 "inject rig faults (docs/faults.md): pot-stuck, pot-drift, pressure-dead (leg "
                 "1..6), imu-dropout, supply-loss (leg 0); e.g. pot-stuck:3:1.5");
+}
+
+// "HOST:PORT" with a dotted IPv4 host and a port 1..65535; "" or the error.
+std::string ParseBoardAddress(const std::string& text, hexa::plant_sim::BoardLinkOptions& b) {
+  const auto colon = text.rfind(':');
+  if (colon == std::string::npos || colon == 0)
+    return "--board-address '" + text + "': expected HOST:PORT (e.g. 127.0.0.1:5005)";
+  b.host = text.substr(0, colon);
+  const std::string port = text.substr(colon + 1);
+  char* end = nullptr;
+  const long value = std::strtol(port.c_str(), &end, 10);
+  if (port.empty() || *end != '\0' || value < 1 || value > 65535)
+    return "--board-address '" + text + "': port '" + port + "' is not in 1..65535";
+  b.port = static_cast<std::uint16_t>(value);
+  if (!hexa::device::ParseIpv4(b.host, b.port))
+    return "--board-address '" + text + "': host '" + b.host + "' is not a dotted IPv4 address";
+  return {};
 }
 
 // Reads the parsed options into `o`; false with the error printed (exit_code::kUsage).
@@ -73,9 +103,11 @@ bool ReadOptions(hexa::cli::Parser& cli, hexa::plant_sim::PlantNodeOptions& o) {
   const auto bench_release = cli.GetDouble("bench-release-s", 0, 1e6);
   const auto budget = cli.GetDouble("compute-budget", 1e-6, 10);
   const auto overrun = cli.GetInt("compute-overrun-cycles", 1, 1000000);
+  const auto board_timeout = cli.GetDouble("board-timeout", 0.01, 60);
+  const auto board_lost = cli.GetInt("board-lost-ticks", 1, 100000);
   if (!hexa::node::ReadCommonOptions(cli, o.common) || !seed || !legs || !duration || !startup ||
       !stale || !grace || !lose || !bench_load || !bench_release || !budget ||
-      !overrun) {
+      !overrun || !board_timeout || !board_lost) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return false;
   }
@@ -87,6 +119,23 @@ bool ReadOptions(hexa::cli::Parser& cli, hexa::plant_sim::PlantNodeOptions& o) {
       std::fprintf(stderr, "error: --fault %s\n(see --help)\n", error.c_str());
       return false;
     }
+  }
+  o.device = cli.Get("device") == "board" ? hexa::plant_sim::DeviceKind::kBoard
+                                           : hexa::plant_sim::DeviceKind::kSim;
+  o.board.answer_timeout_s = *board_timeout;
+  o.board.lost_after_ticks = static_cast<std::uint64_t>(*board_lost);
+  if (o.device == hexa::plant_sim::DeviceKind::kBoard) {
+    if (!cli.Has("board-address")) {
+      std::fprintf(stderr, "error: --device board needs --board-address HOST:PORT\n(see --help)\n");
+      return false;
+    }
+    if (const std::string error = ParseBoardAddress(cli.Get("board-address"), o.board); !error.empty()) {
+      std::fprintf(stderr, "error: %s\n(see --help)\n", error.c_str());
+      return false;
+    }
+  } else if (cli.Has("board-address")) {
+    std::fprintf(stderr, "error: --board-address is for --device board (the device is sim)\n(see --help)\n");
+    return false;
   }
   o.profile = cli.Get("profile");
   o.seed = static_cast<std::uint64_t>(*seed);
@@ -137,9 +186,13 @@ int RunNode(const hexa::cli::Parser& cli, const hexa::plant_sim::PlantNodeOption
   auto latency_hold = hexa::node::ApplyScheduling(o.common, 70, *log);
   hexa::plant_sim::PlantNode node(o, *config, log);
   if (cli.Has("truth-out")) {
+    if (node.simulation() == nullptr) {
+      log->error("--truth-out: the device is a remote board: this process simulates nothing");
+      return hexa::exit_code::kUsage;
+    }
     std::string text;
     google::protobuf::TextFormat::PrintToString(
-        hexa::recorder::MakePlantTruth(node.plant(), config->rig_name, o.profile), &text);
+        hexa::recorder::MakePlantTruth(*node.simulation(), config->rig_name, o.profile), &text);
     std::ofstream out(cli.Get("truth-out"));
     out << text;
     if (!out) {
@@ -158,8 +211,9 @@ int RunNode(const hexa::cli::Parser& cli, const hexa::plant_sim::PlantNodeOption
 
 int main(int argc, char** argv) {
   hexa::cli::Parser cli("hexa_plant_sim",
-                        "Simulated rig: publishes leg sensors (1 kHz), IMU (200 Hz) and ground "
-                        "truth; applies the leg controllers' valve commands.");
+                        "The rig's I/O node and clock master: publishes leg sensors (1 kHz), IMU "
+                        "(200 Hz) and (simulated rig) ground truth; applies the leg controllers' "
+                        "valve commands to the simulated rig or to a remote I/O board (--device).");
   AddOptions(cli);
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;

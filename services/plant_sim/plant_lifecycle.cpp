@@ -24,12 +24,15 @@ int PlantNode::Run() {
                                  ? static_cast<uint64_t>(std::llround(options_.duration_s / kTickS))
                                  : UINT64_MAX;
   loop_started_ns_ = node::MonotonicNow_ns();
-  const int rc = realtime ? RunRealtime(last_tick) : RunLockstep(last_tick);
+  int rc = realtime ? RunRealtime(last_tick) : RunLockstep(last_tick);
+  if (rc == exit_code::kOk && device_lost_) rc = exit_code::kPlantDeviceLost;  // said at the end
   std::lock_guard<std::mutex> lock(mutex_);
   loop_ended_ns_ = node::MonotonicNow_ns();
   LogEnd();
+  LogDeviceEnd();
   LogCommandAges();
   WriteSummary(rc);
+  device_.Close();  // the valves to their safe state, the link released
   if (rc != exit_code::kPlantNonFinite) PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
   node::service_manager::Stopping("stopped");
   return rc;
@@ -37,7 +40,9 @@ int PlantNode::Run() {
 
 void PlantNode::LogStart() const {
   const bool realtime = options_.common.mode == node::TimeMode::kRealtime;
-  log_->info("ticking in {} mode, profile '{}', seed {}", realtime ? "real-time" : "lockstep",
+  log_->info("ticking in {} mode on the {}, profile '{}', seed {}", realtime ? "real-time" : "lockstep",
+             board_ ? "remote board at " + options_.board.host + ":" + std::to_string(options_.board.port)
+                    : std::string("simulated rig"),
              options_.profile, options_.seed);
   log_->info("dead legs: {}; compute budget {:.3f} ms x {} cycles",
              realtime ? fmt::format("liveliness lease {:.3f} s", options_.common.realtime_lease_s)
@@ -277,6 +282,14 @@ void PlantNode::WriteSummary(int exit_code) const {
                                                      {"p99", tick_wall_.Quantile_s(0.99)},
                                                      {"max", tick_wall_.max_s()},
                                                      {"mean", tick_wall_.mean_s()}};
+  j["device"] = board_ ? "board" : "sim";
+  j["control_round_trip_s"] = {{"median", round_trip_.Quantile_s(0.5)},
+                               {"p99", round_trip_.Quantile_s(0.99)},
+                               {"max", round_trip_.max_s()},
+                               {"count", round_trip_.count()}};
+  j["ticks_without_sample"] = samples_missed_total_;
+  j["estop_unsafe_ticks"] = estop_unsafe_ticks_;
+  if (board_ != nullptr) j["board_link"] = board_->counters().Describe();
   j["command_age_bins"] = {"0", "1", "2", "3-7", "8-15", ">=16"};
   j["legs"] = json::Value::array();
   for (std::size_t i = 0; i < kNumLegs; ++i) {

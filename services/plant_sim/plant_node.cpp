@@ -32,6 +32,22 @@ PlatformPlantConfig MakePlantConfig(const PlantNodeOptions& o, const config::Sys
   return p;
 }
 
+// The rig behind the seam. The board's calibration is the rig file's `board` block.
+std::unique_ptr<device::Device> MakeDevice(const PlantNodeOptions& o, const config::SystemConfig& c) {
+  if (o.device == DeviceKind::kSim) return std::make_unique<device::SimDevice>(MakePlantConfig(o, c), kTickS);
+  if (!c.board) {
+    throw std::invalid_argument(o.common.rig_path + ": no `board` block: --device board needs the board's "
+                                "calibration (docs/board_protocol.md, \"Calibration\")");
+  }
+  device::RemoteBoardDeviceConfig b;
+  b.board_host = o.board.host;
+  b.board_port = o.board.port;
+  b.local_host = "0.0.0.0";
+  b.calibration = *c.board;
+  b.valve_null_v = c.rig.valve.null_voltage_v;
+  return std::make_unique<device::RemoteBoardDevice>(b);  // validates: names the field
+}
+
 ArbitrationParams MakeArbitrationParams(const PlantNodeOptions& o, const config::SystemConfig& c) {
   ArbitrationParams p;
   p.realtime = o.common.mode == node::TimeMode::kRealtime;
@@ -75,8 +91,9 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
     : options_(options),
       config_(config),
       log_(std::move(log)),
-      sim_(MakePlantConfig(options, config), kTickS),
-      device_(sim_),
+      device_owner_(MakeDevice(options, config)),
+      device_(*device_owner_),
+      board_(dynamic_cast<device::RemoteBoardDevice*>(device_owner_.get())),
       arbitration_params_(MakeArbitrationParams(options, config)),
       // The six legs' samples of a tick leave in one datagram per reader (comm/writer.hpp).
       participant_(static_cast<dds_domainid_t>(options.common.domain_id),
@@ -103,6 +120,9 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
       fault_topic_(participant_),
       fault_reader_(participant_, fault_topic_, comm::EndpointRole::kControlReader,
                     node::QosFor(options.common, comm::TopicKind::kFaultEvent), 64),
+      operator_topic_(participant_),
+      operator_reader_(participant_, operator_topic_, comm::EndpointRole::kControlReader,
+                       node::QosFor(options.common, comm::TopicKind::kOperatorCommand), 16),
       waitset_(participant_),
       arbitration_(arbitration_params_),
       lockstep_(ClockParams(options)),
@@ -115,9 +135,7 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
     leg_name_[i] = "leg" + std::to_string(i + 1);
     standby_name_[i] = leg_name_[i] + "_standby";
   }
-  std::string error;
-  if (!device_.Configure(error)) throw std::invalid_argument("device: " + error);
-  device_.ReadSensors(sensors_);
+  BringUpDevice();  // throws naming the cause (address, port, e-stop)
   waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
   waitset_.Attach(wake_.get(), kTokenWake);
   waitset_.Attach(peers_.data_condition(), kTokenPeers);
@@ -140,6 +158,7 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
 }
 
 bool PlantNode::CompleteTick(const ArbitrationInput& in) {
+  TakeOperatorCommands();  // an e-stop acts on this tick's write
   arbitration_.Update(in, arbitration_out_);  // arbitrate
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     const std::int64_t age = arbitration_out_.command_age_ticks[i];
@@ -149,15 +168,16 @@ bool PlantNode::CompleteTick(const ArbitrationInput& in) {
     truth_sample_.command_age_ticks[i] = static_cast<int32_t>(std::clamp<std::int64_t>(age, -1, INT32_MAX));
   }
   Report(arbitration_out_.events);
-  if (device_.WriteValves(arbitration_out_.valve_v) == device::DeviceStatus::kFault) {  // step
+  const device::DeviceStatus status = ExchangeWithDevice(arbitration_out_.valve_v);  // step, read
+  if (status == device::DeviceStatus::kFault) {
     faults_.Publish(0, tick_, hexa_msg_FAULT_STATE_NOT_FINITE, "plant state not finite: stopped");
     log_->error("plant state became non-finite at tick {}: stopping", tick_);
     LogLastGoodState();
     PublishStatus(hexa_msg_NODE_FAULT, "state not finite");
     return false;
   }
-  device_.ReadSensors(sensors_);  // read: the next tick's sample
   ++tick_;
+  JudgeDeviceSafety();  // the e-stop as the sample of tick_ shows it
   events_.Clear();
   arbitration_.EndTick(tick_, events_);
   if (tick_ % 100 == 0) {

@@ -6,7 +6,8 @@
 //
 // Parts: the command arbitration (core, pure), the lockstep clock's decisions (core
 // lockstep_clock.hpp) and the real-time clock (realtime_clock.hpp), the rig behind the device
-// seam (device/device.hpp: SimDevice, the simulation), the valve writers' table
+// seam (device/device.hpp: SimDevice, the simulation, or RemoteBoardDevice, an I/O board over
+// UDP; plant_device.cpp), the valve writers' table
 // (leg_writer_table.hpp), the figures of the run (run_figures.hpp). One tick is
 // read -> arbitrate -> step the device -> write (PlantNode::CompleteTick and PublishTick).
 // Files: plant_node.cpp (the loops), plant_commands.cpp (reception, dead legs, the wording of
@@ -49,6 +50,7 @@
 #include "hexa/core/lockstep_protocol.hpp"
 #include "hexa/core/plant_faults.hpp"
 #include "hexa/core/platform_plant.hpp"
+#include "hexa/device/remote_board_device.hpp"
 #include "hexa/device/sim_device.hpp"
 #include "hexa/services/command_refusal.hpp"
 #include "hexa/services/node.hpp"
@@ -60,6 +62,20 @@
 namespace hexa::plant_sim {
 
 inline constexpr double kTickS = 0.001;  // one tick of the loop
+
+// The rig behind the device seam: the simulation in this process, or a remote I/O board over
+// UDP (docs/board_protocol.md; hexa_board_emulator, or real hardware).
+enum class DeviceKind { kSim, kBoard };
+
+struct BoardLinkOptions {
+  std::string host;           // dotted IPv4 address of the board
+  std::uint16_t port = 0;
+  // Lockstep: a command frame must be answered by a sensor frame within this (the emulator in
+  // step mode); bring-up: the board must answer within this. Real time: the board has failed
+  // when no intact frame came for `lost_after_ticks` ticks.
+  double answer_timeout_s = 2.0;
+  std::uint64_t lost_after_ticks = 20;
+};
 
 struct PlantNodeOptions {
   node::CommonOptions common;
@@ -99,6 +115,8 @@ struct PlantNodeOptions {
   std::string summary_path;        // write the run's figures here as JSON at exit ("" = no)
   bool tracker = false;            // publish the external pose instrument (calibration)
   FreeFallBenchParams free_fall;   // --bench free-fall: the Appendix B bench, not the platform
+  DeviceKind device = DeviceKind::kSim;
+  BoardLinkOptions board;          // --device board
 };
 
 class PlantNode {
@@ -108,8 +126,8 @@ class PlantNode {
   // Runs until shutdown (exit_code::kOk), peers not ready or a lockstep stall
   // (kPlantLockstepStall), a non-finite state (kPlantNonFinite), or the configured duration.
   int Run();
-  // The simulated rig (its true parameters, for evaluation).
-  const PlatformPlant& plant() const { return sim_.plant(); }
+  // The simulated rig (its true parameters, for evaluation); nullptr on a remote board.
+  const PlatformPlant* simulation() const { return device_.simulation(); }
 
  private:
   // plant_lifecycle.cpp: start-up, status, watchdog, the report at the end.
@@ -135,6 +153,14 @@ class PlantNode {
   void WatchSilence(dds_duration_t& wait);  // lockstep main thread, under the lock
   void ServeRecorderSync(bool acked);       // lockstep main thread: an acknowledgement wait
 
+  // plant_device.cpp: the device's bring-up and one exchange per tick (write the valves, read
+  // the next sample; the control round trip; the board's e-stop and link judged).
+  void BringUpDevice();
+  device::DeviceStatus ExchangeWithDevice(const LegArray<double>& valve_v);
+  void JudgeDeviceSafety();  // after the exchange, for the sample of the new tick_
+  void TakeOperatorCommands();  // estop: latch the device; reset: ask the device to re-arm
+  void LogDeviceEnd() const;
+
   // plant_outputs.cpp: sensors of tick_ (all legs, or `only_leg` alone: a re-ask), the IMU
   // (every 5th tick), ground truth and the tracker. Batched: each reader gets one datagram.
   void PublishTick(int only_leg = 0);
@@ -154,8 +180,9 @@ class PlantNode {
   PlantNodeOptions options_;
   config::SystemConfig config_;
   std::shared_ptr<spdlog::logger> log_;
-  device::SimDevice sim_;      // the simulated rig
-  device::Device& device_;     // the rig the loop reads and writes (sim_)
+  std::unique_ptr<device::Device> device_owner_;
+  device::Device& device_;              // the rig the loop reads and writes
+  device::RemoteBoardDevice* board_;    // the same device when it is a remote board, else null
   ArbitrationParams arbitration_params_;
   LockstepSchedule schedule_;
 
@@ -178,6 +205,9 @@ class PlantNode {
   node::PeerTracker peers_;
   comm::Topic<hexa_msg_FaultEvent> fault_topic_;
   comm::Reader<hexa_msg_FaultEvent> fault_reader_;  // polled: never a callback
+  // The operator's e-stop and reset, polled each tick (the supervisor answers them).
+  comm::Topic<hexa_msg_OperatorCommand> operator_topic_;
+  comm::Reader<hexa_msg_OperatorCommand> operator_reader_;
   comm::WaitSet waitset_;
   node::PeerProcesses peer_processes_;  // --peer-pid: the session's processes on this host
   LegArray<std::string> leg_name_{}, standby_name_{};  // "leg3", "leg3_standby"
@@ -213,6 +243,17 @@ class PlantNode {
   std::int64_t loop_ended_ns_ = 0;
   std::int64_t tick_started_ns_ = 0;
   std::uint64_t resent_samples_ = 0;  // lockstep: sensor samples re-published to silent legs
+  // The device: the control round trip (a sample read from the device -> the command computed
+  // from it written), ticks without a new sample, the e-stop latch as last reported.
+  DurationHistogram round_trip_;
+  std::int64_t sample_read_ns_ = -1;  // when the newest sample was read; -1: answered already
+  std::uint64_t ticks_without_sample_ = 0;
+  std::uint64_t samples_missed_total_ = 0;
+  bool estop_reported_ = false;
+  bool estop_reset_asked_ = false;     // an operator reset asked; its refusal reported once
+  std::uint64_t estop_unsafe_ticks_ = 0;  // latched, yet a valve not at its safe value
+  bool board_down_ = false;  // no frame since FAULT_BOARD_LINK
+  bool device_lost_ = false;  // the board was lost during the run: exit kPlantDeviceLost
 };
 
 }  // namespace hexa::plant_sim

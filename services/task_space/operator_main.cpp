@@ -25,7 +25,7 @@ namespace exit_code = hexa::exit_code;
 struct Request {
   int domain = 0;
   double wait_s = 0, linger_s = 0, answer_wait_s = 0;
-  std::string what;  // start stop reset home shutdown jog goal
+  std::string what;  // start stop reset home shutdown estop jog goal
   bool any_reader = false;
   double jog_duration_s = 0, jog_rate_hz = 0;  // jog: how long and how often to send it
   hexa_msg_OperatorCommand cmd{};
@@ -69,7 +69,7 @@ void AddOptions(hexa::cli::Parser& cli) {
   cli.AddOption("rpy-deg", "roll,pitch,yaw",
                 "goal: the platform's orientation, degrees (R = Rz(yaw) Ry(pitch) Rx(roll))", "0,0,0");
   cli.AddOption("quaternion", "w,x,y,z", "goal: the orientation as a unit quaternion instead of --rpy-deg");
-  cli.AllowPositional("start|stop|reset|home|shutdown|jog|goal", 1);
+  cli.AllowPositional("start|stop|reset|home|shutdown|estop|jog|goal", 1);
 }
 
 // "a,b,c" -> N finite numbers; false with `error` naming the option.
@@ -157,10 +157,11 @@ int ReadRequest(hexa::cli::Parser& cli, int argc, char** argv, Request& r) {
   else if (what == "reset") cmd.kind = hexa_msg_OPERATOR_RESET;
   else if (what == "home") cmd.kind = hexa_msg_OPERATOR_HOME;
   else if (what == "shutdown") cmd.kind = hexa_msg_OPERATOR_SHUTDOWN;
+  else if (what == "estop") cmd.kind = hexa_msg_OPERATOR_ESTOP;
   else if (what == "jog") cmd.kind = hexa_msg_OPERATOR_JOG;
   else if (what == "goal") cmd.kind = hexa_msg_OPERATOR_GOAL;
   else {
-    std::fprintf(stderr, "error: unknown command '%s' (start stop reset home shutdown jog goal)\n",
+    std::fprintf(stderr, "error: unknown command '%s' (start stop reset home shutdown estop jog goal)\n",
                  what.c_str());
     return exit_code::kUsage;
   }

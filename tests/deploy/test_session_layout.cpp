@@ -14,6 +14,7 @@
 #include "deployment.hpp"
 #include "generate.hpp"
 #include "launcher.hpp"
+#include "hexa/services/scheduling.hpp"
 #include "session_layout.hpp"
 
 namespace {
@@ -217,6 +218,33 @@ TEST(SessionLayout, StartOrderPeersAndPriorities) {
   EXPECT_EQ(layout.Find("bridge")->rt_priority, 0);
   o.rt_sched = false;  // --no-rt-sched: SCHED_OTHER everywhere
   for (const auto& p : hexa::session::BuildSessionLayout(o).processes) EXPECT_EQ(p.rt_priority, 0) << p.name;
+}
+
+// --cpus-* auto: real time pins the control processes to the last CPU (the loop's wake-ups stay
+// on one CPU) and the rest to the others; lockstep pins nothing, so that its normal-priority
+// processes can leave a CPU that real-time loops take (docs/measurements/faults.md).
+hexa::launcher::Options ParseSession(const std::string& mode) {
+  const std::string out = ::testing::TempDir() + "/cpus_" + mode;
+  std::vector<std::string> args = {"hexa_session", "--mode", mode, "--out", out};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  hexa::launcher::Options o;
+  EXPECT_EQ(hexa::launcher::ParseOptions(static_cast<int>(argv.size()), argv.data(), o), -1);
+  return o;
+}
+
+TEST(SessionCpus, AutoPinsRealTimeOnlyAndLockstepRunsOnEveryCpu) {
+  const std::vector<int> cpus = hexa::sched::AllowedCpus();
+  if (cpus.size() < 2) GTEST_SKIP() << "one CPU: auto pins nothing in either mode";
+  const hexa::launcher::Options lockstep = ParseSession("lockstep");
+  EXPECT_EQ(lockstep.cpus_control, "");
+  EXPECT_EQ(lockstep.cpus_supervisor, "");
+  EXPECT_EQ(lockstep.cpus_recorder, "");
+  EXPECT_EQ(lockstep.cpus_standby, "");
+  const hexa::launcher::Options realtime = ParseSession("realtime");
+  EXPECT_EQ(realtime.cpus_control, std::to_string(cpus.back()));
+  EXPECT_NE(realtime.cpus_recorder, "");
+  EXPECT_EQ(realtime.cpus_supervisor, realtime.cpus_recorder);
 }
 
 }  // namespace

@@ -148,6 +148,7 @@ TEST_F(ExitCodePage, ServicesTableMatchesTheHeader) {
   ExpectCodes("Services",
               {{"`hexa_plant_sim`", ec::kPlantLockstepStall, "lockstep"},
                {"`hexa_plant_sim`", ec::kPlantNonFinite, "non-finite"},
+               {"`hexa_plant_sim`", ec::kPlantDeviceLost, "stopped answering"},
                {"`hexa_task_space`", ec::kPeersNotMatched, "peers not matched"},
                {"`hexa_leg_ctrl`", ec::kPeersNotMatched, "peers not matched"},
                {"`hexa_task_space`", ec::kSupervisorHeld, "held the platform"},

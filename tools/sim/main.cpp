@@ -9,6 +9,7 @@
 
 #include "calibrate_in_process.hpp"
 #include "experiment.hpp"
+#include "coupled_leg_feedback.hpp"
 #include "hexa/config/rig_config.hpp"
 #include "hexa/core/calibration.hpp"
 #include "hexa/core/lockstep_simulation.hpp"
@@ -84,15 +85,17 @@ int main(int argc, char** argv) {
   if (cli.Flag("no-outer-loop")) config.supervisor.outer_loop.enabled = false;
   if (cli.Flag("least-squares")) config.supervisor.least_squares_estimator = true;
   if (cli.Flag("no-feedforward")) config.supervisor.feedforward_enabled = false;
-  if (cli.Flag("coupled-feedback")) config.coupled_leg_feedback = true;
-  if (cli.Flag("coupled-raise-only")) config.coupled_raise_only = true;
-  if (cli.Flag("coupled-observer-velocity")) config.coupled_observer_velocity = true;
+  hexa::study::CoupledLegFeedbackParams coupled;
+  coupled.enabled = cli.Flag("coupled-feedback");
+  coupled.raise_only = cli.Flag("coupled-raise-only");
+  coupled.observer_velocity = cli.Flag("coupled-observer-velocity");
   if (const auto m_ref = cli.GetDouble("coupled-reference-mass", 0, 999)) {
-    config.coupled_reference_mass_kg = *m_ref;
+    coupled.reference_mass_kg = *m_ref;
   } else {
     std::fprintf(stderr, "error: %s\n", cli.error().c_str());
     return 2;
   }
+  config.leg_runner = hexa::study::CoupledLegRunnerFactory(coupled);
   config.plant_friction_model = cli.Get("friction-model") == "static"
                                     ? hexa::LegModelParams::FrictionModel::kStatic
                                     : hexa::LegModelParams::FrictionModel::kLugre;

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 
@@ -25,6 +26,12 @@
 #include "hexa/core/supervisor.hpp"
 
 namespace hexa {
+
+class LegRunner;
+// Makes the leg runner of one simulation from its supervisor (its rig) and its six leg
+// controllers (their configurations); called once, before tick 0.
+using LegRunnerFactory = std::function<std::unique_ptr<LegRunner>(
+    const Supervisor& supervisor, const LegArray<std::unique_ptr<LegController>>& legs)>;
 
 struct LockstepConfig {
   RigParams rig = MakeReferenceRig();
@@ -43,27 +50,34 @@ struct LockstepConfig {
   // The plant's friction model (PlatformPlantConfig::friction_model).
   LegModelParams::FrictionModel plant_friction_model = LegModelParams::FrictionModel::kLugre;
   FreeFallBenchParams plant_free_fall;  // enabled: the free-fall bench instead of the platform
-  // Coupled leg feedback (study, docs/measurements/control.md "Coupled leg feedback"; false =
-  // the system): every tick the six BS-SMC feedback parts f_j (and their rates) are mixed,
-  // leg i applying sum_j W_ij f_j with W = M_ls(q) / M_i: M_ls the leg-space mass matrix
-  // (platform_dynamics.hpp) of the supervisor's rig at its pose estimate, refreshed every
-  // supervisor tick (home until the first valid estimate), M_i leg i's
-  // bssmc.effective_mass_kg; each leg's observer is driven by m_obs (M_ls^-1 F)_i, F the six
-  // measured pneumatic forces (BsSmcInput::observer_force_n). In process only: the DDS leg controllers do not see each other.
-  bool coupled_leg_feedback = false;
-  // Reference mass of the coupled feedback, W = M_ls / m_ref; 0: each leg's
-  // bssmc.effective_mass_kg (the paper's M of eq 25 replaced by M_ls).
-  double coupled_reference_mass_kg = 0.0;
-  // Coupled variant: the feedback parts' velocity from the (coupled) leg observers
-  // (BsSmcInput::feedback_velocity_from_observer).
-  bool coupled_observer_velocity = false;
-  // Coupled variant: W = V diag(max(m_k, m_ref)) V^T / m_ref
-  // (M_ls = V diag(m_k) V^T): modes heavier than m_ref get the single-mass loop, lighter ones
-  // keep the uncoupled gain.
-  bool coupled_raise_only = false;
+  // Runs the six leg controllers every tick; unset: the system's runner (each leg its own
+  // LegController::Update, as the six leg services do). A study supplies another (see
+  // LegRunner).
+  LegRunnerFactory leg_runner;
   double tick_s = 0.001;
   int supervisor_every_ticks = 5;
   void Validate() const;  // throws std::invalid_argument naming the field and value
+};
+
+// How the six leg controllers of one tick run. The system's legs are independent processes:
+// each leg's LegController::Update on its own input (IndependentLegRunner). A study may
+// replace it in process only, e.g. one that mixes the legs' feedback
+// (studies/coupled_leg_feedback/). Pure, like the simulation.
+class LegRunner {
+ public:
+  virtual ~LegRunner() = default;
+  // Tick n, after the supervisor and before the plant step: `supervisor_output` is the
+  // supervisor's output of this tick when it ran, null otherwise; `in` the six legs' inputs
+  // of this tick; writes the six outputs.
+  virtual void Run(const SupervisorOutput* supervisor_output,
+                   LegArray<std::unique_ptr<LegController>>& legs,
+                   const LegArray<LegControllerInput>& in, LegArray<LegControllerOutput>& out) = 0;
+};
+
+class IndependentLegRunner final : public LegRunner {
+ public:
+  void Run(const SupervisorOutput* supervisor_output, LegArray<std::unique_ptr<LegController>>& legs,
+           const LegArray<LegControllerInput>& in, LegArray<LegControllerOutput>& out) override;
 };
 
 class LockstepSimulation {
@@ -110,12 +124,7 @@ class LockstepSimulation {
   LegArray<double> applied_v_{};
   bool supervisor_ran_ = false;
   SupervisorOutput sup_out_;
-  // Coupled leg feedback: W = M_ls / M per row (config_.coupled_leg_feedback).
-  Matrix6d coupling_ = Matrix6d::Identity();
-  Matrix6d coupling_inverse_mass_ = Matrix6d::Identity();  // M_ls^-1 (the observers' force)
-  LegArray<double> coupling_mass_kg_{};
-  void UpdateCoupling(const Pose& pose);
-  void RunLegsCoupled(const LegArray<LegControllerInput>& in);
+  std::unique_ptr<LegRunner> leg_runner_;
 };
 
 // Figures of merit of a session (paper Tables 9, 10), accumulated over the supervisor's

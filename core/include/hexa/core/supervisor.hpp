@@ -64,6 +64,8 @@ enum class FaultReason {
   kSensorInconsistent,  // a leg length disagrees with the other legs and the IMU
   kImuLost,             // the IMU stopped delivering samples
   kCommandRefused,      // a command from a writer not of this session was refused
+  kEstop,               // the e-stop latched (the board's loop input, or the operator)
+  kBoardLink,           // the I/O board stopped answering
 };
 const char* ToString(FaultReason reason);  // "FAULT_NONE", ...
 

@@ -13,6 +13,7 @@ inline constexpr int kUsage = 2;        // a usage or configuration error named 
 // Services.
 inline constexpr int kPlantLockstepStall = 3;     // hexa_plant_sim: a leg / the loop stopped answering
 inline constexpr int kPlantNonFinite = 4;         // hexa_plant_sim: the plant's state became non-finite
+inline constexpr int kPlantDeviceLost = 7;        // hexa_plant_sim: the device (I/O board) stopped answering
 inline constexpr int kPeersNotMatched = 3;        // hexa_task_space, hexa_leg_ctrl: peers not matched at start-up
 inline constexpr int kSupervisorHeld = 5;         // hexa_task_space --exit-when-done: HOLD, no reset in time
 inline constexpr int kStoppedByOperator = 6;      // hexa_task_space --exit-when-done: `stop` ended the motion
