@@ -15,6 +15,8 @@
 //        z): share of the squared error within +-N ms of the desired motion's
 //        reversals, bias / first harmonic / rest, the rest's share above 1 Hz, and per leg
 //        the stick-slip (see Reversals below)
+//   platform_study zsplit <traj> [options]    the z error through the legs, split on the
+//        leg-space modes at home (see ZSplit below)
 //   platform_study modes [options]             leg-space modal masses at home and the BS-SMC
 //        velocity loop's crossover and phase margin on each (see Modes below)
 //
@@ -45,6 +47,7 @@
 
 #include "calibrate_in_process.hpp"
 #include "coupled_leg_feedback.hpp"
+#include "platform_observer_feedback.hpp"
 #include "hexa/config/rig_config.hpp"
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
@@ -58,6 +61,26 @@
 namespace {
 
 using hexa::PaperMotion;
+
+// Per-axis scale of the combined motion's amplitudes (keys ax ay az; 1 = eq 49). Lets a run
+// take one axis' content out of the combined motion (diagnosis of combined z).
+hexa::Vector6d g_combined_axis_scale = hexa::Vector6d::Ones();
+
+// The start request of a paper motion, the combined one with g_combined_axis_scale applied.
+hexa::StartRequest PaperStart(const hexa::LockstepSimulation& sim, PaperMotion motion, int periods) {
+  if (motion != PaperMotion::kCombined || g_combined_axis_scale == hexa::Vector6d::Ones()) {
+    return sim.supervisor().PreparePaperStart(motion, periods);
+  }
+  const auto paper = hexa::MakePaperMotion(motion, sim.supervisor().home_xyz_rpy(), periods);
+  hexa::Vector6d phase = hexa::Vector6d::Zero();
+  phase[1] = 3.14159265358979323846 / 2.0;  // eq 49: y = 8 cos
+  auto scaled = std::make_shared<const hexa::SinusoidMotion>(
+      paper->centre(), paper->amplitude().cwiseProduct(g_combined_axis_scale), phase,
+      paper->frequency_hz(), periods > 0 ? periods : hexa::DefaultPeriods(motion));
+  return sim.supervisor().PrepareStart(hexa::Trajectory(scaled, sim.supervisor().rest_xyz_rpy(),
+                                                        sim.supervisor().home_xyz_rpy(),
+                                                        sim.supervisor().timing()));
+}
 
 struct Key {
   const char* name;
@@ -79,8 +102,15 @@ std::vector<CoupledKey> CoupledKeys() {
   };
 }
 
+// The legs' velocity from the platform state observer (studies/platform_observer_feedback,
+// docs/controller.md "Platform state observer"). Applied after --calibrate's procedure, which
+// runs with the system's legs.
+hexa::study::PlatformObserverFeedbackParams g_platform_observer;
+
 std::vector<Key> Keys() {
   return {
+      {"pobs", [](auto&, double v) { g_platform_observer.enabled = v != 0.0; }},
+      {"pobs_rate", [](auto&, double v) { g_platform_observer.disturbance_rate_m_s3 = v; }},
       {"lambda", [](auto& c, double v) { c.leg_controller.bssmc.lambda_1_s = v; }},
       {"K", [](auto& c, double v) { c.leg_controller.bssmc.switching_gain_n = v; }},
       {"xi", [](auto& c, double v) { c.leg_controller.bssmc.boundary_layer_xi_s_m = v; }},
@@ -155,6 +185,10 @@ std::vector<Key> Keys() {
       // Supervisor period in ticks (5 = the system's 5 ms; 1 = a setpoint every tick, no
       // interpolation inside the period). The outer-loop gain is per supervisor step: scale
       // it with ol_gain to keep its integral rate.
+      // Per-axis amplitude scale of the combined motion (study only; see PaperStart).
+      {"ax", [](auto&, double v) { g_combined_axis_scale[0] = v; }},
+      {"ay", [](auto&, double v) { g_combined_axis_scale[1] = v; }},
+      {"az", [](auto&, double v) { g_combined_axis_scale[2] = v; }},
       {"sup_every", [](auto& c, double v) {
          c.supervisor_every_ticks = static_cast<int>(v);
          c.supervisor.period_s = v * c.tick_s;
@@ -181,7 +215,7 @@ std::vector<int> MovingAxes(PaperMotion m) {
 
 int Usage() {
   std::fprintf(stderr,
-               "usage: platform_study [trace|fit|legs|reversals <traj> | modes] [--rig file|default] [--calibrate] [--seed N] [--controller bssmc|pi] [--ideal]\n"
+               "usage: platform_study [trace|fit|legs|reversals|zsplit <traj> | modes] [--rig file|default] [--calibrate] [--seed N] [--controller bssmc|pi] [--ideal]\n"
                "       [--traj all|x,y,z,roll,pitch,yaw,combined] [--periods N] [key=value ...]\n"
                "keys:");
   for (const auto& k : Keys()) std::fprintf(stderr, " %s", k.name);
@@ -235,7 +269,7 @@ hexa::PaperSessionResult RunSession(const hexa::LockstepConfig& config, PaperMot
   hexa::LockstepSimulation sim(config);
   result.plant_status = sim.Tick();
   if (result.plant_status != hexa::PlantStatus::kOk) return result;
-  const hexa::StartRequest start = sim.supervisor().PreparePaperStart(motion, periods);
+  const hexa::StartRequest start = PaperStart(sim, motion, periods);
   bool started = false, left_idle = false;
   hexa::SupervisorState state = hexa::SupervisorState::kIdle;
   while (sim.time_s() < 600.0) {
@@ -312,7 +346,7 @@ void ForEachTrackingTick(hexa::LockstepSimulation& sim, const hexa::StartRequest
 void Trace(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
   hexa::LockstepSimulation sim(config);
   sim.Tick();
-  const hexa::StartRequest start = sim.supervisor().PreparePaperStart(motion, periods);
+  const hexa::StartRequest start = PaperStart(sim, motion, periods);
   std::printf("t,state");
   for (int i = 1; i <= 6; ++i)
     std::printf(",ld%d,l%d,ltrue%d,vd%d,ad%d,u%d,phi%d,S%d,P1_%d,P2_%d,corr%d,v%d,z%d,phidot%d", i, i, i,
@@ -395,7 +429,7 @@ double WrapPi(double a) {
 void Fit(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
   hexa::LockstepSimulation sim(config);
   sim.Tick();
-  const hexa::StartRequest start = sim.supervisor().PreparePaperStart(motion, periods);
+  const hexa::StartRequest start = PaperStart(sim, motion, periods);
   const double f_hz = motion == PaperMotion::kCombined ? 1.0 : 0.1;
   const double w = MotionOmega(motion);
   std::vector<double> t;
@@ -545,7 +579,7 @@ void Legs(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
   const double w = MotionOmega(motion);
   hexa::LockstepSimulation sim(config);
   sim.Tick();
-  const hexa::StartRequest start = sim.supervisor().PreparePaperStart(motion, periods);
+  const hexa::StartRequest start = PaperStart(sim, motion, periods);
   hexa::BsSmcConfig bc;
   bc.params = config.leg_controller.bssmc;
   bc.differentiator = config.leg_controller.differentiator;
@@ -650,7 +684,7 @@ void Reversals(const hexa::LockstepConfig& config, PaperMotion motion, int perio
   const double w = MotionOmega(motion);
   hexa::LockstepSimulation sim(config);
   sim.Tick();
-  const hexa::StartRequest start = sim.supervisor().PreparePaperStart(motion, periods);
+  const hexa::StartRequest start = PaperStart(sim, motion, periods);
   const char* trace_path = std::getenv("HEXA_REVERSALS_TRACE");
   std::FILE* trace = trace_path ? std::fopen(trace_path, "w") : nullptr;
   if (trace) {
@@ -746,6 +780,99 @@ void Reversals(const hexa::LockstepConfig& config, PaperMotion motion, int perio
   }
 }
 
+// Where combined z's error comes from, through the legs: every 1 ms tick of the tracking
+// window the six true leg-length errors e = l - l_d(q_d) (plant's true geometry, the
+// trajectory of NOW) map to a pose error J(q_d)^-1 e (eq 48, first order), whose z is checked
+// against the true z error. e is split on the leg-space modes at home (eigenvectors V_k of
+// M_ls, eq 48, the rig's masses): z_k = (J(q_d)^-1 V_k V_k^T e)_z, sum_k z_k = the z error.
+// Per mode: its mass, its task direction, the RMS of its leg error, the RMS of z_k and its
+// share of z's mean square (mean z_k z / mean z^2; the shares sum to 1). The last column splits
+// z_k into what J(home)^-1 gives (the mode's own z at home) and the rest (the pose-dependent
+// geometry moving the mode's leg error into z away from home).
+void ZSplit(const hexa::LockstepConfig& config, PaperMotion motion, int periods) {
+  hexa::LockstepSimulation sim(config);
+  sim.Tick();
+  const hexa::StartRequest start = PaperStart(sim, motion, periods);
+  const hexa::GeometryParams& geometry = sim.plant().true_geometry();
+  hexa::Pose home;
+  home.p_BP_B_m = geometry.home_position_m;
+  home.R_BP.setIdentity();
+  hexa::Matrix6d j_home, m_ls;
+  hexa::LegJacobian(geometry, home, j_home);
+  hexa::LegSpaceMassMatrix(geometry, hexa::PlatformInertialParams::FromRig(config.rig), home, m_ls);
+  const Eigen::SelfAdjointEigenSolver<hexa::Matrix6d> eig(m_ls);
+  const hexa::Matrix6d v = eig.eigenvectors();
+  const hexa::Matrix6d j_home_inv = j_home.inverse();
+  double sq_true = 0.0, sq_lin = 0.0, sq_diff = 0.0;
+  std::array<double, 6> sq_mode{}, cross_mode{}, sq_leg_mode{}, sq_home{}, sq_leak{};
+  long n = 0;
+  std::vector<double> t_s, heave_m;  // the desired motion's heave coordinate V_heave^T l_d
+  int heave = 0;
+  for (int k = 0; k < 6; ++k) {
+    if (std::abs((j_home_inv * v.col(k))[2]) > std::abs((j_home_inv * v.col(heave))[2])) heave = k;
+  }
+  ForEachTrackingTick(sim, start, config.rig.geometry,
+                      [&](const hexa::PlatformPlantOutput& p, double, const hexa::TrajectorySample& d,
+                          const hexa::LegArray<double>&, const hexa::LegArray<double>&) {
+    hexa::LegArray<double> ld{};
+    hexa::InverseKinematics(geometry, d.pose, ld);
+    hexa::Matrix6d j;
+    hexa::LegJacobian(geometry, d.pose, j);
+    const hexa::Matrix6d j_inv = j.inverse();
+    Eigen::Vector<double, 6> e;
+    for (int i = 0; i < 6; ++i) e[i] = p.truth.length_m[i] - ld[i];
+    const double z_true = p.truth.pose.p_BP_B_m.z() - d.pose.p_BP_B_m.z();
+    t_s.push_back(static_cast<double>(n) * config.tick_s);
+    double h = 0.0;
+    for (int i = 0; i < 6; ++i) h += v(i, heave) * ld[static_cast<std::size_t>(i)];
+    heave_m.push_back(h);
+    const double z_lin = (j_inv * e)[2];
+    sq_true += z_true * z_true;
+    sq_lin += z_lin * z_lin;
+    sq_diff += (z_true - z_lin) * (z_true - z_lin);
+    for (int k = 0; k < 6; ++k) {
+      const double a = v.col(k).dot(e);
+      const double zk = (j_inv * v.col(k))[2] * a;
+      const double zk_home = (j_home_inv * v.col(k))[2] * a;
+      sq_mode[k] += zk * zk;
+      cross_mode[k] += zk * z_lin;
+      sq_leg_mode[k] += a * a;
+      sq_home[k] += zk_home * zk_home;
+      sq_leak[k] += (zk - zk_home) * (zk - zk_home);
+    }
+    ++n;
+  });
+  if (n == 0) {
+    std::fprintf(stderr, "zsplit: empty tracking window\n");
+    return;
+  }
+  const double dn = static_cast<double>(n);
+  std::printf("z error RMS %.4f cm, through the legs (J^-1 e) %.4f cm, difference %.4f cm\n",
+              100 * std::sqrt(sq_true / dn), 100 * std::sqrt(sq_lin / dn), 100 * std::sqrt(sq_diff / dn));
+  std::printf("mode kg | task direction x y z roll pitch yaw | leg error RMS mm | z_k RMS cm | share of z MS | "
+              "z_k at home J / pose-dependent rest RMS cm\n");
+  for (int k = 0; k < 6; ++k) {
+    const hexa::Vector6d dir = j_home_inv * v.col(k);
+    std::printf("%7.3f | %6.3f %6.3f %6.3f %6.3f %6.3f %6.3f | %.3f | %.4f | %+.3f | %.4f / %.4f\n",
+                eig.eigenvalues()[k], dir[0], dir[1], dir[2], dir[3], dir[4], dir[5],
+                1000 * std::sqrt(sq_leg_mode[k] / dn), 100 * std::sqrt(sq_mode[k] / dn),
+                sq_lin > 0 ? cross_mode[k] / sq_lin : 0.0, 100 * std::sqrt(sq_home[k] / dn),
+                100 * std::sqrt(sq_leak[k] / dn));
+  }
+  // The desired legs' common (heave) motion: its amplitude at 1-5 x the motion's frequency.
+  const double w = MotionOmega(motion);
+  std::printf("desired heave coordinate, amplitude mm at 1-5 x f:");
+  for (int hk = 1; hk <= 5; ++hk) {
+    double a = 0.0, b = 0.0;
+    for (std::size_t s = 0; s < t_s.size(); ++s) {
+      a += heave_m[s] * std::sin(hk * w * t_s[s]);
+      b += heave_m[s] * std::cos(hk * w * t_s[s]);
+    }
+    std::printf(" %.4f", 1000.0 * 2.0 * std::hypot(a, b) / static_cast<double>(t_s.size()));
+  }
+  std::printf("\n");
+}
+
 
 // Leg-space modes at home: eigenvalues of J^-T M_p J^-1 + m_leg I (eq 48; the
 // rig's platform mass and inertia, the pistons' moving mass), and for each the BS-SMC's
@@ -827,7 +954,7 @@ int main(int argc, char** argv) {
                                       PaperMotion::kRoll, PaperMotion::kPitch, PaperMotion::kYaw,
                                       PaperMotion::kCombined};
   int periods = 0;
-  bool trace = false, fit = false, legs = false, modes = false, reversals = false, calibrate = false;
+  bool trace = false, zsplit = false, fit = false, legs = false, modes = false, reversals = false, calibrate = false;
   std::optional<hexa::config::SystemConfig> loaded_rig;
   const auto keys = Keys();
   const auto coupled_keys = CoupledKeys();
@@ -835,8 +962,8 @@ int main(int argc, char** argv) {
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
     auto next = [&]() -> std::string { return a + 1 < argc ? argv[++a] : std::string(); };
-    if (arg == "trace" || arg == "fit" || arg == "legs" || arg == "reversals") {
-      (arg == "trace" ? trace : arg == "fit" ? fit : arg == "legs" ? legs : reversals) = true;
+    if (arg == "trace" || arg == "fit" || arg == "legs" || arg == "reversals" || arg == "zsplit") {
+      (arg == "trace" ? trace : arg == "fit" ? fit : arg == "legs" ? legs : arg == "zsplit" ? zsplit : reversals) = true;
       PaperMotion m;
       if (!hexa::ParsePaperMotion(next(), m)) return Usage();
       motions = {m};
@@ -917,8 +1044,19 @@ int main(int argc, char** argv) {
     if (!hexa::calib::CalibrateInProcess(config, calibration, stderr)) return 1;
     hexa::calib::ApplyKinematicCalibration(calibration, config);
   }
+  if (g_platform_observer.enabled) {
+    if (coupled.enabled) {
+      std::fprintf(stderr, "pobs=1 and coupled=1 are exclusive (one leg runner)\n");
+      return 2;
+    }
+    config.leg_runner = hexa::study::PlatformObserverLegRunnerFactory(g_platform_observer);
+  }
   if (reversals) {
     Reversals(config, motions.front(), periods);
+    return 0;
+  }
+  if (zsplit) {
+    ZSplit(config, motions.front(), periods);
     return 0;
   }
   if (trace) {

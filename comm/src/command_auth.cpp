@@ -70,7 +70,7 @@ class MacInput {
   void Bytes(const std::uint8_t* p, std::size_t n) {
     for (std::size_t i = 0; i < n; ++i) Byte(p[i]);
   }
-  std::array<std::uint8_t, 512> buffer_{};  // the largest input (OperatorCommand) is 380 bytes
+  std::array<std::uint8_t, 640> buffer_{};  // the largest input (OperatorCommand) is 492 bytes
   std::size_t size_ = 0;
 };
 
@@ -112,6 +112,11 @@ MacInput InputOf(const ParticipantPrefix& w, const hexa_msg_OperatorCommand& c) 
   m.Text(c.trajectory, sizeof c.trajectory);
   m.Text(c.csv_path, sizeof c.csv_path);
   m.I64(c.source_time_ns);
+  m.U64(static_cast<std::uint64_t>(c.jog_frame));
+  for (const double v : c.jog_velocity_m_s) m.F64(v);
+  for (const double v : c.jog_angular_velocity_rad_s) m.F64(v);
+  for (const double v : c.goal_position_m) m.F64(v);
+  for (const double v : c.goal_orientation_wxyz) m.F64(v);
   return m;
 }
 

@@ -157,6 +157,7 @@ BsSmcFeedback BsSmcController::Begin(const BsSmcInput& in) {
     observer_updated = true;
     v_feedback_m_s = observer_.velocity_m_s();
   }
+  if (in.has_feedback_velocity) v_feedback_m_s = in.feedback_velocity_m_s;
   const double edot_m_s = v_feedback_m_s - in.desired_velocity_m_s;
   const double s_m_s = edot_m_s + p.lambda_1_s * e_m;  // eq 19
 

@@ -201,6 +201,20 @@ void LegController::Update(const LegControllerInput& raw, LegControllerOutput& o
   }
 }
 
+void LegController::Update(const LegControllerInput& raw, LegControllerOutput& out,
+                           double feedback_velocity_m_s) {
+  if (!Prepare(raw, out)) return;
+  if (config_.kind == LegControllerKind::kPi) {
+    RunPi(out);
+    return;
+  }
+  pending_.has_feedback_velocity = true;
+  pending_.feedback_velocity_m_s = feedback_velocity_m_s;
+  BsSmcOutput o;
+  bssmc_.Update(pending_, o);
+  FinishBsSmc(o, out);
+}
+
 std::optional<BsSmcFeedback> LegController::BeginCoupled(const LegControllerInput& raw,
                                                          LegControllerOutput& out,
                                                          std::optional<double> observer_force_n,

@@ -74,10 +74,14 @@ SilentLegVerdict JudgeSilentLegLockstep(const SilentLegFacts& f) {
 }
 
 ControlCycleWatch::Cause ControlCycleWatch::Check(std::uint64_t cycle_sequence, bool unpublished,
-                                                  std::uint64_t unpublished_tick) {
+                                                  std::uint64_t unpublished_tick,
+                                                  bool cycle_thread_starved) {
   Cause now = Cause::kNone;
   if ((cycle_sequence & 1u) != 0 && cycle_sequence == last_sequence_) {
-    now = Cause::kHang;  // the same cycle is still running
+    // The same cycle is still running; if its thread was kept waiting for a CPU meanwhile,
+    // this check says nothing about the cycle: neither counted nor a reset.
+    if (cycle_thread_starved) return cause_;
+    now = Cause::kHang;
   } else if (unpublished && last_unpublished_ && unpublished_tick == last_tick_) {
     now = Cause::kSilence;  // the same answer is still unpublished
   }

@@ -104,6 +104,17 @@ void JogProfile::Reset() noexcept {
   have_command_ = false;
 }
 
+void JogProfile::StartFrom(const Vector6d& twist_C_B, const Vector6d& acceleration_C_B) noexcept {
+  Reset();
+  for (int k = 0; k < 6; ++k) {
+    const AxisLimits& l = k < 3 ? config_.linear : config_.angular;
+    const double v = std::isfinite(twist_C_B[k]) ? twist_C_B[k] : 0.0;
+    const double a = std::isfinite(acceleration_C_B[k]) ? acceleration_C_B[k] : 0.0;
+    axis_[k].velocity = std::clamp(v, -l.max_speed, l.max_speed);
+    axis_[k].acceleration = std::clamp(a, -l.max_acceleration, l.max_acceleration);
+  }
+}
+
 bool JogProfile::still() const noexcept {
   for (int k = 0; k < 6; ++k) {
     if (std::abs(axis_[k].velocity) > config_.still_speed || axis_[k].acceleration != 0.0) {

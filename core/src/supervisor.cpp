@@ -18,6 +18,24 @@ void CopyDetail(std::array<char, 160>& dst, const char* src) {
   std::snprintf(dst.data(), dst.size(), "%s", src);
 }
 
+// The supervisor's own parameters are checked before the operator modes are built from them,
+// so that a bad one is reported as the supervisor's.
+const OperatorMotionConfig& CheckedFirst(const SupervisorParams& params,
+                                         const OperatorMotionConfig& config) {
+  std::vector<ParamIssue> issues;
+  ParamChecker c(issues);
+  CheckSupervisorParams(c, params);
+  ThrowIfIssues(issues, "Supervisor");
+  return config;
+}
+
+OperatorMotionConfig DefaultOperatorMotionConfig(const RigParams& rig, const SupervisorParams& params) {
+  OperatorMotionConfig config;
+  CheckedFirst(params, config);
+  config.limits = MakeSoftLimitsConfig(rig, params);
+  return config;
+}
+
 }  // namespace
 
 const char* ToString(SupervisorState state) {
@@ -27,6 +45,8 @@ const char* ToString(SupervisorState state) {
     case SupervisorState::kTracking: return "SUPERVISOR_TRACKING";
     case SupervisorState::kStopping: return "SUPERVISOR_STOPPING";
     case SupervisorState::kHold: return "SUPERVISOR_HOLD";
+    case SupervisorState::kJogging: return "SUPERVISOR_JOGGING";
+    case SupervisorState::kGoal: return "SUPERVISOR_GOAL";
   }
   return "?";
 }
@@ -65,6 +85,8 @@ const char* ToString(OperatorCommandKind kind) {
     case OperatorCommandKind::kStop: return "stop";
     case OperatorCommandKind::kReset: return "reset";
     case OperatorCommandKind::kHome: return "home";
+    case OperatorCommandKind::kJog: return "jog";
+    case OperatorCommandKind::kGoal: return "goal";
   }
   return "?";
 }
@@ -81,6 +103,12 @@ const char* ToString(CommandResult result) {
 
 Supervisor::Supervisor(const RigParams& rig, const SupervisorParams& params,
                        const LegArray<PotentiometerCalibrationParams>& potentiometer)
+    : Supervisor(rig, params, potentiometer,
+                 DefaultOperatorMotionConfig(rig, params)) {}
+
+Supervisor::Supervisor(const RigParams& rig, const SupervisorParams& params,
+                       const LegArray<PotentiometerCalibrationParams>& potentiometer,
+                       const OperatorMotionConfig& operator_motion)
     : rig_(rig),
       params_(params),
       estimator_(rig.geometry, PoseEstimatorConfig{params.least_squares_estimator,
@@ -91,7 +119,8 @@ Supervisor::Supervisor(const RigParams& rig, const SupervisorParams& params,
       inertial_(PlatformInertialParams::FromRig(rig)),
       potentiometer_(potentiometer),
       home_(HomePoseVector(rig.geometry.home_position_m)),
-      home_motion_(std::make_shared<const ConstantMotion>(home_)) {
+      home_motion_(std::make_shared<const ConstantMotion>(home_)),
+      operator_motion_(rig, CheckedFirst(params, operator_motion)) {
   std::vector<ParamIssue> issues;
   ParamChecker c(issues);
   CheckSupervisorParams(c, params);
@@ -257,7 +286,14 @@ void Supervisor::HandleCommand(const SupervisorInput& input, SupervisorOutput& o
       result = CommandResult::kAccepted;
       return;
     }
+    case OperatorCommandKind::kJog:
+    case OperatorCommandKind::kGoal:
+      HandleMotionCommand(input, output);
+      return;
     case OperatorCommandKind::kStop: {
+      if (state_ == SupervisorState::kJogging || state_ == SupervisorState::kGoal) {
+        operator_motion_.RequestStop();  // to rest at the jog limits, then IDLE
+      }
       if (state_ == SupervisorState::kBlending || state_ == SupervisorState::kTracking) {
         const double t = input.time_s - trajectory_start_time_s_;
         if (t < stop_at_s_) stop_at_s_ = std::max(t, 0.0);
@@ -353,6 +389,7 @@ FaultReason Supervisor::CheckFaults(const SupervisorInput& input,
 
 void Supervisor::Update(const SupervisorInput& input, SupervisorOutput& output) noexcept {
   output.command_result = CommandResult::kNone;
+  output.command_detail[0] = '\0';
   output.fault_raised = false;
 
   // 0. Calibrated lengths (reading of piston position x = offset + gain x).
@@ -389,8 +426,19 @@ void Supervisor::Update(const SupervisorInput& input, SupervisorOutput& output) 
 
   // 4. Desired pose for this tick.
   TrajectorySample desired;
-  if (state_ == SupervisorState::kBlending || state_ == SupervisorState::kTracking ||
-      state_ == SupervisorState::kStopping) {
+  output.operator_motion = OperatorMotionStatus{};
+  if (state_ == SupervisorState::kJogging || state_ == SupervisorState::kGoal) {
+    // Dt: the tick's period (time is an argument; the jog integrates over it).
+    const bool jog_message = input.command == OperatorCommandKind::kJog &&
+                             output.command_result == CommandResult::kAccepted;
+    operator_motion_.Update(input.time_s, params_.period_s, jog_message ? &input.jog : nullptr,
+                            desired, output.operator_motion);
+    if (output.operator_motion.done) {
+      state_ = SupervisorState::kIdle;
+      rest_ = desired.vector.q;
+    }
+  }
+  if (following_trajectory()) {
     trajectory_time_s_ = input.time_s - trajectory_start_time_s_;
     trajectory_.EvaluateStopped(trajectory_time_s_, stop_at_s_, desired);
     switch (desired.phase) {
@@ -445,7 +493,7 @@ void Supervisor::Update(const SupervisorInput& input, SupervisorOutput& output) 
     // Setpoint lead (control_params.hpp): the legs track the motion setpoint_lead_s ahead.
     TrajectorySample led = desired;
     double led_time_s = trajectory_time_s_;
-    const bool moving = state_ != SupervisorState::kIdle;
+    const bool moving = following_trajectory();
     if (moving && params_.setpoint_lead_s > 0.0) {
       led_time_s = trajectory_time_s_ + params_.setpoint_lead_s;
       trajectory_.EvaluateStopped(led_time_s, stop_at_s_, led);
@@ -466,11 +514,44 @@ void Supervisor::Update(const SupervisorInput& input, SupervisorOutput& output) 
   }
 
   output.state = state_;
-  output.trajectory_time_s = state_ == SupervisorState::kIdle ? 0.0 : trajectory_time_s_;
+  output.trajectory_time_s = following_trajectory() || state_ == SupervisorState::kHold
+                                 ? trajectory_time_s_
+                                 : output.operator_motion.goal_time_s;
   output.desired_xyz_rpy = output.desired.vector.q;
   output.fault = fault_;
   output.fault_leg = fault_leg_;
   output.fault_detail = fault_detail_;
+}
+
+void Supervisor::HandleMotionCommand(const SupervisorInput& input, SupervisorOutput& output) {
+  CommandResult& result = output.command_result;
+  const bool jog = input.command == OperatorCommandKind::kJog;
+  if (jog && state_ == SupervisorState::kJogging) {
+    result = CommandResult::kAccepted;  // the jog goes on (Update takes the message)
+    return;
+  }
+  if (state_ != SupervisorState::kIdle) {
+    result = CommandResult::kRefused;
+    std::snprintf(output.command_detail.data(), output.command_detail.size(),
+                  "%s only from SUPERVISOR_IDLE%s (state %s)", jog ? "jog" : "goal",
+                  jog ? " or SUPERVISOR_JOGGING" : "", ToString(state_));
+    return;
+  }
+  const Pose rest = PoseFromVector(rest_);
+  if (jog) {
+    operator_motion_.BeginJog(rest);
+    state_ = SupervisorState::kJogging;
+    result = CommandResult::kAccepted;
+    return;
+  }
+  const GoalCheck check = operator_motion_.BeginGoal(rest, input.goal_X_BP, input.time_s);
+  if (!check.accepted) {
+    result = CommandResult::kRefused;
+    output.command_detail = check.message;
+    return;
+  }
+  state_ = SupervisorState::kGoal;
+  result = CommandResult::kAccepted;
 }
 
 void Supervisor::UpdateConsistency(const SupervisorInput& input) {

@@ -162,6 +162,11 @@ void ToProto(const hexa_msg_OperatorCommand& in, rec::OperatorCommand& out) {
   out.set_trajectory(StringToProto(in.trajectory));
   out.set_csv_path(StringToProto(in.csv_path));
   out.set_source_time_ns(in.source_time_ns);
+  out.set_jog_frame(static_cast<rec::JogFrame>(in.jog_frame));
+  ArrayToProto(in.jog_velocity_m_s, out.mutable_jog_velocity_m_s());
+  ArrayToProto(in.jog_angular_velocity_rad_s, out.mutable_jog_angular_velocity_rad_s());
+  ArrayToProto(in.goal_position_m, out.mutable_goal_position_m());
+  ArrayToProto(in.goal_orientation_wxyz, out.mutable_goal_orientation_wxyz());
 }
 
 void ToProto(const hexa_msg_NodeStatus& in, rec::NodeStatus& out) {
@@ -274,8 +279,15 @@ bool FromProto(const rec::OperatorCommand& in, hexa_msg_OperatorCommand& out) {
   out.sequence = in.sequence();
   out.kind = static_cast<hexa_msg_OperatorCommandKind>(in.kind());
   out.source_time_ns = in.source_time_ns();
+  // Jog and goal fields: absent (zero) in commands recorded before they existed.
+  if (!rec::JogFrame_IsValid(in.jog_frame())) return false;
+  out.jog_frame = static_cast<hexa_msg_JogFrame>(in.jog_frame());
   return StringFromProto(in.trajectory(), out.trajectory) &&
-         StringFromProto(in.csv_path(), out.csv_path);
+         StringFromProto(in.csv_path(), out.csv_path) &&
+         OptionalArrayFromProto(in.jog_velocity_m_s(), out.jog_velocity_m_s, 0.0) &&
+         OptionalArrayFromProto(in.jog_angular_velocity_rad_s(), out.jog_angular_velocity_rad_s, 0.0) &&
+         OptionalArrayFromProto(in.goal_position_m(), out.goal_position_m, 0.0) &&
+         OptionalArrayFromProto(in.goal_orientation_wxyz(), out.goal_orientation_wxyz, 0.0);
 }
 
 bool FromProto(const rec::NodeStatus& in, hexa_msg_NodeStatus& out) {

@@ -34,11 +34,14 @@ void AddOptions(cli::Parser& cli) {
   cli.AddOption("stats-s", "s", "log every client's sent / dropped counts this often (0 = only "
                 "when a client leaves)", "5");
   cli.AddFlag("operator-input",
-              "accept the operator's commands (start stop reset home) from Foxglove clients on "
+              "accept the operator's commands (start stop reset home jog goal) from Foxglove clients on "
               "topic hexa_OperatorInput and forward them to the supervisor: whoever can connect "
               "can then move the platform (docs/foxglove.md, \"Operator input\")");
   cli.AddOption("operator-input-rate-hz", "hz",
                 "per client: operator inputs a second beyond which they are refused", "10");
+  cli.AddOption("operator-jog-rate-hz", "hz",
+                "per client: jog messages a second beyond which they are refused (the supervisor's "
+                "dead-man is 0.25 s: 5-10 Hz keeps a jog going)", "25");
   cli.AddFlag("operator-input-any-host",
               "allow --operator-input with a --listen address other than loopback");
   cli.AddOption("rig", "file", "rig file whose joints the 3-D scene draws",
@@ -69,6 +72,7 @@ int ParseOptions(int argc, char** argv, BridgeOptions& o) {
   const auto total_queue_mb = cli.GetInt("total-queue-mb", 1, 1 << 16);
   const auto nice = cli.GetInt("nice", 0, 19);
   const auto operator_rate_hz = cli.GetDouble("operator-input-rate-hz", 0.1, 100);
+  const auto jog_rate_hz = cli.GetDouble("operator-jog-rate-hz", 1, 200);
   const auto stats_s = cli.GetDouble("stats-s", 0, 3600);
   const auto scene_hz = cli.GetDouble("scene-hz", 1, 1000);
   std::optional<long long> seed;
@@ -81,7 +85,7 @@ int ParseOptions(int argc, char** argv, BridgeOptions& o) {
     return exit_code::kUsage;
   }
   if (!domain || !port || !queue_kb || !max_clients || !total_queue_mb || !nice || !stats_s ||
-      !scene_hz || !operator_rate_hz || (cli.Has("seed") && !seed)) {
+      !scene_hz || !operator_rate_hz || !jog_rate_hz || (cli.Has("seed") && !seed)) {
     return services::UsageError(cli, "hexa_bridge");
   }
   o.domain_id = static_cast<int>(*domain);
@@ -102,6 +106,7 @@ int ParseOptions(int argc, char** argv, BridgeOptions& o) {
   sc.operator_input = cli.Flag("operator-input");
   sc.operator_input_rate_hz = *operator_rate_hz;
   sc.operator_input_burst = std::max(1.0, *operator_rate_hz);
+  sc.operator_jog_rate_hz = *jog_rate_hz;
   if (sc.operator_input && !o.loopback() && !cli.Flag("operator-input-any-host")) {
     std::fprintf(stderr, "hexa_bridge: error: --operator-input with --listen %s: every host that "
                  "can reach it could move the platform; add --operator-input-any-host to mean "

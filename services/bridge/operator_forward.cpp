@@ -53,11 +53,24 @@ void OperatorForwarder::WritePending() {
       case OperatorInput::Command::kStop: cmd.kind = hexa_msg_OPERATOR_STOP; break;
       case OperatorInput::Command::kReset: cmd.kind = hexa_msg_OPERATOR_RESET; break;
       case OperatorInput::Command::kHome: cmd.kind = hexa_msg_OPERATOR_HOME; break;
+      case OperatorInput::Command::kJog: cmd.kind = hexa_msg_OPERATOR_JOG; break;
+      case OperatorInput::Command::kGoal: cmd.kind = hexa_msg_OPERATOR_GOAL; break;
     }
+    const OperatorInput& in = item.input;
+    cmd.jog_frame = in.tool_frame ? hexa_msg_JOG_FRAME_TOOL : hexa_msg_JOG_FRAME_WORK;
+    for (int k = 0; k < 3; ++k) {
+      cmd.jog_velocity_m_s[k] = in.velocity_m_s[k];
+      cmd.jog_angular_velocity_rad_s[k] = in.angular_velocity_rad_s[k];
+      cmd.goal_position_m[k] = in.position_m[k];
+    }
+    for (int k = 0; k < 4; ++k) cmd.goal_orientation_wxyz[k] = in.orientation_wxyz[k];
     std::snprintf(cmd.trajectory, sizeof cmd.trajectory, "%s", item.input.trajectory.c_str());
     cmd.sequence = ++sequence_;
     const dds_return_t rc = writer_.WriteNow(cmd);
-    if (rc == DDS_RETCODE_OK)
+    if (rc == DDS_RETCODE_OK && cmd.kind == hexa_msg_OPERATOR_JOG)
+      log_->debug("client {} ({}): operator command #{} jog written", item.client_id, item.remote,
+                  cmd.sequence);  // a stream: tens a second
+    else if (rc == DDS_RETCODE_OK)
       log_->info("client {} ({}): operator command #{} {}{} written", item.client_id, item.remote,
                  cmd.sequence, CommandName(item.input.command),
                  cmd.kind == hexa_msg_OPERATOR_START ? " " + item.input.trajectory : "");

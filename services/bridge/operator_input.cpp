@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 #include <nlohmann/json.hpp>
+
+#include "hexa/services/operator_motion_checks.hpp"
 
 namespace hexa::bridge {
 namespace {
@@ -13,6 +16,47 @@ OperatorInputResult Refuse(std::string why) {
   OperatorInputResult r;
   r.error = std::move(why);
   return r;
+}
+
+// An array of N finite numbers at `key`; "" or what is wrong.
+template <std::size_t N>
+std::string ReadNumbers(const json& j, const char* key, double (&out)[N]) {
+  const auto it = j.find(key);
+  if (it == j.end()) return std::string("operator input: field '") + key + "' is absent";
+  if (!it->is_array() || it->size() != N)
+    return std::string("operator input: '") + key + "' must be an array of " + std::to_string(N) +
+           " numbers";
+  for (std::size_t k = 0; k < N; ++k) {
+    const json& v = (*it)[k];
+    if (!v.is_number()) return std::string("operator input: '") + key + "' must hold numbers only";
+    out[k] = v.get<double>();
+    if (!std::isfinite(out[k]))
+      return std::string("operator input: '") + key + "' holds a value that is not finite";
+  }
+  return "";
+}
+
+// The jog's or goal's fields, checked as the supervisor checks them.
+std::string ReadMotion(const json& j, OperatorInput& in) {
+  char why[160] = "";
+  if (in.command == OperatorInput::Command::kJog) {
+    if (const auto f = j.find("frame"); f != j.end()) {
+      if (!f->is_string() || (*f != "work" && *f != "tool"))
+        return "operator input: 'frame' must be \"work\" or \"tool\"";
+      in.tool_frame = *f == "tool";
+    }
+    if (std::string e = ReadNumbers(j, "velocity_m_s", in.velocity_m_s); !e.empty()) return e;
+    if (std::string e = ReadNumbers(j, "angular_velocity_rad_s", in.angular_velocity_rad_s); !e.empty())
+      return e;
+    if (!wire::CheckJog(in.velocity_m_s, in.angular_velocity_rad_s, why, sizeof why))
+      return std::string("operator input: ") + why;
+    return "";
+  }
+  if (std::string e = ReadNumbers(j, "position_m", in.position_m); !e.empty()) return e;
+  if (std::string e = ReadNumbers(j, "orientation_wxyz", in.orientation_wxyz); !e.empty()) return e;
+  if (!wire::CheckGoal(in.position_m, in.orientation_wxyz, why, sizeof why))
+    return std::string("operator input: ") + why;
+  return "";
 }
 
 constexpr std::array<const char*, 7> kTrajectories = {"x", "y", "z", "roll", "pitch", "yaw",
@@ -25,6 +69,8 @@ const char* CommandName(OperatorInput::Command c) {
     case OperatorInput::Command::kStop: return "stop";
     case OperatorInput::Command::kReset: return "reset";
     case OperatorInput::Command::kHome: return "home";
+    case OperatorInput::Command::kJog: return "jog";
+    case OperatorInput::Command::kGoal: return "goal";
   }
   return "?";
 }
@@ -34,9 +80,14 @@ OperatorInputResult ParseOperatorInput(std::string_view text) {
   const json j = json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/false);
   if (j.is_discarded()) return Refuse("operator input is not valid JSON");
   if (!j.is_object()) return Refuse("operator input is not a JSON object");
+  static constexpr std::array<const char*, 7> kFields = {
+      "command", "trajectory", "frame", "velocity_m_s", "angular_velocity_rad_s", "position_m",
+      "orientation_wxyz"};
   for (const auto& [key, value] : j.items()) {
-    if (key != "command" && key != "trajectory")
-      return Refuse("operator input: unknown field '" + key + "' (fields: command, trajectory)");
+    if (std::find_if(kFields.begin(), kFields.end(), [&](const char* f) { return key == f; }) == kFields.end())
+      return Refuse("operator input: unknown field '" + key.substr(0, 40) +
+                    "' (fields: command, trajectory, frame, velocity_m_s, angular_velocity_rad_s, "
+                    "position_m, orientation_wxyz)");
   }
   const auto cmd = j.find("command");
   if (cmd == j.end()) return Refuse("operator input: field 'command' is absent");
@@ -47,8 +98,19 @@ OperatorInputResult ParseOperatorInput(std::string_view text) {
   else if (name == "stop") r.input.command = OperatorInput::Command::kStop;
   else if (name == "reset") r.input.command = OperatorInput::Command::kReset;
   else if (name == "home") r.input.command = OperatorInput::Command::kHome;
+  else if (name == "jog") r.input.command = OperatorInput::Command::kJog;
+  else if (name == "goal") r.input.command = OperatorInput::Command::kGoal;
   else return Refuse("operator input: unknown command '" + name.substr(0, 40) +
-                     "' (start stop reset home)");
+                     "' (start stop reset home jog goal)");
+  const bool jog = r.input.command == OperatorInput::Command::kJog;
+  const bool goal = r.input.command == OperatorInput::Command::kGoal;
+  for (const char* key : {"frame", "velocity_m_s", "angular_velocity_rad_s"})
+    if (!jog && j.contains(key)) return Refuse(std::string("operator input: '") + key + "' is for jog only");
+  for (const char* key : {"position_m", "orientation_wxyz"})
+    if (!goal && j.contains(key)) return Refuse(std::string("operator input: '") + key + "' is for goal only");
+  if (jog || goal) {
+    if (std::string e = ReadMotion(j, r.input); !e.empty()) return Refuse(e);
+  }
   const auto traj = j.find("trajectory");
   if (traj != j.end() && r.input.command != OperatorInput::Command::kStart)
     return Refuse("operator input: 'trajectory' is for start only");

@@ -15,12 +15,23 @@ inline constexpr const char* kOperatorInputTopic = "hexa_OperatorInput";
 inline constexpr const char* kOperatorInputEncoding = "json";
 inline constexpr const char* kOperatorInputSchemaName = "hexa.OperatorInput";
 
-// {"command": "start", "trajectory": "combined"} | {"command": "stop" | "reset" | "home"}.
+// {"command": "start", "trajectory": "combined"} | {"command": "stop" | "reset" | "home"}
+// | {"command": "jog", "frame": "work" | "tool", "velocity_m_s": [vx, vy, vz],
+//    "angular_velocity_rad_s": [wx, wy, wz]}     (repeat within the dead-man time, 0.25 s)
+// | {"command": "goal", "position_m": [x, y, z], "orientation_wxyz": [w, x, y, z]}.
 // start's trajectory is one of the named trajectories (x y z roll pitch yaw combined; default
 // combined); a CSV path is not accepted from the network (hexa_operator on the host takes one).
+// Every field of a jog or a goal must be present (frame defaults to work); the values are
+// checked as the supervisor checks them (services/common operator_motion_wire.hpp): finite,
+// not absurd, a unit quaternion.
 struct OperatorInput {
-  enum class Command { kStart, kStop, kReset, kHome } command = Command::kStop;
+  enum class Command { kStart, kStop, kReset, kHome, kJog, kGoal } command = Command::kStop;
   std::string trajectory;  // start only
+  bool tool_frame = false;                    // jog
+  double velocity_m_s[3] = {0, 0, 0};         // jog
+  double angular_velocity_rad_s[3] = {0, 0, 0};  // jog
+  double position_m[3] = {0, 0, 0};           // goal, base frame
+  double orientation_wxyz[4] = {1, 0, 0, 0};  // goal
 };
 const char* CommandName(OperatorInput::Command c);
 

@@ -72,6 +72,7 @@ struct Server::Impl {
     std::deque<Queued> queue;
     std::map<uint32_t, ClientChannel> advertised;  // the client's operator input channels
     RateLimiter operator_limiter{10, 10};
+    RateLimiter jog_limiter{25, 25};      // jog messages: a stream, limited on their own
     uint64_t rate_refused = 0;            // operator inputs over the rate, not yet reported
     int64_t rate_reported_ns = -(int64_t{1} << 62);  // last status about them
   };
@@ -187,6 +188,7 @@ bool Server::OnHandshake(const std::weak_ptr<void>& hdl) {
   con->select_subprotocol(kSubprotocol);
   Impl::Client& c = impl_->clients[hdl];
   c.operator_limiter = RateLimiter(config_.operator_input_rate_hz, config_.operator_input_burst);
+  c.jog_limiter = RateLimiter(config_.operator_jog_rate_hz, config_.operator_jog_rate_hz);
   c.stats.id = impl_->next_client_id++;
   c.stats.remote = con->get_remote_endpoint();
   return true;
@@ -404,6 +406,11 @@ void Server::OnClientChannels(const std::weak_ptr<void>& hdl, const ClientReques
 void Server::OnClientBinary(const std::weak_ptr<void>& hdl, const std::string& frame) {
   const ClientMessageData data = ParseClientBinary(frame);
   const int64_t now_ns = SteadyNow_ns();
+  // A jog (a stream, tens a second) and the other commands have their own rates. The rate is
+  // checked before the message is parsed (a flood costs no parsing): a valid message that holds
+  // the token "jog" is a jog (no other valid input can hold it: its fields and values are fixed),
+  // one that does not is charged to the commands' rate.
+  const bool jog = data.payload.find("\"jog\"") != std::string::npos;
   uint64_t id = 0;
   std::string remote, refusal;
   uint64_t rate_refused = 0;
@@ -418,7 +425,7 @@ void Server::OnClientBinary(const std::weak_ptr<void>& hdl, const std::string& f
       refusal = "message on channel " + std::to_string(data.channel_id) +
                 ", which this client has not advertised (advertise " + kOperatorInputTopic +
                 " first)";
-    } else if (!c.operator_limiter.Allow(now_ns)) {
+    } else if (!(jog ? c.jog_limiter : c.operator_limiter).Allow(now_ns)) {
       ++c.rate_refused;
       ++operator_inputs_refused_;
       if (now_ns - c.rate_reported_ns < 1'000'000'000) return;
@@ -454,8 +461,11 @@ void Server::ReportRateRefusals(const std::weak_ptr<void>& hdl, uint64_t id,
                                 const std::string& remote, uint64_t count) {
   char rate[32];
   std::snprintf(rate, sizeof rate, "%g", config_.operator_input_rate_hz);
+  char jog_rate[32];
+  std::snprintf(jog_rate, sizeof jog_rate, "%g", config_.operator_jog_rate_hz);
   const std::string why = std::to_string(count) + " operator input(s) refused: more than " +
-                          rate + " a second from this client (rate limit)";
+                          rate + " commands or " + jog_rate +
+                          " jog messages a second from this client (rate limit)";
   log_->warn("client {} ({}): {}", id, remote, why);
   SendStatus(hdl, StatusLevel::kError, why);
 }

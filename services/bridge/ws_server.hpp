@@ -56,6 +56,7 @@ struct ServerConfig {
   bool operator_input = false;
   double operator_input_rate_hz = 10;  // per client, sustained
   double operator_input_burst = 10;    // per client, at once
+  double operator_jog_rate_hz = 25;    // per client: jog messages (their own stream), sustained and at once
   void Validate() const;  // throws std::invalid_argument naming the field
   // What each client's queue may hold: min(client_queue_bytes, total_queue_bytes / max_clients).
   std::size_t EffectiveClientQueueBytes() const;

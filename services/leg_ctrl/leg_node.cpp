@@ -429,7 +429,18 @@ void LegNode::WatchControlCycle() {
       tick = last_command_.header.tick;
     }
   }
-  const auto cause = cycle_watch_.Check(cycle_.sequence(), unpublished, tick);
+  // The cycle's thread: did it wait for a CPU more than it ran since the last check (the
+  // machine keeps it off, ControlCycleWatch)?
+  bool starved = false;
+  std::uint64_t run_ns = 0, wait_ns = 0;
+  const int tid = cycle_.thread_id();
+  if (tid > 0 && sched::ReadThreadSchedStat(tid, run_ns, wait_ns)) {
+    starved = tid == watched_tid_ && wait_ns - watched_wait_ns_ > run_ns - watched_run_ns_;
+    watched_tid_ = tid;
+    watched_run_ns_ = run_ns;
+    watched_wait_ns_ = wait_ns;
+  }
+  const auto cause = cycle_watch_.Check(cycle_.sequence(), unpublished, tick, starved);
   if (cause == stuck_reported_) return;
   stuck_reported_ = cause;
   char detail[160];

@@ -140,6 +140,8 @@ class LegNode {
   services::ControlCycle cycle_;
   std::atomic<std::int64_t> last_write_ns_{0};
   ControlCycleWatch cycle_watch_;                 // main thread only
+  int watched_tid_ = 0;  // the cycle's thread at the previous check, and its schedstat then
+  std::uint64_t watched_run_ns_ = 0, watched_wait_ns_ = 0;
   ControlCycleWatch::Cause stuck_reported_ = ControlCycleWatch::Cause::kNone;
   SetpointRing<IssuedSetpoint, kSetpointRing> setpoints_;
   bool has_pending_ = false;         // real time: the newest unanswered sample

@@ -1,6 +1,8 @@
 // hexa_operator: sends one operator command to the supervisor (reliable, keep-all).
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <thread>
 #include <cstring>
 #include <exception>
@@ -12,6 +14,7 @@
 #include "hexa/services/exit_code.hpp"
 #include "hexa/services/logging.hpp"
 #include "hexa/services/node.hpp"
+#include "hexa/services/operator_motion_wire.hpp"
 #include "hexa/services/text.hpp"
 
 namespace {
@@ -22,8 +25,9 @@ namespace exit_code = hexa::exit_code;
 struct Request {
   int domain = 0;
   double wait_s = 0, linger_s = 0, answer_wait_s = 0;
-  std::string what;  // start stop reset home shutdown estop
+  std::string what;  // start stop reset home shutdown estop jog goal
   bool any_reader = false;
+  double jog_duration_s = 0, jog_rate_hz = 0;  // jog: how long and how often to send it
   hexa_msg_OperatorCommand cmd{};
 };
 
@@ -48,7 +52,83 @@ void AddOptions(hexa::cli::Parser& cli) {
   cli.AddOption("answer-wait", "s",
                 "how long to wait for the supervisor's answer (accepted / refused) after the "
                 "command was acknowledged; it answers at its next 5 ms tick", "2");
-  cli.AllowPositional("start|stop|reset|home|shutdown|estop", 1);
+  cli.AddChoice("frame", {"work", "tool"},
+                "jog: the twist's axes: work (fixed to the base; the base frame unless a work "
+                "frame is set) or tool (turning with the platform)", "work");
+  cli.AddOption("velocity-m-s", "vx,vy,vz",
+                "jog: the pivot's velocity in the frame's axes, m/s (the supervisor limits each axis "
+                "to its jog speed, 0.05 m/s by default)", "0,0,0");
+  cli.AddOption("angular-velocity-rad-s", "wx,wy,wz",
+                "jog: the angular velocity in the frame's axes, rad/s (0.2 rad/s by default)", "0,0,0");
+  cli.AddOption("duration-s", "s",
+                "jog: how long to keep sending it; then nothing more is sent and the supervisor's "
+                "dead-man (0.25 s) brings the platform to rest", "1");
+  cli.AddOption("rate-hz", "hz", "jog: how often to send it (at least 10 Hz: the dead-man is 0.25 s)",
+                "50");
+  cli.AddOption("position-m", "x,y,z", "goal: the platform's position in the base frame, m");
+  cli.AddOption("rpy-deg", "roll,pitch,yaw",
+                "goal: the platform's orientation, degrees (R = Rz(yaw) Ry(pitch) Rx(roll))", "0,0,0");
+  cli.AddOption("quaternion", "w,x,y,z", "goal: the orientation as a unit quaternion instead of --rpy-deg");
+  cli.AllowPositional("start|stop|reset|home|shutdown|estop|jog|goal", 1);
+}
+
+// "a,b,c" -> N finite numbers; false with `error` naming the option.
+template <std::size_t N>
+bool ParseList(const std::string& option, const std::string& text, double (&out)[N], std::string& error) {
+  std::size_t pos = 0;
+  for (std::size_t k = 0; k < N; ++k) {
+    const std::size_t comma = text.find(',', pos);
+    const std::string item = text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+    char* end = nullptr;
+    out[k] = std::strtod(item.c_str(), &end);
+    if (item.empty() || end == item.c_str() || *end != '\0' || !std::isfinite(out[k]) ||
+        (k + 1 < N) == (comma == std::string::npos)) {
+      error = "--" + option + " '" + text + "': expected " + std::to_string(N) +
+              " finite numbers separated by commas";
+      return false;
+    }
+    pos = comma + 1;
+  }
+  return true;
+}
+
+// The jog's or the goal's fields from the command line (checked as the supervisor checks them).
+bool ReadMotion(hexa::cli::Parser& cli, Request& r, std::string& error) {
+  hexa_msg_OperatorCommand& cmd = r.cmd;
+  char why[160] = "";
+  if (r.what == "jog") {
+    const auto duration = cli.GetDouble("duration-s", 0, 3600);
+    const auto rate = cli.GetDouble("rate-hz", 10, 1000);
+    if (!duration || !rate) return (error = cli.error(), false);
+    r.jog_duration_s = *duration;
+    r.jog_rate_hz = *rate;
+    r.linger_s = 0;  // the stream follows at once: a linger would let the dead-man stop it
+    cmd.jog_frame = cli.Get("frame") == "tool" ? hexa_msg_JOG_FRAME_TOOL : hexa_msg_JOG_FRAME_WORK;
+    if (!ParseList("velocity-m-s", cli.Get("velocity-m-s"), cmd.jog_velocity_m_s, error) ||
+        !ParseList("angular-velocity-rad-s", cli.Get("angular-velocity-rad-s"),
+                   cmd.jog_angular_velocity_rad_s, error))
+      return false;
+    hexa::JogRequest jog;
+    if (!hexa::wire::JogFromWire(cmd, jog, why)) return (error = why, false);
+    return true;
+  }
+  if (!cli.Has("position-m")) return (error = "goal needs --position-m x,y,z", false);
+  if (!ParseList("position-m", cli.Get("position-m"), cmd.goal_position_m, error)) return false;
+  if (cli.Has("quaternion")) {
+    if (!ParseList("quaternion", cli.Get("quaternion"), cmd.goal_orientation_wxyz, error)) return false;
+  } else {
+    double rpy_deg[3];
+    if (!ParseList("rpy-deg", cli.Get("rpy-deg"), rpy_deg, error)) return false;
+    const Eigen::Vector3d rpy_rad = Eigen::Vector3d(rpy_deg[0], rpy_deg[1], rpy_deg[2]) * (M_PI / 180.0);
+    const Eigen::Quaterniond q(hexa::RotationFromRollPitchYaw(rpy_rad));
+    cmd.goal_orientation_wxyz[0] = q.w();
+    cmd.goal_orientation_wxyz[1] = q.x();
+    cmd.goal_orientation_wxyz[2] = q.y();
+    cmd.goal_orientation_wxyz[3] = q.z();
+  }
+  hexa::Pose goal;
+  if (!hexa::wire::GoalFromWire(cmd, goal, why)) return (error = why, false);
+  return true;
 }
 
 // Reads the command line into `r`: -1 to go on, else the exit code (help, usage error).
@@ -78,10 +158,19 @@ int ReadRequest(hexa::cli::Parser& cli, int argc, char** argv, Request& r) {
   else if (what == "home") cmd.kind = hexa_msg_OPERATOR_HOME;
   else if (what == "shutdown") cmd.kind = hexa_msg_OPERATOR_SHUTDOWN;
   else if (what == "estop") cmd.kind = hexa_msg_OPERATOR_ESTOP;
+  else if (what == "jog") cmd.kind = hexa_msg_OPERATOR_JOG;
+  else if (what == "goal") cmd.kind = hexa_msg_OPERATOR_GOAL;
   else {
-    std::fprintf(stderr, "error: unknown command '%s' (start stop reset home shutdown estop)\n",
+    std::fprintf(stderr, "error: unknown command '%s' (start stop reset home shutdown estop jog goal)\n",
                  what.c_str());
     return exit_code::kUsage;
+  }
+  if (what == "jog" || what == "goal") {
+    std::string error;
+    if (!ReadMotion(cli, r, error)) {
+      std::fprintf(stderr, "error: %s\n(see --help)\n", error.c_str());
+      return exit_code::kUsage;
+    }
   }
   // A CSV path must reach the supervisor exactly: refuse what the wire cannot carry unchanged
   // (OperatorCommand.csv_path is an IDL string<256>, recorded as a proto3 string: UTF-8).
@@ -144,6 +233,44 @@ int SendAcknowledged(Request& r, const hexa::comm::Participant& participant,
   return -1;
 }
 
+// Takes the status samples that came; the supervisor's answer to command `sequence` if one of
+// them holds it (its NodeStatus detail), else kNone.
+hexa::task_space::CommandAnswer PollAnswer(hexa::comm::Reader<hexa_msg_NodeStatus>& status_reader,
+                                           std::uint32_t sequence, std::string& detail) {
+  using hexa::task_space::CommandAnswer;
+  while (status_reader.Take() > 0) {
+    for (std::size_t k = 0; k < status_reader.count(); ++k) {
+      if (!status_reader.info(k).valid_data) continue;
+      const auto& st = status_reader.sample(k);
+      if (std::strcmp(st.node_name, "supervisor") != 0) continue;
+      const CommandAnswer answer = hexa::task_space::ParseCommandAnswer(st.detail, sequence);
+      if (answer != CommandAnswer::kNone) {
+        detail = st.detail;
+        return answer;
+      }
+    }
+  }
+  return CommandAnswer::kNone;
+}
+
+// The exit code for an answer (kNone: none within --answer-wait), logged.
+int ExitForAnswer(const Request& r, hexa::task_space::CommandAnswer answer, const std::string& detail,
+                  spdlog::logger& log) {
+  using hexa::task_space::CommandAnswer;
+  if (answer == CommandAnswer::kAccepted) {
+    log.info("sent {} to domain {}: the supervisor {}", r.what, r.domain, detail);
+    return exit_code::kOk;
+  }
+  if (answer != CommandAnswer::kNone) {
+    log.error("sent {} to domain {}: the supervisor {} (exit 4)", r.what, r.domain, detail);
+    return exit_code::kRefused;
+  }
+  log.error("sent {} to domain {} and it was acknowledged, but the supervisor did not answer "
+            "within {} s (--answer-wait; it answers once it runs, at its next tick): it may "
+            "not have acted on it (exit 3)", r.what, r.domain, r.answer_wait_s);
+  return exit_code::kNotAnswered;
+}
+
 // The supervisor's answer to this command (its sequence number) in its NodeStatus detail.
 int AwaitAnswer(const Request& r, const hexa::comm::Participant& participant,
                 hexa::comm::Reader<hexa_msg_NodeStatus>& status_reader, spdlog::logger& log) {
@@ -152,31 +279,50 @@ int AwaitAnswer(const Request& r, const hexa::comm::Participant& participant,
   answer_ws.Attach(status_reader.data_condition(), 1);
   const int64_t answer_end =
       hexa::node::MonotonicNow_ns() + static_cast<int64_t>(r.answer_wait_s * 1e9);
+  std::string detail;
   for (;;) {
-    while (status_reader.Take() > 0) {
-      for (std::size_t k = 0; k < status_reader.count(); ++k) {
-        if (!status_reader.info(k).valid_data) continue;
-        const auto& st = status_reader.sample(k);
-        if (std::strcmp(st.node_name, "supervisor") != 0) continue;
-        const std::string detail = st.detail;
-        const CommandAnswer answer = hexa::task_space::ParseCommandAnswer(detail, r.cmd.sequence);
-        if (answer == CommandAnswer::kAccepted) {
-          log.info("sent {} to domain {}: the supervisor {}", r.what, r.domain, detail);
-          return exit_code::kOk;
-        }
-        if (answer != CommandAnswer::kNone) {
-          log.error("sent {} to domain {}: the supervisor {} (exit 4)", r.what, r.domain, detail);
-          return exit_code::kRefused;
-        }
-      }
-    }
-    if (hexa::node::MonotonicNow_ns() > answer_end) break;
+    const CommandAnswer answer = PollAnswer(status_reader, r.cmd.sequence, detail);
+    if (answer != CommandAnswer::kNone) return ExitForAnswer(r, answer, detail, log);
+    if (hexa::node::MonotonicNow_ns() > answer_end) return ExitForAnswer(r, answer, detail, log);
     answer_ws.Wait(DDS_MSECS(20));
   }
-  log.error("sent {} to domain {} and it was acknowledged, but the supervisor did not answer "
-            "within {} s (--answer-wait; it answers once it runs, at its next tick): it may "
-            "not have acted on it (exit 3)", r.what, r.domain, r.answer_wait_s);
-  return exit_code::kNotAnswered;
+}
+
+// A jog: its first message was acknowledged; the same jog every 1 / rate until the duration is
+// over, then nothing (the supervisor's dead-man brings the platform to rest). The stream does not
+// wait for the supervisor's answer to the first message (the dead-man would stop the platform
+// meanwhile): the answer is looked for between messages, and a refusal ends the stream.
+int StreamJog(Request& r, hexa::comm::Writer<hexa_msg_OperatorCommand>& writer,
+              hexa::comm::Reader<hexa_msg_NodeStatus>& status_reader, spdlog::logger& log) {
+  using hexa::task_space::CommandAnswer;
+  using Clock = std::chrono::steady_clock;
+  const std::uint32_t first = r.cmd.sequence;
+  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / r.jog_rate_hz));
+  const auto start = Clock::now();
+  const auto end = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(r.jog_duration_s));
+  const auto answer_end = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(r.answer_wait_s));
+  CommandAnswer answer = CommandAnswer::kNone;
+  std::string detail;
+  int sent = 1;
+  for (auto next = start + period;; next += period) {
+    if (answer == CommandAnswer::kNone) answer = PollAnswer(status_reader, first, detail);
+    if (answer == CommandAnswer::kRefused || answer == CommandAnswer::kRejected) break;
+    if (answer == CommandAnswer::kNone && Clock::now() > answer_end) break;
+    if (next >= end) {
+      if (answer != CommandAnswer::kNone) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the stream is over; the answer is due
+      continue;
+    }
+    std::this_thread::sleep_until(next);
+    ++r.cmd.sequence;
+    writer.WriteNow(r.cmd);
+    ++sent;
+  }
+  dds_wait_for_acks(writer.get(), DDS_SECS(2));
+  log.info("jog: {} message(s) in {:.3f} s, then let go (the supervisor's dead-man stops the "
+           "platform)", sent, std::chrono::duration<double>(Clock::now() - start).count());
+  r.cmd.sequence = first;
+  return ExitForAnswer(r, answer, detail, log);
 }
 
 }  // namespace
@@ -184,7 +330,13 @@ int AwaitAnswer(const Request& r, const hexa::comm::Participant& participant,
 int main(int argc, char** argv) {
   hexa::cli::Parser cli("hexa_operator",
                         "Sends an operator command to the supervisor: hexa_operator [options] "
-                        "start|stop|reset|home|shutdown\n"
+                        "start|stop|reset|home|shutdown|jog|goal\n"
+                        "  jog: a twist of the pivot (--velocity-m-s, --angular-velocity-rad-s, "
+                        "--frame) sent every 1/--rate-hz for --duration-s; at rest 0.25 s (the "
+                        "dead-man) plus the braking time after the last one.\n"
+                        "  goal: the platform's pose in the base frame (--position-m, --rpy-deg "
+                        "or --quaternion), reached by a jerk-limited motion; refused (exit 4, "
+                        "the reason logged) when it or the path to it leaves the soft limits.\n"
                         "Exit status: 0 the supervisor accepted the command (with --to any-reader: "
                         "acknowledged by every matched reader), 1 no supervisor (with --to "
                         "any-reader: no reader) matched within --wait (or a DDS error), 2 bad "
@@ -216,6 +368,7 @@ int main(int argc, char** argv) {
         participant, status_topic, hexa::comm::EndpointRole::kControlReader, status_qos, 64);
     r.cmd.sequence = static_cast<uint32_t>(hexa::comm::RealtimeNow_ns() & 0xffffffff);
     if (int rc = SendAcknowledged(r, participant, writer, *log); rc >= 0) return rc;
+    if (r.what == "jog") return StreamJog(r, writer, status_reader, *log);
     return AwaitAnswer(r, participant, status_reader, *log);
   } catch (const std::exception& e) {
     log->error("{}", e.what());

@@ -3,13 +3,10 @@
 #include <signal.h>
 #include <unistd.h>
 
-#include "hexa/core/calibration.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 
-#include "hexa/config/csv_trajectory.hpp"
 #include "hexa/services/exit_code.hpp"
 #include "hexa/services/service_manager.hpp"
 
@@ -39,33 +36,6 @@ SupervisorParams ParamsFrom(const SupervisorNodeOptions& o, const config::System
 
 FaultReason FromWire(hexa_msg_FaultReason r) {
   return static_cast<FaultReason>(static_cast<int>(r));
-}
-
-const char* CommandName(hexa_msg_OperatorCommandKind kind) {
-  switch (kind) {
-    case hexa_msg_OPERATOR_START: return "start";
-    case hexa_msg_OPERATOR_STOP: return "stop";
-    case hexa_msg_OPERATOR_RESET: return "reset";
-    case hexa_msg_OPERATOR_HOME: return "home";
-    case hexa_msg_OPERATOR_SHUTDOWN: return "shutdown";
-    case hexa_msg_OPERATOR_ESTOP: return "estop";
-  }
-  return "unknown";
-}
-
-// Why the core refused `cmd` in state `before` (core Supervisor::HandleCommand's rules).
-void WhyRefused(OperatorCommandKind cmd, SupervisorState before, bool initialized,
-                char (&why)[160]) {
-  if (before == SupervisorState::kHold)
-    std::snprintf(why, sizeof why, "the platform is held (%s): only reset leaves HOLD",
-                  ToString(before));
-  else if (cmd == OperatorCommandKind::kReset)
-    std::snprintf(why, sizeof why, "reset only leaves HOLD (state %s)", ToString(before));
-  else if (!initialized)
-    std::snprintf(why, sizeof why, "no pose estimate yet");
-  else
-    std::snprintf(why, sizeof why, "%s only from SUPERVISOR_IDLE (state %s)", ToString(cmd),
-                  ToString(before));
 }
 
 }  // namespace
@@ -153,144 +123,6 @@ bool SupervisorNode::PeersMatched(std::string& missing) {
   return false;
 }
 
-void SupervisorNode::TakeSensors() {
-  services::TakeValid(sensors_reader_, [&](const hexa_msg_LegSensors& s, std::size_t) {
-    if (s.leg_id < 1 || s.leg_id > kNumLegs) return;
-    const std::size_t i = s.leg_id - 1;
-    sensor_ring_[i][sensor_ring_count_[i]++ % kSensorRing] = s;
-    if (sensors_seen_[i] && s.header.tick < sensors_[i].header.tick) return;
-    sensors_[i] = s;
-    sensors_seen_[i] = true;
-  });
-}
-
-const hexa_msg_LegSensors* SupervisorNode::RingSample(std::size_t leg_index,
-                                                      std::uint64_t tick) const {
-  const std::size_t n = std::min(sensor_ring_count_[leg_index], kSensorRing);
-  for (std::size_t k = 0; k < n; ++k) {
-    const hexa_msg_LegSensors& s = sensor_ring_[leg_index][k];
-    if (s.header.tick == tick) return &s;
-  }
-  return nullptr;
-}
-
-bool SupervisorNode::TakeImu(bool& repeated) {
-  return services::TakeNewest(imu_reader_, imu_, imu_seen_, repeated);
-}
-
-bool SupervisorNode::PrepareStart(const std::string& trajectory, int periods) {
-  PaperMotion motion;
-  StartRequest request;
-  if (trajectory == "calibration") {
-    // Kinematic calibration poses (core/calibration.hpp), record with --tracker.
-    request = supervisor_.PrepareStart(MakeCalibrationTrajectory(
-        supervisor_.rig(), supervisor_.rest_xyz_rpy(), supervisor_.home_xyz_rpy(),
-        supervisor_.timing(), CalibrationProcedureParams{}));
-  } else if (ParsePaperMotion(trajectory, motion)) {
-    request = supervisor_.PreparePaperStart(motion, periods);
-  } else {
-    // The file is read and validated here (config/), the core gets the rows; a file that does
-    // not parse becomes a rejected start: HOLD with the parser's message, a FaultEvent, exit 5.
-    try {
-      request = supervisor_.PrepareRowsStart(config::LoadCsvTrajectory(trajectory));
-    } catch (const std::exception& e) {  // config::CsvTrajectoryError, or the core's checks
-      request = Supervisor::RejectedStart(e.what());
-    }
-  }
-  if (!request.feasibility.feasible) {
-    log_->error("trajectory '{}' rejected before any motion: {}", trajectory,
-                request.feasibility.message);
-  } else {
-    log_->info("trajectory '{}' accepted: {:.3f} s, tracking window [{:.3f}, {:.3f}) s",
-               trajectory, request.trajectory.duration_s(), request.trajectory.tracking_start_s(),
-               request.trajectory.tracking_end_s());
-  }
-  pending_start_ = std::move(request);
-  pending_command_ = OperatorCommandKind::kStart;
-  return pending_start_->feasibility.feasible;
-}
-
-void SupervisorNode::AnswerCommand(std::uint32_t sequence, const char* kind,
-                                   CommandAnswer answer, const char* why) {
-  char (&detail)[sizeof last_answer_] = last_answer_;
-  FormatCommandAnswer(detail, sequence, kind, answer, why);
-  last_answer_cycle_ = cycles_;
-  (answer == CommandAnswer::kAccepted ? log_->info("{}", detail)
-                                                        : log_->warn("{}", detail));
-  runtime_.Publish(RunningState(), Figures(), detail);
-}
-
-void SupervisorNode::TakeOperatorCommands() {
-  services::TakeValid(operator_reader_, [&](const hexa_msg_OperatorCommand& c, std::size_t k) {
-    // Only the session's operator tools command the supervisor (docs/faults.md, "Foreign
-    // commands"): an unauthenticated command is refused and its writer reported.
-    const comm::CommandTrust trust = operator_reader_.Authenticate(k);
-    if (!comm::Trusted(trust)) {
-      log_->warn("operator command #{} (kind {}) REFUSED: {}", c.sequence, static_cast<int>(c.kind),
-                 comm::ToString(trust));
-      refusals_.Refuse(operator_reader_.get(), operator_reader_.info(k), trust,
-                       "OperatorCommand", 0, last_run_tick_, faults_, *log_);
-      return;
-    }
-    log_->info("operator command #{}: kind {} trajectory '{}'", c.sequence,
-               static_cast<int>(c.kind), c.trajectory);
-    // Commands take effect at the next tick; one that a newer one replaces before then is
-    // answered below, so that no operator waits for it in vain.
-    const OperatorCommandKind replaced =
-        pending_from_operator_ ? pending_command_ : OperatorCommandKind::kNone;
-    const std::uint32_t replaced_sequence = pending_sequence_;
-    switch (c.kind) {
-      case hexa_msg_OPERATOR_START: {
-        if (!supervisor_.initialized()) {
-          AnswerCommand(c.sequence, "start", CommandAnswer::kRefused,
-                        "no pose estimate yet");
-          return;
-        }
-        const std::string traj = std::strcmp(c.trajectory, "csv") == 0 ? c.csv_path : c.trajectory;
-        PrepareStart(traj, options_.periods);
-        break;
-      }
-      case hexa_msg_OPERATOR_STOP: pending_command_ = OperatorCommandKind::kStop; break;
-      case hexa_msg_OPERATOR_RESET:
-        pending_command_ = OperatorCommandKind::kReset;
-        leg_fault_.fill(FaultReason::kNone);  // re-latched if the cause is still reported
-        system_fault_ = FaultReason::kNone;
-        break;
-      case hexa_msg_OPERATOR_HOME: pending_command_ = OperatorCommandKind::kHome; break;
-      case hexa_msg_OPERATOR_SHUTDOWN:
-        AnswerCommand(c.sequence, "shutdown", CommandAnswer::kAccepted, "");
-        runtime_.shutdown().RequestShutdown();
-        return;
-      case hexa_msg_OPERATOR_ESTOP:
-        // The plant latches it in the rig and reports FAULT_ESTOP, on which this holds
-        // (docs/faults.md, "Emergency stop"); held already at once, in case that report is late.
-        // Also told to the plant as a FaultEvent: its own command reader may not have matched
-        // the operator's writer in time (the operator waits for this reader only).
-        system_fault_ = FaultReason::kEstop;
-        {
-          char detail[64];
-          std::snprintf(detail, sizeof detail, "e-stop: operator command #%u", static_cast<unsigned>(c.sequence));
-          faults_.Publish(0, last_run_tick_, hexa_msg_FAULT_ESTOP, detail);
-        }
-        AnswerCommand(c.sequence, "estop", CommandAnswer::kAccepted, "the plant latches the e-stop");
-        return;
-      default:
-        AnswerCommand(c.sequence, CommandName(c.kind), CommandAnswer::kRefused,
-                      "unknown command");
-        return;
-    }
-    if (replaced != OperatorCommandKind::kNone) {
-      char why[64];
-      std::snprintf(why, sizeof why, "replaced by command #%u before it was applied",
-                    static_cast<unsigned>(c.sequence));
-      AnswerCommand(replaced_sequence, ToString(replaced),
-                    CommandAnswer::kRefused, why);
-    }
-    pending_from_operator_ = true;
-    pending_sequence_ = c.sequence;
-  });
-}
-
 void SupervisorNode::TakeFaults() {
   services::TakeValid(fault_reader_, [&](const hexa_msg_FaultEvent& f, std::size_t) {
     if (std::strcmp(f.source_node, "supervisor") == 0) return;  // our own
@@ -312,41 +144,6 @@ void SupervisorNode::TakeFaults() {
     }
     if (f.reason == hexa_msg_FAULT_IMU_LOST) imu_lost_ = true;
   });
-}
-
-void SupervisorNode::FinishCommand(SupervisorState before, std::uint64_t tick, double time_s) {
-  const OperatorCommandKind cmd = pending_command_;
-  pending_command_ = OperatorCommandKind::kNone;
-  const CommandResult result = output_.command_result;
-  log_->info("command {}: {}", ToString(cmd), ToString(result));
-  const bool accepted = result == CommandResult::kAccepted;
-  if (accepted && cmd == OperatorCommandKind::kStop &&
-      (before == SupervisorState::kBlending || before == SupervisorState::kTracking)) {
-    stopped_by_operator_ = true;
-    log_->warn("stopped by the operator at t = {:.3f} s (trajectory time {:.3f} s)", time_s,
-               output_.trajectory_time_s);
-  }
-  if (accepted && cmd == OperatorCommandKind::kReset && before == SupervisorState::kHold) {
-    hold_exit_tick_ = 0;
-    if (!options_.hold_report_path.empty()) std::remove(options_.hold_report_path.c_str());
-    // Resume: with --autostart the trajectory starts again from where the platform was held;
-    // without, the operator's next start does. Either way the session has not finished.
-    const bool restart = options_.exit_when_done && options_.autostart;
-    if (restart) autostart_pending_ = true;
-    left_idle_ = false;
-    log_->warn("reset by the operator at t = {:.3f} s (tick {}): HOLD left{}", time_s, tick,
-               restart ? "; the trajectory starts again from the held pose" : "");
-  }
-  if (!pending_from_operator_) return;
-  pending_from_operator_ = false;
-  char why[160] = "";
-  if (result == CommandResult::kRefused) WhyRefused(cmd, before, supervisor_.initialized(), why);
-  if (result == CommandResult::kRejected)
-    std::snprintf(why, sizeof why, "%s", output_.fault_detail.data());
-  const CommandAnswer answer = accepted                               ? CommandAnswer::kAccepted
-                               : result == CommandResult::kRejected ? CommandAnswer::kRejected
-                                                                      : CommandAnswer::kRefused;
-  AnswerCommand(pending_sequence_, ToString(cmd), answer, why);
 }
 
 void SupervisorNode::ReportHold(double time_s) {
@@ -387,6 +184,8 @@ void SupervisorNode::RunTick(std::uint64_t tick, double time_s) {
   const SupervisorState state_before = output_.state;
   supervisor_.Update(input_, output_);
   if (pending_command_ != OperatorCommandKind::kNone) FinishCommand(state_before, tick, time_s);
+  if (output_.state == SupervisorState::kIdle && state_before != output_.state)
+    LogModeEnd(state_before, time_s);
   cycle_times_.Add(static_cast<double>(node::MonotonicNow_ns() - t0) * 1e-9);
   ++cycles_;
   ran_once_ = true;
@@ -415,6 +214,8 @@ void SupervisorNode::FillInput(double time_s) {
   // legs' 1 kHz commands are not sent to one more process (docs/performance.md).
   input_.command = pending_command_;
   input_.start = pending_start_ ? &*pending_start_ : nullptr;
+  input_.jog = pending_jog_;
+  input_.goal_X_BP = pending_goal_;
 }
 
 void SupervisorNode::ReactToOutput(std::uint64_t tick, double time_s) {
@@ -461,7 +262,11 @@ void SupervisorNode::ReactToOutput(std::uint64_t tick, double time_s) {
     PrepareStart(options_.trajectory, options_.periods);
     pending_from_operator_ = false;
   }
-  if (output_.state != SupervisorState::kIdle) left_idle_ = true;
+  // A session ends when its trajectory ends (or a hold, with --exit-when-done); a jog or a
+  // goal ends in IDLE without ending it.
+  const bool operator_mode =
+      output_.state == SupervisorState::kJogging || output_.state == SupervisorState::kGoal;
+  if (output_.state != SupervisorState::kIdle && !operator_mode) left_idle_ = true;
   if (options_.exit_when_done && left_idle_ && output_.state == SupervisorState::kIdle &&
       exit_code_ < 0) {
     if (stopped_by_operator_) {
@@ -512,94 +317,16 @@ void SupervisorNode::Publish(std::uint64_t tick, double time_s) {
   pose_writer_.Write(r, now_ns);
 }
 
-void SupervisorNode::RepublishSetpoints() {
-  const int64_t now_ns = comm::RealtimeNow_ns();
-  for (const hexa_msg_LegSetpoint& s : last_setpoints_) setpoint_writer_.WriteDeferred(s, now_ns);
-  setpoint_writer_.Flush();
-  if (setpoint_republishes_++ == 0)
-    log_->info("lockstep re-ask of tick {}: its setpoints published again (logged once)",
-               last_run_tick_);
-}
-
-bool SupervisorNode::SensorsOfTick(std::uint64_t m) {
-  LegArray<const hexa_msg_LegSensors*> at_m{};
-  for (std::size_t i = 0; i < kNumLegs; ++i)
-    if ((at_m[i] = RingSample(i, m)) == nullptr) return false;
-  for (std::size_t i = 0; i < kNumLegs; ++i) {
-    sensors_[i] = *at_m[i];
-    sensors_seen_[i] = true;
-  }
-  return true;
-}
-
-bool SupervisorNode::RunLockstepWithoutImu() {
-  // The plant said the IMU delivers nothing: tick m runs on the six legs' samples of m with
-  // the last orientation, as an IMU miss (the plant's FAULT_IMU_LOST holds the platform).
-  bool ran = false;
-  for (;;) {
-    const std::uint64_t m = ran_once_ ? last_run_tick_ + static_cast<std::uint64_t>(5) : 0;
-    if (!SensorsOfTick(m)) return ran;
-    ++imu_misses_consecutive_;
-    RunTick(m, sensors_[0].header.sim_time_s);
-    ran = true;
-    if (exit_code_ >= 0) return ran;
-  }
-}
-
-void SupervisorNode::RunCycle() {
-  if (exit_code_ >= 0) return;
-  TakeSensors();
-  if (imu_lost_ && options_.common.mode == node::TimeMode::kLockstep) {
-    bool ignored = false;
-    TakeImu(ignored);  // whatever still comes is stale: ignored
-    RunLockstepWithoutImu();
-    if (exit_code_ >= 0) done_.Set();
-    return;
-  }
-  bool repeated_imu = false;
-  const bool fresh_imu = TakeImu(repeated_imu);
-  if (!imu_seen_) return;
-  const std::uint64_t m = imu_.header.tick;
-  if (options_.common.mode == node::TimeMode::kRealtime) {
-    // On each IMU sample, with the newest leg samples.
-    if (!fresh_imu) return;
-    last_imu_mono_ns_ = node::MonotonicNow_ns();
-    imu_misses_consecutive_ = 0;
-    RunTick(m, imu_.header.sim_time_s);
+void SupervisorNode::LogModeEnd(SupervisorState before, double time_s) {
+  if (before != SupervisorState::kJogging && before != SupervisorState::kGoal) return;
+  const Vector6d& q = output_.desired_xyz_rpy;
+  if (before == SupervisorState::kJogging) {
+    log_->info("jog at rest at t = {:.3f} s, {:.3f} s after the last jog message (t = {:.3f} s): "
+               "({:.4f}, {:.4f}, {:.4f}) m, ({:.4f}, {:.4f}, {:.4f}) rad", time_s,
+               time_s - last_jog_time_s_, last_jog_time_s_, q[0], q[1], q[2], q[3], q[4], q[5]);
   } else {
-    // Lockstep: the IMU of tick m and the six legs' samples of tick m.
-    // The plant re-asks the tick it last sent when a leg cannot answer the next one (core
-    // lockstep_protocol.hpp: that leg may lack this tick's setpoint): publish it again.
-    if (ran_once_ && m <= last_run_tick_) {
-      if (repeated_imu && m == last_run_tick_) RepublishSetpoints();
-      return;
-    }
-    if (!SensorsOfTick(m)) return;
-    RunTick(m, imu_.header.sim_time_s);
-  }
-  if (exit_code_ >= 0) done_.Set();
-}
-
-void SupervisorNode::MainThreadLook() {
-  const bool realtime = !runtime_.lockstep();
-  TakeOperatorCommands();
-  TakeFaults();
-  // Lockstep without the IMU: the tick it awaits may already be here (its data callback
-  // ran before the plant's FAULT_IMU_LOST arrived).
-  if (imu_lost_ && !realtime) RunCycle();
-  // Real time: the IMU is due every 5 ms; 10 ms without one counts a miss and the state
-  // machine runs on what it has (it holds after the configured count).
-  constexpr int64_t kImuDue_ns = 10'000'000;
-  if (realtime && ran_once_ && node::MonotonicNow_ns() - last_imu_mono_ns_ > kImuDue_ns) {
-    ++imu_misses_consecutive_;
-    last_imu_mono_ns_ = node::MonotonicNow_ns();
-    // Once the plant reported the IMU lost: on the legs' newest samples, so that time goes
-    // on without it (the hold, and the exit 1 s after it, must still come).
-    if (imu_lost_ && sensors_seen_[0] && sensors_[0].header.tick > last_run_tick_) {
-      RunTick(sensors_[0].header.tick, sensors_[0].header.sim_time_s);
-    } else {
-      RunTick(last_run_tick_, imu_.header.sim_time_s);
-    }
+    log_->info("goal motion at rest at t = {:.3f} s: ({:.4f}, {:.4f}, {:.4f}) m, ({:.4f}, {:.4f}, "
+               "{:.4f}) rad", time_s, q[0], q[1], q[2], q[3], q[4], q[5]);
   }
 }
 

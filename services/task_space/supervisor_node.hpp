@@ -71,6 +71,11 @@ class SupervisorNode {
   // (a lockstep re-ask from the plant).
   bool TakeImu(bool& repeated);
   void TakeOperatorCommands();
+  // JOG / GOAL: checked (any writer's sample; refused with the reason) and made pending; false
+  // when nothing more is to be done with the message (refused, or a jog joining a pending one).
+  bool TakeMotionCommand(const hexa_msg_OperatorCommand& c, dds_instance_handle_t writer);
+  // JOGGING / GOAL back to IDLE: where the platform rests, and for a jog when it was let go.
+  void LogModeEnd(SupervisorState before, double time_s);
   void TakeFaults();
   void RunCycle();
   // One wake-up of the main thread (operator commands, faults, IMU misses in real time), with
@@ -155,6 +160,11 @@ class SupervisorNode {
   OperatorCommandKind pending_command_ = OperatorCommandKind::kNone;
   bool pending_from_operator_ = false;  // false: autostart (no one waits for an answer)
   std::uint32_t pending_sequence_ = 0;
+  JogRequest pending_jog_;              // the newest jog message (kJog)
+  Pose pending_goal_;                   // kGoal
+  dds_instance_handle_t jog_writer_ = 0;  // the writer of the newest jog message
+  bool answer_jog_ = false;             // the pending jog is a writer's first: answer it
+  double last_jog_time_s_ = 0.0;        // the tick that applied the last jog message
   bool stopped_by_operator_ = false;    // a `stop` ended the motion before its end
   // The last answer, repeated in the periodic NodeStatus for a while: the status writer keeps
   // only its newest sample, so a periodic status written right after the answer could

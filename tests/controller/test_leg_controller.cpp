@@ -461,5 +461,26 @@ TEST(LegControllerCoupled, HoldingLegReturnsNoFeedbackPart) {
   EXPECT_EQ(out.status, LegControlStatus::kOk);
 }
 
+
+TEST(LegController, TheFeedbackVelocityGivenReplacesTheDifferentiatedOneInTheSlidingSurface) {
+  // Two identical BS-SMCs on the same inputs; one is given a feedback velocity (the platform
+  // state observer's, studies/platform_observer_feedback): its S (eq 19) differs by
+  // exactly that velocity minus the eq 40 estimate, which both still report.
+  LegController given(MakeConfig(LegControllerKind::kBsSmc)), own(MakeConfig(LegControllerKind::kBsSmc));
+  LegControllerInput in = RestInput(0.5, 0.5);
+  LegControllerOutput out_given, out_own;
+  for (int k = 0; k < 20; ++k) {
+    in.time_s = 0.001 * k;
+    in.setpoint_time_s = 0.005 * (k / 5);  // a fresh setpoint every 5 ms, as the supervisor's
+    in.length_m = 0.5 + 1e-4 * k;  // moving: the eq 40 estimate is not zero
+    given.Update(in, out_given, 0.25);
+    own.Update(in, out_own);
+    ASSERT_EQ(out_given.status, LegControlStatus::kOk);
+    EXPECT_EQ(out_given.velocity_m_s, out_own.velocity_m_s);
+    EXPECT_NEAR(out_given.sliding_surface_m_s - out_own.sliding_surface_m_s, 0.25 - out_own.velocity_m_s, 1e-12);
+  }
+  EXPECT_GT(std::abs(out_own.velocity_m_s), 0.05);
+}
+
 }  // namespace
 }  // namespace hexa

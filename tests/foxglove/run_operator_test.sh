@@ -2,7 +2,8 @@
 # ctest driver of foxglove.operator_input: `hexa_session --wait-for-operator --bridge
 # --bridge-operator-input` (lockstep, combined trajectory 40 periods: the stop ends it, own domain, bridge on a
 # free port), then js/check_operator.mjs drives it with Foxglove's client library: bad inputs
-# refused, the rate limit, start and stop seen in the supervisor's state. Then: the session
+# refused, the rate limit, jogs in two frames, a pose goal, a goal outside the soft limits
+# refused, start and stop seen in the supervisor's state. Then: the session
 # ended by itself after the stop (exit 6: stopped by the operator, docs/exit_codes.md), the supervisor logged both commands from the
 # bridge, and the bridge logged what it wrote and what it refused.
 # Usage: run_operator_test.sh SRC_DIR NODE_DIR BUILD_DIR DOMAIN
@@ -39,6 +40,9 @@ grep -E "operator command #[0-9]+: kind" "$out/supervisor.log" | head -3 || true
 grep -qE "operator command #[0-9]+ start combined written" "$out/bridge.log" || { echo "FAIL: the bridge wrote no start"; fail=1; }
 [ "$(grep -cE "operator command #[0-9]+: kind 0 trajectory 'combined'" "$out/supervisor.log")" -eq 1 ] \
   || { echo "FAIL: the supervisor did not get exactly one start"; fail=1; }
+grep -q "goal refused: the goal leaves the pose box" "$out/supervisor.log" ||
+  { echo "FAIL: the supervisor did not log why it refused the goal outside the soft limits"; fail=1; }
+grep -E "jogging from|jog at rest|goal motion at rest" "$out/supervisor.log" || { echo "FAIL: no jog or goal in supervisor.log"; fail=1; }
 refusals=$(grep -c "operator input refused\|not accepted\|rate limit" "$out/bridge.log" || true)
 echo "refusals logged by the bridge: $refusals"
 [ "$refusals" -ge 10 ] || { echo "FAIL: expected the refusals in bridge.log"; fail=1; }

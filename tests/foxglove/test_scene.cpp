@@ -299,6 +299,43 @@ TEST(BridgeOperatorInput, OnlyWellFormedCommandsPass) {
   }
 }
 
+TEST(BridgeOperatorInput, JogAndGoalAreCheckedFieldByField) {
+  using hexa::bridge::OperatorInput;
+  using hexa::bridge::ParseOperatorInput;
+  auto jog = ParseOperatorInput(
+      R"({"command": "jog", "frame": "tool", "velocity_m_s": [0.01, 0, -0.02], "angular_velocity_rad_s": [0, 0.1, 0]})");
+  ASSERT_TRUE(jog.ok) << jog.error;
+  EXPECT_EQ(jog.input.command, OperatorInput::Command::kJog);
+  EXPECT_TRUE(jog.input.tool_frame);
+  EXPECT_EQ(jog.input.velocity_m_s[2], -0.02);
+  EXPECT_EQ(jog.input.angular_velocity_rad_s[1], 0.1);
+  auto goal = ParseOperatorInput(
+      R"({"command": "goal", "position_m": [0.01, 0.02, 0.45], "orientation_wxyz": [0.7071067811865476, 0, 0, 0.7071067811865476]})");
+  ASSERT_TRUE(goal.ok) << goal.error;
+  EXPECT_EQ(goal.input.command, OperatorInput::Command::kGoal);
+  EXPECT_EQ(goal.input.position_m[2], 0.45);
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {R"({"command": "jog", "velocity_m_s": [0, 0, 0]})", "'angular_velocity_rad_s' is absent"},
+      {R"({"command": "jog", "angular_velocity_rad_s": [0, 0, 0]})", "'velocity_m_s' is absent"},
+      {R"({"command": "jog", "velocity_m_s": [0, 0], "angular_velocity_rad_s": [0, 0, 0]})", "array of 3"},
+      {R"({"command": "jog", "velocity_m_s": [0, "a", 0], "angular_velocity_rad_s": [0, 0, 0]})", "numbers only"},
+      {R"({"command": "jog", "velocity_m_s": [0, NaN, 0], "angular_velocity_rad_s": [0, 0, 0]})", "not valid JSON"},
+      {R"({"command": "jog", "velocity_m_s": [0, 1e999, 0], "angular_velocity_rad_s": [0, 0, 0]})", ""},
+      {R"({"command": "jog", "velocity_m_s": [5, 0, 0], "angular_velocity_rad_s": [0, 0, 0]})", "jog vx = 5 m/s is absurd"},
+      {R"({"command": "jog", "frame": "base", "velocity_m_s": [0, 0, 0], "angular_velocity_rad_s": [0, 0, 0]})", "'frame' must be"},
+      {R"({"command": "goal", "position_m": [0, 0, 0.4]})", "'orientation_wxyz' is absent"},
+      {R"({"command": "goal", "orientation_wxyz": [1, 0, 0, 0]})", "'position_m' is absent"},
+      {R"({"command": "goal", "position_m": [0, 0, 0.4], "orientation_wxyz": [1, 0, 0, 0.1]})", "not a unit quaternion"},
+      {R"({"command": "goal", "position_m": [10, 0, 0.4], "orientation_wxyz": [1, 0, 0, 0]})", "absurd"},
+      {R"({"command": "stop", "velocity_m_s": [0, 0, 0]})", "for jog only"},
+      {R"({"command": "jog", "position_m": [0, 0, 0]})", "for goal only"}};
+  for (const auto& [text, words] : bad) {
+    const auto r = ParseOperatorInput(text);
+    EXPECT_FALSE(r.ok) << text;
+    EXPECT_NE(r.error.find(words), std::string::npos) << text << ": " << r.error;
+  }
+}
+
 TEST(BridgeOperatorInput, RateLimiterAllowsTheBurstThenTheRate) {
   hexa::bridge::RateLimiter limiter(10, 10);
   int allowed = 0;

@@ -80,6 +80,23 @@ TEST(LockstepProtocol, ControlCycleWatchNeedsTheSameStuckCycleAtFourChecks) {
   for (std::uint64_t t = 0; t < 10; ++t) EXPECT_EQ(slow.Check(8, true, t), Cause::kNone);
 }
 
+// A cycle whose thread the machine keeps off the CPU (it waited for a CPU more than it ran
+// since the previous check) is not stuck: such checks neither count nor reset the count.
+TEST(LockstepProtocol, ControlCycleWatchDoesNotCountChecksWhileTheCycleWaitsForACpu) {
+  using Cause = ControlCycleWatch::Cause;
+  ControlCycleWatch starved;
+  EXPECT_EQ(starved.Check(7, false, 0), Cause::kNone);  // a cycle runs: first sighting
+  for (int k = 0; k < 20; ++k) EXPECT_EQ(starved.Check(7, false, 0, true), Cause::kNone);
+  EXPECT_EQ(starved.Check(9, false, 0), Cause::kNone);  // it went on: progress
+  ControlCycleWatch hang;  // a hang that runs (or sleeps) between starved checks is still one
+  EXPECT_EQ(hang.Check(7, false, 0), Cause::kNone);
+  EXPECT_EQ(hang.Check(7, false, 0), Cause::kNone);
+  EXPECT_EQ(hang.Check(7, false, 0, true), Cause::kNone);
+  EXPECT_EQ(hang.Check(7, false, 0), Cause::kNone);
+  EXPECT_EQ(hang.Check(7, false, 0), Cause::kHang);  // the 4th counted check
+  EXPECT_EQ(hang.Check(7, false, 0, true), Cause::kHang);  // reported: stays reported
+}
+
 // Real time: a lease lapse counts only when the leg's commands stopped too (docs/faults.md).
 TEST(LockstepProtocol, RealtimeLapseWithFreshCommandsIsTheHostNotTheLeg) {
   const std::int64_t confirm = 10;  // a 10 ms lease

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdlib>
+#include <cstdio>
 #include <cstring>
 
 namespace hexa::sched {
@@ -128,6 +129,28 @@ bool LeaveRealtime(std::string& message) {
             (failed > 0 ? ", " + std::to_string(failed) + " refused" : "") +
             "; memory unlocked";
   return failed == 0;
+}
+
+int CurrentThreadId() {
+  thread_local const int tid = static_cast<int>(gettid());
+  return tid;
+}
+
+bool ReadThreadSchedStat(int tid, std::uint64_t& run_ns, std::uint64_t& wait_ns) {
+  char path[64];
+  std::snprintf(path, sizeof path, "/proc/self/task/%d/schedstat", tid);
+  const int fd = open(path, O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return false;
+  char text[96];
+  const ssize_t n = read(fd, text, sizeof text - 1);
+  close(fd);
+  if (n <= 0) return false;
+  text[n] = '\0';
+  unsigned long long run = 0, wait = 0;
+  if (std::sscanf(text, "%llu %llu", &run, &wait) != 2) return false;
+  run_ns = run;
+  wait_ns = wait;
+  return true;
 }
 
 CpuLatencyHold::CpuLatencyHold(int latency_us, std::string& message, const std::string& device) {

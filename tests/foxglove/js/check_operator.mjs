@@ -8,9 +8,13 @@
 //    trajectory on stop; meanwhile the supervisor stays IDLE;
 // 3. 1000 messages at once (stop, which changes nothing while IDLE): at most the
 //    burst (10) pass, the rest is refused for rate with a status;
-// 4. start (combined): the supervisor leaves IDLE (BLENDING, then TRACKING); an info status
+// 4. jog (+x, work frame, 20 Hz until the platform moved 10 mm): the supervisor JOGGING, the
+//    desired pose moving along +x, back to IDLE after the client lets go; a tool-frame jog likewise; bad jogs and
+//    goals refused (absent field, non-unit quaternion, absurd); a goal 2 cm / 1 cm away:
+//    GOAL, then IDLE on it; a goal outside the soft limits: refused by the supervisor (IDLE);
+// 5. start (combined): the supervisor leaves IDLE (BLENDING, then TRACKING); an info status
 //    says it was forwarded;
-// 5. stop: the supervisor goes to STOPPING and then IDLE.
+// 6. stop: the supervisor goes to STOPPING and then IDLE.
 import { createRequire } from "node:module";
 import WebSocket from "ws";
 
@@ -34,7 +38,7 @@ async function until(pred, ms, what) {
     await sleep(20);
   }
 }
-const STATES = ["IDLE", "BLENDING", "TRACKING", "STOPPING", "HOLD"];
+const STATES = ["IDLE", "BLENDING", "TRACKING", "STOPPING", "HOLD", "JOGGING", "GOAL"];
 const enc = new TextEncoder();
 
 const c = { info: null, channels: new Map(), statuses: [], states: [], closed: false };
@@ -47,7 +51,9 @@ let poseType = null;
 let poseSub = null;
 client.on("message", (m) => {
   if (m.subscriptionId !== poseSub) return;
-  const state = STATES[poseType.decode(new Uint8Array(m.data.buffer, m.data.byteOffset, m.data.byteLength)).state ?? 0];
+  const report = poseType.decode(new Uint8Array(m.data.buffer, m.data.byteOffset, m.data.byteLength));
+  const state = STATES[report.state ?? 0];
+  c.desired = report.desiredPose ?? report.desired_pose;
   if (c.states[c.states.length - 1] !== state) {
     c.states.push(state);
     console.log(`supervisor state: ${state}`);
@@ -115,13 +121,60 @@ try {
   check(rate.every((s) => s.level === 2), "the rest refused for rate with status errors");
   check(forwarded + refusedCount === 1000, `every message forwarded or counted as refused (${forwarded} + ${refusedCount})`);
 
-  // ---- 4: start ----------------------------------------------------------------------------
+  // ---- 4: jog and goal ---------------------------------------------------------------------
+  // Jog messages every 50 ms until `done()` (or 60 s): the session runs in lockstep, whose
+  // simulated time may pass slower or faster than the wall clock, so the jog is held until the
+  // platform has moved rather than for a wall-clock time; then let go.
+  const jogUntil = async (done, text, what) => {
+    const t0 = Date.now();
+    while (!done() && Date.now() - t0 < 60000) {
+      client.sendMessage(op, enc.encode(text));
+      await sleep(50);
+    }
+    check(done(), what);
+  };
+  const x0 = c.desired[0];
+  await jogUntil(() => c.states.includes("JOGGING") && c.desired[0] - x0 > 0.01,
+                 '{"command":"jog","velocity_m_s":[0.03,0,0],"angular_velocity_rad_s":[0,0,0]}',
+                 "jog +x: the supervisor JOGGING and the desired pose 10 mm along +x");
+  await until(() => state() === "IDLE", 60000, "the supervisor IDLE after the jog was let go");
+  const dx = c.desired[0] - x0;
+  console.log(`jog +x 3 cm/s: IDLE again after the client let go; desired x moved ${(dx * 1e3).toFixed(2)} mm, ` +
+              `y ${((c.desired[1]) * 1e3).toFixed(2)} mm`);
+  check(dx > 0.01 && dx < 0.05, `the jog moved the platform along +x and stopped (${(dx * 1e3).toFixed(2)} mm)`);
+  const y0 = c.desired[1];
+  const jogging = c.states.length;
+  await jogUntil(() => c.states.slice(jogging).includes("JOGGING") && c.desired[1] - y0 > 0.01,
+                 '{"command":"jog","frame":"tool","velocity_m_s":[0,0.03,0],"angular_velocity_rad_s":[0,0,0]}',
+                 "tool-frame jog +y: JOGGING and 10 mm along +y");
+  await until(() => state() === "IDLE", 60000, "IDLE after the tool-frame jog");
+  await refused(send('{"command":"jog","velocity_m_s":[0,0,0]}'), "a jog without its angular velocity", "'angular_velocity_rad_s' is absent");
+  await refused(send('{"command":"jog","velocity_m_s":[0,1e400,0],"angular_velocity_rad_s":[0,0,0]}'), "a jog of 1e400 m/s", "refused");
+  await refused(send('{"command":"goal","position_m":[0,0,0.45]}'), "a goal without its orientation", "'orientation_wxyz' is absent");
+  await refused(send('{"command":"goal","position_m":[0,0,0.45],"orientation_wxyz":[1,0,0,0.2]}'),
+                "a goal with a non-unit quaternion", "not a unit quaternion");
+  await refused(send('{"command":"goal","position_m":[10,0,0.45],"orientation_wxyz":[1,0,0,0]}'),
+                "a goal 10 m away", "absurd");
+  const goal = [c.desired[0] - 0.02, c.desired[1] + 0.01, c.desired[2]];
+  const g = await answer(send(`{"command":"goal","position_m":[${goal.join(",")}],"orientation_wxyz":[1,0,0,0]}`), "goal");
+  check(g.level === 0 && g.message.includes("goal forwarded"), `goal: '${g.message}'`);
+  await until(() => c.states[c.states.length - 1] === "GOAL" || c.states.slice(-2).includes("GOAL"), 30000, "GOAL");
+  await until(() => state() === "IDLE", 30000, "IDLE on the goal");
+  const miss = Math.hypot(c.desired[0] - goal[0], c.desired[1] - goal[1], c.desired[2] - goal[2]);
+  check(miss < 1e-6, `the desired pose ended on the goal (${miss.toExponential(2)} m)`);
+  const outside = [goal[0] + 0.3, goal[1], goal[2]];
+  const o = await answer(send(`{"command":"goal","position_m":[${outside.join(",")}],"orientation_wxyz":[1,0,0,0]}`), "a goal outside the soft limits");
+  check(o.level === 0, `a goal outside the limits passes the bridge's checks ('${o.message}')`);
+  await sleep(1000);
+  check(state() === "IDLE", `the supervisor refused the goal outside the limits and stays IDLE (${c.states.slice(-3).join(" -> ")})`);
+
+  // ---- 5: start ----------------------------------------------------------------------------
   const s = await answer(send('{"command":"start","trajectory":"combined"}'), "start");
   check(s.level === 0 && s.message.includes("start (combined) forwarded"), `start: '${s.message}'`);
   await until(() => state() === "TRACKING", 60000, "the supervisor tracking after start");
   check(c.states.includes("BLENDING") || c.states.includes("TRACKING"), `after start: ${c.states.join(" -> ")}`);
 
-  // ---- 5: stop -----------------------------------------------------------------------------
+  // ---- 6: stop -----------------------------------------------------------------------------
   const t = await answer(send('{"command":"stop"}'), "stop");
   check(t.level === 0 && t.message.includes("stop forwarded"), `stop: '${t.message}'`);
   await until(() => c.states.slice(c.states.lastIndexOf("TRACKING")).includes("STOPPING"), 30000,

@@ -73,6 +73,10 @@ struct BsSmcInput {
   // Coupled study variant: the feedback part's velocity (e_dot, S) from the leg observer
   // instead of the Gaussian derivative (needs feedback_rate_from_observer and a fraction > 0).
   bool feedback_velocity_from_observer = false;
+  // Platform state observer study (studies/platform_observer_feedback): the feedback
+  // part's velocity (e_dot, S) from the platform state observer instead of eq 40.
+  bool has_feedback_velocity = false;
+  double feedback_velocity_m_s = 0.0;
 };
 
 struct BsSmcOutput {

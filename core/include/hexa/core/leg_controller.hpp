@@ -134,6 +134,9 @@ class LegController {
   explicit LegController(const LegControllerConfig& config);  // validates (throws)
 
   void Update(const LegControllerInput& input, LegControllerOutput& output);
+  // Study (studies/platform_observer_feedback): as Update, the BS-SMC's feedback part
+  // with `feedback_velocity_m_s` (BsSmcInput::feedback_velocity_m_s) as the leg's velocity.
+  void Update(const LegControllerInput& input, LegControllerOutput& output, double feedback_velocity_m_s);
 
   // Coupled leg feedback (BsSmcController::Begin / Finish; docs/measurements/control.md "Coupled leg
   // feedback"): BeginCoupled does everything Update does up to the BS-SMC's feedback part and

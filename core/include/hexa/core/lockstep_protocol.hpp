@@ -161,7 +161,10 @@ SilentLegVerdict JudgeSilentLegLockstep(const SilentLegFacts& facts);
 // A leg controller's main thread calls its control cycle stuck after this many checks in a row
 // (one every quarter lease) that found the same cycle in progress, or the same answer computed
 // and not published. Counted in the controller's own checks, not in wall time: a process that
-// is not scheduled makes no checks and is never called stuck.
+// is not scheduled makes no checks and is never called stuck. The cycle runs on another thread
+// (Cyclone's receive thread), which the machine may not run while the main thread runs on
+// another CPU: a check after which the cycle's thread spent more of the interval waiting for a
+// CPU than running does not count (the thread's scheduler statistics, /proc schedstat).
 inline constexpr int kStuckChecks = 4;
 
 // The leg controller's watch of its own control cycle (main thread), pure: fed at each check
@@ -170,8 +173,11 @@ class ControlCycleWatch {
  public:
   enum class Cause : std::uint8_t { kNone, kHang, kSilence };
   // `cycle_sequence`: odd while a cycle runs (incremented at its start and end); `unpublished`:
-  // an answer was computed and not published, for tick `unpublished_tick`.
-  Cause Check(std::uint64_t cycle_sequence, bool unpublished, std::uint64_t unpublished_tick);
+  // an answer was computed and not published, for tick `unpublished_tick`;
+  // `cycle_thread_starved`: since the previous check the cycle's thread waited for a CPU more
+  // than it ran (the machine's doing, not the cycle's: such a check does not count).
+  Cause Check(std::uint64_t cycle_sequence, bool unpublished, std::uint64_t unpublished_tick,
+              bool cycle_thread_starved = false);
   Cause cause() const { return cause_; }
 
  private:

@@ -86,8 +86,10 @@ class LockstepSimulation {
 
   // Runs tick n = tick(): supervisor (when due, with `command`/`start`), the six leg
   // controllers, command hygiene, one plant step. Returns the plant status.
+  // `jog` with kJog, `goal_X_BP` with kGoal (operator_motion.hpp).
   PlantStatus Tick(OperatorCommandKind command = OperatorCommandKind::kNone,
-                   const StartRequest* start = nullptr);
+                   const StartRequest* start = nullptr, const JogRequest* jog = nullptr,
+                   const Pose* goal_X_BP = nullptr);
 
   std::uint64_t tick() const { return tick_; }
   double time_s() const { return static_cast<double>(tick_) * config_.tick_s; }

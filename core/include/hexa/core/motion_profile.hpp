@@ -79,6 +79,10 @@ class JogProfile {
   void Update(const JogInput& input, JogOutput& output) noexcept;
   // Stop at once (mode change while still, reset): state and command cleared.
   void Reset() noexcept;
+  // Continue a motion already under way (a pose goal being stopped): the axes start at
+  // `twist_C_B` and `acceleration_C_B` (each within this profile's limits, else clamped to
+  // them), with no command: the next Update brings them to rest at the jerk limit.
+  void StartFrom(const Vector6d& twist_C_B, const Vector6d& acceleration_C_B) noexcept;
   bool still() const noexcept;
   // Where a stop commanded now would end, per axis (m, rad): the acceleration ramped to zero at
   // J, then the time-optimal jerk-limited stop from the velocity reached (continuous forms).

@@ -9,6 +9,13 @@
 //    +-----------------------+   +---------------------+---> STOPPING                       |
 //   any state --fault / rejected trajectory--> HOLD --reset (only command accepted)--------+
 //
+//            jog                  let go (dead-man) or stop, at rest
+//   IDLE ------------> JOGGING ------------------------------------> IDLE
+//            goal (inside the soft limits)    reached or stop, at rest
+//   IDLE ------------> GOAL    ------------------------------------> IDLE
+//   (operator_motion.hpp: every jog and goal setpoint is held inside the soft limits; a goal
+//   outside them is refused with the reason, the state unchanged)
+//
 // Faults (checked every tick outside HOLD): a leg fault reported by a leg / the plant, lost
 // liveliness of a leg controller, more consecutive deadline misses than configured, invalid
 // sensors or estimate, estimate outside the workspace; a rejected trajectory on start.
@@ -23,6 +30,7 @@
 #include "hexa/core/control_params.hpp"
 #include "hexa/core/csv_trajectory.hpp"
 #include "hexa/core/feasibility.hpp"
+#include "hexa/core/operator_motion.hpp"
 #include "hexa/core/outer_loop.hpp"
 #include "hexa/core/platform_dynamics.hpp"
 #include "hexa/core/pose_estimator.hpp"
@@ -32,7 +40,7 @@
 namespace hexa {
 
 // Same enumerators, in the same order, as idl/hexa.idl SupervisorState (static_cast maps).
-enum class SupervisorState { kIdle, kBlending, kTracking, kStopping, kHold };
+enum class SupervisorState { kIdle, kBlending, kTracking, kStopping, kHold, kJogging, kGoal };
 const char* ToString(SupervisorState state);  // "SUPERVISOR_IDLE", ...
 
 // Same enumerators, in the same order, as idl/hexa.idl FaultReason (static_cast maps).
@@ -61,7 +69,7 @@ enum class FaultReason {
 };
 const char* ToString(FaultReason reason);  // "FAULT_NONE", ...
 
-enum class OperatorCommandKind { kNone, kStart, kStop, kReset, kHome };
+enum class OperatorCommandKind { kNone, kStart, kStop, kReset, kHome, kJog, kGoal };
 const char* ToString(OperatorCommandKind kind);
 
 enum class CommandResult {
@@ -89,6 +97,8 @@ struct SupervisorInput {
   int imu_deadline_misses_consecutive = 0;
   OperatorCommandKind command = OperatorCommandKind::kNone;
   const StartRequest* start = nullptr;                   // for kStart; copied, not kept
+  JogRequest jog;                                        // for kJog: the newest jog message
+  Pose goal_X_BP;                                        // for kGoal: the platform's goal pose
 };
 
 struct SupervisorLegSetpoint {
@@ -118,6 +128,8 @@ struct SupervisorOutput {
   std::array<char, 160> fault_detail{};  // NUL-terminated, as idl FaultEvent.detail
   bool fault_raised = false;           // the fault was raised at this tick (publish an event)
   CommandResult command_result = CommandResult::kNone;
+  std::array<char, 160> command_detail{};  // why a command was refused (a goal: which limit)
+  OperatorMotionStatus operator_motion;    // in JOGGING / GOAL: the mode's status this tick
 };
 
 class Supervisor {
@@ -127,6 +139,10 @@ class Supervisor {
   // calibration); every measured length is corrected with it before use. Identity by default.
   Supervisor(const RigParams& rig, const SupervisorParams& params,
              const LegArray<PotentiometerCalibrationParams>& potentiometer = {});
+  // With the operator modes' limits, frames and soft limits given (validated, throws).
+  Supervisor(const RigParams& rig, const SupervisorParams& params,
+             const LegArray<PotentiometerCalibrationParams>& potentiometer,
+             const OperatorMotionConfig& operator_motion);
 
   // One 5 ms tick. Neither throws nor allocates.
   void Update(const SupervisorInput& input, SupervisorOutput& output) noexcept;
@@ -139,6 +155,7 @@ class Supervisor {
   TrajectoryTiming timing() const { return TimingFrom(params_); }
   const RigParams& rig() const { return rig_; }
   const SupervisorParams& params() const { return params_; }
+  const OperatorMotion& operator_motion() const { return operator_motion_; }
   // Largest residual of a leg length against the least-squares fit of all six seen so far
   // (fault-free: calibration errors and noise; docs/faults.md measures it).
   double max_consistency_residual_m() const { return max_consistency_residual_m_; }
@@ -160,6 +177,12 @@ class Supervisor {
                           int& leg, std::array<char, 160>& detail) const;
   void HandleCommand(const SupervisorInput& input, SupervisorOutput& output);
   void StartTrajectory(const Trajectory& trajectory, double time_s);
+  // kJog / kGoal (HandleCommand's part for the operator modes).
+  void HandleMotionCommand(const SupervisorInput& input, SupervisorOutput& output);
+  bool following_trajectory() const {
+    return state_ == SupervisorState::kBlending || state_ == SupervisorState::kTracking ||
+           state_ == SupervisorState::kStopping;
+  }
   // Feed-forward of the desired sample (and of the next period's sample while moving).
   void FillFeedforward(const TrajectorySample& desired, double sample_time_s, bool moving,
                        LegArray<SupervisorLegSetpoint>& setpoint) const;
@@ -175,6 +198,7 @@ class Supervisor {
   LegArray<double> sensed_length_m_{};  // this tick's lengths, potentiometers calibrated
   Vector6d home_;
   std::shared_ptr<const ConstantMotion> home_motion_;  // preallocated for the home command
+  OperatorMotion operator_motion_;                     // jog and goal (JOGGING, GOAL)
 
   SupervisorState state_ = SupervisorState::kIdle;
   bool initialized_ = false;

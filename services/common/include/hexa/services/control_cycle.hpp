@@ -19,6 +19,8 @@
 
 #include <dds/dds.h>
 
+#include "hexa/services/scheduling.hpp"
+
 namespace hexa::services {
 
 class ControlCycle {
@@ -61,6 +63,7 @@ class ControlCycle {
   }
   // The same, for a caller that holds mutex() already.
   void RunHoldingLock() {
+    thread_id_.store(sched::CurrentThreadId(), std::memory_order_relaxed);
     sequence_.fetch_add(1, std::memory_order_acq_rel);  // odd: a cycle runs
     if (cycle_ != nullptr) cycle_(context_);
     sequence_.fetch_add(1, std::memory_order_acq_rel);
@@ -68,6 +71,9 @@ class ControlCycle {
 
   std::mutex& mutex() { return mutex_; }
   std::uint64_t sequence() const { return sequence_.load(std::memory_order_acquire); }
+  // The kernel id of the thread that ran the newest cycle (0: none yet): while a cycle runs,
+  // the thread it runs on (for the watch's scheduler statistics).
+  int thread_id() const { return thread_id_.load(std::memory_order_relaxed); }
   std::size_t triggers() const { return triggers_; }
 
  private:
@@ -79,6 +85,7 @@ class ControlCycle {
   };
   std::mutex mutex_;
   std::atomic<std::uint64_t> sequence_{0};
+  std::atomic<int> thread_id_{0};
   void* context_ = nullptr;
   void (*cycle_)(void*) = nullptr;
   std::array<Detach, kMaxTriggers> detach_{};

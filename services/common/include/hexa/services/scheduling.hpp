@@ -41,6 +41,14 @@ bool SetRealtime(int priority, std::string& message);
 // held the six legs off the CPU for ~10 ms; docs/performance.md). Counts the threads changed.
 bool LeaveRealtime(std::string& message);
 
+// This thread's kernel id (gettid), cached per thread: no system call after the first.
+int CurrentThreadId();
+
+// The scheduler's statistics of thread `tid` of this process (/proc/self/task/TID/schedstat):
+// the time it ran and the time it waited for a CPU while runnable, since it started. False
+// when the thread is gone or the kernel keeps no such statistics.
+bool ReadThreadSchedStat(int tid, std::uint64_t& run_ns, std::uint64_t& wait_ns);
+
 // A limit on how long the kernel may take to wake an idle CPU (PM QoS, /dev/cpu_dma_latency),
 // held while the object lives: the request is the int32 written to the device and lasts while
 // its file stays open (the kernel drops it when the file is closed, also when the process
