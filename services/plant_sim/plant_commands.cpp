@@ -2,6 +2,7 @@
 // arbitration, the supervisor's interlock reports, the facts lockstep judges silent legs by,
 // and the wording of every fault event the arbitration emits (docs/faults.md).
 #include <cstdio>
+#include <cstring>
 
 #include "plant_node.hpp"
 
@@ -84,6 +85,11 @@ void PlantNode::TakeFaultEvents() {
     for (std::size_t k = 0; k < fault_reader_.count(); ++k) {
       if (!fault_reader_.info(k).valid_data) continue;
       const hexa_msg_FaultEvent& f = fault_reader_.sample(k);
+      if (f.reason == hexa_msg_FAULT_ESTOP && std::strcmp(f.source_node, "supervisor") == 0) {
+        unsigned sequence = 0;
+        if (std::sscanf(f.detail, "e-stop: operator command #%u", &sequence) == 1) LatchOperatorEstop(sequence);
+        continue;
+      }
       if (f.reason != hexa_msg_FAULT_SENSOR_INCONSISTENT) continue;
       events_.Clear();
       arbitration_.Interlock(f.leg_id, tick_, events_);  // the valve closes, for good

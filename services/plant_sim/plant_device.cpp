@@ -152,7 +152,21 @@ void PlantNode::JudgeDeviceSafety() {
               sensors_.applied_valve_v[3], sensors_.applied_valve_v[4], sensors_.applied_valve_v[5]);
 }
 
+void PlantNode::LatchOperatorEstop(std::uint32_t sequence) {
+  if (operator_estop_sequence_ == sequence) return;  // the same command by the other path
+  operator_estop_sequence_ = sequence;
+  device_.LatchEstop();  // the valves to their safe values from this tick's write on
+  char detail[160];
+  std::snprintf(detail, sizeof detail, "e-stop: operator command #%u: every valve to its safe "
+                "value from tick %llu", static_cast<unsigned>(sequence), static_cast<unsigned long long>(tick_));
+  faults_.Publish(0, tick_, hexa_msg_FAULT_ESTOP, detail);
+  log_->error("tick {}: FAULT_ESTOP: {}", tick_, detail);
+}
+
 void PlantNode::TakeOperatorCommands() {
+  // The supervisor's word on an operator e-stop (a FaultEvent) when this reader missed it;
+  // real time: every 10 ticks with the interlock (RunRealtime), lockstep: every tick.
+  if (options_.common.mode == node::TimeMode::kLockstep) TakeFaultEvents();
   while (operator_reader_.Take() > 0) {
     for (std::size_t k = 0; k < operator_reader_.count(); ++k) {
       if (!operator_reader_.info(k).valid_data) continue;
@@ -166,16 +180,11 @@ void PlantNode::TakeOperatorCommands() {
         continue;
       }
       if (c.kind == hexa_msg_OPERATOR_ESTOP) {
-        device_.LatchEstop();  // the valves to their safe values from this tick's write on
-        char detail[160];
-        std::snprintf(detail, sizeof detail, "e-stop: operator command #%u: every valve to its safe "
-                      "value from tick %llu", static_cast<unsigned>(c.sequence),
-                      static_cast<unsigned long long>(tick_));
-        faults_.Publish(0, tick_, hexa_msg_FAULT_ESTOP, detail);
-        log_->error("tick {}: FAULT_ESTOP: {}", tick_, detail);
+        LatchOperatorEstop(c.sequence);
       } else if (sensors_.safety.estop_latched) {
         device_.RequestEstopReset();  // the rig refuses while its loop is open
         estop_reset_asked_ = true;
+        operator_estop_sequence_ = 0;
         log_->warn("tick {}: operator reset #{}: e-stop reset asked of the rig", tick_,
                    static_cast<unsigned>(c.sequence));
       }

@@ -159,6 +159,7 @@ class PlantNode {
   device::DeviceStatus ExchangeWithDevice(const LegArray<double>& valve_v);
   void JudgeDeviceSafety();  // after the exchange, for the sample of the new tick_
   void TakeOperatorCommands();  // estop: latch the device; reset: ask the device to re-arm
+  void LatchOperatorEstop(std::uint32_t sequence);  // once per command, whichever path brings it
   void LogDeviceEnd() const;
 
   // plant_outputs.cpp: sensors of tick_ (all legs, or `only_leg` alone: a re-ask), the IMU
@@ -250,7 +251,8 @@ class PlantNode {
   std::uint64_t ticks_without_sample_ = 0;
   std::uint64_t samples_missed_total_ = 0;
   bool estop_reported_ = false;
-  bool estop_reset_asked_ = false;     // an operator reset asked; its refusal reported once
+  bool estop_reset_asked_ = false;
+  std::uint32_t operator_estop_sequence_ = 0;  // the operator e-stop latched (0: none)     // an operator reset asked; its refusal reported once
   std::uint64_t estop_unsafe_ticks_ = 0;  // latched, yet a valve not at its safe value
   bool board_down_ = false;  // no frame since FAULT_BOARD_LINK
   bool device_lost_ = false;  // the board was lost during the run: exit kPlantDeviceLost

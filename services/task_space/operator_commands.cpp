@@ -137,7 +137,14 @@ void SupervisorNode::TakeOperatorCommands() {
       case hexa_msg_OPERATOR_ESTOP:
         // The plant latches it in the rig and reports FAULT_ESTOP, on which this holds
         // (docs/faults.md, "Emergency stop"); held already at once, in case that report is late.
+        // Also told to the plant as a FaultEvent: its own command reader may not have matched
+        // the operator's writer in time (the operator waits for this reader only).
         system_fault_ = FaultReason::kEstop;
+        {
+          char detail[64];
+          std::snprintf(detail, sizeof detail, "e-stop: operator command #%u", static_cast<unsigned>(c.sequence));
+          faults_.Publish(0, last_run_tick_, hexa_msg_FAULT_ESTOP, detail);
+        }
         AnswerCommand(c.sequence, "estop", CommandAnswer::kAccepted, "the plant latches the e-stop");
         return;
       default:
