@@ -5,6 +5,7 @@
 // bad board options are refused naming the option and the address.
 #include <signal.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstring>
@@ -22,11 +23,14 @@ namespace {
 using hexa::testing::RunSession;
 using hexa::testing::Slurp;
 
-// Doubles equal bit for bit (NaN where the other has the same NaN).
+// Doubles equal bit for bit (NaN where the other has the same NaN), over the rows both runs
+// have: how many ticks run after the supervisor ended its run (until the plant is stopped)
+// depends on the wall clock.
 template <typename Rows, typename Field>
 void ExpectSameBits(const Rows& a, const Rows& b, Field field, const char* what) {
-  ASSERT_EQ(a.size(), b.size()) << what;
-  for (std::size_t k = 0; k < a.size(); ++k) {
+  const std::size_t n = std::min(a.size(), b.size());
+  EXPECT_LE(std::max(a.size(), b.size()) - n, 20u) << what;
+  for (std::size_t k = 0; k < n; ++k) {
     const auto& x = field(a[k]);
     const auto& y = field(b[k]);
     if (std::memcmp(x.data(), y.data(), sizeof(double) * x.size()) != 0) {
@@ -181,7 +185,8 @@ TEST(BoardSession, OperatorEstopHoldsEveryValveAtNullFromTheTickItIsTaken) {
   const auto r = hexa::recorder::ComputeSessionReport(dir + "/session.mcap");
   std::uint64_t estop_tick = 0;
   for (const auto& f : r.faults)
-    if (f.find("FAULT_ESTOP: e-stop: operator command #") != std::string::npos && estop_tick == 0) {
+    if (f.rfind("plant:", 0) == 0 && f.find("FAULT_ESTOP: e-stop: operator command #") != std::string::npos &&
+        estop_tick == 0) {
       std::smatch m;
       ASSERT_TRUE(std::regex_search(f, m, std::regex("every valve to its safe value from tick ([0-9]+)"))) << f;
       estop_tick = std::stoull(m[1]);
