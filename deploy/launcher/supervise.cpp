@@ -1,8 +1,16 @@
 // hexa_session's children started in the layout's order and watched until the session
 // completes (the supervisor finished the trajectory, the plant the experiment) or fails
 // (docs/exit_codes.md: the launcher's exit codes and the services' codes it reads).
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
 #include <fstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "child_progress.hpp"
@@ -17,11 +25,44 @@ using deploy::ChildExit;
 using deploy::ChildSpec;
 using deploy::ProcessGroup;
 
+// Whether a process has bound UDP port `port` of 127.0.0.1 (a bind of it is refused as in use).
+bool UdpPortBound(int port) {
+  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  if (fd < 0) return false;
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  a.sin_port = htons(static_cast<std::uint16_t>(port));
+  const bool in_use = bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 && errno == EADDRINUSE;
+  close(fd);
+  return in_use;
+}
+
+// The board emulator must listen before the plant sends its first command: a datagram to a
+// port not yet bound is dropped, and in lockstep the plant awaits the answer to each command
+// (a resend could step the emulator twice). Waits until the port is bound, the emulator
+// ended, or 30 s (a loaded machine); false in the last two cases.
+bool AwaitBoardListening(const ProcessGroup& group, int port, spdlog::logger& log) {
+  const auto t0 = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - t0 < std::chrono::seconds(30)) {
+    if (UdpPortBound(port)) {
+      log.info("board emulator listening on UDP 127.0.0.1:{} after {:.3f} s", port,
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      return true;
+    }
+    if (!group.Running("board")) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  log.error("the board emulator does not listen on UDP 127.0.0.1:{} ({}): see board.console.log",
+            port, group.Running("board") ? "not within 30 s" : "it ended");
+  return false;
+}
+
 // Starts every child; the legs and the plant are told the pids of their peers started
 // before them (the layout's peers). In lockstep a process that ended is then dead at once
 // for them, where DDS would see it after its participant's lease (10 s); a stopped or slow
 // one is waited for (docs/faults.md). False (everything stopped) if one cannot start.
-bool StartChildren(ProcessGroup& group, const Launch& launch, spdlog::logger& log) {
+bool StartChildren(ProcessGroup& group, const Launch& launch, int board_port, spdlog::logger& log) {
   std::vector<std::pair<std::string, pid_t>> started;
   for (std::size_t k = 0; k < launch.children.size(); ++k) {
     ChildSpec s = launch.children[k];
@@ -37,6 +78,10 @@ bool StartChildren(ProcessGroup& group, const Launch& launch, spdlog::logger& lo
     }
     started.emplace_back(s.name, pid);
     log.info("started {} (pid {})", s.name, pid);
+    if (s.name == "board" && board_port > 0 && !AwaitBoardListening(group, board_port, log)) {
+      group.StopAll(std::chrono::milliseconds(2000));
+      return false;
+    }
   }
   return true;
 }
@@ -195,7 +240,7 @@ SessionEnd Supervise(ProcessGroup& group, const Options& o, const Launch& launch
                      spdlog::logger& log) {
   SessionEnd end;
   end.t0 = std::chrono::steady_clock::now();
-  if (!StartChildren(group, launch, log)) {
+  if (!StartChildren(group, launch, o.device == "board" ? o.board_port : 0, log)) {
     end.start_failed = true;
     return end;
   }
