@@ -32,7 +32,8 @@ bool IsPerLeg(const gp::FieldDescriptor& f) {
 bool IsXyz(const std::string& name) {
   return name == "position_m" || name == "linear_velocity_m_s" || name == "angular_velocity_rad_s" ||
          name == "angular_rate_rad_s" || name == "p_BA_B_m" || name == "p_PB_P_m" ||
-         name == "platform_inertia_diag_kg_m2";
+         name == "platform_inertia_diag_kg_m2" || name == "jog_velocity_m_s" ||
+         name == "jog_angular_velocity_rad_s" || name == "goal_position_m";
 }
 
 // Suffixes of the SI naming rule (docs/style.md), longest first where one ends another.
@@ -67,7 +68,7 @@ std::string ColumnUnit(const gp::FieldDescriptor& f, int index) {
       break;
   }
   if (IsPoseVector(name)) return index >= 0 && index < 3 ? "m" : index < 6 ? "rad" : "?";
-  if (name == "orientation_wxyz") return "1";
+  if (EndsWith(name, "orientation_wxyz")) return "1";  // a unit quaternion
   for (const auto& [suffix, unit] : kSuffixUnits)
     if (EndsWith(name, suffix)) return unit;
   const bool integer = f.cpp_type() != gp::FieldDescriptor::CPPTYPE_DOUBLE &&
@@ -82,7 +83,7 @@ std::string ElementName(const gp::FieldDescriptor& f, int index) {
   static const char* kWxyz[] = {"w", "x", "y", "z"};
   const std::string& name = f.name();
   if (IsPoseVector(name) && index < 6) return name + "." + kPose[index];
-  if (name == "orientation_wxyz" && index < 4) return name + "." + kWxyz[index];
+  if (EndsWith(name, "orientation_wxyz") && index < 4) return name + "." + kWxyz[index];
   if (IsXyz(name) && index < 3) return name + "." + kPose[index];
   if (IsPerLeg(f) && index < 6) return name + ".leg" + std::to_string(index + 1);
   return name + "[" + std::to_string(index) + "]";

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "hexa/comm/comm.hpp"
 #include "hexa/comm/config.hpp"
@@ -30,12 +31,14 @@ struct Seen {
   double cycle_max_s;
 };
 
-// The newest NodeStatus a peer sees (NodeStatus keeps one sample per node: a peer sees the
-// current status, not every step, so the test waits for each step before the next).
+// The newest NodeStatus of one node a peer sees (NodeStatus keeps one sample per node: a peer
+// sees the current status, not every step, so the test waits for each step before the next).
+// Only `node`'s: the tests of this file may run at once on the domain, each its own node.
 class StatusWatcher {
  public:
-  StatusWatcher()
-      : participant_(kDomain),
+  explicit StatusWatcher(std::string node)
+      : node_(std::move(node)),
+        participant_(kDomain),
         topic_(participant_),
         reader_(participant_, topic_, comm::EndpointRole::kControlReader, comm::QosParams{}, 64) {}
 
@@ -45,6 +48,7 @@ class StatusWatcher {
     const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
     while (std::chrono::steady_clock::now() < end) {
       TakeValid(reader_, [this](const hexa_msg_NodeStatus& s, std::size_t) {
+        if (node_ != s.node_name) return;
         newest_ = {s.state, s.detail, s.header.tick, s.cycles_total,
                    s.deadline_missed_total, s.liveliness_changes_total, s.cycle_time_max_s};
       });
@@ -56,6 +60,7 @@ class StatusWatcher {
   bool Matched() const { return reader_.Snapshot().subscription_matched_current >= 1; }
 
  private:
+  std::string node_;
   comm::Participant participant_;
   comm::Topic<hexa_msg_NodeStatus> topic_;
   comm::Reader<hexa_msg_NodeStatus> reader_;
@@ -87,7 +92,7 @@ class ServiceRuntime : public ::testing::Test {
 };
 
 TEST_F(ServiceRuntime, PublishesEachLifecycleStepWithTheNodesFigures) {
-  StatusWatcher watcher;
+  StatusWatcher watcher("leg4");
   Runtime runtime(Options(), "leg4", Log());
   WaitMatched(runtime, watcher);
   StatusFigures f;
@@ -141,7 +146,7 @@ TEST_F(ServiceRuntime, PublishesEachLifecycleStepWithTheNodesFigures) {
 }
 
 TEST_F(ServiceRuntime, PeersNotMatchedInTimeIsAFaultWithItsExitCode) {
-  StatusWatcher watcher;
+  StatusWatcher watcher("supervisor");
   Runtime runtime(Options(), "supervisor", Log());
   WaitMatched(runtime, watcher);
   runtime.Start({}, "waiting for peers");
