@@ -48,8 +48,9 @@ RolePermissions PermissionsOf(Role role, int leg) {
       p.publish = {{kLegSensorsTopic, {"", any_leg}}, {kImuSampleTopic, {}}, {kGroundTruthTopic, {}},
                    {kTrackerPoseTopic, {}}, status, faults};
       // FaultEvent: the supervisor's FAULT_SENSOR_INCONSISTENT closes that leg's valve
-      // (the plant's interlock, docs/faults.md).
-      p.subscribe = {valve_any, {kLegSetpointTopic, {}}, status, faults};
+      // (the plant's interlock, docs/faults.md). OperatorCommand: the operator's estop and
+      // reset reach the rig directly (docs/faults.md, "Emergency stop").
+      p.subscribe = {valve_any, {kLegSetpointTopic, {}}, {kOperatorCommandTopic, {}}, status, faults};
       break;
     case deployment::LEG:
       // FaultEvent: the leg reports its own held-control episodes (bad input, stale setpoint).
