@@ -1,14 +1,10 @@
 // hexa_session's children started in the layout's order and watched until the session
 // completes (the supervisor finished the trajectory, the plant the experiment) or fails
 // (docs/exit_codes.md: the launcher's exit codes and the services' codes it reads).
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -25,17 +21,21 @@ using deploy::ChildExit;
 using deploy::ChildSpec;
 using deploy::ProcessGroup;
 
-// Whether a process has bound UDP port `port` of 127.0.0.1 (a bind of it is refused as in use).
+// Whether a socket of this network namespace has bound UDP port `port` of 127.0.0.1, read
+// from /proc/net/udp (local_address "0100007F:PORT" in hex). Read, not probed with a bind of
+// its own: a probe would hold the port for an instant and could make the emulator's bind fail.
 bool UdpPortBound(int port) {
-  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
-  if (fd < 0) return false;
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  a.sin_port = htons(static_cast<std::uint16_t>(port));
-  const bool in_use = bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 && errno == EADDRINUSE;
-  close(fd);
-  return in_use;
+  std::ifstream udp("/proc/net/udp");
+  char want[16];
+  std::snprintf(want, sizeof want, "0100007F:%04X", static_cast<unsigned>(port));
+  std::string line;
+  std::getline(udp, line);  // the header
+  while (std::getline(udp, line)) {
+    std::istringstream fields(line);
+    std::string slot, local;
+    if (fields >> slot >> local && local == want) return true;
+  }
+  return false;
 }
 
 // The board emulator must listen before the plant sends its first command: a datagram to a
