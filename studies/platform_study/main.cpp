@@ -59,7 +59,7 @@ struct Key {
   std::function<void(hexa::LockstepConfig&, double)> set;
 };
 
-// Coupled leg feedback (studies/coupled_leg_feedback, docs/measurements/control.md).
+// Coupled leg feedback (studies/coupled_leg_feedback, docs/measurements/control_coupled_feedback.md).
 struct CoupledKey {
   const char* name;
   std::function<void(hexa::study::CoupledLegFeedbackParams&, double)> set;

@@ -113,7 +113,7 @@ void ZSplit(const hexa::LockstepConfig& config, PaperMotion motion, int periods)
 // velocity loop c / (m s) * P(s) * exp(-s tau): c = M lambda + K xi + k_s, P(s) = beta / (s + beta)
 // or, with the feedback rate in phi_dot, ((a + beta tf) s + beta) / ((tf s + 1)(s + beta)),
 // tau = spool filter + valve spool + the velocity estimate's group delay. Crossover and phase
-// margin (docs/measurements/control.md "Per-leg lag and leg 2's overshoot on combined").
+// margin (docs/measurements/control_light_modes.md "Per-leg lag and leg 2's overshoot on combined").
 void Modes(const hexa::LockstepConfig& config, const hexa::study::CoupledLegFeedbackParams& coupled) {
   const hexa::RigParams& rig = config.rig;
   hexa::Pose home;
