@@ -32,13 +32,13 @@ OperatorMotionConfig CheckedFirst(const SupervisorParams& params, const Operator
   return checked;
 }
 
-OperatorMotionConfig DefaultOperatorMotionConfig(const RigParams& rig, const SupervisorParams& params) {
+}  // namespace
+
+OperatorMotionConfig MakeOperatorMotionConfig(const RigParams& rig, const SupervisorParams& params) {
   OperatorMotionConfig config = CheckedFirst(params, OperatorMotionConfig{});
   config.limits = MakeSoftLimitsConfig(rig, params);
   return config;
 }
-
-}  // namespace
 
 const char* ToString(SupervisorState state) {
   switch (state) {
@@ -108,7 +108,7 @@ const char* ToString(CommandResult result) {
 Supervisor::Supervisor(const RigParams& rig, const SupervisorParams& params,
                        const LegArray<PotentiometerCalibrationParams>& potentiometer)
     : Supervisor(rig, params, potentiometer,
-                 DefaultOperatorMotionConfig(rig, params)) {}
+                 MakeOperatorMotionConfig(rig, params)) {}
 
 Supervisor::Supervisor(const RigParams& rig, const SupervisorParams& params,
                        const LegArray<PotentiometerCalibrationParams>& potentiometer,

@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 
+#include "hexa/config/washout_file.hpp"
 #include "hexa/services/exit_code.hpp"
 #include "hexa/services/service_manager.hpp"
 
@@ -34,6 +36,20 @@ SupervisorParams ParamsFrom(const SupervisorNodeOptions& o, const config::System
   return p;
 }
 
+// The operator modes for this rig; the stream's kind and, for vehicle packets, the washout
+// parameters from their file (throws with the file's messages).
+OperatorMotionConfig OperatorMotionFrom(const SupervisorNodeOptions& o, const config::SystemConfig& c) {
+  OperatorMotionConfig m = MakeOperatorMotionConfig(config::MakeSupervisorRig(c), ParamsFrom(o, c));
+  m.stream.kind = o.stream_kind;
+  if (!o.washout_path.empty()) {
+    const config::WashoutFileResult washout = config::LoadWashoutFile(o.washout_path);
+    if (!washout.ok) throw std::runtime_error(washout.error);
+    m.stream.washout = washout.config;
+    m.stream.washout.period_s = m.stream.period_s;  // the supervisor's
+  }
+  return m;
+}
+
 FaultReason FromWire(hexa_msg_FaultReason r) {
   return static_cast<FaultReason>(static_cast<int>(r));
 }
@@ -46,7 +62,7 @@ SupervisorNode::SupervisorNode(const SupervisorNodeOptions& options,
     : options_(options),
       log_(log),
       supervisor_(config::MakeSupervisorRig(config), ParamsFrom(options, config),
-                  PotentiometersFrom(config)),
+                  PotentiometersFrom(config), OperatorMotionFrom(options, config)),
       // The six legs' samples of a tick leave in one datagram per reader (comm/writer.hpp).
       runtime_(options.common, "supervisor", std::move(log), comm::WriteBatching::kOn),
       sensors_topic_(runtime_.participant()),
@@ -83,9 +99,12 @@ SupervisorNode::SupervisorNode(const SupervisorNodeOptions& options,
     stream_receiver_ = std::make_unique<udp::MotionStreamReceiver>(
         options_.stream_endpoint, supervisor_.operator_motion().stream().config().decode);
     const MotionStreamConfig& sc = supervisor_.operator_motion().stream().config();
-    log_->warn("motion stream input ENABLED on UDP {}:{} (kind {}, timeout {:.3f} s): whoever can "
-               "send to it moves the platform while STREAMING (hexa_operator stream)",
+    log_->warn("motion stream input ENABLED on UDP {}:{} (kind {}{}{}, timeout {:.3f} s): whoever "
+               "can send to it moves the platform while STREAMING (hexa_operator stream)",
                options_.stream_endpoint.address, stream_receiver_->port(), ToString(sc.kind),
+               sc.kind == StreamKind::kVehicle ? ", washout " : "",
+               sc.kind != StreamKind::kVehicle ? ""
+               : options_.washout_path.empty() ? "built-in defaults" : options_.washout_path.c_str(),
                sc.timeout_s);
   }
   cycle_.Bind<&SupervisorNode::RunCycle>(*this);

@@ -51,6 +51,8 @@ struct SupervisorNodeOptions {
   // The external motion stream (docs/operate.md): off unless asked; loopback by default.
   bool stream = false;
   udp::StreamEndpoint stream_endpoint;
+  StreamKind stream_kind = StreamKind::kPose;
+  std::string washout_path;  // kVehicle: the washout parameter file ("" = the built-in defaults)
   // Fault injection (docs/faults.md): kill this process with SIGKILL at this simulated time
   // (< 0: never).
   double crash_at_s = -1.0;

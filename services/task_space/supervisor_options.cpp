@@ -43,6 +43,12 @@ int ParseOptions(int argc, char** argv, SupervisorNodeOptions& o) {
                 "--stream: address to bind; anything that can send to it can move the platform",
                 "127.0.0.1");
   cli.AddOption("stream-port", "port", "--stream: UDP port to bind", "47800");
+  cli.AddChoice("stream-kind", {"pose", "vehicle"},
+                "--stream: the packets' kind: pose (a displacement from neutral) or vehicle "
+                "(accelerations and angular rates, through the classical washout)", "pose");
+  cli.AddOption("washout", "file",
+                "--stream-kind vehicle: the washout parameters (protobuf text, e.g. "
+                "deploy/cueing/washout.textproto; default: the same values built in)");
   cli.AddChoice("fault", {"none", "crash"},
                 "fault injection (docs/faults.md): crash = SIGKILL at --fault-at", "none");
   cli.AddOption("fault-at", "s", "simulated time at which the fault starts", "0");
@@ -72,6 +78,8 @@ int ParseOptions(int argc, char** argv, SupervisorNodeOptions& o) {
   o.stream = cli.Flag("stream");
   o.stream_endpoint.address = cli.Get("stream-address");
   o.stream_endpoint.port = static_cast<std::uint16_t>(*stream_port);
+  o.stream_kind = cli.Get("stream-kind") == "vehicle" ? StreamKind::kVehicle : StreamKind::kPose;
+  if (cli.Has("washout")) o.washout_path = cli.Get("washout");
   if (cli.Get("fault") == "crash") o.crash_at_s = *fault_at;
   return -1;
 }

@@ -141,6 +141,10 @@ struct SupervisorOutput {
   OperatorMotionStatus operator_motion;    // in JOGGING / GOAL / STREAMING: the mode's status
 };
 
+// The operator modes' defaults for this rig: the soft limits from its geometry and `params`
+// (stroke margin), the stream at the supervisor's period. Throws for invalid `params`.
+OperatorMotionConfig MakeOperatorMotionConfig(const RigParams& rig, const SupervisorParams& params);
+
 class Supervisor {
  public:
   // Throws std::invalid_argument for inconsistent parameters (values named). `potentiometer`:
