@@ -12,6 +12,8 @@
 #include <gtest/gtest.h>
 
 #include "hexa/core/lockstep_simulation.hpp"
+#include "hexa/core/rig.hpp"
+#include "hexa/core/washout.hpp"
 
 namespace hexa {
 namespace {
@@ -291,6 +293,68 @@ TEST(SupervisorStream, AStreamAcrossTheSoftLimitIsClampedAtIt) {
   EXPECT_LE(peak_x, limit_x + 1e-6);
   EXPECT_GT(peak_x, limit_x - 0.001);
   EXPECT_GT(clamped, 0);
+}
+
+// Vehicle packets (a supervisor configured for them) are cued through the classical washout:
+// a sustained deceleration becomes a pitch that follows the washout's own output (the same
+// filter run beside it on the same samples), the surge washes out, and all returns to neutral.
+// A kinematic plant (the measured lengths are the setpoint's), so that only the cueing is seen.
+TEST(SupervisorStream, VehiclePacketsAreCuedThroughTheWashout) {
+  const RigParams rig = MakeReferenceRig();
+  const SupervisorParams params;
+  OperatorMotionConfig motion = MakeOperatorMotionConfig(rig, params);
+  motion.stream.kind = StreamKind::kVehicle;
+  Supervisor sup(rig, params, {}, motion);
+  WashoutFilter reference(motion.stream.washout);  // the period is the supervisor's: 5 ms
+  SupervisorInput in;
+  SupervisorOutput out;
+  Pose pose;
+  pose.p_BP_B_m = rig.geometry.home_position_m;
+  StreamPacket packet;
+  packet.kind = StreamKind::kVehicle;
+  const auto tick = [&](OperatorCommandKind cmd, bool send) {
+    for (std::size_t i = 0; i < kNumLegs; ++i)
+      in.length_m[i] = (pose.p_BP_B_m + pose.R_BP * rig.geometry.p_PB_P[i] - rig.geometry.p_BA_B[i]).norm();
+    const Eigen::Quaterniond q(pose.R_BP);
+    in.orientation_wxyz = {q.w(), q.x(), q.y(), q.z()};
+    in.command = cmd;
+    in.stream_packets = send ? &packet : nullptr;
+    in.stream_packet_count = send ? 1 : 0;
+    sup.Update(in, out);
+    in.time_s += kSupervisorPeriod_s;
+    pose = out.desired.pose;
+  };
+  tick(OperatorCommandKind::kNone, false);
+  const Vector6d neutral = out.desired_xyz_rpy;
+  tick(OperatorCommandKind::kStream, false);
+  ASSERT_EQ(out.state, SupervisorState::kStreaming);
+  double worst_pitch_gap = 0.0, peak_pitch = 0.0, peak_surge = 0.0;
+  WashoutOutput cue;
+  for (int k = 0; k < 2400; ++k) {  // 12 s: braking at 1 m/s2 for 4 s, then coasting
+    packet.sequence = static_cast<std::uint64_t>(k + 1);
+    packet.time_s = k * kSupervisorPeriod_s;
+    packet.values.setZero();
+    packet.values[0] = k * kSupervisorPeriod_s < 4.0 ? -1.0 : 0.0;
+    tick(OperatorCommandKind::kNone, true);
+    WashoutInput w;
+    w.acceleration_m_s2 = packet.values.head<3>();
+    reference.Update(w, cue);
+    const Vector6d d = out.desired_xyz_rpy - neutral;
+    worst_pitch_gap = std::max(worst_pitch_gap, std::abs(d[4] - cue.displacement[4]));
+    peak_pitch = std::max(peak_pitch, std::abs(d[4]));
+    peak_surge = std::max(peak_surge, std::abs(d[0]));
+  }
+  const Vector6d end = out.desired_xyz_rpy - neutral;
+  std::printf("vehicle stream, braking 1 m/s2 for 4 s: peak pitch %.4f rad (washout steady tilt "
+              "%.4f), setpoint pitch within %.2e rad of the washout's, peak surge %.2f mm; at 12 s "
+              "%.2e m, %.2e rad from neutral\n", peak_pitch,
+              motion.stream.washout.tilt.scale / motion.stream.washout.gravity_m_s2, worst_pitch_gap,
+              peak_surge * 1e3, end.head<3>().cwiseAbs().maxCoeff(), end.tail<3>().cwiseAbs().maxCoeff());
+  EXPECT_EQ(out.state, SupervisorState::kStreaming);
+  EXPECT_GT(peak_pitch, 0.04);            // the tilt carried the deceleration
+  EXPECT_LT(worst_pitch_gap, 0.001);      // the setpoint follows the washout's cue (measured 3.3e-4)
+  EXPECT_GT(peak_surge, 0.001);           // the onset
+  EXPECT_LT(end.cwiseAbs().maxCoeff(), 1e-4);  // washed out, back at neutral (measured 6e-6 m)
 }
 
 }  // namespace
