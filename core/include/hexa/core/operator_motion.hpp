@@ -71,7 +71,8 @@ class OperatorMotion {
   GoalCheck BeginGoal(const Pose& X_BP, const Pose& X_BP_goal, double time_s) noexcept;
   // A stream from rest at X_BP, which becomes its neutral pose (the displacements' origin).
   void BeginStream(const Pose& X_BP) noexcept;
-  // Brings the current mode to rest (a stream: back to its neutral pose) at the jog profile's limits.
+  // Brings the current mode to rest: a jog or a goal at the jog profile's limits, a stream
+  // back to its neutral pose at the stream's limits.
   void RequestStop() noexcept;
   // One tick at `time_s` (dt_s after the previous one). `jog`: the newest jog message since the
   // previous tick, or null. `stream_packets`: the stream packets decoded since the previous

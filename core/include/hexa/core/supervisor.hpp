@@ -16,8 +16,8 @@
 //            stream (operator)        stop: back to the neutral pose, at rest
 //   IDLE ------------> STREAMING ---------------------------------------> IDLE
 //   (a stream gap longer than its timeout: back to neutral, still STREAMING; packets resume it)
-//   (operator_motion.hpp: every jog, goal and stream setpoint is held inside the soft limits; a goal
-//   outside them is refused with the reason, the state unchanged)
+//   (operator_motion.hpp: every jog, goal and stream setpoint is held inside the soft limits;
+//   a goal outside them is refused with the reason, the state unchanged)
 //
 // Faults (checked every tick outside HOLD): a leg fault reported by a leg / the plant, lost
 // liveliness of a leg controller, more consecutive deadline misses than configured, invalid
