@@ -175,8 +175,8 @@ bool ParseCpus(const hexa::cli::Parser& cli, Options& o) {
     // others. In lockstep, no pinning: the processes run at normal priority, and pinned to one
     // CPU they could not move off it when real-time loops (this machine's other sessions pin
     // to the same CPU at SCHED_FIFO) take it: a tick then waits past the 10 s last resort and
-    // a secured start-up past 30 s (docs/measurements/faults.md, "Lockstep beside real-time
-    // load").
+    // a secured start-up past 30 s (docs/measurements/faults_under_load.md, "Lockstep beside
+    // real-time load").
     const hexa::sched::CpuSplit split =
         o.mode == "realtime" ? hexa::sched::AutoCpuSplit() : hexa::sched::CpuSplit{};
     if (cli.Get("cpus-control") == "auto") o.cpus_control = hexa::sched::FormatCpuList(split.control);
@@ -413,7 +413,7 @@ int ParseOptions(int argc, char** argv, Options& o) {
                         "Exit status (docs/exit_codes.md): 0 completed; 1 a process failed or the "
                         "session was stopped (signal, --timeout); 2 bad arguments; 3 held after a "
                         "fault and not reset within --hold-timeout; 4 the plant stopped; 5 the "
-                        "supervisor was lost; 6 stopped by the operator (hexa_operator stop) "
+                        "supervisor was lost; 6 stopped by the operator (hexa_operator stop or shutdown) "
                         "before the trajectory's end; 7 the trajectory completed but the recording "
                         "lost samples.");
   AddSessionOptions(cli);
