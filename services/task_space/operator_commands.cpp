@@ -143,8 +143,9 @@ void SupervisorNode::TakeOperatorCommands() {
       case hexa_msg_OPERATOR_SHUTDOWN:
         AnswerCommand(c.sequence, "shutdown", CommandAnswer::kAccepted, "");
         // A session's trajectory that a shutdown cuts short did not complete: the same exit
-        // as a `stop` before the trajectory's end (docs/exit_codes.md).
-        if (options_.exit_when_done && exit_code_ < 0) {
+        // as a `stop` before the trajectory's end (docs/exit_codes.md). Jog, goal and stream
+        // modes are not a trajectory (left_idle_ stays false): a shutdown after them ends 0.
+        if (options_.exit_when_done && exit_code_ < 0 && left_idle_) {
           log_->warn("shut down by the operator in state {} (trajectory time {:.3f} s), before the "
                      "trajectory's end (exit {})", ToString(output_.state), output_.trajectory_time_s,
                      exit_code::kStoppedByOperator);
