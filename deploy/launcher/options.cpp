@@ -78,6 +78,10 @@ void AddSessionOptions(hexa::cli::Parser& cli) {
   cli.AddFlag("no-outer-loop", "disable the task-space outer loop");
   cli.AddFlag("no-feedforward",
               "no platform inverse-dynamics feed-forward on the leg setpoints (paper-faithful)");
+  cli.AddFlag("stream",
+              "the supervisor accepts the external motion stream on UDP 127.0.0.1:--stream-port; "
+              "`hexa_operator stream` starts following it (docs/operate.md); off by default");
+  cli.AddOption("stream-port", "port", "--stream: the UDP port", "47800");
   cli.AddFlag("tracker", "the plant publishes the external pose instrument (hexa_TrackerPose, for "
                          "hexa_calibrate; use with --trajectory calibration)");
   cli.AddFlag("standby", "also start a hot-standby controller per leg");
@@ -384,6 +388,8 @@ bool TakeFlags(const hexa::cli::Parser& cli, Options& o) {
     return false;
   }
   o.feedforward = !cli.Flag("no-feedforward");
+  o.stream = cli.Flag("stream");
+  o.stream_port = cli.Get("stream-port");
   o.tracker = cli.Flag("tracker");
   o.wait_for_operator = cli.Flag("wait-for-operator");
   o.rt_lease = cli.Get("rt-lease");
