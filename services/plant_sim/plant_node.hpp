@@ -53,8 +53,10 @@
 #include "hexa/device/remote_board_device.hpp"
 #include "hexa/device/sim_device.hpp"
 #include "hexa/services/command_refusal.hpp"
+#include "hexa/services/control_cycle.hpp"
 #include "hexa/services/node.hpp"
 #include "hexa/services/peer_processes.hpp"
+#include "hexa/services/runtime.hpp"
 #include "leg_writer_table.hpp"
 #include "realtime_clock.hpp"
 #include "run_figures.hpp"
@@ -113,11 +115,22 @@ struct PlantNodeOptions {
   ComputeBudgetParams compute_budget;  // leg controllers' compute time per cycle
   PlantFaultParams plant_faults;       // injected rig faults (--fault)
   std::string summary_path;        // write the run's figures here as JSON at exit ("" = no)
+  std::string truth_out_path;      // --truth-out: the plant's true parameters ("" = no)
   bool tracker = false;            // publish the external pose instrument (calibration)
   FreeFallBenchParams free_fall;   // --bench free-fall: the Appendix B bench, not the platform
   DeviceKind device = DeviceKind::kSim;
   BoardLinkOptions board;          // --device board
 };
+
+// SCHED_FIFO priority in real time, below the legs (80): a tick of the simulation can cost a
+// millisecond (stiff substeps), and the plant above the legs on their CPU made their valve
+// writers lapse (docs/measurements/deployment.md, "Where the lapses' milliseconds go"); late,
+// the plant only slips.
+inline constexpr int kRealtimePriority = 70;
+
+// Reads hexa_plant_sim's command line into `options`: -1 to run, else the exit code (--help:
+// kOk; a bad value: kUsage, the error printed).
+int ParseOptions(int argc, char** argv, PlantNodeOptions& options);
 
 class PlantNode {
  public:
@@ -130,11 +143,13 @@ class PlantNode {
   const PlatformPlant* simulation() const { return device_.simulation(); }
 
  private:
-  // plant_lifecycle.cpp: start-up, status, watchdog, the report at the end.
-  bool WaitForPeers();
-  std::string EndedPeer(const std::vector<std::string>& expected) const;
+  // plant_lifecycle.cpp: start-up, status, the report at the end.
+  services::PeerWait StartupWait();
+  // Whether every awaited reader and writer is matched (DDS alone; StartupWait adds the
+  // peers' NodeStatus RUNNING); `counts` says what is matched of what is awaited.
+  bool PeersMatched(std::string& counts);
   std::string DescribeMissing(const std::vector<std::string>& missing) const;
-  void PublishStatus(hexa_msg_NodeState state, const char* detail);
+  services::StatusFigures Figures();
   bool SyncGiveUpDue(std::int64_t blocked_ns) const;
   void LogStart() const;
   void LogEnd() const;
@@ -145,7 +160,7 @@ class PlantNode {
   // plant_node.cpp: the loops and the tick.
   int RunLockstep(std::uint64_t last_tick);
   int RunRealtime(std::uint64_t last_tick);
-  static void OnValveData(void* self);  // receive thread (lockstep)
+  void OnCommands();  // the cycle (lockstep: on the receive thread, ValveCommand data)
   void AdvanceIfComplete();
   void StartTick(std::int64_t now_ns);  // publish tick_ and await its answers
   // Arbitrate, step the device, end the tick; false when the device failed (non-finite).
@@ -187,8 +202,9 @@ class PlantNode {
   ArbitrationParams arbitration_params_;
   LockstepSchedule schedule_;
 
-  comm::Participant participant_;
-  comm::ShutdownGuard shutdown_;
+  // Participant (write batching on), shutdown guard, wait set, lifecycle and NodeStatus,
+  // --peer-pid processes.
+  services::Runtime runtime_;
   comm::GuardCondition wake_;  // set by the receive thread: the run ended, or a recorder sync
   comm::Topic<hexa_msg_LegSensors> sensors_topic_;
   comm::Topic<hexa_msg_ImuSample> imu_topic_;
@@ -201,7 +217,6 @@ class PlantNode {
   comm::Writer<hexa_msg_TrackerPose> tracker_writer_;
   // One reader per leg partition: leg N's commands only from leg N's writers (comm/leg_readers.hpp).
   comm::LegReaders<hexa_msg_ValveCommand> valve_readers_;
-  node::StatusPublisher status_;
   node::FaultPublisher faults_;
   node::PeerTracker peers_;
   comm::Topic<hexa_msg_FaultEvent> fault_topic_;
@@ -209,11 +224,9 @@ class PlantNode {
   // The operator's e-stop and reset, polled each tick (the supervisor answers them).
   comm::Topic<hexa_msg_OperatorCommand> operator_topic_;
   comm::Reader<hexa_msg_OperatorCommand> operator_reader_;
-  comm::WaitSet waitset_;
-  node::PeerProcesses peer_processes_;  // --peer-pid: the session's processes on this host
   LegArray<std::string> leg_name_{}, standby_name_{};  // "leg3", "leg3_standby"
 
-  std::mutex mutex_;  // everything below (the threading rule above)
+  services::ControlCycle cycle_;  // its mutex guards everything below (the threading rule)
   std::uint64_t tick_ = 0;
   int exit_code_ = -1;  // set when the run ends (>= 0)
   CommandArbitration arbitration_;
