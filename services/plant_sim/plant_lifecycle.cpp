@@ -33,7 +33,7 @@ int PlantNode::Run() {
                                  : UINT64_MAX;
   loop_started_ns_ = node::MonotonicNow_ns();
   int rc = realtime ? RunRealtime(last_tick) : RunLockstep(last_tick);
-  if (rc == exit_code::kOk && device_lost_) rc = exit_code::kPlantDeviceLost;  // said at the end
+  if (rc == exit_code::kOk && link_.lost()) rc = exit_code::kPlantDeviceLost;  // said at the end
   std::lock_guard<std::mutex> lock(cycle_.mutex());
   loop_ended_ns_ = node::MonotonicNow_ns();
   LogEnd();
@@ -274,12 +274,12 @@ void PlantNode::WriteSummary(int exit_code) const {
                                                      {"max", tick_wall_.max_s()},
                                                      {"mean", tick_wall_.mean_s()}};
   j["device"] = board_ ? "board" : "sim";
-  j["control_round_trip_s"] = {{"median", round_trip_.Quantile_s(0.5)},
-                               {"p99", round_trip_.Quantile_s(0.99)},
-                               {"max", round_trip_.max_s()},
-                               {"count", round_trip_.count()}};
-  j["ticks_without_sample"] = samples_missed_total_;
-  j["estop_unsafe_ticks"] = estop_unsafe_ticks_;
+  j["control_round_trip_s"] = {{"median", link_.round_trip().Quantile_s(0.5)},
+                               {"p99", link_.round_trip().Quantile_s(0.99)},
+                               {"max", link_.round_trip().max_s()},
+                               {"count", link_.round_trip().count()}};
+  j["ticks_without_sample"] = link_.samples_missed_total();
+  j["estop_unsafe_ticks"] = link_.estop_unsafe_ticks();
   if (board_ != nullptr) j["board_link"] = board_->counters().Describe();
   j["command_age_bins"] = {"0", "1", "2", "3-7", "8-15", ">=16"};
   j["legs"] = json::Value::array();

@@ -57,6 +57,15 @@ ArbitrationParams MakeArbitrationParams(const PlantNodeOptions& o, const config:
   return p;
 }
 
+DeviceLinkParams LinkParams(const PlantNodeOptions& o) {
+  DeviceLinkParams p;
+  p.lockstep = o.common.mode == node::TimeMode::kLockstep;
+  p.answer_timeout_s = o.board.answer_timeout_s;
+  p.lost_after_ticks = o.board.lost_after_ticks;
+  p.address = o.board.host + ":" + std::to_string(o.board.port);
+  return p;
+}
+
 LockstepClockParams ClockParams(const PlantNodeOptions& o) {
   LockstepClockParams p;
   p.barrier.reask_after_ns = static_cast<std::int64_t>(o.resend_after_s * 1e9);
@@ -120,7 +129,8 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
                        node::QosFor(options.common, comm::TopicKind::kOperatorCommand), 16),
       arbitration_(arbitration_params_),
       lockstep_(ClockParams(options)),
-      realtime_(1'000'000, kSlipAfter_ns) {
+      realtime_(1'000'000, kSlipAfter_ns),
+      link_(device_, board_, LinkParams(options), &node::MonotonicNow_ns) {
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     leg_name_[i] = "leg" + std::to_string(i + 1);
     standby_name_[i] = leg_name_[i] + "_standby";

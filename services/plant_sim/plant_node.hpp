@@ -57,6 +57,7 @@
 #include "hexa/services/node.hpp"
 #include "hexa/services/peer_processes.hpp"
 #include "hexa/services/runtime.hpp"
+#include "device_link.hpp"
 #include "leg_writer_table.hpp"
 #include "realtime_clock.hpp"
 #include "run_figures.hpp"
@@ -168,14 +169,15 @@ class PlantNode {
   void WatchSilence(dds_duration_t& wait);  // lockstep main thread, under the lock
   void ServeRecorderSync(bool acked);       // lockstep main thread: an acknowledgement wait
 
-  // plant_device.cpp: the device's bring-up and one exchange per tick (write the valves, read
-  // the next sample; the control round trip; the board's e-stop and link judged).
+  // plant_device.cpp: the device's bring-up and one exchange per tick through link_ (write the
+  // valves, read the next sample; the board's e-stop and link judged).
   void BringUpDevice();
   device::DeviceStatus ExchangeWithDevice(const LegArray<double>& valve_v);
   void JudgeDeviceSafety();  // after the exchange, for the sample of the new tick_
   void TakeOperatorCommands();  // estop: latch the device; reset: ask the device to re-arm
   void LatchOperatorEstop(std::uint32_t sequence);  // once per command, whichever path brings it
   void LogDeviceEnd() const;
+  void Report(const DeviceEvents& events);  // FaultEvents and log lines
 
   // plant_outputs.cpp: sensors of tick_ (all legs, or `only_leg` alone: a re-ask), the IMU
   // (every 5th tick), ground truth and the tracker. Batched: each reader gets one datagram.
@@ -232,7 +234,6 @@ class PlantNode {
   CommandArbitration arbitration_;
   ArbitrationOutput arbitration_out_;
   ArbitrationEvents events_;  // the events of a call between ticks (cleared before each)
-  device::DeviceSensors sensors_{};  // the device's newest sample
   LockstepClock lockstep_;
   RealtimeClock realtime_;
   std::uint64_t slip_recent_until_tick_ = 0;  // real time: stale tolerance after a slip
@@ -257,18 +258,10 @@ class PlantNode {
   std::int64_t loop_ended_ns_ = 0;
   std::int64_t tick_started_ns_ = 0;
   std::uint64_t resent_samples_ = 0;  // lockstep: sensor samples re-published to silent legs
-  // The device: the control round trip (a sample read from the device -> the command computed
-  // from it written), ticks without a new sample, the e-stop latch as last reported.
-  DurationHistogram round_trip_;
-  std::int64_t sample_read_ns_ = -1;  // when the newest sample was read; -1: answered already
-  std::uint64_t ticks_without_sample_ = 0;
-  std::uint64_t samples_missed_total_ = 0;
-  bool estop_reported_ = false;
-  bool estop_reset_asked_ = false;
-  std::uint32_t operator_estop_sequence_ = 0;  // the operator e-stop latched (0: none)     // an operator reset asked; its refusal reported once
-  std::uint64_t estop_unsafe_ticks_ = 0;  // latched, yet a valve not at its safe value
-  bool board_down_ = false;  // no frame since FAULT_BOARD_LINK
-  bool device_lost_ = false;  // the board was lost during the run: exit kPlantDeviceLost
+  // The device: the exchange, the control round trip, the e-stop and the board's link
+  // (device_link.hpp), and the events of its newest call.
+  DeviceLink link_;
+  DeviceEvents device_events_;
 };
 
 }  // namespace hexa::plant_sim
