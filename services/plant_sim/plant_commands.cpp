@@ -189,7 +189,7 @@ void PlantNode::Report(const ArbitrationEvents& events) {
                       "host overload: all %d legs' commands late at tick %llu (newest answers tick "
                       "%llu); plant wake-up late by up to %.1f ms: the host does not keep 1 ms",
                       static_cast<int>(e.count), static_cast<unsigned long long>(e.tick), answered,
-                      tick_wall_.max_s() * 1e3);
+                      figures_.tick_wall.max_s() * 1e3);
         publish();
         log_->error("tick {}: {}", e.tick, detail);
         break;

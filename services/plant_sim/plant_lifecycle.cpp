@@ -31,11 +31,11 @@ int PlantNode::Run() {
   const uint64_t last_tick = options_.duration_s > 0
                                  ? static_cast<uint64_t>(std::llround(options_.duration_s / kTickS))
                                  : UINT64_MAX;
-  loop_started_ns_ = node::MonotonicNow_ns();
+  figures_.loop_started_ns = node::MonotonicNow_ns();
   int rc = realtime ? RunRealtime(last_tick) : RunLockstep(last_tick);
   if (rc == exit_code::kOk && link_.lost()) rc = exit_code::kPlantDeviceLost;  // said at the end
   std::lock_guard<std::mutex> lock(cycle_.mutex());
-  loop_ended_ns_ = node::MonotonicNow_ns();
+  figures_.loop_ended_ns = node::MonotonicNow_ns();
   LogEnd();
   LogDeviceEnd();
   LogCommandAges();
@@ -84,7 +84,7 @@ void PlantNode::LogEnd() const {
              "rejected commands {}, refused commands {} (from {} writers not of this session); "
              "writers:{}",
              tick_, static_cast<double>(tick_) * kTickS, valve.requested_deadline_missed_total,
-             realtime_.overruns(), faults, resent_samples_, lockstep_.barrier().reasks_total(),
+             realtime_.overruns(), faults, figures_.resent_samples, lockstep_.barrier().reasks_total(),
              supervisor_reasks_, sensors_writer_.write_errors_total(), lockstep_.syncs(),
              lockstep_.sync_blocks(), lockstep_.sync_wait_s(), lockstep_.syncs_given_up(),
              slips.count(), static_cast<double>(slips.total_ns()) * 1e-6,
@@ -243,7 +243,7 @@ void PlantNode::LogLastGoodState() const {
 
 void PlantNode::LogCommandAges() const {
   for (std::size_t i = 0; i < kNumLegs; ++i) {
-    const CommandAgeHistogram& h = command_age_[i];
+    const CommandAgeHistogram& h = figures_.command_age[i];
     if (h.total() == 0) continue;
     log_->info("leg {} command age at apply (ticks): 0: {}, 1: {}, 2: {}, 3-7: {}, 8-15: {}, "
                ">=16: {}, none: {}; late ticks {} of {} ({:.3f} %)",
@@ -263,16 +263,16 @@ void PlantNode::WriteSummary(int exit_code) const {
                    {"sim_time_s", static_cast<double>(tick_) * kTickS},
                    {"valve_deadline_misses", valve.requested_deadline_missed_total},
                    {"loop_overruns", realtime_.overruns()},
-                   {"lockstep_resends", resent_samples_},
+                   {"lockstep_resends", figures_.resent_samples},
                    {"schedule_slips", slips.count()},
                    {"slipped_s", static_cast<double>(slips.total_ns()) * 1e-9},
                    {"refused_commands", refusals_.samples()},
                    {"refused_writers", refusals_.writers()},
-                   {"loop_wall_s", static_cast<double>(loop_ended_ns_ - loop_started_ns_) * 1e-9}};
-  j[realtime ? "wake_lateness_s" : "tick_wall_s"] = {{"median", tick_wall_.Quantile_s(0.5)},
-                                                     {"p99", tick_wall_.Quantile_s(0.99)},
-                                                     {"max", tick_wall_.max_s()},
-                                                     {"mean", tick_wall_.mean_s()}};
+                   {"loop_wall_s", static_cast<double>(figures_.loop_ended_ns - figures_.loop_started_ns) * 1e-9}};
+  j[realtime ? "wake_lateness_s" : "tick_wall_s"] = {{"median", figures_.tick_wall.Quantile_s(0.5)},
+                                                     {"p99", figures_.tick_wall.Quantile_s(0.99)},
+                                                     {"max", figures_.tick_wall.max_s()},
+                                                     {"mean", figures_.tick_wall.mean_s()}};
   j["device"] = board_ ? "board" : "sim";
   j["control_round_trip_s"] = {{"median", link_.round_trip().Quantile_s(0.5)},
                                {"p99", link_.round_trip().Quantile_s(0.99)},
@@ -284,7 +284,7 @@ void PlantNode::WriteSummary(int exit_code) const {
   j["command_age_bins"] = {"0", "1", "2", "3-7", "8-15", ">=16"};
   j["legs"] = json::Value::array();
   for (std::size_t i = 0; i < kNumLegs; ++i) {
-    const CommandAgeHistogram& h = command_age_[i];
+    const CommandAgeHistogram& h = figures_.command_age[i];
     const int leg = static_cast<int>(i) + 1;
     json::Value ages = json::Value::array();
     for (int k = 0; k < CommandAgeHistogram::kBins; ++k) ages.push_back(h.bins[static_cast<std::size_t>(k)]);

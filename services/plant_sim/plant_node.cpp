@@ -161,7 +161,7 @@ bool PlantNode::CompleteTick(const ArbitrationInput& in) {
   arbitration_.Update(in, arbitration_out_);  // arbitrate
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     const std::int64_t age = arbitration_out_.command_age_ticks[i];
-    command_age_[i].Add(age);
+    figures_.command_age[i].Add(age);
     // Like applied_valve_v, the ages in a tick's ground truth are those of the step that led
     // to its state.
     truth_sample_.command_age_ticks[i] = static_cast<int32_t>(std::clamp<std::int64_t>(age, -1, INT32_MAX));
@@ -198,7 +198,7 @@ void PlantNode::AdvanceIfComplete() {
   while (lockstep_.ReadyToStep()) {
     const std::int64_t now = node::MonotonicNow_ns();
     cycle_times_.Add(static_cast<double>(now - tick_started_ns_) * 1e-9);
-    tick_wall_.Add(now - tick_started_ns_);
+    figures_.tick_wall.Add(now - tick_started_ns_);
     ArbitrationInput in;
     in.tick = tick_;
     if (!CompleteTick(in)) {
@@ -246,7 +246,7 @@ void PlantNode::WatchSilence(dds_duration_t& wait) {
       for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg)
         if (barrier.missing() & LegBit(leg)) {
           PublishTick(leg);
-          ++resent_samples_;
+          ++figures_.resent_samples;
         }
       if (lockstep_.SupervisorReaskDue(now)) ReaskSupervisor();
       break;
@@ -384,7 +384,7 @@ int PlantNode::RunRealtime(std::uint64_t last_tick) {
     in.writers_valid = true;
     const RealtimeClock::Wake w = realtime_.Measure(tick_);
     cycle_times_.Add(static_cast<double>(w.late_ns) * 1e-9);
-    tick_wall_.Add(w.late_ns);
+    figures_.tick_wall.Add(w.late_ns);
     if (w.slipped) {
       // The schedule restarts from now (RealtimeClock); the controllers on the same host catch
       // up over a few ticks: their answers count as fresh for the stale-command tolerance.

@@ -7,19 +7,21 @@
 // Parts: the command arbitration (core, pure), the lockstep clock's decisions (core
 // lockstep_clock.hpp) and the real-time clock (realtime_clock.hpp), the rig behind the device
 // seam (device/device.hpp: SimDevice, the simulation, or RemoteBoardDevice, an I/O board over
-// UDP; plant_device.cpp), the valve writers' table
+// UDP) and the plant's link to it (device_link.hpp, without DDS), the valve writers' table
 // (leg_writer_table.hpp), the figures of the run (run_figures.hpp). One tick is
 // read -> arbitrate -> step the device -> write (PlantNode::CompleteTick and PublishTick).
 // Files: plant_node.cpp (the loops), plant_commands.cpp (reception, dead legs, the wording of
-// fault events), plant_outputs.cpp (publishing), plant_lifecycle.cpp (start-up, status,
-// watchdog, the end-of-run report).
+// fault events), plant_outputs.cpp (publishing), plant_device.cpp (the device's events),
+// plant_lifecycle.cpp (start-up, status and the end-of-run report on the service runtime,
+// services::Runtime), plant_options.cpp (the command line).
 //
-// Threading rule. Every member below `mutex_` is touched only with `mutex_` held, by exactly
-// one thread at a time; the members above it are set in the constructor and only read after.
+// Threading rule. Every member below `cycle_` is touched only with the cycle's mutex held, by
+// exactly one thread at a time; the members above it are set in the constructor and only read
+// after (DDS entities are thread-safe).
 //   Lockstep: the tick advances on Cyclone's receive thread, in the ValveCommand readers'
-//   data callback (OnValveData): when the last awaited leg has answered tick n the plant steps
-//   and publishes tick n + 1 at once, with no hand-over to another thread
-//   (docs/performance.md: a hand-over costs a wake-up per tick). The main thread only watches
+//   data callback (services::ControlCycle runs OnCommands): when the last awaited leg has
+//   answered tick n the plant steps and publishes tick n + 1 at once, with no hand-over to
+//   another thread (docs/performance.md: a hand-over costs a wake-up per tick). The main thread only watches
 //   for silence (re-ask, dead legs, timeout), waits for the recorder's acknowledgements and
 //   for shutdown, under the same lock between its waits; it never blocks while holding it.
 //   Real time: the main thread alone runs the loop; no callback is installed (the lock is held
@@ -251,13 +253,9 @@ class PlantNode {
   bool imu_lost_reported_ = false;
   hexa_msg_GroundTruth truth_sample_{};
   // Figures of the run.
-  LegArray<CommandAgeHistogram> command_age_{};
+  RunFigures figures_;  // command ages, tick durations, the loop's wall time, re-sends
   node::CycleTimeWindow cycle_times_;
-  DurationHistogram tick_wall_;   // lockstep: publish -> complete; real time: wake-up lateness
-  std::int64_t loop_started_ns_ = 0;
-  std::int64_t loop_ended_ns_ = 0;
   std::int64_t tick_started_ns_ = 0;
-  std::uint64_t resent_samples_ = 0;  // lockstep: sensor samples re-published to silent legs
   // The device: the exchange, the control round trip, the e-stop and the board's link
   // (device_link.hpp), and the events of its newest call.
   DeviceLink link_;
