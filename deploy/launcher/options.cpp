@@ -407,7 +407,7 @@ int ParseOptions(int argc, char** argv, Options& o) {
                         "Exit status (docs/exit_codes.md): 0 completed; 1 a process failed or the "
                         "session was stopped (signal, --timeout); 2 bad arguments; 3 held after a "
                         "fault and not reset within --hold-timeout; 4 the plant stopped; 5 the "
-                        "supervisor was lost; 6 stopped by the operator (hexa_operator stop) "
+                        "supervisor was lost; 6 stopped by the operator (hexa_operator stop or shutdown) "
                         "before the trajectory's end; 7 the trajectory completed but the recording "
                         "lost samples.");
   AddSessionOptions(cli);

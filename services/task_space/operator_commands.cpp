@@ -6,6 +6,7 @@
 
 #include "hexa/config/csv_trajectory.hpp"
 #include "hexa/core/calibration.hpp"
+#include "hexa/services/exit_code.hpp"
 #include "hexa/services/operator_motion_wire.hpp"
 #include "supervisor_node.hpp"
 
@@ -132,6 +133,14 @@ void SupervisorNode::TakeOperatorCommands() {
         break;
       case hexa_msg_OPERATOR_SHUTDOWN:
         AnswerCommand(c.sequence, "shutdown", CommandAnswer::kAccepted, "");
+        // A session's trajectory that a shutdown cuts short did not complete: the same exit
+        // as a `stop` before the trajectory's end (docs/exit_codes.md).
+        if (options_.exit_when_done && exit_code_ < 0) {
+          log_->warn("shut down by the operator in state {} (trajectory time {:.3f} s), before the "
+                     "trajectory's end (exit {})", ToString(output_.state), output_.trajectory_time_s,
+                     exit_code::kStoppedByOperator);
+          exit_code_ = exit_code::kStoppedByOperator;
+        }
         runtime_.shutdown().RequestShutdown();
         return;
       case hexa_msg_OPERATOR_ESTOP:

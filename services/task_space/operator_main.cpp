@@ -234,9 +234,12 @@ int SendAcknowledged(Request& r, const hexa::comm::Participant& participant,
 }
 
 // Takes the status samples that came; the supervisor's answer to command `sequence` if one of
-// them holds it (its NodeStatus detail), else kNone.
+// them holds it (its NodeStatus detail), else kNone. With `stopping_accepts` (shutdown) the
+// supervisor's STOPPING status is the answer too: it publishes its answer and, within the same
+// tick, STOPPING, and a reader that takes both at once keeps only the newest of its instance.
 hexa::task_space::CommandAnswer PollAnswer(hexa::comm::Reader<hexa_msg_NodeStatus>& status_reader,
-                                           std::uint32_t sequence, std::string& detail) {
+                                           std::uint32_t sequence, std::string& detail,
+                                           bool stopping_accepts = false) {
   using hexa::task_space::CommandAnswer;
   while (status_reader.Take() > 0) {
     for (std::size_t k = 0; k < status_reader.count(); ++k) {
@@ -247,6 +250,10 @@ hexa::task_space::CommandAnswer PollAnswer(hexa::comm::Reader<hexa_msg_NodeStatu
       if (answer != CommandAnswer::kNone) {
         detail = st.detail;
         return answer;
+      }
+      if (stopping_accepts && st.state == hexa_msg_NODE_STOPPING) {
+        detail = std::string("is stopping (its status: ") + st.detail + ")";
+        return CommandAnswer::kAccepted;
       }
     }
   }
@@ -281,7 +288,8 @@ int AwaitAnswer(const Request& r, const hexa::comm::Participant& participant,
       hexa::node::MonotonicNow_ns() + static_cast<int64_t>(r.answer_wait_s * 1e9);
   std::string detail;
   for (;;) {
-    const CommandAnswer answer = PollAnswer(status_reader, r.cmd.sequence, detail);
+    const CommandAnswer answer = PollAnswer(status_reader, r.cmd.sequence, detail,
+                                            r.cmd.kind == hexa_msg_OPERATOR_SHUTDOWN);
     if (answer != CommandAnswer::kNone) return ExitForAnswer(r, answer, detail, log);
     if (hexa::node::MonotonicNow_ns() > answer_end) return ExitForAnswer(r, answer, detail, log);
     answer_ws.Wait(DDS_MSECS(20));
