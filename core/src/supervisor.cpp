@@ -230,10 +230,18 @@ void Supervisor::HandleCommand(const SupervisorInput& input, SupervisorOutput& o
       result = CommandResult::kRefused;
       return;
     }
-    // Leave HOLD at rest where the setpoints were frozen; faults still present are detected
-    // again in this same tick.
+    // Leave HOLD at rest where the platform is, not where the setpoints were frozen: after an
+    // e-stop (valves blocked) or a lost board the platform coasts off them, and resuming on
+    // a stale setpoint would be a step. The outer loop's correction restarts from zero, so
+    // that the legs are told the lengths they have; every motion from here begins with its
+    // blend at limited speed. Faults still present are detected again in this same tick.
     state_ = SupervisorState::kIdle;
-    rest_ = last_desired_.vector.q;
+    if (output.estimate.status == KinStatus::kOk) {
+      rest_ = output.estimate.xyz_rpy;
+      outer_loop_.Reset();
+    } else {
+      rest_ = last_desired_.vector.q;
+    }
     fault_ = FaultReason::kNone;
     fault_leg_ = 0;
     fault_detail_[0] = '\0';

@@ -171,8 +171,8 @@ bool ParseCpus(const hexa::cli::Parser& cli, Options& o) {
     // others. In lockstep, no pinning: the processes run at normal priority, and pinned to one
     // CPU they could not move off it when real-time loops (this machine's other sessions pin
     // to the same CPU at SCHED_FIFO) take it: a tick then waits past the 10 s last resort and
-    // a secured start-up past 30 s (docs/measurements/faults.md, "Lockstep beside real-time
-    // load").
+    // a secured start-up past 30 s (docs/measurements/faults_under_load.md, "Lockstep beside
+    // real-time load").
     const hexa::sched::CpuSplit split =
         o.mode == "realtime" ? hexa::sched::AutoCpuSplit() : hexa::sched::CpuSplit{};
     if (cli.Get("cpus-control") == "auto") o.cpus_control = hexa::sched::FormatCpuList(split.control);

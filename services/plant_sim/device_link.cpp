@@ -65,8 +65,8 @@ std::string DeviceLink::BringUp() {
     if (readable && device_.ReadSensors(sensors_) == device::DeviceStatus::kOk) {
       answered = true;
       if (frame >= 4 && !sensors_.safety.estop_latched) break;
-    } else if (params_.lockstep || now_ns_() > end_ns) {
-      break;
+    } else if ((params_.lockstep && !readable) || now_ns_() > end_ns) {
+      break;  // lockstep: a refused frame (a lost one's empty datagram) is an answer; silence is not
     }
   }
   if (!answered) {
@@ -95,8 +95,11 @@ device::DeviceStatus DeviceLink::Exchange(const LegArray<double>& valve_v, std::
   if (written == device::DeviceStatus::kFault) return written;
   // Lockstep on a board: the emulator in step mode answers this command with the next frame
   // (not awaited again once the board is lost: the loop ticks on so that the supervisor holds).
-  if (board_ != nullptr && params_.lockstep && !board_down_) board_->WaitForData(params_.answer_timeout_s);
-  const device::DeviceStatus read = device_.ReadSensors(sensors_);
+  bool timed_out = false;
+  const device::DeviceStatus read = board_ != nullptr && params_.lockstep && !board_down_
+                                        ? ReadBoardAnswer(timed_out)
+                                        : device_.ReadSensors(sensors_);
+  if (board_ != nullptr) ReportRefusedFrames(tick, events);
   if (read == device::DeviceStatus::kOk) {
     sample_read_ns_ = now_ns_();
     if (board_down_) {
@@ -108,20 +111,70 @@ device::DeviceStatus DeviceLink::Exchange(const LegArray<double>& valve_v, std::
     ticks_without_sample_ = 0;
     return written;
   }
-  // No new sample this tick: the last one is published again (real time: a frame lost or
-  // late; the board's and this loop's clocks are not locked).
+  // No new sample this tick: the last one is published again (a frame lost, refused or late;
+  // in real time also the board's and this loop's clocks, which are not locked).
   ++samples_missed_total_;
   ++ticks_without_sample_;
-  const bool lost = params_.lockstep || ticks_without_sample_ >= params_.lost_after_ticks;
+  const bool lost = timed_out || ticks_without_sample_ >= params_.lost_after_ticks;
   if (board_ != nullptr && lost && !board_down_) {
     board_down_ = true;
     device_lost_ = true;
     if (DeviceEvent* e = events.Add(DeviceEvent::Kind::kLinkLost, tick))
-      std::snprintf(e->detail, sizeof e->detail, "board %s: no intact sensor frame for %llu ticks (%s; %s)",
+      std::snprintf(e->detail, sizeof e->detail, "board %s: no intact sensor frame for %llu ticks (%s; %s%s)",
                     params_.address.c_str(), static_cast<unsigned long long>(ticks_without_sample_),
-                    device::ToString(read), board_->counters().Describe().c_str());
+                    device::ToString(read), LastOutOfRange().c_str(),
+                    board_->counters().Describe().c_str());
   }
   return written;
+}
+
+device::DeviceStatus DeviceLink::ReadBoardAnswer(bool& timed_out) {
+  // The emulator in step mode answers each command with one datagram: an intact frame, or
+  // one refused (a bad CRC, an old version, a value out of range; the empty datagram of a
+  // frame the link lost). A frame not newer than the last accepted one is a late frame of an
+  // earlier tick, not this command's answer: the wait goes on.
+  auto answers = [this] {
+    const device::BoardLinkCounters& c = board_->counters();
+    std::uint64_t n = 0;
+    for (std::size_t v = 0; v < device::kFrameVerdictCount; ++v) n += c.frames[v];
+    return n - c[device::FrameVerdict::kOldSequence] - c[device::FrameVerdict::kUnknownSender];
+  };
+  const std::uint64_t before = answers();
+  const std::int64_t end_ns = now_ns_() + static_cast<std::int64_t>(params_.answer_timeout_s * 1e9);
+  for (;;) {
+    const double left_s = static_cast<double>(end_ns - now_ns_()) * 1e-9;
+    if (left_s <= 0.0 || !board_->WaitForData(left_s)) {
+      timed_out = true;
+      return device_.ReadSensors(sensors_);
+    }
+    const device::DeviceStatus read = device_.ReadSensors(sensors_);
+    if (read != device::DeviceStatus::kNoNewData || answers() != before) return read;
+  }
+}
+
+void DeviceLink::ReportRefusedFrames(std::uint64_t tick, DeviceEvents& events) {
+  // The first datagram of each refusing verdict is reported with its cause; every one is
+  // counted (the end's log line, plant.json "board_link").
+  const device::BoardLinkCounters& c = board_->counters();
+  for (std::size_t v = 1; v < device::kFrameVerdictCount; ++v) {
+    if (c.frames[v] == 0 || link_reported_.frames[v] != 0) continue;
+    const auto verdict = static_cast<device::FrameVerdict>(v);
+    if (DeviceEvent* e = events.Add(DeviceEvent::Kind::kFrameRefused, tick))
+      std::snprintf(e->detail, sizeof e->detail, "a datagram from the board refused: %s%s%s%s",
+                    device::ToString(verdict), verdict == device::FrameVerdict::kOutOfRange ? " (" : "",
+                    verdict == device::FrameVerdict::kOutOfRange ? LastOutOfRange().c_str() : "",
+                    verdict == device::FrameVerdict::kOutOfRange ? ")" : "");
+  }
+  link_reported_ = c;
+}
+
+std::string DeviceLink::LastOutOfRange() const {
+  const int channel = board_->decoder().last_out_of_range_channel();
+  if (channel < 0) return "";
+  char text[96];
+  std::snprintf(text, sizeof text, "%s = %.4g out of its range; ", device::BoardChannelName(channel).c_str(),
+                board_->decoder().last_out_of_range_value_si());
+  return text;
 }
 
 void DeviceLink::JudgeSafety(std::uint64_t tick, DeviceEvents& events) {

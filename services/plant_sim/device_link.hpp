@@ -27,7 +27,8 @@ struct DeviceLinkParams {
   // Lockstep: a command frame must be answered by a sensor frame within this (the emulator in
   // step mode); bring-up: the board must answer within this.
   double answer_timeout_s = 2.0;
-  // Real time: the board has failed when no intact frame came for this many ticks.
+  // The board has failed when no intact frame came for this many ticks in a row (lost or
+  // refused frames; lockstep: also when a command is not answered within answer_timeout_s).
   std::uint64_t lost_after_ticks = 20;
   std::string address;  // "host:port" of a remote board, for messages
 };
@@ -42,11 +43,14 @@ struct DeviceEvent {
     kLinkLost,           // FAULT_BOARD_LINK: no intact sensor frame
     kEstopReleased,      // (log only) the latch was reset: the valves follow again
     kLinkBack,           // (log only) the board answers again
+    kFrameRefused,       // (log only) the first datagram refused with a verdict (its cause)
   };
   Kind kind = Kind::kEstopLatched;
   std::uint64_t tick = 0;
   char detail[160] = {};
-  bool fault() const { return kind != Kind::kEstopReleased && kind != Kind::kLinkBack; }
+  bool fault() const {
+    return kind != Kind::kEstopReleased && kind != Kind::kLinkBack && kind != Kind::kFrameRefused;
+  }
   hexa_msg_FaultReason reason() const;
 };
 
@@ -99,6 +103,11 @@ class DeviceLink {
   std::string DescribeEnd() const;
 
  private:
+  // Lockstep: this command's answer from the board (timed_out: none within the timeout).
+  device::DeviceStatus ReadBoardAnswer(bool& timed_out);
+  void ReportRefusedFrames(std::uint64_t tick, DeviceEvents& events);  // the first of each verdict
+  std::string LastOutOfRange() const;  // "leg 1 potentiometer_m = 0.3734 out of its range; " or ""
+
   device::Device& device_;
   device::RemoteBoardDevice* board_;
   DeviceLinkParams params_;
@@ -116,6 +125,7 @@ class DeviceLink {
   std::uint32_t operator_estop_sequence_ = 0;  // the operator e-stop latched (0: none)
   std::uint64_t estop_unsafe_ticks_ = 0;       // latched, yet a valve not at its safe value
   bool board_down_ = false;                    // no frame since FAULT_BOARD_LINK
+  device::BoardLinkCounters link_reported_{};  // the counters as last reported
   bool device_lost_ = false;
 };
 

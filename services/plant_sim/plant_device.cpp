@@ -50,6 +50,10 @@ void PlantNode::Report(const DeviceEvents& events) {
       case DeviceEvent::Kind::kLinkBack:
         log_->warn("tick {}: {}", e.tick, e.detail);
         break;
+      case DeviceEvent::Kind::kFrameRefused:
+        log_->warn("tick {}: {} (the first; the tick republishes the last sample, every refusal is "
+                   "counted)", e.tick, e.detail);
+        break;
     }
   }
 }

@@ -75,9 +75,9 @@ enum class DeviceKind { kSim, kBoard };
 struct BoardLinkOptions {
   std::string host;           // dotted IPv4 address of the board
   std::uint16_t port = 0;
-  // Lockstep: a command frame must be answered by a sensor frame within this (the emulator in
-  // step mode); bring-up: the board must answer within this. Real time: the board has failed
-  // when no intact frame came for `lost_after_ticks` ticks.
+  // Lockstep: a command frame must be answered by a datagram within this (the emulator in
+  // step mode); bring-up: the board must answer within this. The board has failed when no
+  // intact frame came for `lost_after_ticks` ticks in a row (lost or refused frames).
   double answer_timeout_s = 2.0;
   std::uint64_t lost_after_ticks = 20;
 };
