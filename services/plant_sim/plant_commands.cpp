@@ -79,7 +79,7 @@ void PlantNode::RejectCommand(int reader_leg, const hexa_msg_ValveCommand& c,
 }
 
 void PlantNode::TakeFaultEvents() {
-  // Polled, never a data callback: this process writes FaultEvents while holding mutex_, and
+  // Polled, never a data callback: this process writes FaultEvents while holding the cycle's mutex, and
   // Cyclone may deliver to a local reader's callback inside that write (self-deadlock).
   while (fault_reader_.Take() > 0) {
     for (std::size_t k = 0; k < fault_reader_.count(); ++k) {
@@ -111,9 +111,9 @@ SilentLegFacts PlantNode::LegFacts(int leg) {
   SilentLegFacts f;
   f.writers = writers_.Counts(leg);
   auto add = [&](const std::string& name) {
-    if (peer_processes_.Known(name)) {
+    if (runtime_.peer_processes().Known(name)) {
       ++f.processes;
-      if (peer_processes_.State(name) == node::PeerProcessState::kEnded) ++f.processes_ended;
+      if (runtime_.peer_processes().State(name) == node::PeerProcessState::kEnded) ++f.processes_ended;
     }
     // The controller's main thread says its cycle is stuck (leg_node: ControlCycleWatch).
     if (peers_.StateOf(name) == hexa_msg_NODE_FAULT) ++f.processes_stuck;
@@ -189,7 +189,7 @@ void PlantNode::Report(const ArbitrationEvents& events) {
                       "host overload: all %d legs' commands late at tick %llu (newest answers tick "
                       "%llu); plant wake-up late by up to %.1f ms: the host does not keep 1 ms",
                       static_cast<int>(e.count), static_cast<unsigned long long>(e.tick), answered,
-                      tick_wall_.max_s() * 1e3);
+                      figures_.tick_wall.max_s() * 1e3);
         publish();
         log_->error("tick {}: {}", e.tick, detail);
         break;
@@ -223,7 +223,7 @@ void PlantNode::Report(const ArbitrationEvents& events) {
       case ArbitrationEventKind::kLapseWaited:
         log_->warn("tick {}: leg {}'s lease lapsed ({}): not a fault in lockstep, the plant "
                    "waits for it (logged once per leg, counted)", e.tick, e.leg,
-                   peer_processes_.Known(leg_name_[i]) ? peer_processes_.Describe(leg_name_[i])
+                   runtime_.peer_processes().Known(leg_name_[i]) ? runtime_.peer_processes().Describe(leg_name_[i])
                                                        : "process not known on this host");
         break;
       case ArbitrationEventKind::kWriterGone:

@@ -1,6 +1,6 @@
 // The plant node's life cycle: start-up (waiting for its peers), the status it publishes, the
 // service manager's notifications and watchdog, and the report of the run at its end
-// (log and JSON summary). Kept together so that it can move to the services' shared runtime.
+// (log and JSON summary), on the services' shared runtime (hexa/services/runtime.hpp).
 #include <algorithm>
 #include <cmath>
 
@@ -10,31 +10,40 @@
 #include "plant_node.hpp"
 
 namespace hexa::plant_sim {
+namespace {
+
+constexpr dds_attach_t kTokenPeers = 3;  // the Runtime's shutdown is 1, the loop's wake 2
+
+}  // namespace
 
 int PlantNode::Run() {
   const bool realtime = options_.common.mode == node::TimeMode::kRealtime;
-  if (!WaitForPeers()) {
-    PublishStatus(hexa_msg_NODE_FAULT, "peers not ready");
-    return shutdown_.requested() ? exit_code::kOk : exit_code::kPeersNotMatched;
-  }
-  PublishStatus(hexa_msg_NODE_RUNNING, realtime ? "real time" : "lockstep");
-  node::service_manager::Ready(realtime ? "ticking in real time" : "ticking in lockstep");
+  runtime_.Start(Figures(), "waiting for peers");
+  // NodeStatus data wakes the wait (a peer RUNNING); the loop polls it without waking.
+  runtime_.waitset().Attach(peers_.data_condition(), kTokenPeers);
+  const services::PeerWaitResult started = runtime_.WaitForPeers(StartupWait());
+  runtime_.waitset().Detach(peers_.data_condition());
+  if (started != services::PeerWaitResult::kMatched)
+    return runtime_.FailStart(Figures(), "peers not ready", exit_code::kPeersNotMatched);
+  runtime_.Running(Figures(), realtime ? "real time" : "lockstep",
+                   realtime ? "ticking in real time" : "ticking in lockstep");
   LogStart();
   const uint64_t last_tick = options_.duration_s > 0
                                  ? static_cast<uint64_t>(std::llround(options_.duration_s / kTickS))
                                  : UINT64_MAX;
-  loop_started_ns_ = node::MonotonicNow_ns();
+  figures_.loop_started_ns = node::MonotonicNow_ns();
   int rc = realtime ? RunRealtime(last_tick) : RunLockstep(last_tick);
-  if (rc == exit_code::kOk && device_lost_) rc = exit_code::kPlantDeviceLost;  // said at the end
-  std::lock_guard<std::mutex> lock(mutex_);
-  loop_ended_ns_ = node::MonotonicNow_ns();
+  if (rc == exit_code::kOk && link_.lost()) rc = exit_code::kPlantDeviceLost;  // said at the end
+  std::lock_guard<std::mutex> lock(cycle_.mutex());
+  figures_.loop_ended_ns = node::MonotonicNow_ns();
   LogEnd();
   LogDeviceEnd();
   LogCommandAges();
   WriteSummary(rc);
   device_.Close();  // the valves to their safe state, the link released
-  if (rc != exit_code::kPlantNonFinite) PublishStatus(hexa_msg_NODE_STOPPING, "stopped");
-  node::service_manager::Stopping("stopped");
+  // A non-finite state leaves its FAULT as the plant's last word (no STOPPING after it).
+  if (rc != exit_code::kPlantNonFinite) runtime_.Stop(Figures(), "stopped");
+  else node::service_manager::Stopping("stopped");
   return rc;
 }
 
@@ -49,7 +58,7 @@ void PlantNode::LogStart() const {
                       : fmt::format("lockstep: a process ended ({}), writers gone, or a "
                                     "controller stuck (lease {:.3f} s lapsed and its cycle "
                                     "stuck); last resort {:.1f} s",
-                                    peer_processes_.empty()
+                                    runtime_.peer_processes().empty()
                                         ? "no process ids given: seen when its participant's "
                                           "lease expires"
                                         : "process ids given by the launcher",
@@ -75,7 +84,7 @@ void PlantNode::LogEnd() const {
              "rejected commands {}, refused commands {} (from {} writers not of this session); "
              "writers:{}",
              tick_, static_cast<double>(tick_) * kTickS, valve.requested_deadline_missed_total,
-             realtime_.overruns(), faults, resent_samples_, lockstep_.barrier().reasks_total(),
+             realtime_.overruns(), faults, figures_.resent_samples, lockstep_.barrier().reasks_total(),
              supervisor_reasks_, sensors_writer_.write_errors_total(), lockstep_.syncs(),
              lockstep_.sync_blocks(), lockstep_.sync_wait_s(), lockstep_.syncs_given_up(),
              slips.count(), static_cast<double>(slips.total_ns()) * 1e-6,
@@ -99,13 +108,19 @@ void PlantNode::LogEnd() const {
   }
 }
 
-void PlantNode::PublishStatus(hexa_msg_NodeState state, const char* detail) {
+services::StatusFigures PlantNode::Figures() {
   const auto valve = valve_readers_.Snapshot();
-  status_.Publish(state, tick_, static_cast<double>(tick_) * kTickS,
-                  valve.requested_deadline_missed_total + realtime_.overruns(),
-                  valve.liveliness_changed_events, cycle_times_.total(), cycle_times_.Median(),
-                  cycle_times_.Max(), detail);
+  services::StatusFigures f;
+  f.tick = tick_;
+  f.sim_time_s = static_cast<double>(tick_) * kTickS;
+  f.deadline_missed = static_cast<std::uint32_t>(valve.requested_deadline_missed_total + realtime_.overruns());
+  f.liveliness_changes = valve.liveliness_changed_events;
+  f.cycles = cycle_times_.total();
+  f.cycle_median_s = cycle_times_.Median();
+  f.cycle_max_s = cycle_times_.Max();
+  return f;
 }
+
 bool PlantNode::SyncGiveUpDue(std::int64_t blocked_ns) const {
   // The readers the sync waits for: the supervisor's and the recorder's (all-legs partition,
   // ground truth). Processes that exist (perhaps stopped: a SIGSTOP, a loaded machine) are
@@ -117,29 +132,23 @@ bool PlantNode::SyncGiveUpDue(std::int64_t blocked_ns) const {
   // lost in one run) where a 1 s pause keeps it within the history.
   bool known = false, ended = false;
   for (const char* name : {"recorder", "supervisor"}) {
-    const node::PeerProcessState state = peer_processes_.State(name);
+    const node::PeerProcessState state = runtime_.peer_processes().State(name);
     ended = ended || state == node::PeerProcessState::kEnded;
     known = known || state != node::PeerProcessState::kUnknown;
   }
   if (known && !ended) return false;
   return blocked_ns > static_cast<std::int64_t>(options_.recorder_sync_give_up_s * 1e9);
 }
-std::string PlantNode::EndedPeer(const std::vector<std::string>& expected) const {
-  for (const std::string& name : expected)
-    if (peer_processes_.State(name) == node::PeerProcessState::kEnded) return name;
-  return {};
-}
-
 std::string PlantNode::DescribeMissing(const std::vector<std::string>& missing) const {
   std::string text;
   for (const std::string& name : missing) {
     text += text.empty() ? "" : "; ";
-    if (!peer_processes_.Known(name)) {
+    if (!runtime_.peer_processes().Known(name)) {
       text += name + " (no NodeStatus RUNNING yet; process not known on this host)";
       continue;
     }
-    const node::PeerProcessState state = peer_processes_.State(name);
-    text += peer_processes_.Describe(name) +
+    const node::PeerProcessState state = runtime_.peer_processes().State(name);
+    text += runtime_.peer_processes().Describe(name) +
             (state == node::PeerProcessState::kStopped
                  ? ": it cannot start until it is continued"
                  : state == node::PeerProcessState::kRunning ? ": not RUNNING yet (matching its peers)" : "");
@@ -147,14 +156,36 @@ std::string PlantNode::DescribeMissing(const std::vector<std::string>& missing) 
   return text;
 }
 
-bool PlantNode::WaitForPeers() {
-  std::vector<std::string> expected;
+services::PeerWait PlantNode::StartupWait() {
+  services::PeerWait wait;
+  wait.rule.timeout_s = options_.startup_timeout_s;
+  wait.rule.report_after_s = options_.startup_report_after_s;
   for (int leg = 1; leg <= options_.expected_legs; ++leg) {
-    expected.push_back("leg" + std::to_string(leg));
-    if (options_.expect_standbys) expected.push_back("leg" + std::to_string(leg) + "_standby");
+    wait.processes.push_back(leg_name_[static_cast<std::size_t>(leg - 1)]);
+    if (options_.expect_standbys) wait.processes.push_back(standby_name_[static_cast<std::size_t>(leg - 1)]);
   }
-  if (options_.expect_supervisor) expected.push_back("supervisor");
-  if (options_.expect_recorder) expected.push_back("recorder");
+  if (options_.expect_supervisor) wait.processes.push_back("supervisor");
+  if (options_.expect_recorder) wait.processes.push_back("recorder");
+  // A process the launcher started for this session has ended: it will never be ready.
+  wait.fail_when_a_process_ends = true;
+  wait.recheck_ns = 50'000'000;  // and on NodeStatus data
+  wait.matched = [this, expected = wait.processes](std::string& missing) {
+    peers_.Poll();
+    const std::vector<std::string> not_running = peers_.NotRunning(expected);
+    std::string counts;
+    if (PeersMatched(counts) && not_running.empty()) {
+      log_->info("all peers ready: {}", counts);
+      return true;
+    }
+    missing = "not running: " +
+              (not_running.empty() ? std::string("none (every process RUNNING)")
+                                   : DescribeMissing(not_running)) + "; " + counts;
+    return false;
+  };
+  return wait;
+}
+
+bool PlantNode::PeersMatched(std::string& counts) {
   // Sensor readers: each leg controller (and its hot standby) in its leg's partition; the
   // supervisor and the recorder on the all-legs writer. Valve writers: one per leg
   // controller. A standby must see tick 0 too: lockstep does not wait for it later, and a
@@ -164,80 +195,40 @@ bool PlantNode::WaitForPeers() {
                                     (options_.expect_recorder ? 1u : 0u);
   const uint32_t sensor_readers =
       static_cast<uint32_t>(options_.expected_legs) * per_leg + all_legs_readers;
-  auto sensor_readers_matched = [&] {
-    uint32_t n = 0;
-    for (int leg = 1; leg <= options_.expected_legs; ++leg)
-      n += std::min(per_leg, sensors_writer_.leg(leg).Snapshot().publication_matched_current);
-    return n + std::min(all_legs_readers, sensors_writer_.all().Snapshot().publication_matched_current);
-  };
+  uint32_t sensors = 0;
+  for (int leg = 1; leg <= options_.expected_legs; ++leg)
+    sensors += std::min(per_leg, sensors_writer_.leg(leg).Snapshot().publication_matched_current);
+  sensors += std::min(all_legs_readers, sensors_writer_.all().Snapshot().publication_matched_current);
   const uint32_t valve_writers = static_cast<uint32_t>(options_.expected_legs) * per_leg;
-  PublishStatus(hexa_msg_NODE_STARTING, "waiting for peers");
-  const int64_t end = node::MonotonicNow_ns() + static_cast<int64_t>(options_.startup_timeout_s * 1e9);
-  int64_t next_log =
-      node::MonotonicNow_ns() + static_cast<int64_t>(options_.startup_report_after_s * 1e9);
-  while (!shutdown_.requested()) {
-    peers_.Poll();
-    const auto missing = peers_.NotRunning(expected);
-    const auto sensors = sensor_readers_matched();
-    const auto valves = valve_readers_.Snapshot().subscription_matched_current;
-    // The IMU too: a reader matched on its side may not be matched on this side yet, and a
-    // volatile IMU(0) sent before would never reach it (the supervisor would wait for it).
-    const auto imu = imu_writer_.Snapshot().publication_matched_current;
-    const auto truth = truth_writer_.Snapshot().publication_matched_current;
-    const uint32_t truth_readers = options_.expect_recorder ? 1u : 0u;
-    // Every awaited leg's writers known as that leg's (USER_DATA resolved). Alive or not: a
-    // writer whose lease lapsed before it wrote (its process stopped or not scheduled during
-    // start-up) is seen alive again only when it writes, and in lockstep a lapse decides
-    // nothing (docs/faults.md). Real time: the control readers are best effort, and a
-    // best-effort reader learns a writer's liveliness from its data only (no heartbeats):
-    // before the first command no leg looks alive. CheckLinksRealtime arms a leg once it has
-    // been seen alive.
-    writers_.Refresh(valve_readers_, /*may_give_up=*/false);
-    int legs_alive = 0;
-    for (int leg = 1; leg <= options_.expected_legs; ++leg) {
-      const LegWriterCounts c = writers_.Counts(leg);
-      legs_alive += c.alive + c.not_alive >= static_cast<int>(per_leg) ? 1 : 0;
-    }
-    if (options_.common.mode == node::TimeMode::kRealtime) legs_alive = options_.expected_legs;
-    if (missing.empty() && sensors >= sensor_readers && valves >= valve_writers &&
-        imu >= all_legs_readers && truth >= truth_readers && legs_alive == options_.expected_legs) {
-      log_->info("all peers ready: {} sensor readers, {} valve writers; writers:{}", sensors,
-                 valves, writers_.Describe());
-      return true;
-    }
-    const int64_t now = node::MonotonicNow_ns();
-    // A process the launcher started for this session has ended: it will never be ready.
-    if (const std::string ended = EndedPeer(expected); !ended.empty()) {
-      log_->error("peers not ready: {}'s process has ended (the launcher's log says how); "
-                  "waited {:.1f} s", ended,
-                  options_.startup_timeout_s - static_cast<double>(end - now) * 1e-9);
-      return false;
-    }
-    if (now > end) {
-      log_->error("peers not ready after {} s: not running: {}; sensor readers {}/{}, valve "
-                  "writers {}/{} (legs with known writers {}/{}), IMU readers {}/{}, "
-                  "ground-truth readers {}/{}; writers:{}",
-                  options_.startup_timeout_s, missing.empty() ? "none" : DescribeMissing(missing), sensors,
-                  sensor_readers, valves, valve_writers, legs_alive, options_.expected_legs, imu,
-                  all_legs_readers, truth, truth_readers, writers_.Describe());
-      return false;
-    }
-    if (now > next_log) {
-      // After a few seconds, every second: which peer is missing and why.
-      log_->warn("waiting for peers for {:.1f} s: {}; sensor readers {}/{}, valve writers {}/{} "
-                 "(legs with known writers {}/{}); writers:{}",
-                 options_.startup_timeout_s - static_cast<double>(end - now) * 1e-9,
-                 missing.empty() ? std::string("every process RUNNING") : DescribeMissing(missing),
-                 sensors, sensor_readers, valves, valve_writers, legs_alive,
-                 options_.expected_legs, writers_.Describe());
-      next_log = now + 1'000'000'000;
-    }
-    // Wakes on NodeStatus data or shutdown; the timeout re-checks the match counts, which
-    // change without data.
-    waitset_.Wait(DDS_MSECS(50));
+  const auto valves = valve_readers_.Snapshot().subscription_matched_current;
+  // The IMU too: a reader matched on its side may not be matched on this side yet, and a
+  // volatile IMU(0) sent before would never reach it (the supervisor would wait for it).
+  const auto imu = imu_writer_.Snapshot().publication_matched_current;
+  const auto truth = truth_writer_.Snapshot().publication_matched_current;
+  const uint32_t truth_readers = options_.expect_recorder ? 1u : 0u;
+  // Every awaited leg's writers known as that leg's (USER_DATA resolved). Alive or not: a
+  // writer whose lease lapsed before it wrote (its process stopped or not scheduled during
+  // start-up) is seen alive again only when it writes, and in lockstep a lapse decides
+  // nothing (docs/faults.md). Real time: the control readers are best effort, and a
+  // best-effort reader learns a writer's liveliness from its data only (no heartbeats):
+  // before the first command no leg looks alive. CheckLinksRealtime arms a leg once it has
+  // been seen alive.
+  writers_.Refresh(valve_readers_, /*may_give_up=*/false);
+  int legs_alive = 0;
+  for (int leg = 1; leg <= options_.expected_legs; ++leg) {
+    const LegWriterCounts c = writers_.Counts(leg);
+    legs_alive += c.alive + c.not_alive >= static_cast<int>(per_leg) ? 1 : 0;
   }
-  return false;
+  if (options_.common.mode == node::TimeMode::kRealtime) legs_alive = options_.expected_legs;
+  counts = fmt::format("sensor readers {}/{}, valve writers {}/{} (legs with known writers "
+                        "{}/{}), IMU readers {}/{}, ground-truth readers {}/{}; writers:{}",
+                        sensors, sensor_readers, valves, valve_writers, legs_alive,
+                        options_.expected_legs, imu, all_legs_readers, truth, truth_readers,
+                        writers_.Describe());
+  return sensors >= sensor_readers && valves >= valve_writers && imu >= all_legs_readers &&
+         truth >= truth_readers && legs_alive == options_.expected_legs;
 }
+
 void PlantNode::LogLastGoodState() const {
   const PlatformPlant* sim = device_.simulation();
   if (sim == nullptr) return;
@@ -252,7 +243,7 @@ void PlantNode::LogLastGoodState() const {
 
 void PlantNode::LogCommandAges() const {
   for (std::size_t i = 0; i < kNumLegs; ++i) {
-    const CommandAgeHistogram& h = command_age_[i];
+    const CommandAgeHistogram& h = figures_.command_age[i];
     if (h.total() == 0) continue;
     log_->info("leg {} command age at apply (ticks): 0: {}, 1: {}, 2: {}, 3-7: {}, 8-15: {}, "
                ">=16: {}, none: {}; late ticks {} of {} ({:.3f} %)",
@@ -272,28 +263,28 @@ void PlantNode::WriteSummary(int exit_code) const {
                    {"sim_time_s", static_cast<double>(tick_) * kTickS},
                    {"valve_deadline_misses", valve.requested_deadline_missed_total},
                    {"loop_overruns", realtime_.overruns()},
-                   {"lockstep_resends", resent_samples_},
+                   {"lockstep_resends", figures_.resent_samples},
                    {"schedule_slips", slips.count()},
                    {"slipped_s", static_cast<double>(slips.total_ns()) * 1e-9},
                    {"refused_commands", refusals_.samples()},
                    {"refused_writers", refusals_.writers()},
-                   {"loop_wall_s", static_cast<double>(loop_ended_ns_ - loop_started_ns_) * 1e-9}};
-  j[realtime ? "wake_lateness_s" : "tick_wall_s"] = {{"median", tick_wall_.Quantile_s(0.5)},
-                                                     {"p99", tick_wall_.Quantile_s(0.99)},
-                                                     {"max", tick_wall_.max_s()},
-                                                     {"mean", tick_wall_.mean_s()}};
+                   {"loop_wall_s", static_cast<double>(figures_.loop_ended_ns - figures_.loop_started_ns) * 1e-9}};
+  j[realtime ? "wake_lateness_s" : "tick_wall_s"] = {{"median", figures_.tick_wall.Quantile_s(0.5)},
+                                                     {"p99", figures_.tick_wall.Quantile_s(0.99)},
+                                                     {"max", figures_.tick_wall.max_s()},
+                                                     {"mean", figures_.tick_wall.mean_s()}};
   j["device"] = board_ ? "board" : "sim";
-  j["control_round_trip_s"] = {{"median", round_trip_.Quantile_s(0.5)},
-                               {"p99", round_trip_.Quantile_s(0.99)},
-                               {"max", round_trip_.max_s()},
-                               {"count", round_trip_.count()}};
-  j["ticks_without_sample"] = samples_missed_total_;
-  j["estop_unsafe_ticks"] = estop_unsafe_ticks_;
+  j["control_round_trip_s"] = {{"median", link_.round_trip().Quantile_s(0.5)},
+                               {"p99", link_.round_trip().Quantile_s(0.99)},
+                               {"max", link_.round_trip().max_s()},
+                               {"count", link_.round_trip().count()}};
+  j["ticks_without_sample"] = link_.samples_missed_total();
+  j["estop_unsafe_ticks"] = link_.estop_unsafe_ticks();
   if (board_ != nullptr) j["board_link"] = board_->counters().Describe();
   j["command_age_bins"] = {"0", "1", "2", "3-7", "8-15", ">=16"};
   j["legs"] = json::Value::array();
   for (std::size_t i = 0; i < kNumLegs; ++i) {
-    const CommandAgeHistogram& h = command_age_[i];
+    const CommandAgeHistogram& h = figures_.command_age[i];
     const int leg = static_cast<int>(i) + 1;
     json::Value ages = json::Value::array();
     for (int k = 0; k < CommandAgeHistogram::kBins; ++k) ages.push_back(h.bins[static_cast<std::size_t>(k)]);

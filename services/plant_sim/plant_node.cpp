@@ -14,9 +14,7 @@
 namespace hexa::plant_sim {
 namespace {
 
-constexpr dds_attach_t kTokenShutdown = 1;
-constexpr dds_attach_t kTokenWake = 2;
-constexpr dds_attach_t kTokenPeers = 3;
+constexpr dds_attach_t kTokenWake = 2;  // services::Runtime::kShutdownToken is 1
 // Real time: wake-ups later than this restart the schedule (RealtimeClock). Every slip is
 // logged with its tick and kept for the summary: a lapse's tick can be matched to the stall.
 constexpr std::int64_t kSlipAfter_ns = 2'000'000;
@@ -59,6 +57,15 @@ ArbitrationParams MakeArbitrationParams(const PlantNodeOptions& o, const config:
   return p;
 }
 
+DeviceLinkParams LinkParams(const PlantNodeOptions& o) {
+  DeviceLinkParams p;
+  p.lockstep = o.common.mode == node::TimeMode::kLockstep;
+  p.answer_timeout_s = o.board.answer_timeout_s;
+  p.lost_after_ticks = o.board.lost_after_ticks;
+  p.address = o.board.host + ":" + std::to_string(o.board.port);
+  return p;
+}
+
 LockstepClockParams ClockParams(const PlantNodeOptions& o) {
   LockstepClockParams p;
   p.barrier.reask_after_ns = static_cast<std::int64_t>(o.resend_after_s * 1e9);
@@ -96,49 +103,41 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
       board_(dynamic_cast<device::RemoteBoardDevice*>(device_owner_.get())),
       arbitration_params_(MakeArbitrationParams(options, config)),
       // The six legs' samples of a tick leave in one datagram per reader (comm/writer.hpp).
-      participant_(static_cast<dds_domainid_t>(options.common.domain_id),
-                   comm::WriteBatching::kOn),
-      shutdown_(participant_),
-      wake_(participant_),
-      sensors_topic_(participant_),
-      imu_topic_(participant_),
-      truth_topic_(participant_),
-      valve_topic_(participant_),
-      sensors_writer_(participant_, sensors_topic_,
+      runtime_(options.common, "plant", log_, comm::WriteBatching::kOn),
+      wake_(runtime_.participant()),
+      sensors_topic_(runtime_.participant()),
+      imu_topic_(runtime_.participant()),
+      truth_topic_(runtime_.participant()),
+      valve_topic_(runtime_.participant()),
+      sensors_writer_(runtime_.participant(), sensors_topic_,
                       node::QosFor(options.common, comm::TopicKind::kLegSensors)),
-      imu_writer_(participant_, imu_topic_, node::QosFor(options.common, comm::TopicKind::kImuSample)),
-      truth_writer_(participant_, truth_topic_,
+      imu_writer_(runtime_.participant(), imu_topic_, node::QosFor(options.common, comm::TopicKind::kImuSample)),
+      truth_writer_(runtime_.participant(), truth_topic_,
                     node::QosFor(options.common, comm::TopicKind::kGroundTruth)),
-      tracker_topic_(participant_),
-      tracker_writer_(participant_, tracker_topic_,
+      tracker_topic_(runtime_.participant()),
+      tracker_writer_(runtime_.participant(), tracker_topic_,
                       node::QosFor(options.common, comm::TopicKind::kTrackerPose)),
-      valve_readers_(participant_, valve_topic_, comm::EndpointRole::kControlReader,
+      valve_readers_(runtime_.participant(), valve_topic_, comm::EndpointRole::kControlReader,
                      ValveReaderQos(options.common), 64),
-      status_(participant_, "plant"),
-      faults_(participant_, "plant"),
-      peers_(participant_),
-      fault_topic_(participant_),
-      fault_reader_(participant_, fault_topic_, comm::EndpointRole::kControlReader,
+      faults_(runtime_.participant(), "plant"),
+      peers_(runtime_.participant()),
+      fault_topic_(runtime_.participant()),
+      fault_reader_(runtime_.participant(), fault_topic_, comm::EndpointRole::kControlReader,
                     node::QosFor(options.common, comm::TopicKind::kFaultEvent), 64),
-      operator_topic_(participant_),
-      operator_reader_(participant_, operator_topic_, comm::EndpointRole::kControlReader,
+      operator_topic_(runtime_.participant()),
+      operator_reader_(runtime_.participant(), operator_topic_, comm::EndpointRole::kControlReader,
                        node::QosFor(options.common, comm::TopicKind::kOperatorCommand), 16),
-      waitset_(participant_),
       arbitration_(arbitration_params_),
       lockstep_(ClockParams(options)),
-      realtime_(1'000'000, kSlipAfter_ns) {
-  for (const std::string& spec : options.common.peer_pids) {
-    std::string error;
-    if (!peer_processes_.Add(spec, error)) throw std::invalid_argument(error);
-  }
+      realtime_(1'000'000, kSlipAfter_ns),
+      link_(device_, board_, LinkParams(options), &node::MonotonicNow_ns) {
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     leg_name_[i] = "leg" + std::to_string(i + 1);
     standby_name_[i] = leg_name_[i] + "_standby";
   }
   BringUpDevice();  // throws naming the cause (address, port, e-stop)
-  waitset_.Attach(shutdown_.guard_condition(), kTokenShutdown);
-  waitset_.Attach(wake_.get(), kTokenWake);
-  waitset_.Attach(peers_.data_condition(), kTokenPeers);
+  cycle_.Bind<&PlantNode::OnCommands>(*this);
+  runtime_.waitset().Attach(wake_.get(), kTokenWake);
   for (auto& age : truth_sample_.command_age_ticks) age = -1;
   // The loop may run recorder_sync_window_ticks (+ one sync period) ahead of the recorder;
   // the writers must still hold those samples, with margin.
@@ -162,7 +161,7 @@ bool PlantNode::CompleteTick(const ArbitrationInput& in) {
   arbitration_.Update(in, arbitration_out_);  // arbitrate
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     const std::int64_t age = arbitration_out_.command_age_ticks[i];
-    command_age_[i].Add(age);
+    figures_.command_age[i].Add(age);
     // Like applied_valve_v, the ages in a tick's ground truth are those of the step that led
     // to its state.
     truth_sample_.command_age_ticks[i] = static_cast<int32_t>(std::clamp<std::int64_t>(age, -1, INT32_MAX));
@@ -173,7 +172,7 @@ bool PlantNode::CompleteTick(const ArbitrationInput& in) {
     faults_.Publish(0, tick_, hexa_msg_FAULT_STATE_NOT_FINITE, "plant state not finite: stopped");
     log_->error("plant state became non-finite at tick {}: stopping", tick_);
     LogLastGoodState();
-    PublishStatus(hexa_msg_NODE_FAULT, "state not finite");
+    runtime_.Publish(hexa_msg_NODE_FAULT, Figures(), "state not finite");
     return false;
   }
   ++tick_;
@@ -181,17 +180,15 @@ bool PlantNode::CompleteTick(const ArbitrationInput& in) {
   events_.Clear();
   arbitration_.EndTick(tick_, events_);
   if (tick_ % 100 == 0) {
-    PublishStatus(hexa_msg_NODE_RUNNING, arbitration_params_.realtime ? "real time" : "lockstep");
+    runtime_.Publish(hexa_msg_NODE_RUNNING, Figures(), arbitration_params_.realtime ? "real time" : "lockstep");
   }
   Report(events_);  // a fault episode in effect, repeated at the status rate
   return true;
 }
 
-void PlantNode::OnValveData(void* self) {
-  auto* node = static_cast<PlantNode*>(self);
-  std::lock_guard<std::mutex> lock(node->mutex_);
-  node->TakeCommands(true);
-  node->AdvanceIfComplete();
+void PlantNode::OnCommands() {
+  TakeCommands(true);
+  AdvanceIfComplete();
 }
 
 void PlantNode::AdvanceIfComplete() {
@@ -201,7 +198,7 @@ void PlantNode::AdvanceIfComplete() {
   while (lockstep_.ReadyToStep()) {
     const std::int64_t now = node::MonotonicNow_ns();
     cycle_times_.Add(static_cast<double>(now - tick_started_ns_) * 1e-9);
-    tick_wall_.Add(now - tick_started_ns_);
+    figures_.tick_wall.Add(now - tick_started_ns_);
     ArbitrationInput in;
     in.tick = tick_;
     if (!CompleteTick(in)) {
@@ -249,7 +246,7 @@ void PlantNode::WatchSilence(dds_duration_t& wait) {
       for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg)
         if (barrier.missing() & LegBit(leg)) {
           PublishTick(leg);
-          ++resent_samples_;
+          ++figures_.resent_samples;
         }
       if (lockstep_.SupervisorReaskDue(now)) ReaskSupervisor();
       break;
@@ -257,8 +254,8 @@ void PlantNode::WatchSilence(dds_duration_t& wait) {
       std::string states;
       for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg)
         if (barrier.missing() & LegBit(leg))
-          states += "; " + peer_processes_.Describe(leg_name_[static_cast<std::size_t>(leg - 1)]);
-      if (options_.expect_supervisor) states += "; " + peer_processes_.Describe("supervisor");
+          states += "; " + runtime_.peer_processes().Describe(leg_name_[static_cast<std::size_t>(leg - 1)]);
+      if (options_.expect_supervisor) states += "; " + runtime_.peer_processes().Describe("supervisor");
       log_->error("lockstep: tick {} not answered within {} s (the last resort) by:{}{}", tick_,
                   options_.common.lockstep_timeout_s, LegList(barrier.missing()), states);
       for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
@@ -290,7 +287,7 @@ void PlantNode::ServeRecorderSync(bool acked) {
     log_->warn("tick {}: a reliable reader has not acknowledged for {:.1f} s ({}; {}): "
                "recorder sync given up, the loop runs on (counted, logged per episode)",
                tick_, static_cast<double>(blocked_ns) * 1e-9,
-               peer_processes_.Describe("recorder"), peer_processes_.Describe("supervisor"));
+               runtime_.peer_processes().Describe("recorder"), runtime_.peer_processes().Describe("supervisor"));
   }
   if (o.resume && lockstep_.running()) {
     StartTick(now);
@@ -300,24 +297,23 @@ void PlantNode::ServeRecorderSync(bool acked) {
 
 int PlantNode::RunLockstep(std::uint64_t last_tick) {
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<std::mutex> lock(cycle_.mutex());
     lockstep_.Run(last_tick);
     // The callback first, then tick 0: an answer can never arrive unseen.
-    valve_readers_.OnDataAvailable(&PlantNode::OnValveData, this);
+    cycle_.TriggerOn(valve_readers_);
     StartTick(node::MonotonicNow_ns());
     AdvanceIfComplete();
   }
-  waitset_.Detach(peers_.data_condition());  // NodeStatus traffic must not wake this thread
   // The receive thread runs the loop; this thread watches for silence and shutdown, and
   // keeps the loop within the recorder's window. Every 10 ms at most it judges the legs the
   // tick still awaits (a dead one is no longer awaited: the detection bound is the liveliness
   // lease + 10 ms, docs/faults.md), takes the supervisor's sensor faults and reports writers
   // that are gone.
-  while (!shutdown_.requested()) {
+  while (!runtime_.shutdown_requested()) {
     dds_duration_t wait = DDS_MSECS(10);
     bool waiting_for_acks = false;
     {
-      std::lock_guard<std::mutex> lock(mutex_);
+      std::lock_guard<std::mutex> lock(cycle_.mutex());
       if (exit_code_ >= 0) break;
       if (lockstep_.TakeAckWaitRequest()) wake_.Set(false);
       waiting_for_acks = lockstep_.ack_wait_active();
@@ -334,7 +330,7 @@ int PlantNode::RunLockstep(std::uint64_t last_tick) {
                        sensors_writer_.all().WaitForAcks(DDS_MSECS(10)) == DDS_RETCODE_OK &&
                        truth_writer_.WaitForAcks(DDS_MSECS(10)) == DDS_RETCODE_OK;
     {
-      std::lock_guard<std::mutex> lock(mutex_);
+      std::lock_guard<std::mutex> lock(cycle_.mutex());
       // systemd's watchdog: this thread holds the loop's lock, so the receive thread is not
       // stuck in a tick (a stuck tick keeps the lock and the pings stop).
       node::service_manager::Watchdog();
@@ -356,14 +352,14 @@ int PlantNode::RunLockstep(std::uint64_t last_tick) {
         if (exit_code_ >= 0) break;
       }
     }
-    if (!waiting_for_acks) waitset_.Wait(wait);
+    if (!waiting_for_acks) runtime_.waitset().Wait(wait);
   }
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<std::mutex> lock(cycle_.mutex());
     lockstep_.Stop();
   }
   // No callback runs after this (it touches members destroyed before the reader).
-  valve_readers_.OnDataAvailable(nullptr, nullptr);
+  cycle_.StopTriggers();
   return exit_code_ >= 0 ? exit_code_ : exit_code::kOk;
 }
 
@@ -371,8 +367,8 @@ int PlantNode::RunRealtime(std::uint64_t last_tick) {
   realtime_.Start();
   // No data callback in real time: this thread alone touches the loop state. The lock is
   // held for form (uncontended) so that the helpers' contract is the same in both modes.
-  std::lock_guard<std::mutex> lock(mutex_);
-  while (!shutdown_.requested() && tick_ < last_tick) {
+  std::lock_guard<std::mutex> lock(cycle_.mutex());
+  while (!runtime_.shutdown_requested() && tick_ < last_tick) {
     node::service_manager::Watchdog();
     PublishTick();                            // write: the sensors of tick_
     realtime_.SleepUntilNext();
@@ -388,7 +384,7 @@ int PlantNode::RunRealtime(std::uint64_t last_tick) {
     in.writers_valid = true;
     const RealtimeClock::Wake w = realtime_.Measure(tick_);
     cycle_times_.Add(static_cast<double>(w.late_ns) * 1e-9);
-    tick_wall_.Add(w.late_ns);
+    figures_.tick_wall.Add(w.late_ns);
     if (w.slipped) {
       // The schedule restarts from now (RealtimeClock); the controllers on the same host catch
       // up over a few ticks: their answers count as fresh for the stale-command tolerance.

@@ -7,19 +7,21 @@
 // Parts: the command arbitration (core, pure), the lockstep clock's decisions (core
 // lockstep_clock.hpp) and the real-time clock (realtime_clock.hpp), the rig behind the device
 // seam (device/device.hpp: SimDevice, the simulation, or RemoteBoardDevice, an I/O board over
-// UDP; plant_device.cpp), the valve writers' table
+// UDP) and the plant's link to it (device_link.hpp, without DDS), the valve writers' table
 // (leg_writer_table.hpp), the figures of the run (run_figures.hpp). One tick is
 // read -> arbitrate -> step the device -> write (PlantNode::CompleteTick and PublishTick).
 // Files: plant_node.cpp (the loops), plant_commands.cpp (reception, dead legs, the wording of
-// fault events), plant_outputs.cpp (publishing), plant_lifecycle.cpp (start-up, status,
-// watchdog, the end-of-run report).
+// fault events), plant_outputs.cpp (publishing), plant_device.cpp (the device's events),
+// plant_lifecycle.cpp (start-up, status and the end-of-run report on the service runtime,
+// services::Runtime), plant_options.cpp (the command line).
 //
-// Threading rule. Every member below `mutex_` is touched only with `mutex_` held, by exactly
-// one thread at a time; the members above it are set in the constructor and only read after.
+// Threading rule. Every member below `cycle_` is touched only with the cycle's mutex held, by
+// exactly one thread at a time; the members above it are set in the constructor and only read
+// after (DDS entities are thread-safe).
 //   Lockstep: the tick advances on Cyclone's receive thread, in the ValveCommand readers'
-//   data callback (OnValveData): when the last awaited leg has answered tick n the plant steps
-//   and publishes tick n + 1 at once, with no hand-over to another thread
-//   (docs/performance.md: a hand-over costs a wake-up per tick). The main thread only watches
+//   data callback (services::ControlCycle runs OnCommands): when the last awaited leg has
+//   answered tick n the plant steps and publishes tick n + 1 at once, with no hand-over to
+//   another thread (docs/performance.md: a hand-over costs a wake-up per tick). The main thread only watches
 //   for silence (re-ask, dead legs, timeout), waits for the recorder's acknowledgements and
 //   for shutdown, under the same lock between its waits; it never blocks while holding it.
 //   Real time: the main thread alone runs the loop; no callback is installed (the lock is held
@@ -53,8 +55,11 @@
 #include "hexa/device/remote_board_device.hpp"
 #include "hexa/device/sim_device.hpp"
 #include "hexa/services/command_refusal.hpp"
+#include "hexa/services/control_cycle.hpp"
 #include "hexa/services/node.hpp"
 #include "hexa/services/peer_processes.hpp"
+#include "hexa/services/runtime.hpp"
+#include "device_link.hpp"
 #include "leg_writer_table.hpp"
 #include "realtime_clock.hpp"
 #include "run_figures.hpp"
@@ -113,11 +118,22 @@ struct PlantNodeOptions {
   ComputeBudgetParams compute_budget;  // leg controllers' compute time per cycle
   PlantFaultParams plant_faults;       // injected rig faults (--fault)
   std::string summary_path;        // write the run's figures here as JSON at exit ("" = no)
+  std::string truth_out_path;      // --truth-out: the plant's true parameters ("" = no)
   bool tracker = false;            // publish the external pose instrument (calibration)
   FreeFallBenchParams free_fall;   // --bench free-fall: the Appendix B bench, not the platform
   DeviceKind device = DeviceKind::kSim;
   BoardLinkOptions board;          // --device board
 };
+
+// SCHED_FIFO priority in real time, below the legs (80): a tick of the simulation can cost a
+// millisecond (stiff substeps), and the plant above the legs on their CPU made their valve
+// writers lapse (docs/measurements/deployment.md, "Where the lapses' milliseconds go"); late,
+// the plant only slips.
+inline constexpr int kRealtimePriority = 70;
+
+// Reads hexa_plant_sim's command line into `options`: -1 to run, else the exit code (--help:
+// kOk; a bad value: kUsage, the error printed).
+int ParseOptions(int argc, char** argv, PlantNodeOptions& options);
 
 class PlantNode {
  public:
@@ -130,11 +146,13 @@ class PlantNode {
   const PlatformPlant* simulation() const { return device_.simulation(); }
 
  private:
-  // plant_lifecycle.cpp: start-up, status, watchdog, the report at the end.
-  bool WaitForPeers();
-  std::string EndedPeer(const std::vector<std::string>& expected) const;
+  // plant_lifecycle.cpp: start-up, status, the report at the end.
+  services::PeerWait StartupWait();
+  // Whether every awaited reader and writer is matched (DDS alone; StartupWait adds the
+  // peers' NodeStatus RUNNING); `counts` says what is matched of what is awaited.
+  bool PeersMatched(std::string& counts);
   std::string DescribeMissing(const std::vector<std::string>& missing) const;
-  void PublishStatus(hexa_msg_NodeState state, const char* detail);
+  services::StatusFigures Figures();
   bool SyncGiveUpDue(std::int64_t blocked_ns) const;
   void LogStart() const;
   void LogEnd() const;
@@ -145,7 +163,7 @@ class PlantNode {
   // plant_node.cpp: the loops and the tick.
   int RunLockstep(std::uint64_t last_tick);
   int RunRealtime(std::uint64_t last_tick);
-  static void OnValveData(void* self);  // receive thread (lockstep)
+  void OnCommands();  // the cycle (lockstep: on the receive thread, ValveCommand data)
   void AdvanceIfComplete();
   void StartTick(std::int64_t now_ns);  // publish tick_ and await its answers
   // Arbitrate, step the device, end the tick; false when the device failed (non-finite).
@@ -153,18 +171,15 @@ class PlantNode {
   void WatchSilence(dds_duration_t& wait);  // lockstep main thread, under the lock
   void ServeRecorderSync(bool acked);       // lockstep main thread: an acknowledgement wait
 
-  // plant_device.cpp: the device's bring-up and one exchange per tick (write the valves, read
-  // the next sample; the control round trip; the board's e-stop and link judged).
+  // plant_device.cpp: the device's bring-up and one exchange per tick through link_ (write the
+  // valves, read the next sample; the board's e-stop and link judged).
   void BringUpDevice();
   device::DeviceStatus ExchangeWithDevice(const LegArray<double>& valve_v);
-  // Lockstep: this command's answer from the board (timed_out: none within the timeout).
-  device::DeviceStatus ReadBoardAnswer(bool& timed_out);
-  void ReportRefusedFrames();  // the first refusal of each verdict, logged with its cause
-  std::string LastOutOfRange() const;  // "leg 1 potentiometer_m = 0.3734 out of its range; " or ""
   void JudgeDeviceSafety();  // after the exchange, for the sample of the new tick_
   void TakeOperatorCommands();  // estop: latch the device; reset: ask the device to re-arm
   void LatchOperatorEstop(std::uint32_t sequence);  // once per command, whichever path brings it
   void LogDeviceEnd() const;
+  void Report(const DeviceEvents& events);  // FaultEvents and log lines
 
   // plant_outputs.cpp: sensors of tick_ (all legs, or `only_leg` alone: a re-ask), the IMU
   // (every 5th tick), ground truth and the tracker. Batched: each reader gets one datagram.
@@ -191,8 +206,9 @@ class PlantNode {
   ArbitrationParams arbitration_params_;
   LockstepSchedule schedule_;
 
-  comm::Participant participant_;
-  comm::ShutdownGuard shutdown_;
+  // Participant (write batching on), shutdown guard, wait set, lifecycle and NodeStatus,
+  // --peer-pid processes.
+  services::Runtime runtime_;
   comm::GuardCondition wake_;  // set by the receive thread: the run ended, or a recorder sync
   comm::Topic<hexa_msg_LegSensors> sensors_topic_;
   comm::Topic<hexa_msg_ImuSample> imu_topic_;
@@ -205,7 +221,6 @@ class PlantNode {
   comm::Writer<hexa_msg_TrackerPose> tracker_writer_;
   // One reader per leg partition: leg N's commands only from leg N's writers (comm/leg_readers.hpp).
   comm::LegReaders<hexa_msg_ValveCommand> valve_readers_;
-  node::StatusPublisher status_;
   node::FaultPublisher faults_;
   node::PeerTracker peers_;
   comm::Topic<hexa_msg_FaultEvent> fault_topic_;
@@ -213,17 +228,14 @@ class PlantNode {
   // The operator's e-stop and reset, polled each tick (the supervisor answers them).
   comm::Topic<hexa_msg_OperatorCommand> operator_topic_;
   comm::Reader<hexa_msg_OperatorCommand> operator_reader_;
-  comm::WaitSet waitset_;
-  node::PeerProcesses peer_processes_;  // --peer-pid: the session's processes on this host
   LegArray<std::string> leg_name_{}, standby_name_{};  // "leg3", "leg3_standby"
 
-  std::mutex mutex_;  // everything below (the threading rule above)
+  services::ControlCycle cycle_;  // its mutex guards everything below (the threading rule)
   std::uint64_t tick_ = 0;
   int exit_code_ = -1;  // set when the run ends (>= 0)
   CommandArbitration arbitration_;
   ArbitrationOutput arbitration_out_;
   ArbitrationEvents events_;  // the events of a call between ticks (cleared before each)
-  device::DeviceSensors sensors_{};  // the device's newest sample
   LockstepClock lockstep_;
   RealtimeClock realtime_;
   std::uint64_t slip_recent_until_tick_ = 0;  // real time: stale tolerance after a slip
@@ -241,26 +253,13 @@ class PlantNode {
   bool imu_lost_reported_ = false;
   hexa_msg_GroundTruth truth_sample_{};
   // Figures of the run.
-  LegArray<CommandAgeHistogram> command_age_{};
+  RunFigures figures_;  // command ages, tick durations, the loop's wall time, re-sends
   node::CycleTimeWindow cycle_times_;
-  DurationHistogram tick_wall_;   // lockstep: publish -> complete; real time: wake-up lateness
-  std::int64_t loop_started_ns_ = 0;
-  std::int64_t loop_ended_ns_ = 0;
   std::int64_t tick_started_ns_ = 0;
-  std::uint64_t resent_samples_ = 0;  // lockstep: sensor samples re-published to silent legs
-  // The device: the control round trip (a sample read from the device -> the command computed
-  // from it written), ticks without a new sample, the e-stop latch as last reported.
-  DurationHistogram round_trip_;
-  std::int64_t sample_read_ns_ = -1;  // when the newest sample was read; -1: answered already
-  std::uint64_t ticks_without_sample_ = 0;
-  std::uint64_t samples_missed_total_ = 0;
-  bool estop_reported_ = false;
-  bool estop_reset_asked_ = false;
-  std::uint32_t operator_estop_sequence_ = 0;  // the operator e-stop latched (0: none)     // an operator reset asked; its refusal reported once
-  std::uint64_t estop_unsafe_ticks_ = 0;  // latched, yet a valve not at its safe value
-  bool board_down_ = false;  // no frame since FAULT_BOARD_LINK
-  device::BoardLinkCounters link_reported_{};  // the counters as last logged
-  bool device_lost_ = false;  // the board was lost during the run: exit kPlantDeviceLost
+  // The device: the exchange, the control round trip, the e-stop and the board's link
+  // (device_link.hpp), and the events of its newest call.
+  DeviceLink link_;
+  DeviceEvents device_events_;
 };
 
 }  // namespace hexa::plant_sim

@@ -7,7 +7,7 @@
 
 namespace hexa::plant_sim {
 void PlantNode::PublishTick(int only_leg) {
-  const device::DeviceSensors& out = sensors_;
+  const device::DeviceSensors& out = link_.sensors();
   const double t = static_cast<double>(tick_) * kTickS;
   const int64_t now_ns = comm::RealtimeNow_ns();
   const bool lose_supervisor_inputs =

@@ -5,6 +5,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "hexa/core/rig.hpp"
+
 namespace hexa::plant_sim {
 
 // Age of the command the plant applied at a tick, in ticks (tick - answered tick; 0 = the
@@ -37,6 +39,15 @@ class DurationHistogram {
   std::uint64_t count_ = 0;
   std::int64_t max_ns_ = 0;
   double sum_s_ = 0.0;
+};
+
+// The figures of one run that the plant reports at its end (log and --summary JSON).
+struct RunFigures {
+  LegArray<CommandAgeHistogram> command_age{};
+  DurationHistogram tick_wall;  // lockstep: publish -> complete; real time: wake-up lateness
+  std::int64_t loop_started_ns = 0;
+  std::int64_t loop_ended_ns = 0;
+  std::uint64_t resent_samples = 0;  // lockstep: sensor samples re-published to silent legs
 };
 
 }  // namespace hexa::plant_sim

@@ -3,6 +3,8 @@
 // and exit codes, and the transitions it refuses. A reader on a second participant sees what
 // a peer (the plant, the launcher, hexa_operator) would see. Domain 38, loopback.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <stdexcept>
@@ -186,6 +188,34 @@ TEST_F(ServiceRuntime, RefusesToRunBeforeItsPeersMatched) {
   runtime.Start({}, "waiting for the plant");
   EXPECT_THROW(runtime.Running({}, "primary", "primary"), std::logic_error);
   EXPECT_FALSE(runtime.Publish(hexa_msg_NODE_RUNNING, {}, "not yet"));
+}
+
+TEST_F(ServiceRuntime, APeerProcessThatEndedFailsTheWaitAtOnceWhenAsked) {
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) _exit(0);
+  ASSERT_EQ(waitpid(child, nullptr, 0), child);  // ended and reaped: its pid names no process
+  node::CommonOptions o = Options();
+  o.peer_pids = {"recorder=" + std::to_string(child)};
+  Runtime runtime(o, "plant_ended_peer", Log());
+  runtime.Start({}, "waiting for peers");
+  PeerWait wait;
+  wait.rule.timeout_s = 0.3;
+  wait.processes = {"recorder"};
+  wait.matched = [](std::string& missing) {
+    missing = "recorder";
+    return false;
+  };
+  // Not asked: the wait lasts its timeout.
+  EXPECT_EQ(runtime.WaitForPeers(wait), PeerWaitResult::kTimedOut);
+  // Asked (the plant): at the first look, well within a long timeout.
+  wait.rule.timeout_s = 30.0;
+  wait.fail_when_a_process_ends = true;
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(runtime.WaitForPeers(wait), PeerWaitResult::kProcessEnded);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(5));
+  EXPECT_EQ(runtime.FailStart({}, "peers not ready", exit_code::kPeersNotMatched),
+            exit_code::kPeersNotMatched);
 }
 
 TEST_F(ServiceRuntime, AMalformedPeerPidIsRefusedAtConstruction) {

@@ -135,6 +135,14 @@ PeerWaitResult Runtime::WaitForPeers(const PeerWait& wait) {
   while (!shutdown_.requested()) {
     missing.clear();
     const bool matched = wait.matched(missing);
+    if (!matched && wait.fail_when_a_process_ends) {
+      for (const std::string& name : wait.processes) {
+        if (peer_processes_.State(name) != node::PeerProcessState::kEnded) continue;
+        log_->error("peers not ready: {}'s process has ended (the launcher's log says how); "
+                    "waited {:.1f} s", name, rule.waited_s());
+        return PeerWaitResult::kProcessEnded;
+      }
+    }
     switch (rule.Look(node::MonotonicNow_ns(), matched)) {
       case PeerWaitRule::Verdict::kMatched:
         Enter(Phase::kPeersMatched);

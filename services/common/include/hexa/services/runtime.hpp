@@ -73,10 +73,13 @@ struct PeerWait {
   // the report says of each one given a process id whether it runs, is stopped or ended
   // (the others are on another host, or not started by a launcher: DDS alone speaks of them).
   std::vector<std::string> processes;
+  // Whether the wait ends at once (kProcessEnded, logged) when one of `processes` has ended:
+  // it will never match (the plant, which a session cannot run without any of its peers).
+  bool fail_when_a_process_ends = false;
   std::int64_t recheck_ns = 20'000'000;  // match counts change without data: bounded re-check
 };
 
-enum class PeerWaitResult : std::uint8_t { kMatched, kShutdown, kTimedOut };
+enum class PeerWaitResult : std::uint8_t { kMatched, kShutdown, kTimedOut, kProcessEnded };
 
 // Whether a node publishes its lifecycle on NodeStatus: the control services do (the plant,
 // the launcher and hexa_operator read it); the bridge, which is no part of the control loop,
