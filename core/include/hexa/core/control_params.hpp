@@ -127,10 +127,25 @@ struct PiParams {
   double force_feedforward_v_n = 0.001;  // tuned on the seven trajectories (docs/controller.md)
 };
 
+// Coupled leg feedback (docs/controller.md "Coupled leg feedback"; off by default): leg i
+// applies f_i + gain * LPF((W_ii - 1) f_i + sum_{j != i} W_ij f_j), W = M_ls(home) / M, the
+// other legs' BS-SMC feedback parts f_j of the previous tick as the plant relays them with
+// leg i's sensor sample (RelayedFeedback, coupled_legs.hpp). Any leg's part missing: the
+// decoupled law (f_i alone) on that tick.
+struct CoupledLegsParams {
+  bool enabled = false;
+  double gain = 1.0;        // share of the coupling increment applied, [0, 1]
+  double cutoff_hz = 0.0;   // first-order low-pass of the increment (and its rate); 0 = none
+  // W = V diag(max(m_k, M)) V^T / M (M_ls = V diag(m_k) V^T): only the modes heavier than M
+  // get the single-mass loop, the light roll / pitch modes keep their uncoupled gain.
+  bool raise_only = true;
+};
+
 struct LegControllerParams {
   DifferentiatorParams differentiator;
   BsSmcParams bssmc;
   PiParams pi;
+  CoupledLegsParams coupled;
   double setpoint_timeout_s = 0.015;    // setpoints older than this -> hold (3 periods)
 };
 
