@@ -73,10 +73,12 @@ bool CoupledFeedbackMix::Apply(const BsSmcFeedback& own, std::uint64_t own_tick,
     Reset();
     return false;
   }
-  double force_n = (row_[leg_] - 1.0) * own.force_n;
-  double rate_n_s = (row_[leg_] - 1.0) * own.rate_n_s;
+  // Every part of the increment from the same tick n - 1, this leg's own included: on a
+  // motion that is a mode of W the increment is then (lambda_k - 1) f(n - 1), with no
+  // (W_ii - 1) (f_i(n) - f_i(n - 1)) term that would differentiate this leg's noise.
+  double force_n = -relay.parts[leg_].force_n;
+  double rate_n_s = -relay.parts[leg_].rate_n_s;
   for (std::size_t j = 0; j < kNumLegs; ++j) {
-    if (j == leg_) continue;
     force_n += row_[j] * relay.parts[j].force_n;
     rate_n_s += row_[j] * relay.parts[j].rate_n_s;
   }

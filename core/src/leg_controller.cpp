@@ -215,7 +215,11 @@ void LegController::Update(const LegControllerInput& raw, LegControllerOutput& o
     BsSmcFeedback applied;
     out.coupled = coupling_->Apply(own, raw.tick, raw.relayed, applied);
     BsSmcOutput o;
-    bssmc_.Finish(pending_, applied, o);
+    if (out.coupled) {
+      bssmc_.Finish(pending_, applied, o);
+    } else {
+      bssmc_.FinishOwn(pending_, o);  // the decoupled law, bit for bit
+    }
     FinishBsSmc(o, out);
     out.feedback = FeedbackPart{std::isfinite(own.force_n) && std::isfinite(own.rate_n_s),
                                 own.force_n, own.rate_n_s};

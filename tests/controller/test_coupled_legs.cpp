@@ -107,8 +107,8 @@ TEST(CoupledLegs, LowPassAndGainShapeTheIncrementOnly) {
   const LegArray<double> row = CouplingRowAtHome(rig, 0, 1.5, true);
   const LegArray<double> parts{4.0, -1.0, 2.0, 3.0, -2.0, 1.0};
   const BsSmcFeedback own{4.0, 40.0};
-  double increment = (row[0] - 1.0) * own.force_n;
-  for (std::size_t j = 1; j < kNumLegs; ++j) increment += row[j] * parts[j];
+  double increment = -parts[0];  // sum_j W_0j f_j(n - 1) - f_0(n - 1)
+  for (std::size_t j = 0; j < kNumLegs; ++j) increment += row[j] * parts[j];
   ASSERT_GT(std::abs(increment), 0.1);
   CoupledLegsParams params;
   params.enabled = true;
