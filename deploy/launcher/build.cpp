@@ -40,18 +40,23 @@ int ChooseDomain(Options& o, spdlog::logger& log) {
       log.error("cannot check DDS domain {} for another session: {}", o.domain, probe.error);
       return exit_code::kRunError;
     }
-    if (probe.other_participants == 0) return kContinue;
+    if (probe.other_participants == 0 && probe.fixed_index_ports == 0) return kContinue;
+    std::string who = std::to_string(probe.other_participants) + " participant(s) discovered";
+    if (probe.fixed_index_ports > 0) {
+      who += ", " + std::to_string(probe.fixed_index_ports) + " of its participant ports bound";
+      for (std::size_t k = 0; k < probe.port_owners.size(); ++k)
+        who += (k == 0 ? " by " : ", ") + probe.port_owners[k];
+    }
     if (!o.domain_chosen || attempt == 20) {
-      log.error("DDS domain {} is in use: {} other participant(s) on it (another session, or "
-                "a process left of one): two sessions on one domain would command each other. "
-                "{}", o.domain, probe.other_participants,
+      log.error("DDS domain {} is in use ({}: another session, secured or not, or a process left "
+                "of one): two sessions on one domain would command each other. {}",
+                o.domain, who,
                 o.domain_chosen ? "No free domain among the next 20."
                                 : "Choose another --domain, or stop the other session.");
       return exit_code::kUsage;
     }
     const long long next = 100 + (o.domain - 100 + 1) % 100;
-    log.warn("DDS domain {} is in use ({} other participant(s): another session?): trying {}",
-             o.domain, probe.other_participants, next);
+    log.warn("DDS domain {} is in use ({}: another session?): trying {}", o.domain, who, next);
     o.domain = next;
   }
 }

@@ -2,15 +2,45 @@
 
 #include <time.h>
 
+#include <algorithm>
 #include <cstring>
 #include <set>
 
 #include <dds/dds.h>
 
+#include "udp_ports.hpp"
+
 namespace hexa::deploy {
+namespace {
+
+// Participant indices scanned: the ports of index 0..119 fill the domain's block of 250 ports.
+constexpr int kMaxParticipantIndex = 119;
+
+// A participant with a fixed index binds its unicast ports before it announces itself; a
+// secured session's participants announce themselves by unicast to their peers only, so these
+// ports are what shows them to a process outside the session. Read before the probe's own
+// participant exists (it binds ports of its own).
+void FindFixedIndexPorts(int domain, DomainProbe& result) {
+  for (const auto& socket : BoundUdpSockets()) {
+    bool fixed = false;
+    for (int i = 0; i <= kMaxParticipantIndex && !fixed; ++i)
+      fixed = socket.port == DiscoveryUnicastPort(domain, i) || socket.port == UserUnicastPort(domain, i);
+    if (!fixed) continue;
+    ++result.fixed_index_ports;
+    const std::string owner = SocketOwner(socket.inode);
+    auto& owners = result.port_owners;
+    if (!owner.empty() && std::find(owners.begin(), owners.end(), owner) == owners.end()) owners.push_back(owner);
+  }
+}
+
+}  // namespace
+
+int DiscoveryUnicastPort(int domain, int index) { return 7400 + 250 * domain + 10 + 2 * index; }
+int UserUnicastPort(int domain, int index) { return 7400 + 250 * domain + 11 + 2 * index; }
 
 DomainProbe ProbeDomain(int domain, double listen_s) {
   DomainProbe result;
+  FindFixedIndexPorts(domain, result);
   const dds_entity_t participant = dds_create_participant(static_cast<dds_domainid_t>(domain), nullptr, nullptr);
   if (participant < 0) {
     result.error = std::string("cannot create a DDS participant on domain ") + std::to_string(domain) +

@@ -13,6 +13,7 @@
 #include "hexa/services/exit_code.hpp"
 #include "hexa/services/progress.hpp"
 #include "launcher.hpp"
+#include "udp_ports.hpp"
 
 namespace hexa::launcher {
 namespace {
@@ -21,23 +22,6 @@ using deploy::ChildExit;
 using deploy::ChildSpec;
 using deploy::ProcessGroup;
 
-// Whether a socket of this network namespace has bound UDP port `port` of 127.0.0.1, read
-// from /proc/net/udp (local_address "0100007F:PORT" in hex). Read, not probed with a bind of
-// its own: a probe would hold the port for an instant and could make the emulator's bind fail.
-bool UdpPortBound(int port) {
-  std::ifstream udp("/proc/net/udp");
-  char want[16];
-  std::snprintf(want, sizeof want, "0100007F:%04X", static_cast<unsigned>(port));
-  std::string line;
-  std::getline(udp, line);  // the header
-  while (std::getline(udp, line)) {
-    std::istringstream fields(line);
-    std::string slot, local;
-    if (fields >> slot >> local && local == want) return true;
-  }
-  return false;
-}
-
 // The board emulator must listen before the plant sends its first command: a datagram to a
 // port not yet bound is dropped, and in lockstep the plant awaits the answer to each command
 // (a resend could step the emulator twice). Waits until the port is bound, the emulator
@@ -45,7 +29,7 @@ bool UdpPortBound(int port) {
 bool AwaitBoardListening(const ProcessGroup& group, int port, spdlog::logger& log) {
   const auto t0 = std::chrono::steady_clock::now();
   while (std::chrono::steady_clock::now() - t0 < std::chrono::seconds(30)) {
-    if (UdpPortBound(port)) {
+    if (deploy::UdpLoopbackPortBound(port)) {  // read, not probed: a bind would race the emulator's
       log.info("board emulator listening on UDP 127.0.0.1:{} after {:.3f} s", port,
                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
       return true;

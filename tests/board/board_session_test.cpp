@@ -157,7 +157,10 @@ TEST(BoardSession, OperatorEstopHoldsEveryValveAtNullFromTheTickItIsTaken) {
   const std::string dir = hexa::testing::ScratchDir("operator_estop");
   const int domain = 57;
   hexa::deploy::ProcessGroup session;
-  hexa::deploy::ChildSpec s{"session", {HEXA_SESSION, "--trajectory", "combined", "--periods", "3",
+  // Lockstep runs as fast as the machine allows (3 periods took 3 s of wall time on an idle
+  // machine): 40 periods keep the trajectory running for far longer than the operator's
+  // e-stop takes to arrive, and the session ends at the hold, not at the trajectory's end.
+  hexa::deploy::ChildSpec s{"session", {HEXA_SESSION, "--trajectory", "combined", "--periods", "40",
                             "--seed", "3", "--wait-for-operator", "--hold-timeout", "1", "--domain",
                             std::to_string(domain), "--out", dir, "--timeout", "240"},
                             {}, dir + "/launcher.console.log"};
@@ -177,8 +180,8 @@ TEST(BoardSession, OperatorEstopHoldsEveryValveAtNullFromTheTickItIsTaken) {
     if (started != 0) std::this_thread::sleep_for(std::chrono::milliseconds(500));
   }
   ASSERT_EQ(started, 0) << Slurp(dir + "/operator_start.log");
-  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // into the trajectory
-  EXPECT_EQ(op("estop"), 0) << Slurp(dir + "/operator_estop.log");
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // into the trajectory
+  ASSERT_EQ(op("estop"), 0) << Slurp(dir + "/operator_estop.log");
   const auto ev = session.WaitEvent(std::chrono::seconds(300));
   ASSERT_EQ(ev.kind, hexa::deploy::ProcessGroup::Event::kChildExited);
   EXPECT_EQ(ev.exit.exit_code, 3) << Slurp(dir + "/session.log");
@@ -217,7 +220,7 @@ TEST(BoardSession, EmulatorKilledIsBoardLinkLostWithinATickAndHolds) {
   const std::string dir = hexa::testing::ScratchDir("board_killed");
   hexa::deploy::ProcessGroup session;
   std::vector<std::string> argv = {HEXA_SESSION, "--hold-timeout", "1", "--domain", "56", "--out", dir,
-                                   "--timeout", "240", "--periods", "3"};
+                                   "--timeout", "240", "--periods", "40"};  // ends at the hold
   for (const auto& a : BoardSessionArgs())
     if (a != "--periods" && a != "1") argv.push_back(a);
   std::string err;

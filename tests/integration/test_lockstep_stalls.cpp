@@ -220,4 +220,27 @@ TEST(SessionDomain, ADomainInUseIsRefusedWithAMessage) {
   EXPECT_EQ(log.find("started plant"), std::string::npos) << "no process may start: " << log;
 }
 
+// A session whose participants discover by unicast only, with fixed participant indices (every
+// secured session, docs/security.md), never answers the probe's multicast discovery: the ports
+// its participants bound show it, and the session is refused naming the process holding them.
+TEST(SessionDomain, AUnicastOnlySessionOnTheDomainIsRefusedNamingItsProcess) {
+  const char* unicast_only =
+      "<CycloneDDS><Domain id=\"any\"><General><Interfaces><NetworkInterface name=\"lo\" "
+      "multicast=\"false\"/></Interfaces><AllowMulticast>false</AllowMulticast></General>"
+      "<Discovery><ParticipantIndex>auto</ParticipantIndex><Peers><Peer address=\"127.0.0.1\"/>"
+      "</Peers></Discovery></Domain></CycloneDDS>";
+  const dds_entity_t domain = dds_create_domain(98, unicast_only);
+  ASSERT_GT(domain, 0) << dds_strretcode(domain);
+  const dds_entity_t other = dds_create_participant(98, nullptr, nullptr);
+  ASSERT_GT(other, 0) << dds_strretcode(other);
+  const auto run = hexa::testing::RunSession("domain_in_use_unicast", 98, kCombined);
+  dds_delete(DDS_CYCLONEDDS_HANDLE);
+  EXPECT_EQ(run.exit_code, 2) << Slurp(run.dir + "/session.log");
+  const std::string log = Slurp(run.dir + "/session.log");
+  EXPECT_NE(log.find("DDS domain 98 is in use (0 participant(s) discovered, 2 of its participant ports bound by "),
+            std::string::npos) << log;
+  EXPECT_NE(log.find("(pid " + std::to_string(getpid()) + ")"), std::string::npos) << log;
+  EXPECT_EQ(log.find("started plant"), std::string::npos) << "no process may start: " << log;
+}
+
 }  // namespace
