@@ -128,10 +128,12 @@ struct PiParams {
 };
 
 // Coupled leg feedback (docs/controller.md "Coupled leg feedback"; off by default): leg i
-// applies f_i + gain * LPF((W_ii - 1) f_i + sum_{j != i} W_ij f_j), W = M_ls(home) / M, the
-// other legs' BS-SMC feedback parts f_j of the previous tick as the plant relays them with
-// leg i's sensor sample (RelayedFeedback, coupled_legs.hpp). Any leg's part missing: the
-// decoupled law (f_i alone) on that tick.
+// applies f_i(n) + gain * LPF(sum_j W_ij f_j(n - 1) - f_i(n - 1)), W = M_ls(home) / M, the
+// six legs' BS-SMC feedback parts f_j of the previous tick as the plant relays them with leg
+// i's sensor sample (RelayedFeedback, coupled_legs.hpp). Any leg's part missing: the decoupled
+// law (f_i alone) on that tick. The struct's gain and cut-off are the plain law's (1, none);
+// the reference rig file sets the measured 0.25 and 50 Hz
+// (docs/measurements/coupled_feedback.md).
 struct CoupledLegsParams {
   bool enabled = false;
   double gain = 1.0;        // share of the coupling increment applied, [0, 1]

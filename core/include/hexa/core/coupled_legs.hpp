@@ -3,7 +3,7 @@
 // part f_j (BsSmcFeedback) with its valve command; the plant, which gathers the six commands
 // of every tick anyway, relays the six parts of tick n - 1 with each leg's sensor sample of
 // tick n (FeedbackRelay); leg i then applies (CoupledFeedbackMix)
-//   f_i(n) + g LPF( (W_ii - 1) f_i(n) + sum_{j != i} W_ij f_j(n - 1) ),   W = M_ls / M,
+//   f_i(n) + g LPF( sum_j W_ij f_j(n - 1) - f_i(n - 1) ),   W = M_ls / M,
 // M_ls the leg-space mass matrix at home (eq 48, platform_dynamics.hpp), M the BS-SMC's
 // effective mass (eq 25). A leg needs nothing from the others but what comes with its own
 // sensor sample: a leg that crashes, hangs or goes silent is missing from the relay the tick
