@@ -39,8 +39,10 @@ TEST(CoupledLegs, OnEachPlatformModeTheMixScalesByTheRaisedModalMassOverM) {
   const RigParams rig = MakeReferenceRig();
   const double mass_kg = LegControllerParams{}.bssmc.effective_mass_kg;
   const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(HomeMassMatrix(rig));
-  CoupledLegsParams params;
+  CoupledLegsParams params;  // the plain coupled law: no gain below 1, no low-pass
   params.enabled = true;
+  params.gain = 1.0;
+  params.cutoff_hz = 0.0;
   int raised = 0, kept = 0;
   for (int k = 0; k < 6; ++k) {
     const Vector6d v = eig.eigenvectors().col(k) * 10.0;  // N
