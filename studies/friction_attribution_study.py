@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """How much of the Table 9 / 10 error is the controllers' friction model, and what is left
-with an exact model (docs/measurements/results.md "What limits the cells that miss one fifth").
+with an exact model (docs/measurements/results.md "The controllers' friction model").
 
 Runs the seven paper trajectories in the in-process lockstep simulation (hexa_sim, BS-SMC,
 feed-forward on, realistic profile, kinematic calibration first: `--calibrate`), seeds 1-3,

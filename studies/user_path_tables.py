@@ -55,7 +55,8 @@ def report_axes(report):
 def valve_activity(report):
     """(mean |dV| per tick in V, % of ticks saturated, worst valve's %) over the six valves of a
     report (report.json gives both per valve), or None."""
-    if report is None or not report.get("valve_mean_abs_step_v_per_tick"):
+    steps = report.get("valve_mean_abs_step_v_per_tick") if report else None
+    if not steps or None in steps:  # null: no GroundTruth recorded, activity unknown
         return None
     sat = report["valve_saturated_fraction"]
     return (statistics.mean(report["valve_mean_abs_step_v_per_tick"]),

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Lockstep under load and stalls (docs/faults.md, "Liveliness in lockstep"): N lockstep
+"""Lockstep under load and stalls (docs/liveliness.md, "Liveliness in lockstep"): N lockstep
 sessions of the combined trajectory, each compared bit for bit with a reference session, with
 optionally `stress-ng --cpu K` beside them and one process stopped (SIGSTOP) for a while.
 

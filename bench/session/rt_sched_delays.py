@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """How often and how long each process of a real-time session waits for a CPU (docs/measurements/
-faults.md, "Scheduling delays in real time"): N real-time sessions (combined trajectory, 1 period,
+faults_under_load.md, "Scheduling delays in real time"): N real-time sessions (combined trajectory, 1 period,
 seeds 1..N), each traced with `perf sched record -a`, optionally with `stress-ng --cpu K` beside.
 
     /usr/bin/python3 bench/session/rt_sched_delays.py --runs 5

@@ -265,7 +265,7 @@ void BsSmcController::Complete(const BsSmcInput& in, const BsSmcFeedback* applie
   const double s_m_s = stage_.s_m_s;
   const double vd = in.desired_velocity_m_s;
   // eq 45, plus the proportional reaching term -k_s S and the integral term (not in the paper).
-  // Coupled (docs/measurements/control.md "Coupled leg feedback"): the feedback part is the mix the
+  // Coupled (docs/measurements/control_coupled_feedback.md "Coupled leg feedback"): the feedback part is the mix the
   // caller hands over instead of this leg's own.
   const double phi =
       applied ? stage_.phi_model_n + applied->force_n - integral_force_n_

@@ -52,7 +52,9 @@ LockstepSimulation::LockstepSimulation(const LockstepConfig& config) : config_(c
 
 
 PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartRequest* start,
-                                     const JogRequest* jog, const Pose* goal_X_BP) {
+                                     const JogRequest* jog, const Pose* goal_X_BP,
+                                     const StreamPacket* stream_packets,
+                                     std::size_t stream_packet_count) {
   plant_before_ = plant_->output();
   const double now_s = time_s();
   // The clock's barrier, as the plant service runs it (answers arrive here in call order;
@@ -71,6 +73,8 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
     in.start = start;
     if (jog != nullptr) in.jog = *jog;
     if (goal_X_BP != nullptr) in.goal_X_BP = *goal_X_BP;
+    in.stream_packets = stream_packets;
+    in.stream_packet_count = stream_packet_count;
     supervisor_->Update(in, sup_out_);
     for (std::size_t i = 0; i < kNumLegs; ++i)
       setpoints_[i].Add(IssuedSetpoint{tick_, now_s, sup_out_.setpoint[i]});

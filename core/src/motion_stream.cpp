@@ -220,10 +220,29 @@ void MotionStream::Apply(const StreamPacket& packet, double time_s) {
   counters_.Count(StreamDecodeResult{});
 }
 
+void MotionStream::Restart() noexcept {
+  washout_.Reset();
+  for (AxisMotionState& a : axis_) a = AxisMotionState{};
+  displacement_.setZero();
+  target_.setZero();
+  target_velocity_.setZero();
+  have_latest_ = false;
+  active_ = false;
+  newest_sequence_ = 0;
+  last_applied_time_s_ = 0.0;
+  state_ = StreamState::kWaiting;
+}
+
 void MotionStream::Update(const MotionStreamInput& input, MotionStreamOutput& output) noexcept {
   output.timed_out = false;
-  for (std::size_t i = 0; i < input.packet_count && input.packets != nullptr; ++i) {
-    Apply(input.packets[i], input.time_s);
+  if (input.return_to_neutral) {
+    if (active_) state_ = StreamState::kReturning;
+    active_ = false;
+    have_latest_ = false;
+  } else {
+    for (std::size_t i = 0; i < input.packet_count && input.packets != nullptr; ++i) {
+      Apply(input.packets[i], input.time_s);
+    }
   }
   const double since = active_ ? input.time_s - last_applied_time_s_ : 0.0;
   if (active_ && !(since <= config_.timeout_s)) {

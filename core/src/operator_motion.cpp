@@ -1,5 +1,6 @@
 #include "hexa/core/operator_motion.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -12,6 +13,7 @@ void OperatorMotionConfig::Validate() const {
   jog.Validate();
   limits.Validate();
   frames.Validate();
+  stream.Validate();
   std::vector<ParamIssue> issues;
   ParamChecker c(issues);
   c.Positive("goal.linear.max_speed", goal_linear.max_speed, "speed limit");
@@ -41,12 +43,13 @@ const char* ToString(OperatorMode mode) {
     case OperatorMode::kNone: return "none";
     case OperatorMode::kJog: return "jog";
     case OperatorMode::kGoal: return "goal";
+    case OperatorMode::kStream: return "stream";
   }
   return "unknown";
 }
 
 OperatorMotion::OperatorMotion(const RigParams& rig, const OperatorMotionConfig& config)
-    : config_(config), limits_(rig, config.limits), jog_(config.jog) {
+    : config_(config), limits_(rig, config.limits), jog_(config.jog), stream_(config.stream) {
   config_.Validate();
 }
 
@@ -76,7 +79,63 @@ GoalCheck OperatorMotion::BeginGoal(const Pose& X_BP, const Pose& X_BP_goal, dou
   return check;
 }
 
+void OperatorMotion::BeginStream(const Pose& X_BP) noexcept {
+  stream_.Restart();
+  stream_neutral_ = X_BP;
+  setpoint_ = X_BP;
+  mode_ = OperatorMode::kStream;
+  stopping_ = false;
+}
+
 void OperatorMotion::RequestStop() noexcept { stopping_ = true; }
+
+namespace {
+
+// Angular velocity, in the parent's axes, of R(rpy) = Rz(yaw) Ry(pitch) Rx(roll) (pose.hpp)
+// for the angle rates rpy_dot: w = E(rpy) rpy_dot, and its rate E rpy_ddot + dE/dt rpy_dot.
+void AngularRatesFromRollPitchYaw(const Eigen::Vector3d& rpy, const Eigen::Vector3d& rpy_dot,
+                                  const Eigen::Vector3d& rpy_ddot, Eigen::Vector3d& w,
+                                  Eigen::Vector3d& w_dot) {
+  const double cp = std::cos(rpy[1]), sp = std::sin(rpy[1]);
+  const double cy = std::cos(rpy[2]), sy = std::sin(rpy[2]);
+  Eigen::Matrix3d E;
+  E << cy * cp, -sy, 0.0,
+       sy * cp, cy, 0.0,
+       -sp, 0.0, 1.0;
+  const double dp = rpy_dot[1], dy = rpy_dot[2];
+  Eigen::Matrix3d E_dot;
+  E_dot << -sy * dy * cp - cy * sp * dp, -cy * dy, 0.0,
+           cy * dy * cp - sy * sp * dp, -sy * dy, 0.0,
+           -cp * dp, 0.0, 0.0;
+  w = E * rpy_dot;
+  w_dot = E * rpy_ddot + E_dot * rpy_dot;
+}
+
+}  // namespace
+
+Pose OperatorMotion::StepStream(double time_s, const StreamPacket* packets, std::size_t count,
+                                Vector6d& twist_C_B, Vector6d& acceleration_C_B,
+                                OperatorMotionStatus& status) noexcept {
+  MotionStreamInput in;
+  in.time_s = time_s;
+  in.packets = packets;
+  in.packet_count = count;
+  in.return_to_neutral = stopping_;
+  stream_.Update(in, status.stream);
+  const MotionStreamOutput& out = status.stream;
+  // The displacement is in the work frame's axes (user_frames.hpp): p_C = p_C0 + R_BW d_p,
+  // R_BC = R_BW R(d_rpy) R_BW^T R_BC0, so v_C = R_BW d_p', w = R_BW E(d_rpy) d_rpy'.
+  const Eigen::Matrix3d& R_BW = config_.frames.X_BW.R_BP;
+  Eigen::Vector3d w, w_dot;
+  AngularRatesFromRollPitchYaw(out.displacement.tail<3>(), out.velocity.tail<3>(),
+                               out.acceleration.tail<3>(), w, w_dot);
+  twist_C_B.head<3>() = R_BW * out.velocity.head<3>();
+  twist_C_B.tail<3>() = R_BW * w;
+  acceleration_C_B.head<3>() = R_BW * out.acceleration.head<3>();
+  acceleration_C_B.tail<3>() = R_BW * w_dot;
+  status.done = stopping_ && out.state == StreamState::kWaiting;
+  return PlatformPoseFromDisplacement(stream_neutral_, out.displacement, config_.frames);
+}
 
 void OperatorMotion::StepJog(double time_s, double dt_s, const JogRequest* jog, Vector6d& twist_C_B,
                              Vector6d& acceleration_C_B, OperatorMotionStatus& status) noexcept {
@@ -103,7 +162,9 @@ void OperatorMotion::StepJog(double time_s, double dt_s, const JogRequest* jog, 
 }
 
 void OperatorMotion::Update(double time_s, double dt_s, const JogRequest* jog,
-                            TrajectorySample& desired, OperatorMotionStatus& status) noexcept {
+                            TrajectorySample& desired, OperatorMotionStatus& status,
+                            const StreamPacket* stream_packets,
+                            std::size_t stream_packet_count) noexcept {
   status = OperatorMotionStatus{};
   status.mode = mode_;
   status.stopping = stopping_;
@@ -128,6 +189,9 @@ void OperatorMotion::Update(double time_s, double dt_s, const JogRequest* jog,
     twist_C_B = g.twist_C_B;
     acceleration_C_B = g.acceleration_C_B;
     status.done = g.done;
+  } else if (mode_ == OperatorMode::kStream) {
+    candidate = StepStream(time_s, stream_packets, stream_packet_count, twist_C_B,
+                           acceleration_C_B, status);
   }
   limits_.Update({setpoint_, candidate, dt_s}, status.limits);
   setpoint_ = status.limits.setpoint;

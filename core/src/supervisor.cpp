@@ -20,23 +20,25 @@ void CopyDetail(std::array<char, 160>& dst, const char* src) {
 
 // The supervisor's own parameters are checked before the operator modes are built from them,
 // so that a bad one is reported as the supervisor's.
-const OperatorMotionConfig& CheckedFirst(const SupervisorParams& params,
-                                         const OperatorMotionConfig& config) {
+// The stream runs at the supervisor's period.
+OperatorMotionConfig CheckedFirst(const SupervisorParams& params, const OperatorMotionConfig& config) {
   std::vector<ParamIssue> issues;
   ParamChecker c(issues);
   CheckSupervisorParams(c, params);
   ThrowIfIssues(issues, "Supervisor");
-  return config;
-}
-
-OperatorMotionConfig DefaultOperatorMotionConfig(const RigParams& rig, const SupervisorParams& params) {
-  OperatorMotionConfig config;
-  CheckedFirst(params, config);
-  config.limits = MakeSoftLimitsConfig(rig, params);
-  return config;
+  OperatorMotionConfig checked = config;
+  checked.stream.period_s = params.period_s;
+  checked.stream.washout.period_s = params.period_s;
+  return checked;
 }
 
 }  // namespace
+
+OperatorMotionConfig MakeOperatorMotionConfig(const RigParams& rig, const SupervisorParams& params) {
+  OperatorMotionConfig config = CheckedFirst(params, OperatorMotionConfig{});
+  config.limits = MakeSoftLimitsConfig(rig, params);
+  return config;
+}
 
 const char* ToString(SupervisorState state) {
   switch (state) {
@@ -47,6 +49,7 @@ const char* ToString(SupervisorState state) {
     case SupervisorState::kHold: return "SUPERVISOR_HOLD";
     case SupervisorState::kJogging: return "SUPERVISOR_JOGGING";
     case SupervisorState::kGoal: return "SUPERVISOR_GOAL";
+    case SupervisorState::kStreaming: return "SUPERVISOR_STREAMING";
   }
   return "?";
 }
@@ -87,6 +90,7 @@ const char* ToString(OperatorCommandKind kind) {
     case OperatorCommandKind::kHome: return "home";
     case OperatorCommandKind::kJog: return "jog";
     case OperatorCommandKind::kGoal: return "goal";
+    case OperatorCommandKind::kStream: return "stream";
   }
   return "?";
 }
@@ -104,7 +108,7 @@ const char* ToString(CommandResult result) {
 Supervisor::Supervisor(const RigParams& rig, const SupervisorParams& params,
                        const LegArray<PotentiometerCalibrationParams>& potentiometer)
     : Supervisor(rig, params, potentiometer,
-                 DefaultOperatorMotionConfig(rig, params)) {}
+                 MakeOperatorMotionConfig(rig, params)) {}
 
 Supervisor::Supervisor(const RigParams& rig, const SupervisorParams& params,
                        const LegArray<PotentiometerCalibrationParams>& potentiometer,
@@ -230,10 +234,18 @@ void Supervisor::HandleCommand(const SupervisorInput& input, SupervisorOutput& o
       result = CommandResult::kRefused;
       return;
     }
-    // Leave HOLD at rest where the setpoints were frozen; faults still present are detected
-    // again in this same tick.
+    // Leave HOLD at rest where the platform is, not where the setpoints were frozen: after an
+    // e-stop (valves blocked) or a lost board the platform coasts off them, and resuming on
+    // a stale setpoint would be a step. The outer loop's correction restarts from zero, so
+    // that the legs are told the lengths they have; every motion from here begins with its
+    // blend at limited speed. Faults still present are detected again in this same tick.
     state_ = SupervisorState::kIdle;
-    rest_ = last_desired_.vector.q;
+    if (output.estimate.status == KinStatus::kOk) {
+      rest_ = output.estimate.xyz_rpy;
+      outer_loop_.Reset();
+    } else {
+      rest_ = last_desired_.vector.q;
+    }
     fault_ = FaultReason::kNone;
     fault_leg_ = 0;
     fault_detail_[0] = '\0';
@@ -288,11 +300,13 @@ void Supervisor::HandleCommand(const SupervisorInput& input, SupervisorOutput& o
     }
     case OperatorCommandKind::kJog:
     case OperatorCommandKind::kGoal:
+    case OperatorCommandKind::kStream:
       HandleMotionCommand(input, output);
       return;
     case OperatorCommandKind::kStop: {
-      if (state_ == SupervisorState::kJogging || state_ == SupervisorState::kGoal) {
-        operator_motion_.RequestStop();  // to rest at the jog limits, then IDLE
+      if (in_operator_mode()) {
+        // To rest at the jog limits (a stream: back to neutral at its limits), then IDLE.
+        operator_motion_.RequestStop();
       }
       if (state_ == SupervisorState::kBlending || state_ == SupervisorState::kTracking) {
         const double t = input.time_s - trajectory_start_time_s_;
@@ -427,12 +441,13 @@ void Supervisor::Update(const SupervisorInput& input, SupervisorOutput& output) 
   // 4. Desired pose for this tick.
   TrajectorySample desired;
   output.operator_motion = OperatorMotionStatus{};
-  if (state_ == SupervisorState::kJogging || state_ == SupervisorState::kGoal) {
+  if (in_operator_mode()) {
     // Dt: the tick's period (time is an argument; the jog integrates over it).
     const bool jog_message = input.command == OperatorCommandKind::kJog &&
                              output.command_result == CommandResult::kAccepted;
     operator_motion_.Update(input.time_s, params_.period_s, jog_message ? &input.jog : nullptr,
-                            desired, output.operator_motion);
+                            desired, output.operator_motion, input.stream_packets,
+                            input.stream_packet_count);
     if (output.operator_motion.done) {
       state_ = SupervisorState::kIdle;
       rest_ = desired.vector.q;
@@ -533,7 +548,7 @@ void Supervisor::HandleMotionCommand(const SupervisorInput& input, SupervisorOut
   if (state_ != SupervisorState::kIdle) {
     result = CommandResult::kRefused;
     std::snprintf(output.command_detail.data(), output.command_detail.size(),
-                  "%s only from SUPERVISOR_IDLE%s (state %s)", jog ? "jog" : "goal",
+                  "%s only from SUPERVISOR_IDLE%s (state %s)", ToString(input.command),
                   jog ? " or SUPERVISOR_JOGGING" : "", ToString(state_));
     return;
   }
@@ -541,6 +556,12 @@ void Supervisor::HandleMotionCommand(const SupervisorInput& input, SupervisorOut
   if (jog) {
     operator_motion_.BeginJog(rest);
     state_ = SupervisorState::kJogging;
+    result = CommandResult::kAccepted;
+    return;
+  }
+  if (input.command == OperatorCommandKind::kStream) {
+    operator_motion_.BeginStream(rest);
+    state_ = SupervisorState::kStreaming;
     result = CommandResult::kAccepted;
     return;
   }

@@ -235,6 +235,7 @@ ChildSpec Supervisor(const ProcessSpec& p, const Options& o, const Launch& launc
   else if (!o.outer_loop || o.trajectory == "calibration") args.push_back("--no-outer-loop");
   if (o.fault_supervisor()) Append(args, {"--fault", "crash", "--fault-at", o.FaultOfLeg(0)->at});
   if (!o.feedforward) args.push_back("--no-feedforward");
+  if (o.stream) Append(args, {"--stream", "--stream-port", o.stream_port});
   Append(args, OverlayArgs(o));
   Append(s.argv, args);
   Append(s.argv, p.args);

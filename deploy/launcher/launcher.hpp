@@ -28,6 +28,9 @@ struct Options {
   std::string cpus_control, cpus_recorder, cpus_standby, cpus_supervisor, cpus_bridge;
   std::string bridge_listen, bridge_port, bridge_queue_kb, bridge_max_clients;
   bool bridge_operator_input = false;
+  // The external motion stream (hexa_task_space --stream), on 127.0.0.1:stream_port.
+  bool stream = false;
+  std::string stream_port;
   // Passed on to the control processes as given.
   std::string rt_lease, lockstep_lease, cpu_latency_us, rt_dds_event_thread;
   // --fault, repeatable: at most one per process (leg 1..6 primary, or the supervisor).

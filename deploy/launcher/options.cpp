@@ -78,6 +78,10 @@ void AddSessionOptions(hexa::cli::Parser& cli) {
   cli.AddFlag("no-outer-loop", "disable the task-space outer loop");
   cli.AddFlag("no-feedforward",
               "no platform inverse-dynamics feed-forward on the leg setpoints (paper-faithful)");
+  cli.AddFlag("stream",
+              "the supervisor accepts the external motion stream on UDP 127.0.0.1:--stream-port; "
+              "`hexa_operator stream` starts following it (docs/operate.md); off by default");
+  cli.AddOption("stream-port", "port", "--stream: the UDP port", "47800");
   cli.AddFlag("tracker", "the plant publishes the external pose instrument (hexa_TrackerPose, for "
                          "hexa_calibrate; use with --trajectory calibration)");
   cli.AddFlag("standby", "also start a hot-standby controller per leg");
@@ -174,8 +178,8 @@ bool ParseCpus(const hexa::cli::Parser& cli, Options& o) {
     // others. In lockstep, no pinning: the processes run at normal priority, and pinned to one
     // CPU they could not move off it when real-time loops (this machine's other sessions pin
     // to the same CPU at SCHED_FIFO) take it: a tick then waits past the 10 s last resort and
-    // a secured start-up past 30 s (docs/measurements/faults.md, "Lockstep beside real-time
-    // load").
+    // a secured start-up past 30 s (docs/measurements/faults_under_load.md, "Lockstep beside
+    // real-time load").
     const hexa::sched::CpuSplit split =
         o.mode == "realtime" ? hexa::sched::AutoCpuSplit() : hexa::sched::CpuSplit{};
     if (cli.Get("cpus-control") == "auto") o.cpus_control = hexa::sched::FormatCpuList(split.control);
@@ -388,6 +392,8 @@ bool TakeFlags(const hexa::cli::Parser& cli, Options& o) {
     return false;
   }
   o.feedforward = !cli.Flag("no-feedforward");
+  o.stream = cli.Flag("stream");
+  o.stream_port = cli.Get("stream-port");
   o.tracker = cli.Flag("tracker");
   o.wait_for_operator = cli.Flag("wait-for-operator");
   o.rt_lease = cli.Get("rt-lease");
@@ -411,7 +417,7 @@ int ParseOptions(int argc, char** argv, Options& o) {
                         "Exit status (docs/exit_codes.md): 0 completed; 1 a process failed or the "
                         "session was stopped (signal, --timeout); 2 bad arguments; 3 held after a "
                         "fault and not reset within --hold-timeout; 4 the plant stopped; 5 the "
-                        "supervisor was lost; 6 stopped by the operator (hexa_operator stop) "
+                        "supervisor was lost; 6 stopped by the operator (hexa_operator stop or shutdown) "
                         "before the trajectory's end; 7 the trajectory completed but the recording "
                         "lost samples.");
   AddSessionOptions(cli);

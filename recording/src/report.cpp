@@ -295,9 +295,12 @@ void ComputeJointSpace(const std::vector<PoseSample>& poses, const std::vector<T
     r.leg_length_rmse_m[i] = legs[i].Rmse();
     r.leg_length_max_abs_m[i] = legs[i].MaxAbs();
   }
-  for (int i = 0; i < 6 && valve_ticks > 0; ++i) {
-    r.valve_mean_abs_step_v[i] = valve_step_sum[i] / static_cast<double>(valve_ticks);
-    r.valve_saturated_fraction[i] = valve_saturated[i] / static_cast<double>(valve_ticks + 1);
+  // Without GroundTruth in the tracking window (a rig's device: what the valves got is not
+  // known) the activity is unknown (NaN; null in report.json), not 0.
+  for (int i = 0; i < 6; ++i) {
+    r.valve_mean_abs_step_v[i] = valve_ticks > 0 ? valve_step_sum[i] / static_cast<double>(valve_ticks) : std::nan("");
+    r.valve_saturated_fraction[i] =
+        valve_ticks > 0 ? valve_saturated[i] / static_cast<double>(valve_ticks + 1) : std::nan("");
   }
   r.latency_pairs = latencies.size();
   r.latency_s = ComputePercentiles(std::move(latencies));

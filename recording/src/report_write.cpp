@@ -200,13 +200,18 @@ void WriteTrackingFigures(std::ostream& m, const SessionReport& r, const std::st
   for (double v : r.leg_length_rmse_m) m << " | " << Num(1000 * v).substr(0, 6);
   m << " |\n| max mm";
   for (double v : r.leg_length_max_abs_m) m << " | " << Num(1000 * v).substr(0, 6);
+  const auto cell = [](double v) { return std::isfinite(v) ? Num(v).substr(0, 5) : std::string("-"); };
   m << " |\n| valve mean abs step V/tick";
-  for (double v : r.valve_mean_abs_step_v) m << " | " << Num(v).substr(0, 5);
+  for (double v : r.valve_mean_abs_step_v) m << " | " << cell(v);
   m << " |\n| valve saturated %";
-  for (double v : r.valve_saturated_fraction) m << " | " << Num(100 * v).substr(0, 5);
+  for (double v : r.valve_saturated_fraction) m << " | " << cell(100 * v);
   m << " |\n\nValve activity is taken over the tracking window from the voltages the plant "
        "applied: a smooth command moves a few hundredths of a volt per 1 ms tick; chattering "
-       "shows as large steps and time at 0 or 10 V.\n\n";
+       "shows as large steps and time at 0 or 10 V.";
+  if (!std::isfinite(r.valve_mean_abs_step_v[0]))
+    m << " '-': no GroundTruth was recorded in the tracking window (a rig's device publishes "
+         "none: the voltages its valves got are not known), so the valve activity is unknown.";
+  m << "\n\n";
 }
 
 namespace {

@@ -34,7 +34,7 @@ void AddOptions(cli::Parser& cli) {
   cli.AddOption("stats-s", "s", "log every client's sent / dropped counts this often (0 = only "
                 "when a client leaves)", "5");
   cli.AddFlag("operator-input",
-              "accept the operator's commands (start stop reset home jog goal) from Foxglove clients on "
+              "accept the operator's commands (start stop reset home jog goal stream) from Foxglove clients on "
               "topic hexa_OperatorInput and forward them to the supervisor: whoever can connect "
               "can then move the platform (docs/foxglove.md, \"Operator input\")");
   cli.AddOption("operator-input-rate-hz", "hz",

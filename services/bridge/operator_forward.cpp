@@ -55,6 +55,7 @@ void OperatorForwarder::WritePending() {
       case OperatorInput::Command::kHome: cmd.kind = hexa_msg_OPERATOR_HOME; break;
       case OperatorInput::Command::kJog: cmd.kind = hexa_msg_OPERATOR_JOG; break;
       case OperatorInput::Command::kGoal: cmd.kind = hexa_msg_OPERATOR_GOAL; break;
+      case OperatorInput::Command::kStream: cmd.kind = hexa_msg_OPERATOR_STREAM; break;
     }
     const OperatorInput& in = item.input;
     cmd.jog_frame = in.tool_frame ? hexa_msg_JOG_FRAME_TOOL : hexa_msg_JOG_FRAME_WORK;

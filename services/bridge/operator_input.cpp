@@ -71,6 +71,7 @@ const char* CommandName(OperatorInput::Command c) {
     case OperatorInput::Command::kHome: return "home";
     case OperatorInput::Command::kJog: return "jog";
     case OperatorInput::Command::kGoal: return "goal";
+    case OperatorInput::Command::kStream: return "stream";
   }
   return "?";
 }
@@ -100,8 +101,9 @@ OperatorInputResult ParseOperatorInput(std::string_view text) {
   else if (name == "home") r.input.command = OperatorInput::Command::kHome;
   else if (name == "jog") r.input.command = OperatorInput::Command::kJog;
   else if (name == "goal") r.input.command = OperatorInput::Command::kGoal;
+  else if (name == "stream") r.input.command = OperatorInput::Command::kStream;
   else return Refuse("operator input: unknown command '" + name.substr(0, 40) +
-                     "' (start stop reset home jog goal)");
+                     "' (start stop reset home jog goal stream)");
   const bool jog = r.input.command == OperatorInput::Command::kJog;
   const bool goal = r.input.command == OperatorInput::Command::kGoal;
   for (const char* key : {"frame", "velocity_m_s", "angular_velocity_rad_s"})

@@ -15,7 +15,7 @@ inline constexpr const char* kOperatorInputTopic = "hexa_OperatorInput";
 inline constexpr const char* kOperatorInputEncoding = "json";
 inline constexpr const char* kOperatorInputSchemaName = "hexa.OperatorInput";
 
-// {"command": "start", "trajectory": "combined"} | {"command": "stop" | "reset" | "home"}
+// {"command": "start", "trajectory": "combined"} | {"command": "stop" | "reset" | "home" | "stream"}
 // | {"command": "jog", "frame": "work" | "tool", "velocity_m_s": [vx, vy, vz],
 //    "angular_velocity_rad_s": [wx, wy, wz]}     (repeat within the dead-man time, 0.25 s)
 // | {"command": "goal", "position_m": [x, y, z], "orientation_wxyz": [w, x, y, z]}.
@@ -25,7 +25,7 @@ inline constexpr const char* kOperatorInputSchemaName = "hexa.OperatorInput";
 // checked as the supervisor checks them (services/common operator_motion_wire.hpp): finite,
 // not absurd, a unit quaternion.
 struct OperatorInput {
-  enum class Command { kStart, kStop, kReset, kHome, kJog, kGoal } command = Command::kStop;
+  enum class Command { kStart, kStop, kReset, kHome, kJog, kGoal, kStream } command = Command::kStop;
   std::string trajectory;  // start only
   bool tool_frame = false;                    // jog
   double velocity_m_s[3] = {0, 0, 0};         // jog

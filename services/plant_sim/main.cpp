@@ -66,8 +66,9 @@ void AddOptions(hexa::cli::Parser& cli) {
                 "--device board: the board must answer a command within this (bring-up; lockstep: "
                 "every tick)", "2");
   cli.AddOption("board-lost-ticks", "N",
-                "--device board, real time: ticks without an intact sensor frame after which the "
-                "link is lost (FAULT_BOARD_LINK, exit 7)", "20");
+                "--device board: ticks in a row without an intact sensor frame (lost, refused) after "
+                "which the link is lost (FAULT_BOARD_LINK, exit 7; lockstep: also no answer within "
+                "--board-timeout)", "20");
   cli.AddOption("fault", "kind:leg:time_s[,...]",
                 "inject rig faults (docs/faults.md): pot-stuck, pot-drift, pressure-dead (leg "
                 "1..6), imu-dropout, supply-loss (leg 0); e.g. pot-stuck:3:1.5");

@@ -56,8 +56,8 @@ void PlantNode::BringUpDevice() {
     if (readable && device_.ReadSensors(sensors_) == device::DeviceStatus::kOk) {
       answered = true;
       if (frame >= 4 && !sensors_.safety.estop_latched) break;
-    } else if (lockstep || node::MonotonicNow_ns() > end_ns) {
-      break;
+    } else if ((lockstep && !readable) || node::MonotonicNow_ns() > end_ns) {
+      break;  // lockstep: a refused frame (a lost one's empty datagram) is an answer; silence is not
     }
   }
   if (!answered) {
@@ -85,9 +85,12 @@ device::DeviceStatus PlantNode::ExchangeWithDevice(const LegArray<double>& valve
   if (written == device::DeviceStatus::kFault) return written;
   // Lockstep on a board: the emulator in step mode answers this command with the next frame
   // (not awaited again once the board is lost: the loop ticks on so that the supervisor holds).
-  if (board_ != nullptr && options_.common.mode == node::TimeMode::kLockstep && !board_down_)
-    board_->WaitForData(options_.board.answer_timeout_s);
-  const device::DeviceStatus read = device_.ReadSensors(sensors_);
+  bool timed_out = false;
+  const device::DeviceStatus read = board_ != nullptr && options_.common.mode == node::TimeMode::kLockstep &&
+                                            !board_down_
+                                        ? ReadBoardAnswer(timed_out)
+                                        : device_.ReadSensors(sensors_);
+  if (board_ != nullptr) ReportRefusedFrames();
   if (read == device::DeviceStatus::kOk) {
     sample_read_ns_ = node::MonotonicNow_ns();
     if (board_down_)
@@ -97,25 +100,72 @@ device::DeviceStatus PlantNode::ExchangeWithDevice(const LegArray<double>& valve
     ticks_without_sample_ = 0;
     return written;
   }
-  // No new sample this tick: the last one is published again (real time: a frame lost or
-  // late; the board's and this loop's clocks are not locked).
+  // No new sample this tick: the last one is published again (a frame lost, refused or late;
+  // in real time also the board's and this loop's clocks, which are not locked).
   ++samples_missed_total_;
   ++ticks_without_sample_;
-  const bool lost = options_.common.mode == node::TimeMode::kLockstep ||
-                    ticks_without_sample_ >= options_.board.lost_after_ticks;
+  const bool lost = timed_out || ticks_without_sample_ >= options_.board.lost_after_ticks;
   if (board_ != nullptr && lost && !board_down_) {
     board_down_ = true;
     device_lost_ = true;
     char detail[160];
-    std::snprintf(detail, sizeof detail, "board %s: no intact sensor frame for %llu ticks (%s; %s)",
+    std::snprintf(detail, sizeof detail, "board %s: no intact sensor frame for %llu ticks (%s; %s%s)",
                   BoardAddress(options_.board).c_str(),
                   static_cast<unsigned long long>(ticks_without_sample_), device::ToString(read),
-                  board_->counters().Describe().c_str());
+                  LastOutOfRange().c_str(), board_->counters().Describe().c_str());
     faults_.Publish(0, tick_, hexa_msg_FAULT_BOARD_LINK, detail);
     log_->error("tick {}: FAULT_BOARD_LINK: {}: the last sample is published on, the supervisor "
                 "holds, the board's watchdog holds the valves safe", tick_, detail);
   }
   return written;
+}
+
+device::DeviceStatus PlantNode::ReadBoardAnswer(bool& timed_out) {
+  // The emulator in step mode answers each command with one datagram: an intact frame, or
+  // one refused (a bad CRC, an old version, a value out of range; the empty datagram of a
+  // frame the link lost). A frame not newer than the last accepted one is a late frame of an
+  // earlier tick, not this command's answer: the wait goes on.
+  auto answers = [this] {
+    const device::BoardLinkCounters& c = board_->counters();
+    std::uint64_t n = 0;
+    for (std::size_t v = 0; v < device::kFrameVerdictCount; ++v) n += c.frames[v];
+    return n - c[device::FrameVerdict::kOldSequence] - c[device::FrameVerdict::kUnknownSender];
+  };
+  const std::uint64_t before = answers();
+  const std::int64_t end_ns =
+      node::MonotonicNow_ns() + static_cast<std::int64_t>(options_.board.answer_timeout_s * 1e9);
+  for (;;) {
+    const double left_s = static_cast<double>(end_ns - node::MonotonicNow_ns()) * 1e-9;
+    if (left_s <= 0.0 || !board_->WaitForData(left_s)) {
+      timed_out = true;
+      return device_.ReadSensors(sensors_);
+    }
+    const device::DeviceStatus read = device_.ReadSensors(sensors_);
+    if (read != device::DeviceStatus::kNoNewData || answers() != before) return read;
+  }
+}
+
+void PlantNode::ReportRefusedFrames() {
+  // The first datagram of each refusing verdict is logged with its cause; every one is counted
+  // (the end's log line, plant.json "board_link").
+  const device::BoardLinkCounters& c = board_->counters();
+  for (std::size_t v = 1; v < device::kFrameVerdictCount; ++v) {
+    if (c.frames[v] == 0 || link_reported_.frames[v] != 0) continue;
+    const auto verdict = static_cast<device::FrameVerdict>(v);
+    log_->warn("tick {}: a datagram from the board refused: {}{} (the first; the tick republishes the "
+               "last sample, every refusal is counted)", tick_, device::ToString(verdict),
+               verdict == device::FrameVerdict::kOutOfRange ? " (" + LastOutOfRange() + ")" : std::string());
+  }
+  link_reported_ = c;
+}
+
+std::string PlantNode::LastOutOfRange() const {
+  const int channel = board_->decoder().last_out_of_range_channel();
+  if (channel < 0) return "";
+  char text[96];
+  std::snprintf(text, sizeof text, "%s = %.4g out of its range; ", device::BoardChannelName(channel).c_str(),
+                board_->decoder().last_out_of_range_value_si());
+  return text;
 }
 
 void PlantNode::JudgeDeviceSafety() {

@@ -71,9 +71,9 @@ enum class DeviceKind { kSim, kBoard };
 struct BoardLinkOptions {
   std::string host;           // dotted IPv4 address of the board
   std::uint16_t port = 0;
-  // Lockstep: a command frame must be answered by a sensor frame within this (the emulator in
-  // step mode); bring-up: the board must answer within this. Real time: the board has failed
-  // when no intact frame came for `lost_after_ticks` ticks.
+  // Lockstep: a command frame must be answered by a datagram within this (the emulator in
+  // step mode); bring-up: the board must answer within this. The board has failed when no
+  // intact frame came for `lost_after_ticks` ticks in a row (lost or refused frames).
   double answer_timeout_s = 2.0;
   std::uint64_t lost_after_ticks = 20;
 };
@@ -158,6 +158,10 @@ class PlantNode {
   // the next sample; the control round trip; the board's e-stop and link judged).
   void BringUpDevice();
   device::DeviceStatus ExchangeWithDevice(const LegArray<double>& valve_v);
+  // Lockstep: this command's answer from the board (timed_out: none within the timeout).
+  device::DeviceStatus ReadBoardAnswer(bool& timed_out);
+  void ReportRefusedFrames();  // the first refusal of each verdict, logged with its cause
+  std::string LastOutOfRange() const;  // "leg 1 potentiometer_m = 0.3734 out of its range; " or ""
   void JudgeDeviceSafety();  // after the exchange, for the sample of the new tick_
   void TakeOperatorCommands();  // estop: latch the device; reset: ask the device to re-arm
   void LatchOperatorEstop(std::uint32_t sequence);  // once per command, whichever path brings it
@@ -260,6 +264,7 @@ class PlantNode {
   std::uint32_t operator_estop_sequence_ = 0;  // the operator e-stop latched (0: none)     // an operator reset asked; its refusal reported once
   std::uint64_t estop_unsafe_ticks_ = 0;  // latched, yet a valve not at its safe value
   bool board_down_ = false;  // no frame since FAULT_BOARD_LINK
+  device::BoardLinkCounters link_reported_{};  // the counters as last logged
   bool device_lost_ = false;  // the board was lost during the run: exit kPlantDeviceLost
 };
 

@@ -6,6 +6,7 @@
 
 #include "hexa/config/csv_trajectory.hpp"
 #include "hexa/core/calibration.hpp"
+#include "hexa/services/exit_code.hpp"
 #include "hexa/services/operator_motion_wire.hpp"
 #include "supervisor_node.hpp"
 
@@ -22,6 +23,7 @@ const char* CommandName(hexa_msg_OperatorCommandKind kind) {
     case hexa_msg_OPERATOR_JOG: return "jog";
     case hexa_msg_OPERATOR_GOAL: return "goal";
     case hexa_msg_OPERATOR_ESTOP: return "estop";
+    case hexa_msg_OPERATOR_STREAM: return "stream";
   }
   return "unknown";
 }
@@ -130,8 +132,25 @@ void SupervisorNode::TakeOperatorCommands() {
       case hexa_msg_OPERATOR_GOAL:
         if (!TakeMotionCommand(c, operator_reader_.info(k).publication_handle)) return;
         break;
+      case hexa_msg_OPERATOR_STREAM:
+        if (!stream_receiver_) {
+          AnswerCommand(c.sequence, "stream", CommandAnswer::kRefused,
+                        "the motion stream input is off (start hexa_task_space with --stream)");
+          return;
+        }
+        pending_command_ = OperatorCommandKind::kStream;
+        break;
       case hexa_msg_OPERATOR_SHUTDOWN:
         AnswerCommand(c.sequence, "shutdown", CommandAnswer::kAccepted, "");
+        // A session's trajectory that a shutdown cuts short did not complete: the same exit
+        // as a `stop` before the trajectory's end (docs/exit_codes.md). Jog, goal and stream
+        // modes are not a trajectory (left_idle_ stays false): a shutdown after them ends 0.
+        if (options_.exit_when_done && exit_code_ < 0 && left_idle_) {
+          log_->warn("shut down by the operator in state {} (trajectory time {:.3f} s), before the "
+                     "trajectory's end (exit {})", ToString(output_.state), output_.trajectory_time_s,
+                     exit_code::kStoppedByOperator);
+          exit_code_ = exit_code::kStoppedByOperator;
+        }
         runtime_.shutdown().RequestShutdown();
         return;
       case hexa_msg_OPERATOR_ESTOP:
@@ -214,6 +233,12 @@ void SupervisorNode::FinishCommand(SupervisorState before, std::uint64_t tick, d
   log_->info("command {}: {}", ToString(cmd), ToString(result));
   if (accepted && cmd == OperatorCommandKind::kJog)
     log_->info("jogging from t = {:.3f} s ({} frame)", time_s, ToString(pending_jog_.frame));
+  if (accepted && cmd == OperatorCommandKind::kStream)
+    log_->info("streaming from t = {:.3f} s: UDP {}:{}, neutral pose ({:.4f}, {:.4f}, {:.4f}) m, "
+               "({:.4f}, {:.4f}, {:.4f}) rad", time_s, options_.stream_endpoint.address,
+               stream_receiver_->port(), supervisor_.rest_xyz_rpy()[0], supervisor_.rest_xyz_rpy()[1],
+               supervisor_.rest_xyz_rpy()[2], supervisor_.rest_xyz_rpy()[3],
+               supervisor_.rest_xyz_rpy()[4], supervisor_.rest_xyz_rpy()[5]);
   if (accepted && cmd == OperatorCommandKind::kGoal)
     log_->info("goal started at t = {:.3f} s: {:.3f} s to reach it", time_s,
                supervisor_.operator_motion().goal_duration_s());

@@ -25,7 +25,7 @@ namespace exit_code = hexa::exit_code;
 struct Request {
   int domain = 0;
   double wait_s = 0, linger_s = 0, answer_wait_s = 0;
-  std::string what;  // start stop reset home shutdown estop jog goal
+  std::string what;  // start stop reset home shutdown estop jog goal stream
   bool any_reader = false;
   double jog_duration_s = 0, jog_rate_hz = 0;  // jog: how long and how often to send it
   hexa_msg_OperatorCommand cmd{};
@@ -69,7 +69,7 @@ void AddOptions(hexa::cli::Parser& cli) {
   cli.AddOption("rpy-deg", "roll,pitch,yaw",
                 "goal: the platform's orientation, degrees (R = Rz(yaw) Ry(pitch) Rx(roll))", "0,0,0");
   cli.AddOption("quaternion", "w,x,y,z", "goal: the orientation as a unit quaternion instead of --rpy-deg");
-  cli.AllowPositional("start|stop|reset|home|shutdown|estop|jog|goal", 1);
+  cli.AllowPositional("start|stop|reset|home|shutdown|estop|jog|goal|stream", 1);
 }
 
 // "a,b,c" -> N finite numbers; false with `error` naming the option.
@@ -160,8 +160,9 @@ int ReadRequest(hexa::cli::Parser& cli, int argc, char** argv, Request& r) {
   else if (what == "estop") cmd.kind = hexa_msg_OPERATOR_ESTOP;
   else if (what == "jog") cmd.kind = hexa_msg_OPERATOR_JOG;
   else if (what == "goal") cmd.kind = hexa_msg_OPERATOR_GOAL;
+  else if (what == "stream") cmd.kind = hexa_msg_OPERATOR_STREAM;
   else {
-    std::fprintf(stderr, "error: unknown command '%s' (start stop reset home shutdown estop jog goal)\n",
+    std::fprintf(stderr, "error: unknown command '%s' (start stop reset home shutdown estop jog goal stream)\n",
                  what.c_str());
     return exit_code::kUsage;
   }
@@ -234,9 +235,12 @@ int SendAcknowledged(Request& r, const hexa::comm::Participant& participant,
 }
 
 // Takes the status samples that came; the supervisor's answer to command `sequence` if one of
-// them holds it (its NodeStatus detail), else kNone.
+// them holds it (its NodeStatus detail), else kNone. With `stopping_accepts` (shutdown) the
+// supervisor's STOPPING status is the answer too: it publishes its answer and, within the same
+// tick, STOPPING, and a reader that takes both at once keeps only the newest of its instance.
 hexa::task_space::CommandAnswer PollAnswer(hexa::comm::Reader<hexa_msg_NodeStatus>& status_reader,
-                                           std::uint32_t sequence, std::string& detail) {
+                                           std::uint32_t sequence, std::string& detail,
+                                           bool stopping_accepts = false) {
   using hexa::task_space::CommandAnswer;
   while (status_reader.Take() > 0) {
     for (std::size_t k = 0; k < status_reader.count(); ++k) {
@@ -247,6 +251,10 @@ hexa::task_space::CommandAnswer PollAnswer(hexa::comm::Reader<hexa_msg_NodeStatu
       if (answer != CommandAnswer::kNone) {
         detail = st.detail;
         return answer;
+      }
+      if (stopping_accepts && st.state == hexa_msg_NODE_STOPPING) {
+        detail = std::string("is stopping (its status: ") + st.detail + ")";
+        return CommandAnswer::kAccepted;
       }
     }
   }
@@ -281,7 +289,8 @@ int AwaitAnswer(const Request& r, const hexa::comm::Participant& participant,
       hexa::node::MonotonicNow_ns() + static_cast<int64_t>(r.answer_wait_s * 1e9);
   std::string detail;
   for (;;) {
-    const CommandAnswer answer = PollAnswer(status_reader, r.cmd.sequence, detail);
+    const CommandAnswer answer = PollAnswer(status_reader, r.cmd.sequence, detail,
+                                            r.cmd.kind == hexa_msg_OPERATOR_SHUTDOWN);
     if (answer != CommandAnswer::kNone) return ExitForAnswer(r, answer, detail, log);
     if (hexa::node::MonotonicNow_ns() > answer_end) return ExitForAnswer(r, answer, detail, log);
     answer_ws.Wait(DDS_MSECS(20));
@@ -330,13 +339,16 @@ int StreamJog(Request& r, hexa::comm::Writer<hexa_msg_OperatorCommand>& writer,
 int main(int argc, char** argv) {
   hexa::cli::Parser cli("hexa_operator",
                         "Sends an operator command to the supervisor: hexa_operator [options] "
-                        "start|stop|reset|home|shutdown|jog|goal\n"
+                        "start|stop|reset|home|shutdown|estop|jog|goal|stream\n"
                         "  jog: a twist of the pivot (--velocity-m-s, --angular-velocity-rad-s, "
                         "--frame) sent every 1/--rate-hz for --duration-s; at rest 0.25 s (the "
                         "dead-man) plus the braking time after the last one.\n"
                         "  goal: the platform's pose in the base frame (--position-m, --rpy-deg "
                         "or --quaternion), reached by a jerk-limited motion; refused (exit 4, "
                         "the reason logged) when it or the path to it leaves the soft limits.\n"
+                        "  stream: from IDLE, the platform follows the external motion stream "
+                        "(UDP packets, docs/operate.md) from where it rests, until `stop` brings it "
+                        "back there; refused (exit 4) unless hexa_task_space runs with --stream.\n"
                         "Exit status: 0 the supervisor accepted the command (with --to any-reader: "
                         "acknowledged by every matched reader), 1 no supervisor (with --to "
                         "any-reader: no reader) matched within --wait (or a DDS error), 2 bad "

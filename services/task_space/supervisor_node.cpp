@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 
+#include "hexa/config/washout_file.hpp"
 #include "hexa/services/exit_code.hpp"
 #include "hexa/services/service_manager.hpp"
 
@@ -34,6 +36,20 @@ SupervisorParams ParamsFrom(const SupervisorNodeOptions& o, const config::System
   return p;
 }
 
+// The operator modes for this rig; the stream's kind and, for vehicle packets, the washout
+// parameters from their file (throws with the file's messages).
+OperatorMotionConfig OperatorMotionFrom(const SupervisorNodeOptions& o, const config::SystemConfig& c) {
+  OperatorMotionConfig m = MakeOperatorMotionConfig(config::MakeSupervisorRig(c), ParamsFrom(o, c));
+  m.stream.kind = o.stream_kind;
+  if (!o.washout_path.empty()) {
+    const config::WashoutFileResult washout = config::LoadWashoutFile(o.washout_path);
+    if (!washout.ok) throw std::runtime_error(washout.error);
+    m.stream.washout = washout.config;
+    m.stream.washout.period_s = m.stream.period_s;  // the supervisor's
+  }
+  return m;
+}
+
 FaultReason FromWire(hexa_msg_FaultReason r) {
   return static_cast<FaultReason>(static_cast<int>(r));
 }
@@ -46,7 +62,7 @@ SupervisorNode::SupervisorNode(const SupervisorNodeOptions& options,
     : options_(options),
       log_(log),
       supervisor_(config::MakeSupervisorRig(config), ParamsFrom(options, config),
-                  PotentiometersFrom(config)),
+                  PotentiometersFrom(config), OperatorMotionFrom(options, config)),
       // The six legs' samples of a tick leave in one datagram per reader (comm/writer.hpp).
       runtime_(options.common, "supervisor", std::move(log), comm::WriteBatching::kOn),
       sensors_topic_(runtime_.participant()),
@@ -78,6 +94,19 @@ SupervisorNode::SupervisorNode(const SupervisorNodeOptions& options,
   runtime_.waitset().Attach(fault_reader_.data_condition(), kTokenFault);
   runtime_.waitset().Attach(done_.get(), kTokenDone);
   leg_fault_.fill(FaultReason::kNone);
+  if (options_.stream) {
+    // Throws (address, port, reason) when the port cannot be bound: the service does not start.
+    stream_receiver_ = std::make_unique<udp::MotionStreamReceiver>(
+        options_.stream_endpoint, supervisor_.operator_motion().stream().config().decode);
+    const MotionStreamConfig& sc = supervisor_.operator_motion().stream().config();
+    log_->warn("motion stream input ENABLED on UDP {}:{} (kind {}{}{}, timeout {:.3f} s): whoever "
+               "can send to it moves the platform while STREAMING (hexa_operator stream)",
+               options_.stream_endpoint.address, stream_receiver_->port(), ToString(sc.kind),
+               sc.kind == StreamKind::kVehicle ? ", washout " : "",
+               sc.kind != StreamKind::kVehicle ? ""
+               : options_.washout_path.empty() ? "built-in defaults" : options_.washout_path.c_str(),
+               sc.timeout_s);
+  }
   cycle_.Bind<&SupervisorNode::RunCycle>(*this);
 }
 
@@ -184,6 +213,8 @@ void SupervisorNode::RunTick(std::uint64_t tick, double time_s) {
   const SupervisorState state_before = output_.state;
   supervisor_.Update(input_, output_);
   if (pending_command_ != OperatorCommandKind::kNone) FinishCommand(state_before, tick, time_s);
+  if (output_.state == SupervisorState::kStreaming || state_before == SupervisorState::kStreaming)
+    LogStreamEvents(state_before, time_s);
   if (output_.state == SupervisorState::kIdle && state_before != output_.state)
     LogModeEnd(state_before, time_s);
   cycle_times_.Add(static_cast<double>(node::MonotonicNow_ns() - t0) * 1e-9);
@@ -216,6 +247,11 @@ void SupervisorNode::FillInput(double time_s) {
   input_.start = pending_start_ ? &*pending_start_ : nullptr;
   input_.jog = pending_jog_;
   input_.goal_X_BP = pending_goal_;
+  if (stream_receiver_) {
+    // Drained every tick (outside STREAMING the core ignores them): no backlog at the start.
+    input_.stream_packet_count = stream_receiver_->Receive(stream_decoder_refusals_);
+    input_.stream_packets = stream_receiver_->packets();
+  }
 }
 
 void SupervisorNode::ReactToOutput(std::uint64_t tick, double time_s) {
@@ -264,8 +300,9 @@ void SupervisorNode::ReactToOutput(std::uint64_t tick, double time_s) {
   }
   // A session ends when its trajectory ends (or a hold, with --exit-when-done); a jog or a
   // goal ends in IDLE without ending it.
-  const bool operator_mode =
-      output_.state == SupervisorState::kJogging || output_.state == SupervisorState::kGoal;
+  const bool operator_mode = output_.state == SupervisorState::kJogging ||
+                             output_.state == SupervisorState::kGoal ||
+                             output_.state == SupervisorState::kStreaming;
   if (output_.state != SupervisorState::kIdle && !operator_mode) left_idle_ = true;
   if (options_.exit_when_done && left_idle_ && output_.state == SupervisorState::kIdle &&
       exit_code_ < 0) {
@@ -317,10 +354,57 @@ void SupervisorNode::Publish(std::uint64_t tick, double time_s) {
   pose_writer_.Write(r, now_ns);
 }
 
+void SupervisorNode::LogStreamCounters(const char* when) {
+  const StreamCounters& c = supervisor_.operator_motion().stream().counters();
+  const StreamCounters& d = stream_decoder_refusals_;
+  const auto n = [](const StreamCounters& k, StreamPacketError e) {
+    return k.by_reason[static_cast<std::size_t>(e)];
+  };
+  log_->info("motion stream {}: applied {}, missing {}, late {}, duplicate {}, wrong kind {}, "
+             "timeouts {}; refused by the decoder: wrong size {}, bad magic {}, wrong version {}, "
+             "unknown kind {}, not finite {}, absurd value {}; setpoint clamped by the soft "
+             "limits on {} ticks", when, c.applied, c.missing, n(c, StreamPacketError::kLate),
+             n(c, StreamPacketError::kDuplicate), n(c, StreamPacketError::kWrongKind), c.timeouts,
+             n(d, StreamPacketError::kWrongSize), n(d, StreamPacketError::kBadMagic),
+             n(d, StreamPacketError::kWrongVersion), n(d, StreamPacketError::kUnknownKind),
+             n(d, StreamPacketError::kNotFinite), n(d, StreamPacketError::kAbsurdValue),
+             stream_clamped_ticks_);
+}
+
+void SupervisorNode::LogStreamEvents(SupervisorState before, double time_s) {
+  const OperatorMotionStatus& m = output_.operator_motion;
+  if (before != SupervisorState::kStreaming) {
+    last_stream_state_ = StreamState::kWaiting;
+    stream_clamped_ticks_ = 0;
+    return;  // entered (logged with the command's answer) or left (LogModeEnd)
+  }
+  if (output_.state != SupervisorState::kStreaming) return;
+  if (m.limits.result != SoftLimitsResult::kInside) ++stream_clamped_ticks_;
+  const StreamState state = m.stream.state;
+  if (state == StreamState::kStreaming && last_stream_state_ != StreamState::kStreaming) {
+    log_->info("motion stream: packets applied from t = {:.3f} s ({} applied so far)", time_s,
+               supervisor_.operator_motion().stream().counters().applied);
+  }
+  if (m.stream.timed_out) {
+    log_->warn("motion stream TIMEOUT at t = {:.3f} s: no packet for {:.3f} s (limit {:.3f} s); "
+               "returning to neutral", time_s, m.stream.since_packet_s,
+               supervisor_.operator_motion().stream().config().timeout_s);
+  }
+  if (state == StreamState::kWaiting && last_stream_state_ == StreamState::kReturning)
+    log_->info("motion stream: at neutral at t = {:.3f} s, waiting for packets", time_s);
+  last_stream_state_ = state;
+}
+
 void SupervisorNode::LogModeEnd(SupervisorState before, double time_s) {
-  if (before != SupervisorState::kJogging && before != SupervisorState::kGoal) return;
+  if (before != SupervisorState::kJogging && before != SupervisorState::kGoal &&
+      before != SupervisorState::kStreaming)
+    return;
   const Vector6d& q = output_.desired_xyz_rpy;
-  if (before == SupervisorState::kJogging) {
+  if (before == SupervisorState::kStreaming) {
+    log_->info("stream stopped: at neutral at t = {:.3f} s: ({:.4f}, {:.4f}, {:.4f}) m, ({:.4f}, "
+               "{:.4f}, {:.4f}) rad", time_s, q[0], q[1], q[2], q[3], q[4], q[5]);
+    LogStreamCounters("so far");
+  } else if (before == SupervisorState::kJogging) {
     log_->info("jog at rest at t = {:.3f} s, {:.3f} s after the last jog message (t = {:.3f} s): "
                "({:.4f}, {:.4f}, {:.4f}) m, ({:.4f}, {:.4f}, {:.4f}) rad", time_s,
                time_s - last_jog_time_s_, last_jog_time_s_, q[0], q[1], q[2], q[3], q[4], q[5]);

@@ -22,6 +22,7 @@
 #include "hexa/services/control_cycle.hpp"
 #include "hexa/services/node.hpp"
 #include "hexa/services/runtime.hpp"
+#include "hexa/services/udp_stream.hpp"
 
 namespace hexa::task_space {
 
@@ -47,6 +48,11 @@ struct SupervisorNodeOptions {
   // it on its console).
   std::string hold_report_path;
   int pose_readers = 0;  // matched PoseReport readers required before RUNNING (the recorder)
+  // The external motion stream (docs/operate.md): off unless asked; loopback by default.
+  bool stream = false;
+  udp::StreamEndpoint stream_endpoint;
+  StreamKind stream_kind = StreamKind::kPose;
+  std::string washout_path;  // kVehicle: the washout parameter file ("" = the built-in defaults)
   // Fault injection (docs/faults.md): kill this process with SIGKILL at this simulated time
   // (< 0: never).
   double crash_at_s = -1.0;
@@ -74,8 +80,12 @@ class SupervisorNode {
   // JOG / GOAL: checked (any writer's sample; refused with the reason) and made pending; false
   // when nothing more is to be done with the message (refused, or a jog joining a pending one).
   bool TakeMotionCommand(const hexa_msg_OperatorCommand& c, dds_instance_handle_t writer);
-  // JOGGING / GOAL back to IDLE: where the platform rests, and for a jog when it was let go.
+  // JOGGING / GOAL / STREAMING back to IDLE: where the platform rests, and for a jog when it
+  // was let go; for a stream its counters.
   void LogModeEnd(SupervisorState before, double time_s);
+  // STREAMING: packets arriving again, a timeout (the return to neutral), clamps.
+  void LogStreamEvents(SupervisorState before, double time_s);
+  void LogStreamCounters(const char* when);
   void TakeFaults();
   void RunCycle();
   // One wake-up of the main thread (operator commands, faults, IMU misses in real time), with
@@ -153,6 +163,12 @@ class SupervisorNode {
   LegArray<int> leg_misses_consecutive_{};
   LegArray<FaultReason> leg_fault_{};
   FaultReason system_fault_ = FaultReason::kNone;
+
+  // The motion stream's socket (--stream), drained every tick; its decoder's refusals.
+  std::unique_ptr<udp::MotionStreamReceiver> stream_receiver_;
+  StreamCounters stream_decoder_refusals_;
+  StreamState last_stream_state_ = StreamState::kWaiting;
+  std::uint64_t stream_clamped_ticks_ = 0;
 
   SupervisorInput input_;
   SupervisorOutput output_;

@@ -36,6 +36,19 @@ int ParseOptions(int argc, char** argv, SupervisorNodeOptions& o) {
   cli.AddOption("pose-readers", "N",
                 "readers of the pose reports to match before running (1 with a recorder, so "
                 "that the recording has the first report)", "0");
+  cli.AddFlag("stream",
+              "accept the external motion stream (docs/operate.md) on UDP: the operator's "
+              "`stream` command then moves the platform as the packets say; off: it is refused");
+  cli.AddOption("stream-address", "IPv4",
+                "--stream: address to bind; anything that can send to it can move the platform",
+                "127.0.0.1");
+  cli.AddOption("stream-port", "port", "--stream: UDP port to bind", "47800");
+  cli.AddChoice("stream-kind", {"pose", "vehicle"},
+                "--stream: the packets' kind: pose (a displacement from neutral) or vehicle "
+                "(accelerations and angular rates, through the classical washout)", "pose");
+  cli.AddOption("washout", "file",
+                "--stream-kind vehicle: the washout parameters (protobuf text, e.g. "
+                "deploy/cueing/washout.textproto; default: the same values built in)");
   cli.AddChoice("fault", {"none", "crash"},
                 "fault injection (docs/faults.md): crash = SIGKILL at --fault-at", "none");
   cli.AddOption("fault-at", "s", "simulated time at which the fault starts", "0");
@@ -46,8 +59,9 @@ int ParseOptions(int argc, char** argv, SupervisorNodeOptions& o) {
   const auto pose_readers = cli.GetInt("pose-readers", 0, 16);
   const auto fault_at = cli.GetDouble("fault-at", 0, 1e7);
   const auto hold_timeout = cli.GetDouble("hold-timeout", 0.001, 1e6);
+  const auto stream_port = cli.GetInt("stream-port", 1, 65535);
   if (!node::ReadCommonOptions(cli, o.common) || !periods || !startup || !pose_readers ||
-      !fault_at || !hold_timeout) {
+      !fault_at || !hold_timeout || !stream_port) {
     return services::UsageError(cli);
   }
   o.trajectory = cli.Get("trajectory");
@@ -61,6 +75,11 @@ int ParseOptions(int argc, char** argv, SupervisorNodeOptions& o) {
   o.hold_timeout_s = *hold_timeout;
   if (cli.Has("hold-report")) o.hold_report_path = cli.Get("hold-report");
   o.pose_readers = static_cast<int>(*pose_readers);
+  o.stream = cli.Flag("stream");
+  o.stream_endpoint.address = cli.Get("stream-address");
+  o.stream_endpoint.port = static_cast<std::uint16_t>(*stream_port);
+  o.stream_kind = cli.Get("stream-kind") == "vehicle" ? StreamKind::kVehicle : StreamKind::kPose;
+  if (cli.Has("washout")) o.washout_path = cli.Get("washout");
   if (cli.Get("fault") == "crash") o.crash_at_s = *fault_at;
   return -1;
 }

@@ -1,5 +1,5 @@
 // Coupled leg feedback, a study of the in-process lockstep simulation (docs/measurements/
-// control.md "Coupled leg feedback"; not in the system: the leg services do not see each
+// control_coupled_feedback.md "Coupled leg feedback"; not in the system: the leg services do not see each
 // other). Every tick the six BS-SMC feedback parts f_j (and their rates) are mixed, leg i
 // applying sum_j W_ij f_j with W = M_ls(q) / M_i: M_ls the leg-space mass matrix
 // (platform_dynamics.hpp) of the supervisor's rig at its pose estimate, refreshed every

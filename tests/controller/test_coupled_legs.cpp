@@ -60,7 +60,7 @@ TEST(CoupledLegs, OnEachPlatformModeTheMixScalesByTheRaisedModalMassOverM) {
     }
   }
   // The reference rig at home: roll / pitch lighter than M (0.877 kg), heave equal to it to
-  // within its rounding, yaw and x / y heavier (docs/measurements/control.md, modal table).
+  // within its rounding, yaw and x / y heavier (docs/measurements/control_coupled_feedback.md, modal table).
   EXPECT_GE(raised, 3);
   EXPECT_GE(kept, 2);
 }

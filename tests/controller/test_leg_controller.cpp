@@ -388,7 +388,7 @@ TEST(LegControllerConfig, ValidateNamesTheField) {
 namespace hexa {
 namespace {
 
-// Coupled leg feedback (docs/measurements/control.md "Coupled leg feedback"): BeginCoupled +
+// Coupled leg feedback (docs/measurements/control_coupled_feedback.md "Coupled leg feedback"): BeginCoupled +
 // FinishCoupled with the leg's own feedback part is the uncoupled law (to round-off: the
 // coupled path sums phi as model part + feedback part), and a different feedback part moves
 // phi by exactly the difference, its rate phi_dot by the fraction times the difference.

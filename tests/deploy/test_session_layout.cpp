@@ -251,7 +251,7 @@ TEST(SessionLayout, ThePlantUnitWaitsForStandbysOnlyWhenEveryLegHasOne) {
 
 // --cpus-* auto: real time pins the control processes to the last CPU (the loop's wake-ups stay
 // on one CPU) and the rest to the others; lockstep pins nothing, so that its normal-priority
-// processes can leave a CPU that real-time loops take (docs/measurements/faults.md).
+// processes can leave a CPU that real-time loops take (docs/measurements/faults_under_load.md).
 hexa::launcher::Options ParseSession(const std::string& mode) {
   const std::string out = ::testing::TempDir() + "/cpus_" + mode;
   std::vector<std::string> args = {"hexa_session", "--mode", mode, "--out", out};

@@ -275,7 +275,7 @@ TEST(BridgeOperatorInput, OnlyWellFormedCommandsPass) {
   EXPECT_EQ(ok.input.command, OperatorInput::Command::kStart);
   EXPECT_EQ(ok.input.trajectory, "pitch");
   EXPECT_EQ(ParseOperatorInput(R"({"command": "start"})").input.trajectory, "combined");
-  for (const char* c : {"stop", "reset", "home"}) {
+  for (const char* c : {"stop", "reset", "home", "stream"}) {
     const auto r = ParseOperatorInput(std::string(R"({"command": ")") + c + "\"}");
     EXPECT_TRUE(r.ok) << c << ": " << r.error;
     EXPECT_STREQ(hexa::bridge::CommandName(r.input.command), c);
@@ -291,7 +291,8 @@ TEST(BridgeOperatorInput, OnlyWellFormedCommandsPass) {
       {R"({"command": "stop", "x": 1})", "unknown field 'x'"},
       {R"({"command": "start", "trajectory": "data/traj.csv"})", "is not one of"},
       {R"({"command": "start", "trajectory": 1})", "must be a string"},
-      {R"({"command": "home", "trajectory": "x"})", "for start only"}};
+      {R"({"command": "home", "trajectory": "x"})", "for start only"},
+      {R"({"command": "stream", "velocity_m_s": [0, 0, 0]})", "for jog only"}};
   for (const auto& [text, words] : bad) {
     const auto r = ParseOperatorInput(text);
     EXPECT_FALSE(r.ok) << text;

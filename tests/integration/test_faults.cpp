@@ -98,7 +98,7 @@ TEST(Faults, HotStandbyTakesOverACrashedPrimaryWithoutAFault) {
   hexa::testing::ExpectSameAsInProcess(r, hexa::PaperMotion::kCombined, 1, 2,
                                        hexa::LegControllerKind::kBsSmc);
   // --cpus-* auto pins nothing in lockstep: its processes run at normal priority and must be
-  // free to leave a CPU that real-time loops take (docs/measurements/faults.md). Real time
+  // free to leave a CPU that real-time loops take (docs/measurements/faults_under_load.md). Real time
   // pins (SessionCpus.AutoPinsRealTimeOnlyAndLockstepRunsOnEveryCpu).
   for (const std::string name : {"leg1", "leg2_standby", "leg6", "leg6_standby", "supervisor", "plant"}) {
     const std::string log = Slurp(run.dir + "/" + name + ".log");

@@ -1,4 +1,4 @@
-// Lockstep judges progress, not the wall clock (docs/faults.md, "Liveliness in lockstep"): a
+// Lockstep judges progress, not the wall clock (docs/liveliness.md, "Liveliness in lockstep"): a
 // process of the session stopped with SIGSTOP while the session starts or runs is a process
 // that does not run for a while, as on a loaded machine, not a dead one. The session waits for
 // it and completes, bit-identical to the in-process simulation. A process that ends is dead at

@@ -199,6 +199,59 @@ TEST(Washout, TiltRateNeverAboveItsLimit) {
   EXPECT_GT(limited, 0);
 }
 
+// A sustained deceleration (steady specific force): the translational channel washes out to
+// zero displacement and the tilt carries the cue, reached at no more than the tilt-rate limit and
+// settling on k_t a / g (small angles).
+TEST(Washout, SustainedAccelerationBecomesATiltReachedAtTheRateLimit) {
+  const WashoutConfig config;
+  WashoutFilter filter(config);
+  WashoutInput in;
+  in.acceleration_m_s2 = Eigen::Vector3d(-1.0, 0.0, 0.0);  // braking at 1 m/s2, held
+  WashoutOutput out;
+  const double T = config.period_s, limit = config.tilt.rate_limit_rad_s;
+  const double steady = config.tilt.scale * 1.0 / config.gravity_m_s2;  // 0.051 rad
+  double previous = 0.0, largest_step = 0.0, reached_s = -1.0;
+  for (int k = 0; k * T < 30.0; ++k) {
+    filter.Update(in, out);
+    const double pitch = out.tilt_rad[1];
+    largest_step = std::max(largest_step, std::abs(pitch - previous));
+    previous = pitch;
+    if (reached_s < 0.0 && std::abs(pitch) >= 0.99 * steady) reached_s = k * T;
+  }
+  std::printf("steady braking 1 m/s2: tilt %.6f rad (steady state %.6f), 99 %% after %.3f s "
+              "(rate limit alone: %.3f s), largest step %.3e rad (limit x T %.3e), surge %.2e m\n",
+              out.tilt_rad[1], steady, reached_s, 0.99 * steady / limit, largest_step, limit * T,
+              out.displacement[0]);
+  EXPECT_LE(largest_step, limit * T * (1 + 1e-12));
+  EXPECT_GE(reached_s, 0.99 * steady / limit - T);  // no faster than the rate limit allows
+  EXPECT_NEAR(std::abs(out.tilt_rad[1]), steady, 1e-6);
+  EXPECT_NEAR(out.displacement[4], out.tilt_rad[1], 1e-9);  // the pitch is the tilt: rate 0
+  EXPECT_LT(std::abs(out.displacement[0]), 1e-6);            // washed out
+}
+
+// A step in lateral acceleration: the onset moves the platform the way of the acceleration,
+// then the third-order high-pass brings the displacement back to zero.
+TEST(Washout, AccelerationStepGivesATransientThatWashesOutToZeroDisplacement) {
+  const WashoutConfig config;
+  WashoutFilter filter(config);
+  WashoutInput in;
+  WashoutOutput out;
+  filter.Update(in, out);
+  in.acceleration_m_s2 = Eigen::Vector3d(0.0, 2.0, 0.0);  // a step of 2 m/s2 to the left
+  double peak = 0.0, peak_s = 0.0;
+  const double T = config.period_s;
+  for (int k = 1; k * T < 40.0; ++k) {
+    filter.Update(in, out);
+    if (std::abs(out.translation_m[1]) > std::abs(peak)) peak = out.translation_m[1], peak_s = k * T;
+  }
+  std::printf("lateral step 2 m/s2: peak sway %.2f mm at %.3f s, %.2e m at 40 s\n", peak * 1e3,
+              peak_s, out.translation_m[1]);
+  EXPECT_GT(peak, 0.005);  // the onset: towards +y, several millimetres
+  EXPECT_LT(peak_s, 2.0);
+  EXPECT_LT(std::abs(out.translation_m[1]), 1e-6);  // back to zero
+  EXPECT_LT(std::abs(out.displacement[1]), 1e-6);
+}
+
 struct ExampleFigures {
   double peak_surge_m = 0, peak_sway_m = 0, peak_pitch_rad = 0, peak_roll_rad = 0;
   double peak_yaw_rad = 0, final_abs_m = 0, tilt_limited_s = 0, peak_tilt_rate = 0;

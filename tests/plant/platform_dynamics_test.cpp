@@ -173,7 +173,8 @@ TEST(PlatformDynamics, LegSpaceMassMatrixMapsLegAccelerationsToForcesAtRest) {
 }
 
 TEST(PlatformDynamics, LegSpaceMassMatrixModalMassesAtHome) {
-  // docs/measurements/control.md: eigenvalues 0.877 (x2), 1.502, 2.787, 10.27 (x2) kg on the reference rig.
+  // docs/measurements/control_light_modes.md "Leg-space modes": eigenvalues 0.877 (x2), 1.502,
+  // 2.787, 10.27 (x2) kg on the reference rig.
   const RigParams rig = MakeReferenceRig();
   Pose home;
   home.p_BP_B_m = rig.geometry.home_position_m;

@@ -36,8 +36,10 @@ std::string Slurp(const fs::path& p) {
 
 // A 1 s session, 1 kHz legs, 200 Hz supervisor, every tick recorded. Leg 3's valve commands
 // come from its primary up to `primary_until_tick`, from its hot standby after (0: primary
-// throughout). The supervisor reports `state` throughout.
-void WriteSession(const std::string& path, rec::SupervisorState state, uint64_t primary_until_tick) {
+// throughout). The supervisor reports `state` throughout. Without `ground_truth` the plant
+// publishes none (a rig's device).
+void WriteSession(const std::string& path, rec::SupervisorState state, uint64_t primary_until_tick,
+                  bool ground_truth = true) {
   McapWriterConfig config;
   config.sync = McapSyncMode::kNone;
   RecordingWriter w(config);
@@ -54,8 +56,8 @@ void WriteSession(const std::string& path, rec::SupervisorState state, uint64_t 
     test::FillHeader(g.mutable_header(), tick);
     for (double v : {0.0, 0.0, 0.5}) g.add_position_m(v);
     for (double v : {1.0, 0.0, 0.0, 0.0}) g.add_orientation_wxyz(v);
-    for (int i = 0; i < 6; ++i) g.add_applied_valve_v(5.0);
-    w.Write(c_gt, t_ns, t_ns, g);
+    for (int i = 0; i < 6; ++i) g.add_applied_valve_v(tick % 2 ? 5.0 : 5.5);
+    if (ground_truth) w.Write(c_gt, t_ns, t_ns, g);
     for (uint32_t leg = 1; leg <= 6; ++leg) {
       rec::LegSensors s;
       s.set_leg_id(leg);
@@ -128,6 +130,26 @@ TEST(SessionReportOutcome, AStandbyTakeOverIsListedWithItsTick) {
   WriteSession(path, rec::SUPERVISOR_TRACKING, 0);
   WriteSessionReport(ComputeSessionReport(path), dir.string());
   EXPECT_NE(Slurp(dir / "report.md").find("## Faults\n\nnone\n"), std::string::npos);
+}
+
+// Valve activity comes from the voltages the plant applied (GroundTruth). A rig's device
+// publishes no GroundTruth: the activity is unknown, '-' and null, not 0.
+TEST(SessionReportOutcome, ValveActivityWithoutGroundTruthIsUnknownNotZero) {
+  const fs::path dir = TempDir();
+  const std::string path = (dir / "valves.mcap").string();
+  WriteSession(path, rec::SUPERVISOR_TRACKING, 0);
+  const SessionReport truth = ComputeSessionReport(path);
+  for (int i = 0; i < 6; ++i) EXPECT_NEAR(truth.valve_mean_abs_step_v[i], 0.5, 1e-12) << "leg " << i + 1;
+  WriteSession(path, rec::SUPERVISOR_TRACKING, 0, /*ground_truth=*/false);
+  const SessionReport rig = ComputeSessionReport(path);
+  WriteSessionReport(rig, dir.string());
+  const std::string md = Slurp(dir / "report.md");
+  EXPECT_NE(md.find("| valve mean abs step V/tick | - | - | - | - | - | - |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| valve saturated % | - | - | - | - | - | - |"), std::string::npos) << md;
+  EXPECT_NE(md.find("the valve activity is unknown"), std::string::npos) << md;
+  const auto json = hexa::json::Value::parse(Slurp(dir / "report.json"));
+  EXPECT_TRUE(json["valve_mean_abs_step_v_per_tick"][0].is_null()) << json.dump();
+  EXPECT_TRUE(json["valve_saturated_fraction"][5].is_null()) << json.dump();
 }
 
 // The synthetic recording lacks 5 LegSensors samples and 1 ImuSample: the recorder lost them.

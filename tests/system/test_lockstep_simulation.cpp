@@ -128,7 +128,7 @@ TEST(LockstepProtocol, ReleasedLegsAreNoLongerAwaited) {
 // sample lost on the way is asked for again as soon as before), then after 100, 200, 400,
 // 800 ms and every 1 s. Polled every 50 ms (as the plant's barrier does) over the 10 s last
 // resort: 13 re-asks instead of the 199 of a fixed 50 ms period that buried a starved
-// supervisor under repeated inputs (docs/faults.md, "Re-asks back off").
+// supervisor under repeated inputs (docs/liveliness.md, "Re-asks back off").
 TEST(LockstepProtocol, SupervisorReasksBackOffWithinATick) {
   constexpr std::int64_t kMs = 1'000'000;
   ReaskBackoff r(50 * kMs, 1000 * kMs);

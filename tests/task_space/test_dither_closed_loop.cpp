@@ -1,4 +1,4 @@
-// The BS-SMC's dither (pure z; docs/controller.md "Dither", docs/measurements/control.md "Pure
+// The BS-SMC's dither (pure z; docs/controller.md "Dither", docs/measurements/control_friction.md "Pure
 // z and the stick-slip of the slow motions"). On the paper's 0.1 Hz motions the legs stick and
 // slip: the plant's LuGre bristles hold a slowly moving piston while the force builds, the
 // pressure loop is slow near the valve's null (chatter band), and the leg breaks away and

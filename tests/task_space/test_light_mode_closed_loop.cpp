@@ -1,4 +1,4 @@
-// The legs' velocity loop on the platform's light modes (docs/measurements/control.md "Per-leg
+// The legs' velocity loop on the platform's light modes (docs/measurements/control_light_modes.md "Per-leg
 // lag and leg 2's overshoot on combined"). Leg-space mass matrix at home J^-T M_p J^-1 + m_leg:
 // two 0.88 kg modes (roll / pitch). The BS-SMC's velocity gain (200 N s/m) through the
 // backstepping loop and ~7 ms of lag has a 20.7 Hz crossover with -20 deg phase margin on them:
@@ -62,7 +62,7 @@ TEST(LightModeClosedLoop, DefaultVelocityEstimateDelayTracksCombinedBetterOnTheI
   EXPECT_LT(with_default, 0.95 * with_old);
 }
 
-// The feedback rate in phi_dot (docs/measurements/control.md "Feedback rate in phi_dot"): the rate of phi's feedback part
+// The feedback rate in phi_dot (docs/measurements/control_light_modes.md "Feedback rate in phi_dot"): the rate of phi's feedback part
 // in phi_dot, from the leg observer, gives the velocity loop its phase back on the light modes.
 // Measured: the legs' velocity error v_hat - v_d over the tracking window of combined, all six
 // legs, its part above ~10 Hz (minus a centred 100-sample moving average, whose first null is at

@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
   cli.AddFlag("no-feedforward", "no inverse-dynamics feed-forward (paper-faithful)");
   cli.AddFlag("coupled-feedback",
               "study: the BS-SMC feedback mixed across the legs through the leg-space mass "
-              "matrix (in process only; docs/measurements/control.md \"Coupled leg feedback\")");
+              "matrix (in process only; docs/measurements/control_coupled_feedback.md \"Coupled leg feedback\")");
   cli.AddOption("coupled-reference-mass", "kg",
                 "--coupled-feedback: m_ref of W = M_ls / m_ref (0: the BS-SMC's effective mass)", "0");
   cli.AddFlag("coupled-raise-only",

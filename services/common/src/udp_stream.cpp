@@ -39,7 +39,8 @@ MotionStreamReceiver::~MotionStreamReceiver() {
   if (fd_ >= 0) close(fd_);
 }
 
-std::size_t MotionStreamReceiver::Receive(MotionStream& stream) noexcept {
+template <typename CountRefusal>
+std::size_t MotionStreamReceiver::Drain(CountRefusal&& count_refusal) noexcept {
   std::size_t count = 0;
   std::uint8_t buffer[256];
   for (std::size_t i = 0; i < packets_.size(); ++i) {
@@ -52,10 +53,18 @@ std::size_t MotionStreamReceiver::Receive(MotionStream& stream) noexcept {
     if (result.error == StreamPacketError::kOk) {
       ++count;
     } else {
-      stream.CountRefused(result);
+      count_refusal(result);
     }
   }
   return count;
+}
+
+std::size_t MotionStreamReceiver::Receive(MotionStream& stream) noexcept {
+  return Drain([&](const StreamDecodeResult& r) { stream.CountRefused(r); });
+}
+
+std::size_t MotionStreamReceiver::Receive(StreamCounters& refusals) noexcept {
+  return Drain([&](const StreamDecodeResult& r) { refusals.Count(r); });
 }
 
 }  // namespace hexa::udp

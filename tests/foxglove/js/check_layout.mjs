@@ -52,8 +52,8 @@ for (const [id, config] of Object.entries(layout.configById)) {
   check(Object.keys(value).every((k) => k === "command" || k === "trajectory"), `${id}: fields ${Object.keys(value)}`);
   commands.push(value.command);
 }
-check(JSON.stringify(commands.sort()) === JSON.stringify(["home", "reset", "start", "stop"]),
-      `operator controls for start stop reset home (${commands})`);
+check(JSON.stringify(commands.sort()) === JSON.stringify(["home", "reset", "start", "stop", "stream"]),
+      `operator controls for start stop reset home stream (${commands})`);
 
 // The recording: schema per topic and every decoded message.
 const bytes = new Uint8Array(readFileSync(file));

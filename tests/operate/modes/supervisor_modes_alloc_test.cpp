@@ -1,8 +1,10 @@
 // Supervisor::Update in the operator modes allocates nothing: a jog (messages, dead-man stop),
-// a pose goal, a refused goal and a stopped goal, on a kinematic plant (the measured lengths are
+// a pose goal, a refused goal, a stopped goal and a stream (packets, duplicates, a timeout, a
+// stop), on a kinematic plant (the measured lengths are
 // the setpoints' lengths, the IMU the desired orientation). This binary interposes
 // malloc / calloc / realloc (forwarding to glibc's __libc_* functions) and counts the calls
 // made while Update runs.
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -39,7 +41,7 @@ void* realloc(void* p, std::size_t n) {
 namespace hexa {
 namespace {
 
-TEST(SupervisorModesAllocation, UpdateAllocatesNothingInJogAndGoal) {
+TEST(SupervisorModesAllocation, UpdateAllocatesNothingInJogGoalAndStream) {
   {  // the counter sees an allocation (the test can fail)
     t_counting = true;
     int* probe = new int(1);
@@ -91,6 +93,24 @@ TEST(SupervisorModesAllocation, UpdateAllocatesNothingInJogAndGoal) {
   tick(OperatorCommandKind::kStop);
   for (int k = 0; k < 400 && out.state != SupervisorState::kIdle; ++k) tick(OperatorCommandKind::kNone);
   EXPECT_EQ(out.state, SupervisorState::kIdle);
+  // A stream: packets of a sine, a duplicate, a gap past the timeout, then a stop.
+  std::array<StreamPacket, 2> packets{};
+  std::uint64_t sequence = 10;
+  tick(OperatorCommandKind::kStream);
+  EXPECT_EQ(out.state, SupervisorState::kStreaming);
+  for (int k = 0; k < 200; ++k) {
+    packets[0].sequence = ++sequence;
+    packets[0].time_s = k * 0.005;
+    packets[0].values[0] = 0.02 * std::sin(k * 0.02);
+    packets[1] = packets[0];  // a duplicate
+    in.stream_packets = k < 120 ? packets.data() : nullptr;  // then a gap: the timeout
+    in.stream_packet_count = k < 120 ? packets.size() : 0;
+    tick(OperatorCommandKind::kNone);
+  }
+  tick(OperatorCommandKind::kStop);
+  for (int k = 0; k < 400 && out.state != SupervisorState::kIdle; ++k) tick(OperatorCommandKind::kNone);
+  EXPECT_EQ(out.state, SupervisorState::kIdle);
+  EXPECT_EQ(sup.operator_motion().stream().counters().timeouts, 1u);
   EXPECT_EQ(t_allocations - before, 0u) << "over " << updates << " updates";
 }
 

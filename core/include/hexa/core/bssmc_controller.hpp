@@ -65,7 +65,7 @@ struct BsSmcInput {
   // Sensor tick of this period (LegControllerInput::tick): the dither's time base, the same
   // for the six legs.
   std::uint64_t tick = 0;
-  // Coupled leg feedback only (docs/measurements/control.md "Coupled leg feedback"): the force the leg
+  // Coupled leg feedback only (docs/measurements/control_coupled_feedback.md "Coupled leg feedback"): the force the leg
   // observer is driven with in place of this leg's pneumatic force, m_obs (M_ls^-1 F)_i, so
   // that its acceleration F / m_obs is the leg's acceleration on the coupled platform.
   bool has_observer_force = false;
@@ -110,7 +110,7 @@ class BsSmcController {
   // them); a non-finite intermediate still yields the null voltage.
   void Update(const BsSmcInput& input, BsSmcOutput& output);
 
-  // Coupled leg feedback (docs/measurements/control.md "Coupled leg feedback"; off in the system): one
+  // Coupled leg feedback (docs/measurements/control_coupled_feedback.md "Coupled leg feedback"; off in the system): one
   // control period in two steps. Begin runs the estimates (velocity, integral, observer) and
   // returns this leg's own feedback part; Finish completes the law with the feedback part that
   // is to act on this leg (the caller mixes the six legs' parts through the leg-space mass

@@ -18,7 +18,7 @@ struct BsSmcParams {
   double lambda_1_s = 40.0;             // sliding surface slope (eq 19); platform grid (docs/measurements/tuning.md)
   double switching_gain_n = 90.0;       // K (eq 22, 30), as a force; platform grid (docs/measurements/tuning.md)
   double boundary_layer_xi_s_m = 1.0;   // xi in tanh(xi S) (eq 45); paper: 10; chatter study (docs/measurements/tuning.md)
-  double backstepping_beta_1_s = 90.0;  // beta (eq 38); valve activity (docs/measurements/control.md)
+  double backstepping_beta_1_s = 90.0;  // beta (eq 38); valve activity (docs/measurements/control.md "Outer loop speed gate")
   double effective_mass_kg = 1.5;       // vertical-motion value; chatter study (docs/measurements/tuning.md)
   double gravity_load_n = 13.2;         // along the leg at home: 6 g/(6 cos) + 0.25 g cos (docs)
   double viscous_estimate_scale = 1.0;  // B_hat = scale * Table 8 B (eq 21)
@@ -62,12 +62,12 @@ struct BsSmcParams {
   // feedback_rate_time_constant_s (a band-limited derivative). With it the feedback force
   // reaches the pressure force through ((a + beta tau) s + beta) / ((tau s + 1)(s + beta))
   // instead of beta / (s + beta): phase back on the velocity loop of the platform's light
-  // modes (docs/measurements/control.md "Feedback rate in phi_dot"). 0 = off (only beta z acts on it).
-  double feedback_rate_fraction = 0.4;          // docs/measurements/control.md "Feedback rate in phi_dot"
+  // modes (docs/measurements/control_light_modes.md "Feedback rate in phi_dot"). 0 = off (only beta z acts on it).
+  double feedback_rate_fraction = 0.4;          // docs/measurements/control_light_modes.md "Feedback rate in phi_dot"
   double feedback_rate_time_constant_s = 0.001;
   // Speed schedule of the fraction: a_eff = a (1 - exp(-(v_d / this)^2)), v_d the desired
   // piston speed; 0 = a at every speed. Below ~0.05 m/s the plant's own bristle damping keeps
-  // the light modes quiet (docs/measurements/control.md) and the rate term only slows the force build-up
+  // the light modes quiet (docs/measurements/control_light_modes.md) and the rate term only slows the force build-up
   // against static friction (an observer cannot tell a stuck piston from a lagging one).
   double feedback_rate_full_speed_m_s = 0.1;
   // Source of that rate. false: the backward difference of the feedback part computed from
@@ -88,7 +88,7 @@ struct BsSmcParams {
   // the bristles of a slowly moving leg from sticking. t = the sensor tick x period_s (common
   // to the six legs, lockstep and real time alike); f is rounded to 1 / (N period_s), N integer.
   // 0 N = off (the paper's eq 14).
-  // Grid on the seven trajectories, seeds 1-3 (docs/measurements/control.md "Pure z and the stick-slip
+  // Grid on the seven trajectories, seeds 1-3 (docs/measurements/control_friction.md "Pure z and the stick-slip
   // of the slow motions"); the paper's 0.1 Hz motions move the legs at |v_d| <= 0.045 m/s.
   double dither_amplitude_n = 7.5;
   double dither_frequency_hz = 25.0;

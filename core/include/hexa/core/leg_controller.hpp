@@ -155,7 +155,7 @@ class LegController {
   // with `feedback_velocity_m_s` (BsSmcInput::feedback_velocity_m_s) as the leg's velocity.
   void Update(const LegControllerInput& input, LegControllerOutput& output, double feedback_velocity_m_s);
 
-  // Coupled leg feedback (BsSmcController::Begin / Finish; docs/measurements/control.md "Coupled leg
+  // Coupled leg feedback (BsSmcController::Begin / Finish; docs/measurements/control_coupled_feedback.md "Coupled leg
   // feedback"): BeginCoupled does everything Update does up to the BS-SMC's feedback part and
   // returns it; nothing (the output is then final) when the leg holds, is open loop or runs
   // the PI. FinishCoupled, only after a BeginCoupled that returned a value, completes the

@@ -25,7 +25,7 @@ struct LockstepClockParams {
   LockstepBarrierParams barrier;
   // Re-asks of the supervisor back off within a tick (the re-ask period, then doubling up to
   // this): a supervisor that is only slow is not buried under repeated inputs
-  // (docs/faults.md, "Re-asks back off").
+  // (docs/liveliness.md, "Re-asks back off").
   std::int64_t supervisor_reask_max_ns = 1'000'000'000;
   std::uint64_t sync_every_ticks = 0;  // 0: no recorder flow control
   std::uint64_t sync_window_ticks = 1200;

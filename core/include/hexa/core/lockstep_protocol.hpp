@@ -94,7 +94,7 @@ class LockstepBarrier {
 // twice the previous wait, up to `max_ns` between two. For a process that is only slow (its
 // CPU starved): every re-ask adds samples it must take, and under DDS Security decrypt, in
 // order, before the one it waits for; re-asked at a fixed 50 ms it fell further behind with
-// every re-ask (docs/faults.md, "Re-asks back off"). A sample lost on the way is still asked
+// every re-ask (docs/liveliness.md, "Re-asks back off"). A sample lost on the way is still asked
 // for again after `first_ns`.
 class ReaskBackoff {
  public:

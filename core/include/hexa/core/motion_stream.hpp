@@ -105,6 +105,9 @@ struct MotionStreamInput {
   double time_s = 0.0;                    // receiver's clock, this tick
   const StreamPacket* packets = nullptr;  // decoded packets received since the last tick,
   std::size_t packet_count = 0;           // in arrival order
+  // An operator stop: the target is neutral from this tick on, packets are not applied (nor
+  // counted); the follower brings the displacement back within the same limits.
+  bool return_to_neutral = false;
 };
 
 enum class StreamState { kWaiting, kStreaming, kReturning };
@@ -136,6 +139,8 @@ class MotionStream {
   // A decoder refusal, counted beside the unit's own (the receiver calls it).
   void CountRefused(const StreamDecodeResult& result) { counters_.Count(result); }
   const MotionStreamConfig& config() const { return config_; }
+  // A new stream from neutral, at rest (the counters are kept). Neither throws nor allocates.
+  void Restart() noexcept;
 
  private:
   void Apply(const StreamPacket& packet, double time_s);

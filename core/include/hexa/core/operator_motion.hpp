@@ -6,6 +6,9 @@
 //         SoftLimits::Update (clamp along the motion)
 //   goal: PoseGoalProfile (double-S along the path, refused up front by SoftLimits::CheckGoal
 //         if the goal or its path leaves the limits) -> SoftLimits::Update
+//   stream: MotionStream (sequence checks, timeout -> back to neutral, washout for vehicle
+//         packets, V/A/J per axis) -> PlatformPoseFromDisplacement (from the neutral pose the
+//         stream began at) -> SoftLimits::Update (a stream that crosses a limit is clamped)
 //   stop: a goal hands its twist and acceleration to the jog profile, which brings it to rest
 //         at the jerk limit; a jog's target becomes zero and later jog messages are ignored.
 //
@@ -15,6 +18,7 @@
 #include <array>
 
 #include "hexa/core/motion_profile.hpp"
+#include "hexa/core/motion_stream.hpp"
 #include "hexa/core/rig.hpp"
 #include "hexa/core/soft_limits.hpp"
 #include "hexa/core/trajectory.hpp"
@@ -30,6 +34,8 @@ struct OperatorMotionConfig {
   AxisLimits goal_angular{0.2, 1.0, 10.0};
   SoftLimitsConfig limits;
   UserFramesConfig frames;
+  // The external motion stream (STREAMING); its period_s is the supervisor's.
+  MotionStreamConfig stream;
   void Validate() const;  // throws std::invalid_argument naming the field, value and limit
 };
 
@@ -40,8 +46,8 @@ struct JogRequest {
   Vector6d twist = Vector6d::Zero();  // [v m/s; w rad/s]
 };
 
-enum class OperatorMode { kNone, kJog, kGoal };
-const char* ToString(OperatorMode mode);  // "none", "jog", "goal"
+enum class OperatorMode { kNone, kJog, kGoal, kStream };
+const char* ToString(OperatorMode mode);  // "none", "jog", "goal", "stream"
 
 struct OperatorMotionStatus {
   OperatorMode mode = OperatorMode::kNone;
@@ -49,6 +55,7 @@ struct OperatorMotionStatus {
   bool stopping = false;    // an operator stop is bringing the motion to rest
   JogStatus jog = JogStatus::kStill;
   double goal_time_s = 0.0; // time since the goal started
+  MotionStreamOutput stream;  // kStream: the follower's displacement, state, timeout
   SoftLimitsOutput limits;  // the soft limits' verdict on this tick's setpoint
 };
 
@@ -62,27 +69,39 @@ class OperatorMotion {
   // A goal for the platform frame from rest at X_BP. Refused (accepted false, the message says
   // why) when the goal or the path to it leaves the soft limits; then nothing changes.
   GoalCheck BeginGoal(const Pose& X_BP, const Pose& X_BP_goal, double time_s) noexcept;
-  // Brings the current mode to rest at the jog profile's limits.
+  // A stream from rest at X_BP, which becomes its neutral pose (the displacements' origin).
+  void BeginStream(const Pose& X_BP) noexcept;
+  // Brings the current mode to rest: a jog or a goal at the jog profile's limits, a stream
+  // back to its neutral pose at the stream's limits.
   void RequestStop() noexcept;
   // One tick at `time_s` (dt_s after the previous one). `jog`: the newest jog message since the
-  // previous tick, or null. Fills `desired` (pose, twist, rate; phase kTracking).
+  // previous tick, or null. `stream_packets`: the stream packets decoded since the previous
+  // tick, in arrival order (used in kStream only). Fills `desired` (pose, twist, rate; phase
+  // kTracking).
   void Update(double time_s, double dt_s, const JogRequest* jog, TrajectorySample& desired,
-              OperatorMotionStatus& status) noexcept;
+              OperatorMotionStatus& status, const StreamPacket* stream_packets = nullptr,
+              std::size_t stream_packet_count = 0) noexcept;
 
   OperatorMode mode() const { return mode_; }
   const Pose& setpoint() const { return setpoint_; }
   const SoftLimits& limits() const { return limits_; }
   const OperatorMotionConfig& config() const { return config_; }
   double goal_duration_s() const { return goal_.duration_s(); }
+  const MotionStream& stream() const { return stream_; }
 
  private:
   void StepJog(double time_s, double dt_s, const JogRequest* jog, Vector6d& twist_C_B,
                Vector6d& acceleration_C_B, OperatorMotionStatus& status) noexcept;
+  Pose StepStream(double time_s, const StreamPacket* packets, std::size_t count,
+                  Vector6d& twist_C_B, Vector6d& acceleration_C_B,
+                  OperatorMotionStatus& status) noexcept;
 
   OperatorMotionConfig config_;
   SoftLimits limits_;
   JogProfile jog_;
   PoseGoalProfile goal_;
+  MotionStream stream_;
+  Pose stream_neutral_;  // X_BP where the stream began
   OperatorMode mode_ = OperatorMode::kNone;
   bool stopping_ = false;
   double goal_start_s_ = 0.0;

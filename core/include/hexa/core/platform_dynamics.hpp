@@ -50,7 +50,7 @@ struct LegForceResult {
 KinStatus LegForcesForMotion(const GeometryParams& geometry, const PlatformInertialParams& inertial,
                              const PlatformMotion& motion, LegForceResult& result);
 
-// Leg-space mass matrix at `pose` (coupled leg feedback; docs/measurements/control.md
+// Leg-space mass matrix at `pose` (coupled leg feedback; docs/measurements/control_coupled_feedback.md
 // "Coupled leg feedback"): with the platform at rest (zero twist, so c = 0 above),
 //   f - f(l_ddot = 0) = M_ls l_ddot,   M_ls = J^-T M_p J^-1 + m_leg I,
 // M_p = diag(m I_3, R I_P R^T) about the platform origin, J the eq 48 Jacobian. Symmetric,

@@ -13,8 +13,11 @@
 //   IDLE ------------> JOGGING ------------------------------------> IDLE
 //            goal (inside the soft limits)    reached or stop, at rest
 //   IDLE ------------> GOAL    ------------------------------------> IDLE
-//   (operator_motion.hpp: every jog and goal setpoint is held inside the soft limits; a goal
-//   outside them is refused with the reason, the state unchanged)
+//            stream (operator)        stop: back to the neutral pose, at rest
+//   IDLE ------------> STREAMING ---------------------------------------> IDLE
+//   (a stream gap longer than its timeout: back to neutral, still STREAMING; packets resume it)
+//   (operator_motion.hpp: every jog, goal and stream setpoint is held inside the soft limits;
+//   a goal outside them is refused with the reason, the state unchanged)
 //
 // Faults (checked every tick outside HOLD): a leg fault reported by a leg / the plant, lost
 // liveliness of a leg controller, more consecutive deadline misses than configured, invalid
@@ -40,7 +43,9 @@
 namespace hexa {
 
 // Same enumerators, in the same order, as idl/hexa.idl SupervisorState (static_cast maps).
-enum class SupervisorState { kIdle, kBlending, kTracking, kStopping, kHold, kJogging, kGoal };
+enum class SupervisorState {
+  kIdle, kBlending, kTracking, kStopping, kHold, kJogging, kGoal, kStreaming
+};
 const char* ToString(SupervisorState state);  // "SUPERVISOR_IDLE", ...
 
 // Same enumerators, in the same order, as idl/hexa.idl FaultReason (static_cast maps).
@@ -69,7 +74,7 @@ enum class FaultReason {
 };
 const char* ToString(FaultReason reason);  // "FAULT_NONE", ...
 
-enum class OperatorCommandKind { kNone, kStart, kStop, kReset, kHome, kJog, kGoal };
+enum class OperatorCommandKind { kNone, kStart, kStop, kReset, kHome, kJog, kGoal, kStream };
 const char* ToString(OperatorCommandKind kind);
 
 enum class CommandResult {
@@ -99,6 +104,10 @@ struct SupervisorInput {
   const StartRequest* start = nullptr;                   // for kStart; copied, not kept
   JogRequest jog;                                        // for kJog: the newest jog message
   Pose goal_X_BP;                                        // for kGoal: the platform's goal pose
+  // The external motion stream's packets decoded since the previous tick (arrival order; the
+  // service's receiver owns them). Applied in STREAMING only, ignored otherwise.
+  const StreamPacket* stream_packets = nullptr;
+  std::size_t stream_packet_count = 0;
 };
 
 struct SupervisorLegSetpoint {
@@ -129,8 +138,12 @@ struct SupervisorOutput {
   bool fault_raised = false;           // the fault was raised at this tick (publish an event)
   CommandResult command_result = CommandResult::kNone;
   std::array<char, 160> command_detail{};  // why a command was refused (a goal: which limit)
-  OperatorMotionStatus operator_motion;    // in JOGGING / GOAL: the mode's status this tick
+  OperatorMotionStatus operator_motion;    // in JOGGING / GOAL / STREAMING: the mode's status
 };
+
+// The operator modes' defaults for this rig: the soft limits from its geometry and `params`
+// (stroke margin), the stream at the supervisor's period. Throws for invalid `params`.
+OperatorMotionConfig MakeOperatorMotionConfig(const RigParams& rig, const SupervisorParams& params);
 
 class Supervisor {
  public:
@@ -139,7 +152,9 @@ class Supervisor {
   // calibration); every measured length is corrected with it before use. Identity by default.
   Supervisor(const RigParams& rig, const SupervisorParams& params,
              const LegArray<PotentiometerCalibrationParams>& potentiometer = {});
-  // With the operator modes' limits, frames and soft limits given (validated, throws).
+  // With the operator modes' limits, frames and soft limits given (validated, throws). The
+  // stream runs at the supervisor's period: operator_motion.stream.period_s (and its washout's)
+  // are set to params.period_s.
   Supervisor(const RigParams& rig, const SupervisorParams& params,
              const LegArray<PotentiometerCalibrationParams>& potentiometer,
              const OperatorMotionConfig& operator_motion);
@@ -177,7 +192,7 @@ class Supervisor {
                           int& leg, std::array<char, 160>& detail) const;
   void HandleCommand(const SupervisorInput& input, SupervisorOutput& output);
   void StartTrajectory(const Trajectory& trajectory, double time_s);
-  // kJog / kGoal (HandleCommand's part for the operator modes).
+  // kJog / kGoal / kStream (HandleCommand's part for the operator modes).
   void HandleMotionCommand(const SupervisorInput& input, SupervisorOutput& output);
   bool following_trajectory() const {
     return state_ == SupervisorState::kBlending || state_ == SupervisorState::kTracking ||
@@ -198,7 +213,11 @@ class Supervisor {
   LegArray<double> sensed_length_m_{};  // this tick's lengths, potentiometers calibrated
   Vector6d home_;
   std::shared_ptr<const ConstantMotion> home_motion_;  // preallocated for the home command
-  OperatorMotion operator_motion_;                     // jog and goal (JOGGING, GOAL)
+  OperatorMotion operator_motion_;  // jog, goal, stream (JOGGING, GOAL, STREAMING)
+  bool in_operator_mode() const {
+    return state_ == SupervisorState::kJogging || state_ == SupervisorState::kGoal ||
+           state_ == SupervisorState::kStreaming;
+  }
 
   SupervisorState state_ = SupervisorState::kIdle;
   bool initialized_ = false;

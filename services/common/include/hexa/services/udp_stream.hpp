@@ -41,11 +41,16 @@ class MotionStreamReceiver {
   // call). Valid packets land in packets() (arrival order); each refusal is counted in
   // `stream` (MotionStream::CountRefused). Returns the number of valid packets. Never blocks.
   std::size_t Receive(MotionStream& stream) noexcept;
+  // The same, each refusal counted in `refusals` (a stream owned elsewhere: the supervisor's).
+  std::size_t Receive(StreamCounters& refusals) noexcept;
   const StreamPacket* packets() const { return packets_.data(); }
   std::uint16_t port() const { return port_; }  // the bound port
   std::uint64_t datagrams() const { return datagrams_; }
 
  private:
+  template <typename CountRefusal>
+  std::size_t Drain(CountRefusal&& count_refusal) noexcept;
+
   int fd_ = -1;
   std::uint16_t port_ = 0;
   StreamDecodeLimits limits_;
