@@ -122,7 +122,8 @@ def rig_page():
          "Every field of the rig file (protobuf text format, schema `proto/rig.proto`), generated from",
          "the schema by `scripts/reference_docs.py --write` (ctest `docs.reference_pages_match_the_code`",
          "checks it). Every field must be written: the loader refuses a file with a value missing",
-         "(only the `board` block may be left out, by a rig that only the simulator drives).",
+         "(only the `board` block may be left out, by a rig that only the simulator drives, and",
+         "`leg_controller.coupled_legs`, the coupled leg feedback, off when left out).",
          "The unit is the suffix of the name (`_m`, `_pa`, `_s`, `_n_s_m`, ...), pressures are absolute,",
          "a `Vector3` is `{ x: .. y: .. z: .. }`. How to write one, the validation rules and their limits:",
          "docs/config.md; the reference rig: `deploy/rigs/hexataar_r.textproto`.", ""]

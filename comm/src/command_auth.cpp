@@ -87,6 +87,10 @@ MacInput InputOf(const ParticipantPrefix& w, const hexa_msg_ValveCommand& c) {
   m.F64(c.sliding_surface_m_s);
   m.F64(c.friction_scale);
   m.F64(c.compute_time_s);
+  m.U64(c.feedback_valid ? 1 : 0);
+  m.F64(c.feedback_force_n);
+  m.F64(c.feedback_rate_n_s);
+  m.U64(c.coupled ? 1 : 0);
   return m;
 }
 

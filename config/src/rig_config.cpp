@@ -54,8 +54,9 @@ std::string DefaultRigFile() { return HEXA_DEFAULT_RIG_FILE; }
 
 namespace {
 
-// The one block a rig file may leave out (proto/rig.proto): a rig without an I/O board.
-constexpr const char* kOptionalTopLevelBlock = "board";
+// Blocks a rig file may leave out (their defaults apply): the board wiring, the coupled leg
+// feedback (off).
+const std::vector<std::string> kOptionalBlocks = {"board", "leg_controller.coupled_legs"};
 
 Eigen::Vector3d FromPb(const pb::Vector3& v) { return {v.x(), v.y(), v.z()}; }
 void ToPb(const Eigen::Vector3d& v, pb::Vector3* out) {
@@ -263,6 +264,13 @@ SystemConfig Translate(const pb::RigFile& f) {
   c.leg_controller.pi.rate_damping_v_s_m = lc.pi().rate_damping_v_s_m();
   c.leg_controller.pi.force_feedforward_v_n = lc.pi().force_feedforward_v_n();
   c.leg_controller.setpoint_timeout_s = lc.setpoint_timeout_s();
+  if (lc.has_coupled_legs()) {
+    const pb::CoupledLegsConfig& k = lc.coupled_legs();
+    c.leg_controller.coupled.enabled = k.enabled();
+    c.leg_controller.coupled.gain = k.gain();
+    c.leg_controller.coupled.cutoff_hz = k.cutoff_hz();
+    c.leg_controller.coupled.raise_only = k.raise_only();
+  }
 
   const pb::SupervisorConfig& sv = f.supervisor();
   c.supervisor.period_s = sv.period_s();
@@ -384,7 +392,7 @@ ConfigResult ParseSystemConfig(const std::string& text, const std::string& displ
     if (!internal::ParseTextFormat(text, display_name, file, tree, issues)) return Fail(std::move(issues));
     const int eof_line = CountLines(text);
 
-    internal::CheckEveryFieldWritten(file, tree, display_name, eof_line, kOptionalTopLevelBlock, issues);
+    internal::CheckEveryFieldWritten(file, tree, display_name, eof_line, kOptionalBlocks, issues);
     if (!issues.empty()) return Fail(std::move(issues));
 
     CheckStructure(file, tree, display_name, eof_line, issues);
@@ -548,6 +556,11 @@ std::string ToTextFormat(const SystemConfig& c) {
   lc->mutable_pi()->set_rate_damping_v_s_m(c.leg_controller.pi.rate_damping_v_s_m);
   lc->mutable_pi()->set_force_feedforward_v_n(c.leg_controller.pi.force_feedforward_v_n);
   lc->set_setpoint_timeout_s(c.leg_controller.setpoint_timeout_s);
+  pb::CoupledLegsConfig* k = lc->mutable_coupled_legs();
+  k->set_enabled(c.leg_controller.coupled.enabled);
+  k->set_gain(c.leg_controller.coupled.gain);
+  k->set_cutoff_hz(c.leg_controller.coupled.cutoff_hz);
+  k->set_raise_only(c.leg_controller.coupled.raise_only);
 
   pb::SupervisorConfig* sv = f.mutable_supervisor();
   sv->set_period_s(c.supervisor.period_s);

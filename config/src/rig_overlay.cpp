@@ -126,8 +126,11 @@ LegControllerConfig MakeLegControllerConfig(const SystemConfig& config, int leg_
     throw std::invalid_argument("MakeLegControllerConfig: leg_id = " + std::to_string(leg_id) +
                                 " outside [1, 6]");
   }
-  return LegControllerConfig::FromModel(MakeControllerModel(config),
-                                        static_cast<std::size_t>(leg_id - 1), kind);
+  const ControllerModel model = MakeControllerModel(config);
+  const auto index = static_cast<std::size_t>(leg_id - 1);
+  LegControllerConfig c = LegControllerConfig::FromModel(model, index, kind);
+  AssignCouplingRow(model.SupervisorRig(config.rig), index, c);  // as LockstepSimulation does
+  return c;
 }
 
 RigParams MakeSupervisorRig(const SystemConfig& config) {

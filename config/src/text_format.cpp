@@ -202,7 +202,7 @@ namespace {
 struct PresenceContext {
   const std::string& file;
   int eof_line;
-  const std::string& optional_top_level_block;
+  const std::vector<std::string>& optional_blocks;
   std::vector<ConfigIssue>& issues;
 };
 
@@ -227,7 +227,10 @@ void CheckPresence(const gp::Message& msg, const ParseInfoTree* tree, const std:
       continue;
     }
     const Location loc = tree ? FromRange(tree->GetLocationRange(fd, -1)) : Location{};
-    if (!r->HasField(msg, fd) && path.empty() && fd->name() == ctx.optional_top_level_block) continue;
+    if (!r->HasField(msg, fd) && is_message &&
+        std::find(ctx.optional_blocks.begin(), ctx.optional_blocks.end(), field_path) !=
+            ctx.optional_blocks.end())
+      continue;
     if (!r->HasField(msg, fd)) {
       ConfigIssue issue;
       issue.file = ctx.file;
@@ -267,9 +270,9 @@ void CheckPresence(const gp::Message& msg, const ParseInfoTree* tree, const std:
 }  // namespace
 
 void CheckEveryFieldWritten(const gp::Message& message, const ParseInfoTree& tree, const std::string& file,
-                            int eof_line, const std::string& optional_top_level_block,
+                            int eof_line, const std::vector<std::string>& optional_blocks,
                             std::vector<ConfigIssue>& issues) {
-  PresenceContext ctx{file, eof_line, optional_top_level_block, issues};
+  PresenceContext ctx{file, eof_line, optional_blocks, issues};
   CheckPresence(message, &tree, "", Location{1, 1, eof_line}, ctx);
 }
 

@@ -53,12 +53,13 @@ bool ParseTextFormat(const std::string& text, const std::string& display_name,
 
 // Every singular field of every block written (nothing takes a silent default) and every
 // floating-point value finite, in `message` parsed from `file` (ParseTextFormat) with its
-// locations in `tree`; `optional_top_level_block` ("" for none) may be absent. One issue per
+// locations in `tree`; the blocks at the paths `optional_blocks` ("board",
+// "leg_controller.coupled_legs") may be absent. One issue per
 // field, at its line (a missing one: at its block's first line, or at `eof_line`).
 void CheckEveryFieldWritten(const google::protobuf::Message& message,
                             const google::protobuf::TextFormat::ParseInfoTree& tree,
                             const std::string& file, int eof_line,
-                            const std::string& optional_top_level_block,
+                            const std::vector<std::string>& optional_blocks,
                             std::vector<ConfigIssue>& issues);
 
 int CountLines(const std::string& text);

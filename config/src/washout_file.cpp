@@ -53,7 +53,7 @@ WashoutFileResult ParseWashoutFile(const std::string& text, const std::string& d
   ParseInfoTree tree;
   std::vector<ConfigIssue> issues;
   if (!internal::ParseTextFormat(text, display_name, file, tree, issues)) return Fail(std::move(issues));
-  internal::CheckEveryFieldWritten(file, tree, display_name, internal::CountLines(text), "", issues);
+  internal::CheckEveryFieldWritten(file, tree, display_name, internal::CountLines(text), {}, issues);
   if (!issues.empty()) return Fail(std::move(issues));
   WashoutFileResult result;
   result.config = Translate(file);

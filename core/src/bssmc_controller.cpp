@@ -133,6 +133,8 @@ void BsSmcController::Finish(const BsSmcInput& in, const BsSmcFeedback& applied,
   Complete(in, &applied, out);
 }
 
+void BsSmcController::FinishOwn(const BsSmcInput& in, BsSmcOutput& out) { Complete(in, nullptr, out); }
+
 BsSmcFeedback BsSmcController::Begin(const BsSmcInput& in) {
   const BsSmcParams& p = config_.params;
   const NominalLegModel& m = config_.model;

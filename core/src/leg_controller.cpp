@@ -135,6 +135,17 @@ LegController::LegController(const LegControllerConfig& config)
   if (config_.kind == LegControllerKind::kExcitation) {
     excitation_.emplace(config_.excitation, config_.model.valve, config_.model.cylinder);
   }
+  if (config_.params.coupled.enabled && config_.kind == LegControllerKind::kBsSmc)
+    coupling_.emplace(config_.params.coupled, config_.coupling_row, config_.leg_index, config_.period_s);
+}
+
+void AssignCouplingRow(const RigParams& supervisor_rig, std::size_t leg_index,
+                       LegControllerConfig& config) {
+  config.leg_index = leg_index;
+  if (!config.params.coupled.enabled) return;
+  config.coupling_row = CouplingRowAtHome(supervisor_rig, leg_index,
+                                          config.params.bssmc.effective_mass_kg,
+                                          config.params.coupled.raise_only);
 }
 
 void LegController::Interpolate(const LegControllerInput& in, double& length_m, double& velocity_m_s,
@@ -191,13 +202,31 @@ bool LegController::Hold(LegControlStatus status, LegControllerOutput& out, LegI
 }
 
 void LegController::Update(const LegControllerInput& raw, LegControllerOutput& out) {
-  if (!Prepare(raw, out)) return;
-  if (config_.kind != LegControllerKind::kPi) {  // BS-SMC, also outside an excitation window
+  out.feedback = FeedbackPart{};
+  out.coupled = false;
+  if (!Prepare(raw, out)) {
+    if (coupling_) coupling_->Reset();
+    return;
+  }
+  if (config_.kind == LegControllerKind::kPi) {
+    RunPi(out);
+  } else if (coupling_) {  // BS-SMC with the coupled feedback (coupled_legs.hpp)
+    const BsSmcFeedback own = bssmc_.Begin(pending_);
+    BsSmcFeedback applied;
+    out.coupled = coupling_->Apply(own, raw.tick, raw.relayed, applied);
+    BsSmcOutput o;
+    if (out.coupled) {
+      bssmc_.Finish(pending_, applied, o);
+    } else {
+      bssmc_.FinishOwn(pending_, o);  // the decoupled law, bit for bit
+    }
+    FinishBsSmc(o, out);
+    out.feedback = FeedbackPart{std::isfinite(own.force_n) && std::isfinite(own.rate_n_s),
+                                own.force_n, own.rate_n_s};
+  } else {  // BS-SMC, also outside an excitation window
     BsSmcOutput o;
     bssmc_.Update(pending_, o);
     FinishBsSmc(o, out);
-  } else {
-    RunPi(out);
   }
 }
 

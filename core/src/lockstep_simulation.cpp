@@ -39,6 +39,7 @@ LockstepSimulation::LockstepSimulation(const LockstepConfig& config) : config_(c
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     LegControllerConfig leg = LegControllerConfig::FromModel(model, i, config_.controller);
     leg.excitation = config_.excitation[i];
+    AssignCouplingRow(supervisor_->rig(), i, leg);
     legs_[i] = std::make_unique<LegController>(leg);
   }
   leg_runner_ = config_.leg_runner ? config_.leg_runner(*supervisor_, legs_)
@@ -91,6 +92,7 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
     in.rod_pressure_pa = s.chamber2_pressure_pa;
     in.supply_pressure_pa = s.supply_pressure_pa;
     SetSetpointInput(setpoints_[i].ForTick(tick_, schedule_.supervisor_every_ticks), in);
+    in.relayed = relayed_;  // the plant relays the previous tick's feedback parts
   }
   leg_runner_->Run(supervisor_ran_ ? &sup_out_ : nullptr, legs_, leg_in, leg_out_);
   // The commands reach the plant's arbitration as the service's do: each leg's one writer
@@ -103,12 +105,15 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
     sample.writer = static_cast<std::uint64_t>(leg);
     sample.answered_tick = leg_out_[i].tick;
     sample.valve_v = leg_out_[i].valve_v;
-    if (arbitration_->Offer(sample, tick_, [](std::uint64_t) { return SourceLiveliness::kAlive; }, events))
+    if (arbitration_->Offer(sample, tick_, [](std::uint64_t) { return SourceLiveliness::kAlive; }, events)) {
       barrier_.Answer(leg, leg_out_[i].tick);
+      relay_.Offer(leg, leg_out_[i].tick, leg_out_[i].feedback);
+    }
   }
   ArbitrationInput arbitration_in;
   arbitration_in.tick = tick_;
   arbitration_->Update(arbitration_in, arbitration_out_);
+  relayed_ = relay_.For(tick_, arbitration_out_.forced);
   const LegArray<double>& valve_v = arbitration_out_.valve_v;
   applied_v_ = valve_v;
   // Every leg controller answers the tick it was given (LegController::Update): an internal

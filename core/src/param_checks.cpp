@@ -343,6 +343,9 @@ void CheckLegControllerParams(ParamChecker& c, const LegControllerParams& p,
   CheckDifferentiatorParams(c, p.differentiator, path + ".differentiator");
   CheckBsSmcParams(c, p.bssmc, path + ".bssmc");
   CheckPiParams(c, p.pi, path + ".pi");
+  c.InClosed(path + ".coupled.gain", p.coupled.gain, 0.0, 1.0, "coupling gain");
+  c.InClosed(path + ".coupled.cutoff_hz", p.coupled.cutoff_hz, 0.0, 500.0,
+             "coupling low-pass cut-off (0 = none; at most the 1 kHz tick's Nyquist frequency)");
   // Its lower bound (the setpoint period) is a system rule.
   c.Positive(path + ".setpoint_timeout_s", p.setpoint_timeout_s, "setpoint timeout");
 }

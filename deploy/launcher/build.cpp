@@ -212,6 +212,7 @@ ChildSpec Leg(const ProcessSpec& p, const Options& o, const Launch& launch) {
     Append(s.argv, {"--controller", o.controller});
   }
   Append(s.argv, OverlayArgs(o));
+  if (o.coupled_legs) s.argv.push_back("--coupled-legs");
   if (const auto* fault = o.FaultOfLeg(p.leg); fault != nullptr && !p.standby)
     Append(s.argv, {"--fault", fault->kind, "--fault-at", fault->at});
   AppendControlCommon(s.argv, p, o);

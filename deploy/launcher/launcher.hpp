@@ -22,7 +22,7 @@ struct Options {
   std::string trajectory, controller, profile, mode, out_dir, rig, dds_config;
   long long seed = 1, domain = 0, periods = 0, stale_ticks = 15;
   bool domain_chosen = true;  // no --domain: the next free one is taken when in use
-  bool recorder = true, standby = false, outer_loop = true, rt_sched = true, bridge = false,
+  bool recorder = true, standby = false, coupled_legs = false, outer_loop = true, rt_sched = true, bridge = false,
        feedforward = true, tracker = false, secure = false, command_auth = true,
        wait_for_operator = false;
   std::string cpus_control, cpus_recorder, cpus_standby, cpus_supervisor, cpus_bridge;

@@ -85,6 +85,9 @@ void AddSessionOptions(hexa::cli::Parser& cli) {
   cli.AddFlag("tracker", "the plant publishes the external pose instrument (hexa_TrackerPose, for "
                          "hexa_calibrate; use with --trajectory calibration)");
   cli.AddFlag("standby", "also start a hot-standby controller per leg");
+  cli.AddFlag("coupled-legs",
+              "the leg controllers run the coupled leg feedback (the rig file's "
+              "leg_controller.coupled_legs, turned on; docs/controller.md \"Coupled leg feedback\")");
   cli.AddChoice("device", {"sim", "board"},
                 "the rig behind the plant: sim (the plant simulates it) or board (the session also "
                 "runs hexa_board_emulator on 127.0.0.1 at a free UDP port, stepped once per command "
@@ -365,6 +368,7 @@ bool TakeFlags(const hexa::cli::Parser& cli, Options& o) {
   o.dds_config = fs::absolute(cli.Get("dds-config")).string();
   o.recorder = !cli.Flag("no-recorder");
   o.standby = cli.Flag("standby");
+  o.coupled_legs = cli.Flag("coupled-legs");
   o.secure = cli.Flag("secure");
   o.command_auth = !cli.Flag("insecure-commands");
   if (o.secure && cli.Get("dds-config") != HEXA_DEFAULT_CYCLONE_CONFIG) {

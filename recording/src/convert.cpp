@@ -102,6 +102,7 @@ void ToProto(const hexa_msg_ValveCommand& in, rec::ValveCommand& out) {
   out.set_desired_length_m(in.desired_length_m);
   out.set_sliding_surface_m_s(in.sliding_surface_m_s);
   out.set_friction_scale(in.friction_scale);
+  out.set_coupled(in.coupled);
   out.set_compute_time_s(in.compute_time_s);
 }
 
@@ -219,6 +220,7 @@ bool FromProto(const rec::ValveCommand& in, hexa_msg_ValveCommand& out) {
   // A recording from before the field: theta unknown, read as eq 14's nominal 1.
   out.friction_scale = in.has_friction_scale() ? in.friction_scale() : 1.0;
   out.compute_time_s = in.compute_time_s();
+  out.coupled = in.coupled();
   return OctetFromProto(in.leg_id(), out.leg_id) && FromProto(in.header(), out.header);
 }
 

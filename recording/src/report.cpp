@@ -68,6 +68,7 @@ struct TickSlot {
   std::array<int64_t, 6> command_time_ns{};
   std::array<bool, 6> command_bssmc{};
   std::array<double, 6> command_friction_scale{};  // NaN: the field is not in the recording
+  std::array<bool, 6> command_coupled{};
 };
 
 }  // namespace
@@ -182,6 +183,7 @@ class SessionCollector {
     s.command_time_ns[i] = m.header().source_time_ns();
     s.command_bssmc[i] = m.controller() == rec::CONTROLLER_BSSMC;
     s.command_friction_scale[i] = m.has_friction_scale() ? m.friction_scale() : std::nan("");
+    s.command_coupled[i] = m.coupled();
   }
 
   const std::string& path_;  // named in messages
@@ -266,6 +268,10 @@ void ComputeJointSpace(const std::vector<PoseSample>& poses, const std::vector<T
       none.fill(std::nan(""));
       r.command_friction_scale.resize(tick + 1, none);
       r.command_friction_scale[tick] = row.friction_scale;
+      std::array<int, 6> coupled;
+      for (int i = 0; i < 6; ++i) coupled[i] = s.command[i] ? (s.command_coupled[i] ? 1 : 0) : -1;
+      r.command_coupled.resize(tick + 1, {-1, -1, -1, -1, -1, -1});
+      r.command_coupled[tick] = coupled;
     }
     if (s.truth && state == 2) {
       for (int i = 0; i < 6; ++i) {

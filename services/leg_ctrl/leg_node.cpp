@@ -82,7 +82,9 @@ LegNode::LegNode(const LegNodeOptions& options, const config::SystemConfig& conf
       log_(log),
       runtime_(options.common, NodeName(options), std::move(log)),
       controller_([&] {
-        LegControllerConfig c = config::MakeLegControllerConfig(config, options.leg, options.controller);
+        config::SystemConfig system = config;
+        if (options.coupled_legs) system.leg_controller.coupled.enabled = true;
+        LegControllerConfig c = config::MakeLegControllerConfig(system, options.leg, options.controller);
         c.excitation = options.excitation;
         return c;
       }()),
@@ -297,6 +299,10 @@ void LegNode::Answer(const hexa_msg_LegSensors& s) {
   input_.cap_pressure_pa = s.cap_pressure_pa;
   input_.rod_pressure_pa = s.rod_pressure_pa;
   input_.supply_pressure_pa = s.supply_pressure_pa;
+  input_.relayed.present = s.relayed_present;
+  input_.relayed.tick = s.relayed_tick;
+  for (std::size_t j = 0; j < kNumLegs; ++j)
+    input_.relayed.parts[j] = FeedbackPart{s.relayed_valid[j], s.relayed_force_n[j], s.relayed_rate_n_s[j]};
   SetSetpointInput(SetpointFor(s.header.tick), input_);
   controller_.Update(input_, output_);
   const double compute_s = static_cast<double>(node::MonotonicNow_ns() - t0) * 1e-9;
@@ -312,6 +318,10 @@ void LegNode::Answer(const hexa_msg_LegSensors& s) {
   c.sliding_surface_m_s = output_.sliding_surface_m_s;
   c.friction_scale = output_.friction_scale;
   c.compute_time_s = compute_s;
+  c.feedback_valid = output_.feedback.valid;
+  c.feedback_force_n = output_.feedback.force_n;
+  c.feedback_rate_n_s = output_.feedback.rate_n_s;
+  c.coupled = output_.coupled;
   // Open loop (identification excitation): no position controller chose this voltage.
   c.controller = output_.open_loop ? hexa_msg_CONTROLLER_NONE : base_controller_;
   if (fault_active_ && options_.fault.kind == FaultKind::kGarbage) {

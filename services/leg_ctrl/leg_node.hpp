@@ -61,6 +61,7 @@ struct LegNodeOptions {
   LegControllerKind controller = LegControllerKind::kBsSmc;
   ExcitationParams excitation;  // kExcitation: the leg's identification window
   bool standby = false;
+  bool coupled_legs = false;  // --coupled-legs: leg_controller.coupled.enabled
   FaultInjection fault;
   double startup_timeout_s = 30.0;
   // Matched readers of the valve-command writer required before RUNNING (the plant, plus

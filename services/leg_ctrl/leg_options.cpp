@@ -24,6 +24,9 @@ int ParseOptions(int argc, char** argv, LegNodeOptions& o) {
   cli.AddOption("excite-duration", "s", "excite: length of the excitation window", "30");
   cli.AddOption("excite-seed", "N", "excite: seed of the pseudo-random sequence", "1");
   cli.AddFlag("standby", "hot standby: same law, lower ownership strength");
+  cli.AddFlag("coupled-legs",
+              "the coupled leg feedback (the rig file's leg_controller.coupled_legs, turned on "
+              "whatever its 'enabled' says; docs/controller.md \"Coupled leg feedback\")");
   cli.AddChoice("fault", {"none", "crash", "hang", "slow", "garbage", "silence"},
                 "fault injection (safety tests)", "none");
   cli.AddOption("fault-at", "s", "simulated time at which the fault starts", "0");
@@ -58,6 +61,7 @@ int ParseOptions(int argc, char** argv, LegNodeOptions& o) {
   o.excitation.duration_s = o.controller == LegControllerKind::kExcitation ? *excite_duration : 0.0;
   o.excitation.seed = static_cast<std::uint64_t>(*excite_seed);
   o.standby = cli.Flag("standby");
+  o.coupled_legs = cli.Flag("coupled-legs");
   ParseFaultKind(cli.Get("fault"), o.fault.kind);
   o.fault.at_sim_time_s = *at;
   o.fault.slow_extra_s = *slow;

@@ -57,8 +57,11 @@ void PlantNode::TakeCommands(bool feed_barrier) {
         s.valve_v = c.valve_v;
         s.compute_s = c.compute_time_s;
         events_.Clear();
-        if (arbitration_.Offer(s, tick_, liveliness, events_) && feed_barrier)
-          lockstep_.Answer(leg, c.header.tick);
+        if (arbitration_.Offer(s, tick_, liveliness, events_)) {
+          relay_.Offer(leg, c.header.tick,
+                       FeedbackPart{c.feedback_valid, c.feedback_force_n, c.feedback_rate_n_s});
+          if (feed_barrier) lockstep_.Answer(leg, c.header.tick);
+        }
         Report(events_);
       }
     }

@@ -159,6 +159,7 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
 bool PlantNode::CompleteTick(const ArbitrationInput& in) {
   TakeOperatorCommands();  // an e-stop acts on this tick's write
   arbitration_.Update(in, arbitration_out_);  // arbitrate
+  relayed_ = relay_.For(tick_, arbitration_out_.forced);  // with the next tick's samples
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     const std::int64_t age = arbitration_out_.command_age_ticks[i];
     figures_.command_age[i].Add(age);

@@ -48,6 +48,7 @@
 
 #include "hexa/comm/comm.hpp"
 #include "hexa/core/command_arbitration.hpp"
+#include "hexa/core/coupled_legs.hpp"
 #include "hexa/core/lockstep_clock.hpp"
 #include "hexa/core/lockstep_protocol.hpp"
 #include "hexa/core/plant_faults.hpp"
@@ -235,6 +236,10 @@ class PlantNode {
   int exit_code_ = -1;  // set when the run ends (>= 0)
   CommandArbitration arbitration_;
   ArbitrationOutput arbitration_out_;
+  // The legs' feedback parts relayed with the next tick's samples (coupled leg feedback,
+  // hexa/core/coupled_legs.hpp): the commands' parts as arbitrated, judged after each tick.
+  FeedbackRelay relay_;
+  RelayedFeedback relayed_;
   ArbitrationEvents events_;  // the events of a call between ticks (cleared before each)
   LockstepClock lockstep_;
   RealtimeClock realtime_;

@@ -28,6 +28,13 @@ void PlantNode::PublishTick(int only_leg) {
     s.cap_pressure_pa = out.legs[i].chamber1_pressure_pa;
     s.rod_pressure_pa = out.legs[i].chamber2_pressure_pa;
     s.supply_pressure_pa = out.legs[i].supply_pressure_pa;
+    s.relayed_present = relayed_.present;
+    s.relayed_tick = relayed_.tick;
+    for (std::size_t j = 0; j < kNumLegs; ++j) {
+      s.relayed_valid[j] = relayed_.parts[j].valid;
+      s.relayed_force_n[j] = relayed_.parts[j].force_n;
+      s.relayed_rate_n_s[j] = relayed_.parts[j].rate_n_s;
+    }
     if (only_leg != 0) {
       sensors_writer_.WriteToLegOnly(s, now_ns);  // a re-ask: that leg's controllers only
       return;

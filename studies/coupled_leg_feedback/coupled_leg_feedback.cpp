@@ -1,12 +1,12 @@
 #include "coupled_leg_feedback.hpp"
 
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 
 #include <optional>
 #include <stdexcept>
 #include <string>
 
+#include "hexa/core/coupled_legs.hpp"
 #include "hexa/core/platform_dynamics.hpp"
 
 namespace hexa::study {
@@ -17,22 +17,6 @@ void CoupledLegFeedbackParams::Validate() const {
                                 std::to_string(reference_mass_kg) +
                                 " kg: must be in [0, 1000) (0: the BS-SMC's effective mass)");
   }
-}
-
-Matrix6d CouplingMatrix(const Matrix6d& m_ls, const LegArray<double>& mass_kg, bool raise_only) {
-  Matrix6d w;
-  if (!raise_only) {
-    for (std::size_t i = 0; i < kNumLegs; ++i)
-      w.row(static_cast<int>(i)) = m_ls.row(static_cast<int>(i)) / mass_kg[i];
-    return w;
-  }
-  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(m_ls);
-  for (std::size_t i = 0; i < kNumLegs; ++i) {
-    const Vector6d raised = eig.eigenvalues().cwiseMax(mass_kg[i]);
-    const Matrix6d shaped = eig.eigenvectors() * raised.asDiagonal() * eig.eigenvectors().transpose();
-    w.row(static_cast<int>(i)) = shaped.row(static_cast<int>(i)) / mass_kg[i];
-  }
-  return w;
 }
 
 namespace {

@@ -30,8 +30,4 @@ struct CoupledLegFeedbackParams {
 // !params.enabled: the system's independent legs.
 LegRunnerFactory CoupledLegRunnerFactory(const CoupledLegFeedbackParams& params);
 
-// W of leg-space mass matrix `m_ls` with each row's reference mass `mass_kg` (the study's
-// `raise_only` variant when `raise_only`).
-Matrix6d CouplingMatrix(const Matrix6d& m_ls, const LegArray<double>& mass_kg, bool raise_only);
-
 }  // namespace hexa::study

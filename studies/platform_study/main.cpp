@@ -78,10 +78,18 @@ std::vector<CoupledKey> CoupledKeys() {
 // docs/controller.md "Platform state observer"). Applied after --calibrate's procedure, which
 // runs with the system's legs.
 hexa::study::PlatformObserverFeedbackParams g_platform_observer;
+// The system's coupled leg feedback (hexa/core/coupled_legs.hpp), keys cl, cl_gain, cl_cutoff,
+// cl_raise; like pobs, applied after --calibrate's procedure (the user calibrates with the
+// decoupled legs, docs/calibration.md).
+hexa::CoupledLegsParams g_coupled_legs;
 
 std::vector<Key> Keys() {
   return {
       {"pobs", [](auto&, double v) { g_platform_observer.enabled = v != 0.0; }},
+      {"cl", [](auto&, double v) { g_coupled_legs.enabled = v != 0.0; }},
+      {"cl_gain", [](auto&, double v) { g_coupled_legs.gain = v; }},
+      {"cl_cutoff", [](auto&, double v) { g_coupled_legs.cutoff_hz = v; }},
+      {"cl_raise", [](auto&, double v) { g_coupled_legs.raise_only = v != 0.0; }},
       {"pobs_rate", [](auto&, double v) { g_platform_observer.disturbance_rate_m_s3 = v; }},
       {"lambda", [](auto& c, double v) { c.leg_controller.bssmc.lambda_1_s = v; }},
       {"K", [](auto& c, double v) { c.leg_controller.bssmc.switching_gain_n = v; }},
@@ -278,6 +286,9 @@ int main(int argc, char** argv) {
     if (!hexa::calib::CalibrateInProcess(config, calibration, stderr)) return 1;
     hexa::calib::ApplyKinematicCalibration(calibration, config);
   }
+  config.leg_controller.coupled = g_coupled_legs;
+  if (config.controllers)
+    for (auto& leg : config.controllers->legs) leg.params.coupled = g_coupled_legs;
   if (g_platform_observer.enabled) {
     if (coupled.enabled) {
       std::fprintf(stderr, "pobs=1 and coupled=1 are exclusive (one leg runner)\n");

@@ -52,6 +52,13 @@ inline hexa_msg_LegSensors Make(uint64_t seq) {
   s.cap_pressure_pa = V(seq, 2);
   s.rod_pressure_pa = V(seq, 3);
   s.supply_pressure_pa = V(seq, 4);
+  s.relayed_present = (seq % 2) == 0;
+  s.relayed_tick = seq * 3 + (uint64_t{1} << 41);
+  for (int i = 0; i < 6; ++i) {
+    s.relayed_valid[i] = ((seq + static_cast<uint64_t>(i)) % 2) == 1;
+    s.relayed_force_n[i] = V(seq, 60 + i);
+    s.relayed_rate_n_s[i] = V(seq, 70 + i);
+  }
   return s;
 }
 
@@ -69,6 +76,10 @@ inline hexa_msg_ValveCommand Make(uint64_t seq) {
   s.sliding_surface_m_s = V(seq, 3);
   s.compute_time_s = V(seq, 4);
   s.friction_scale = V(seq, 5);
+  s.feedback_valid = (seq % 2) == 0;
+  s.feedback_force_n = V(seq, 6);
+  s.feedback_rate_n_s = V(seq, 7);
+  s.coupled = (seq % 3) == 1;
   return s;
 }
 
@@ -225,6 +236,11 @@ inline std::string Diff(const hexa_msg_LegSensors& g, const hexa_msg_LegSensors&
   c.Field("cap_pressure_pa", g.cap_pressure_pa, w.cap_pressure_pa);
   c.Field("rod_pressure_pa", g.rod_pressure_pa, w.rod_pressure_pa);
   c.Field("supply_pressure_pa", g.supply_pressure_pa, w.supply_pressure_pa);
+  c.Field("relayed_present", g.relayed_present, w.relayed_present);
+  c.Field("relayed_tick", g.relayed_tick, w.relayed_tick);
+  c.Array("relayed_valid", g.relayed_valid, w.relayed_valid);
+  c.Array("relayed_force_n", g.relayed_force_n, w.relayed_force_n);
+  c.Array("relayed_rate_n_s", g.relayed_rate_n_s, w.relayed_rate_n_s);
   return c.diff;
 }
 inline std::string Diff(const hexa_msg_ValveCommand& g, const hexa_msg_ValveCommand& w) {
@@ -240,6 +256,10 @@ inline std::string Diff(const hexa_msg_ValveCommand& g, const hexa_msg_ValveComm
   c.Field("sliding_surface_m_s", g.sliding_surface_m_s, w.sliding_surface_m_s);
   c.Field("compute_time_s", g.compute_time_s, w.compute_time_s);
   c.Field("friction_scale", g.friction_scale, w.friction_scale);
+  c.Field("feedback_valid", g.feedback_valid, w.feedback_valid);
+  c.Field("feedback_force_n", g.feedback_force_n, w.feedback_force_n);
+  c.Field("feedback_rate_n_s", g.feedback_rate_n_s, w.feedback_rate_n_s);
+  c.Field("coupled", g.coupled, w.coupled);
   return c.diff;
 }
 inline std::string Diff(const hexa_msg_ImuSample& g, const hexa_msg_ImuSample& w) {

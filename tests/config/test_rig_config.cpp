@@ -131,6 +131,10 @@ void ExpectLegControllerEq(const hexa::LegControllerParams& a, const hexa::LegCo
   EXPECT_EQ(a.pi.rate_damping_v_s_m, b.pi.rate_damping_v_s_m);
   EXPECT_EQ(a.pi.force_feedforward_v_n, b.pi.force_feedforward_v_n);
   EXPECT_EQ(a.setpoint_timeout_s, b.setpoint_timeout_s);
+  EXPECT_EQ(a.coupled.enabled, b.coupled.enabled);
+  EXPECT_EQ(a.coupled.gain, b.coupled.gain);
+  EXPECT_EQ(a.coupled.cutoff_hz, b.coupled.cutoff_hz);
+  EXPECT_EQ(a.coupled.raise_only, b.coupled.raise_only);
 }
 
 void ExpectSupervisorEq(const hexa::SupervisorParams& a, const hexa::SupervisorParams& b) {
@@ -267,7 +271,8 @@ TEST(RigConfigReference, CoreStructsHaveNotGrownPastTheSchema) {
   EXPECT_EQ(sizeof(hexa::DifferentiatorParams), 3 * sizeof(double));  // int (padded) + 2 doubles
   EXPECT_EQ(sizeof(hexa::BsSmcParams), 32 * sizeof(double));  // 31 doubles + feedback_rate_from_observer (padded)
   EXPECT_EQ(sizeof(hexa::PiParams), 6 * sizeof(double));
-  EXPECT_EQ(sizeof(hexa::LegControllerParams), 42 * sizeof(double));
+  EXPECT_EQ(sizeof(hexa::CoupledLegsParams), 4 * sizeof(double));  // 2 doubles + 2 bools (padded)
+  EXPECT_EQ(sizeof(hexa::LegControllerParams), 46 * sizeof(double));
   EXPECT_EQ(sizeof(hexa::OuterLoopParams), 5 * sizeof(double));
   // + feedforward_enabled (padded), length_consistency_ticks (padded)
   EXPECT_EQ(sizeof(hexa::SupervisorParams), 20 * sizeof(double));

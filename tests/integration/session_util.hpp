@@ -69,14 +69,16 @@ inline SessionRun RunSession(const std::string& name, int domain, std::vector<st
 
 // The in-process lockstep simulation of a paper session with the shipped rig file, as
 // hexa_session runs it: tick 0 latches the rest pose, START at tick 5. `rig_overlays` are
-// applied as the services apply them (config::MakeControllerModel). Calls on_step(n, sim)
-// after each step n = 1, 2, ... until it returns false.
+// applied as the services apply them (config::MakeControllerModel); `coupled_legs`: as
+// --coupled-legs. Calls on_step(n, sim) after each step n = 1, 2, ... until it returns false.
 template <typename OnStep>
 inline void RunInProcessSession(PaperMotion motion, int periods, std::uint64_t seed,
                                 LegControllerKind controller,
-                                const std::vector<std::string>& rig_overlays, OnStep on_step) {
-  const auto loaded = config::LoadSystemConfig(config::DefaultRigFile(), rig_overlays);
+                                const std::vector<std::string>& rig_overlays, OnStep on_step,
+                                bool coupled_legs = false) {
+  auto loaded = config::LoadSystemConfig(config::DefaultRigFile(), rig_overlays);
   ASSERT_TRUE(loaded.ok) << loaded.error;
+  if (coupled_legs) loaded.config.leg_controller.coupled.enabled = true;
   const config::SystemConfig& cfg = loaded.config;
   LockstepConfig lc;
   lc.rig = cfg.rig;
@@ -104,7 +106,8 @@ inline void ExpectSameAsInProcess(const recorder::SessionReport& report, PaperMo
                                   int periods, std::uint64_t seed,
                                   LegControllerKind controller = LegControllerKind::kBsSmc,
                                   std::uint64_t up_to_tick = UINT64_MAX,
-                                  const std::vector<std::string>& rig_overlays = {}) {
+                                  const std::vector<std::string>& rig_overlays = {},
+                                  bool coupled_legs = false) {
   const auto& applied = report.applied_valve_v;
   ASSERT_GT(applied.size(), 1000u);
   RunInProcessSession(motion, periods, seed, controller, rig_overlays,
@@ -118,7 +121,8 @@ inline void ExpectSameAsInProcess(const recorder::SessionReport& report, PaperMo
                           }
                         }
                         return true;
-                      });
+                      },
+                      coupled_legs);
 }
 
 // The legs' adapted friction scale theta the session recorded (ValveCommand(n).friction_scale)

@@ -75,11 +75,11 @@ TEST(CoupledLegFeedback, CouplingMatrixRaiseOnlyBelowEveryModeIsThePlainMix) {
   hexa::Matrix6d a = hexa::Matrix6d::Random();
   const hexa::Matrix6d m_ls = a * a.transpose() + 2.0 * hexa::Matrix6d::Identity();
   const hexa::LegArray<double> mass_kg{1.0, 1.0, 1.0, 1.0, 1.0, 1.0};
-  const hexa::Matrix6d plain = hexa::study::CouplingMatrix(m_ls, mass_kg, false);
+  const hexa::Matrix6d plain = hexa::CouplingMatrix(m_ls, mass_kg, false);
   EXPECT_TRUE(plain.isApprox(m_ls, 1e-14));
-  EXPECT_TRUE(hexa::study::CouplingMatrix(m_ls, mass_kg, true).isApprox(plain, 1e-12));
+  EXPECT_TRUE(hexa::CouplingMatrix(m_ls, mass_kg, true).isApprox(plain, 1e-12));
   const hexa::LegArray<double> heavy{1e3, 1e3, 1e3, 1e3, 1e3, 1e3};
-  EXPECT_TRUE(hexa::study::CouplingMatrix(m_ls, heavy, true).isApprox(hexa::Matrix6d::Identity(), 1e-12));
+  EXPECT_TRUE(hexa::CouplingMatrix(m_ls, heavy, true).isApprox(hexa::Matrix6d::Identity(), 1e-12));
 }
 
 // The hook itself: the system's runner supplied explicitly is the simulation without a hook.

@@ -41,6 +41,9 @@ int main(int argc, char** argv) {
               "--coupled-feedback: W = V diag(max(m_k, m_ref)) V^T / m_ref (modes lighter than m_ref keep the uncoupled gain)");
   cli.AddFlag("coupled-observer-velocity",
               "--coupled-feedback: the feedback part's velocity from the coupled leg observer");
+  cli.AddFlag("coupled-legs",
+              "the coupled leg feedback of the system (rig file leg_controller.coupled_legs, "
+              "turned on whatever its 'enabled' says; docs/controller.md \"Coupled leg feedback\")");
   cli.AddFlag("calibrate",
               "first run the kinematic calibration procedure (tracker on, Ceres fit) and use the "
               "fitted calibration in the controllers");
@@ -62,11 +65,12 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: %s\n", cli.error().c_str());
     return 2;
   }
-  const auto loaded = hexa::config::LoadSystemConfig(cli.Get("rig"), cli.GetAll("rig-overlay"));
+  auto loaded = hexa::config::LoadSystemConfig(cli.Get("rig"), cli.GetAll("rig-overlay"));
   if (!loaded.ok) {
     std::fprintf(stderr, "%s\n", loaded.error.c_str());
     return 1;
   }
+  if (cli.Flag("coupled-legs")) loaded.config.leg_controller.coupled.enabled = true;
   hexa::LockstepConfig config;
   config.rig = loaded.config.rig;
   config.leg_controller = loaded.config.leg_controller;

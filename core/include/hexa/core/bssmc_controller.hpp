@@ -118,6 +118,9 @@ class BsSmcController {
   // (bit for bit the uncoupled law).
   BsSmcFeedback Begin(const BsSmcInput& input);
   void Finish(const BsSmcInput& input, const BsSmcFeedback& applied, BsSmcOutput& output);
+  // Finish with the leg's own part in the uncoupled law's arithmetic: Begin then this is Update,
+  // bit for bit (the coupled leg feedback's fall-back).
+  void FinishOwn(const BsSmcInput& input, BsSmcOutput& output);
 
   const BsSmcConfig& config() const { return config_; }
 

@@ -127,10 +127,26 @@ struct PiParams {
   double force_feedforward_v_n = 0.001;  // tuned on the seven trajectories (docs/controller.md)
 };
 
+// Coupled leg feedback (docs/controller.md "Coupled leg feedback"; off by default): leg i
+// applies f_i(n) + gain * LPF(sum_j W_ij f_j(n - 1) - f_i(n - 1)), W = M_ls(home) / M, the
+// six legs' BS-SMC feedback parts f_j of the previous tick as the plant relays them with leg
+// i's sensor sample (RelayedFeedback, coupled_legs.hpp). Any leg's part missing: the decoupled
+// law (f_i alone) on that tick. Gain and cut-off: chosen on seed 1 of the user's path
+// (docs/measurements/coupled_feedback.md); gain 1 and no low-pass is the plain coupled law.
+struct CoupledLegsParams {
+  bool enabled = false;
+  double gain = 0.25;       // share of the coupling increment applied, [0, 1]
+  double cutoff_hz = 50.0;  // first-order low-pass of the increment (and its rate); 0 = none
+  // W = V diag(max(m_k, M)) V^T / M (M_ls = V diag(m_k) V^T): only the modes heavier than M
+  // get the single-mass loop, the light roll / pitch modes keep their uncoupled gain.
+  bool raise_only = true;
+};
+
 struct LegControllerParams {
   DifferentiatorParams differentiator;
   BsSmcParams bssmc;
   PiParams pi;
+  CoupledLegsParams coupled;
   double setpoint_timeout_s = 0.015;    // setpoints older than this -> hold (3 periods)
 };
 

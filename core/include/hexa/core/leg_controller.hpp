@@ -12,6 +12,7 @@
 
 #include "hexa/core/bssmc_controller.hpp"
 #include "hexa/core/control_params.hpp"
+#include "hexa/core/coupled_legs.hpp"
 #include "hexa/core/controller_model.hpp"
 #include "hexa/core/excitation.hpp"
 #include "hexa/core/pi_controller.hpp"
@@ -71,6 +72,9 @@ struct LegControllerConfig {
   PotentiometerCalibrationParams potentiometer;
   // kExcitation only: the leg's excitation window and sequence.
   ExcitationParams excitation;
+  // params.coupled.enabled: this leg's index (0-based) and row of W (AssignCouplingRow).
+  std::size_t leg_index = 0;
+  LegArray<double> coupling_row{};
 
   static LegControllerConfig FromRig(const RigParams& rig, const LegControllerParams& params,
                                      LegControllerKind kind);
@@ -79,6 +83,12 @@ struct LegControllerConfig {
                                        LegControllerKind kind);
   void Validate() const;  // throws std::invalid_argument naming field, value and limit
 };
+
+// Coupled leg feedback: `config`'s leg index and its row of W at home of `supervisor_rig` (the
+// rig the supervisor uses: ControllerModel::SupervisorRig), reference mass the BS-SMC's
+// effective mass; nothing when params.coupled is off. Throws std::invalid_argument.
+void AssignCouplingRow(const RigParams& supervisor_rig, std::size_t leg_index,
+                       LegControllerConfig& config);
 
 struct LegControllerInput {
   // Sensor sample of this tick.
@@ -102,6 +112,9 @@ struct LegControllerInput {
   bool feedforward_valid = false;
   double feedforward_force_n = 0.0;
   double feedforward_force_rate_n_s = 0.0;
+  // The six legs' feedback parts of the previous tick, relayed by the plant with this
+  // sample (coupled leg feedback); not present: none.
+  RelayedFeedback relayed;
 };
 
 struct LegControllerOutput {
@@ -127,6 +140,10 @@ struct LegControllerOutput {
   // guard of the excitation was in control when `guarding`.
   bool open_loop = false;
   bool guarding = false;
+  // The BS-SMC's own feedback part of this tick (for the other legs; valid when it ran), and
+  // whether the coupled part acted this tick (params.coupled.enabled and the relay complete).
+  FeedbackPart feedback;
+  bool coupled = false;
 };
 
 class LegController {
@@ -177,6 +194,7 @@ class LegController {
   bool potentiometer_calibrated_ = false;  // config_.potentiometer is not the identity
   double last_desired_length_m_ = 0.0;
   BsSmcInput pending_;  // the law's input of this period (Prepare)
+  std::optional<CoupledFeedbackMix> coupling_;  // params.coupled.enabled
 };
 
 }  // namespace hexa

@@ -128,6 +128,9 @@ class LockstepSimulation {
   bool supervisor_ran_ = false;
   SupervisorOutput sup_out_;
   std::unique_ptr<LegRunner> leg_runner_;
+  // The plant service's relay of the legs' feedback parts (coupled_legs.hpp), as it runs it.
+  FeedbackRelay relay_;
+  RelayedFeedback relayed_;  // what the legs get with the next tick's samples
 };
 
 // Figures of merit of a session (paper Tables 9, 10), accumulated over the supervisor's

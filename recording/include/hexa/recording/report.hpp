@@ -101,6 +101,8 @@ struct SessionReport {
   // ValveCommand.friction_scale per command tick (the first recorded command of the leg and
   // tick), for the same comparisons; NaN where there is none or it does not carry the field.
   std::vector<std::array<double, 6>> command_friction_scale;
+  // ValveCommand.coupled per command tick likewise: 1 coupled, 0 not, -1 no command.
+  std::vector<std::array<int, 6>> command_coupled;
 };
 
 // Throws McapError / std::runtime_error with a message naming the file on a bad recording.
