@@ -152,9 +152,13 @@ std::string WriteValveRecording(const fs::path& path, bool other_build) {
       extra->set_number(40);
       extra->set_type(gp::FieldDescriptorProto::TYPE_DOUBLE);
       extra->set_label(gp::FieldDescriptorProto::LABEL_OPTIONAL);
-      // proto3 optional fields come with a synthetic oneof: drop them with the field.
+      // proto3 optional fields come with a synthetic oneof: drop them all, and the other
+      // optional fields' proto3_optional mark, which needs its oneof.
       m.clear_oneof_decl();
-      for (auto& f : *m.mutable_field()) f.clear_oneof_index();
+      for (auto& f : *m.mutable_field()) {
+        f.clear_oneof_index();
+        f.clear_proto3_optional();
+      }
     }
   }
   *set.add_file() = file;
