@@ -1,8 +1,9 @@
-// Steady-state allocation of the reading path used in the 1 ms loop. This binary interposes
-// malloc/calloc/realloc (forwarding to glibc's __libc_* functions) and counts calls made by
-// the test thread only, so Cyclone's own receive threads (which allocate for incoming data)
-// do not count. Domain id 47.
+// Steady-state allocation of the reading path used in the 1 ms loop, counted on the test
+// thread only (allocation_counter.hpp), so Cyclone's own receive threads (which allocate for
+// incoming data) do not count. Domain id 47.
 #include <gtest/gtest.h>
+
+#include "allocation_counter.hpp"
 
 #include <cstddef>
 #include <cstdint>
@@ -11,33 +12,10 @@
 
 #include "hexa/comm/comm.hpp"
 
-extern "C" {
-void* __libc_malloc(std::size_t);
-void* __libc_calloc(std::size_t, std::size_t);
-void* __libc_realloc(void*, std::size_t);
-void __libc_free(void*);
-}
-
 namespace {
-thread_local bool t_counting = false;
-thread_local std::uint64_t t_allocations = 0;
+using hexa::testing::t_allocations;
+using hexa::testing::t_counting;
 }  // namespace
-
-extern "C" {
-void* malloc(std::size_t n) {
-  if (t_counting) ++t_allocations;
-  return __libc_malloc(n);
-}
-void* calloc(std::size_t n, std::size_t m) {
-  if (t_counting) ++t_allocations;
-  return __libc_calloc(n, m);
-}
-void* realloc(void* p, std::size_t n) {
-  if (t_counting) ++t_allocations;
-  return __libc_realloc(p, n);
-}
-void free(void* p) { __libc_free(p); }
-}
 
 namespace {
 

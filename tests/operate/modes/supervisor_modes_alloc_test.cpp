@@ -1,42 +1,22 @@
 // Supervisor::Update in the operator modes allocates nothing: a jog (messages, dead-man stop),
 // a pose goal, a refused goal, a stopped goal and a stream (packets, duplicates, a timeout, a
 // stop), on a kinematic plant (the measured lengths are
-// the setpoints' lengths, the IMU the desired orientation). This binary interposes
-// malloc / calloc / realloc (forwarding to glibc's __libc_* functions) and counts the calls
-// made while Update runs.
+// the setpoints' lengths, the IMU the desired orientation). The allocations made while Update
+// runs are counted (allocation_counter.hpp).
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 
 #include <gtest/gtest.h>
 
+#include "allocation_counter.hpp"
+
 #include "hexa/core/supervisor.hpp"
 
-extern "C" {
-void* __libc_malloc(std::size_t);
-void* __libc_calloc(std::size_t, std::size_t);
-void* __libc_realloc(void*, std::size_t);
-}
-
 namespace {
-thread_local bool t_counting = false;
-thread_local std::uint64_t t_allocations = 0;
+using hexa::testing::t_allocations;
+using hexa::testing::t_counting;
 }  // namespace
-
-extern "C" {
-void* malloc(std::size_t n) {
-  if (t_counting) ++t_allocations;
-  return __libc_malloc(n);
-}
-void* calloc(std::size_t n, std::size_t m) {
-  if (t_counting) ++t_allocations;
-  return __libc_calloc(n, m);
-}
-void* realloc(void* p, std::size_t n) {
-  if (t_counting) ++t_allocations;
-  return __libc_realloc(p, n);
-}
-}
 
 namespace hexa {
 namespace {
