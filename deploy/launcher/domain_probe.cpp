@@ -22,10 +22,9 @@ constexpr int kMaxParticipantIndex = 119;
 // participant exists (it binds ports of its own).
 void FindFixedIndexPorts(int domain, DomainProbe& result) {
   for (const auto& socket : BoundUdpSockets()) {
-    bool fixed = false;
-    for (int i = 0; i <= kMaxParticipantIndex && !fixed; ++i)
-      fixed = socket.port == DiscoveryUnicastPort(domain, i) || socket.port == UserUnicastPort(domain, i);
-    if (!fixed) continue;
+    // The two ports of indices 0..kMaxParticipantIndex are one contiguous range.
+    if (socket.port < DiscoveryUnicastPort(domain, 0) || socket.port > UserUnicastPort(domain, kMaxParticipantIndex))
+      continue;
     ++result.fixed_index_ports;
     const std::string owner = SocketOwner(socket.inode);
     auto& owners = result.port_owners;
