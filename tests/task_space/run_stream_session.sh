@@ -15,11 +15,7 @@ out="$build/tests/task_space/stream_session"
 rm -rf "$out"; mkdir -p "$out"
 op="$build/services/task_space/hexa_operator"
 send="$build/tools/hexa_stream_send"
-pids=()
-cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; wait 2>/dev/null || true; }
-trap cleanup EXIT
-fail=0
-check() { if eval "$1"; then echo "ok: $2"; else echo "FAIL: $2"; fail=1; fi; }
+. "$(dirname "$0")/operator_session_lib.sh"
 
 "$build/deploy/hexa_session" --trajectory combined --periods 1 --seed 3 --domain "$domain" \
     --out "$out" --wait-for-operator --stream --stream-port "$port" --timeout 240 \
@@ -34,21 +30,6 @@ for _ in $(seq 1 600); do
 done
 check "grep -q 'motion stream input ENABLED on UDP 127.0.0.1:$port' '$out/supervisor.log'" \
       "the supervisor listens on loopback, on the port asked"
-
-run() {  # run NAME EXPECTED_EXIT ARGS...: hexa_operator, its exit status checked
-  local name="$1" want="$2"; shift 2
-  local rc=0
-  "$op" --domain "$domain" --wait 30 --answer-wait 30 "$@" > "$out/op_$name.log" 2>&1 || rc=$?
-  check "[ $rc -eq $want ]" "hexa_operator $name exits $want (got $rc)"
-  if [ "$rc" -ne "$want" ]; then cat "$out/op_$name.log"; fi
-}
-wait_log() {  # wait_log PATTERN COUNT: until supervisor.log holds COUNT lines matching PATTERN
-  for _ in $(seq 1 600); do
-    [ "$(grep -cE "$1" "$out/supervisor.log" || true)" -ge "$2" ] && return 0
-    sleep 0.1
-  done
-  return 1
-}
 
 run stream 0 stream
 check "wait_log 'streaming from t = ' 1" "STREAMING from the neutral pose (supervisor.log)"
