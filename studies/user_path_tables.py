@@ -12,8 +12,13 @@ per seed: the two paths must agree.
 The seed is the plant's (`hexa_session --seed` = `hexa_sim --seed`): noise, calibration errors
 and the tracker's noise all derive from it.
 
+With --coupled-legs the seven trajectories (and hexa_sim) run with the coupled leg feedback
+(`hexa_session --coupled-legs`, docs/controller.md "Coupled leg feedback"); the calibration
+session stays decoupled, as a user calibrates (docs/calibration.md).
+
 Usage: /usr/bin/python3 studies/user_path_tables.py [--build build] [--seeds 1,2,3]
-       [--out out/user_path] [--in-process] [--reuse] [--doc docs/measurements/results.md]
+       [--out out/user_path] [--in-process] [--reuse] [--coupled-legs]
+       [--doc docs/measurements/results.md]
 """
 import argparse
 import datetime
@@ -108,9 +113,10 @@ def run_seed(a, seed, domain):
     if code != 0 or not os.path.exists(overlay):
         progress(f"seed {seed}: no calibration overlay; see {root}/hexa_calibrate.log")
         return res
+    coupled = ["--coupled-legs"] if a.coupled_legs else []
     for t in TRAJ:
         d = os.path.join(root, t)
-        cmd = [session, "--trajectory", t, "--rig-overlay", overlay, "--out", d] + common
+        cmd = [session, "--trajectory", t, "--rig-overlay", overlay, "--out", d] + common + coupled
         res["commands"].append(cmd)
         code, wall = run(cmd, os.path.join(root, f"{t}.log"),
                          os.path.join(d, "report.json") if a.reuse else None)
@@ -121,7 +127,8 @@ def run_seed(a, seed, domain):
     if a.in_process:
         j = os.path.join(root, "in_process.json")
         cmd = [os.path.join(a.build, "tools", "hexa_sim"), "--controller", a.controller,
-               "--profile", a.profile, "--seed", str(seed), "--rig-overlay", overlay, "--json", j] + rig
+               "--profile", a.profile, "--seed", str(seed), "--rig-overlay", overlay, "--json", j] + rig \
+            + coupled
         res["commands"].append(cmd)
         code, wall = run(cmd, os.path.join(root, "in_process.log"), j if a.reuse else None)
         progress(f"seed {seed}: hexa_sim with the same overlay exit {code} ({wall:.0f} s)")
@@ -153,7 +160,7 @@ def f3(v):
     return "n/a" if v is None else f"{v:.3f}"
 
 
-def format_section(results, seeds, command, date, commit):
+def format_section(results, seeds, command, date, commit, coupled=False):
     """The markdown section (Table 9/10 layout, the 12 cells against one fifth of the paper,
     valve activity on combined, agreement with the in-process simulation)."""
     seed_list = ", ".join(map(str, seeds))
@@ -162,7 +169,9 @@ def format_section(results, seeds, command, date, commit):
          "DDS (every process started by `hexa_session`; lockstep, BS-SMC, `realistic` profile): "
          "`hexa_session --trajectory calibration --tracker --out DIR`, `hexa_calibrate "
          "DIR/session.mcap --out DIR/calibration.textproto`, then `hexa_session --trajectory T "
-         "--rig-overlay DIR/calibration.textproto` for the seven trajectories. RMSE against "
+         "--rig-overlay DIR/calibration.textproto` for the seven trajectories"
+         + (" with `--coupled-legs` (the coupled leg feedback; the calibration session "
+            "decoupled)" if coupled else "") + ". RMSE against "
          "ground truth over the tracking window, from each session's report.json; median over "
          "the seeds per cell. Table 9 cells: the moving axis of each pure motion; Table 10: the "
          "combined trajectory (eq 49).\n"]
@@ -170,10 +179,11 @@ def format_section(results, seeds, command, date, commit):
     L.append("|---|---|---|---|---|---|---|")
     t9 = [median_cell(results, seeds, TRAJ[k], k) for k in range(6)]
     t10 = [median_cell(results, seeds, "combined", k) for k in range(6)]
-    for name, row in [("Table 9 layout (pure motions): BS-SMC, calibrated, DDS", t9),
+    law = "BS-SMC, coupled legs" if coupled else "BS-SMC"
+    for name, row in [(f"Table 9 layout (pure motions): {law}, calibrated, DDS", t9),
                       ("paper, Table 9", PAPER9),
                       ("one fifth of Table 9", [p / 5 for p in PAPER9]),
-                      ("Table 10 layout (combined): BS-SMC, calibrated, DDS", t10),
+                      (f"Table 10 layout (combined): {law}, calibrated, DDS", t10),
                       ("paper, Table 10", PAPER10),
                       ("one fifth of Table 10", [p / 5 for p in PAPER10])]:
         L.append(f"| {name} | " + " | ".join(f3(v) for v in row) + " |")
@@ -260,6 +270,9 @@ def main():
                     help="also run hexa_sim with the same overlay and seed and compare")
     ap.add_argument("--reuse", action="store_true",
                     help="skip a step whose output (session.mcap, overlay, report.json) exists")
+    ap.add_argument("--coupled-legs", action="store_true",
+                    help="run the seven trajectories (and hexa_sim) with --coupled-legs; the "
+                         "calibration session stays decoupled")
     ap.add_argument("--doc", help="also put the section into this page (e.g. "
                                   "docs/measurements/results.md)")
     a = ap.parse_args()
@@ -277,7 +290,7 @@ def main():
                             capture_output=True, text=True).stdout.strip() or "unknown commit"
     command = "/usr/bin/python3 studies/user_path_tables.py " + " ".join(sys.argv[1:])
     section = format_section(results, seeds, command.strip(),
-                             datetime.date.today().isoformat(), commit)
+                             datetime.date.today().isoformat(), commit, a.coupled_legs)
     with open(os.path.join(a.out, "section.md"), "w") as f:
         f.write(section + "\n")
     with open(os.path.join(a.out, "commands.txt"), "w") as f:

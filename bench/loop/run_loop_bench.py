@@ -18,13 +18,16 @@ Each figure is the median over --runs runs (real time: over the completed runs, 
 listed), printed as a table with its ratio to its anchor and saved as JSON. --baseline-build
 runs the same system rows with another build (e.g. the commit before) interleaved with this
 one, so before and after are measured in the same minutes. --hog runs everything with a CPU
-hog (stress-ng --cpu 1 at normal priority, pinned to CPU 0) beside it.
+hog (stress-ng --cpu 1 at normal priority, pinned to CPU 0) beside it. --coupled-legs adds
+the same system rows of --build with `hexa_session --coupled-legs` (the coupled leg feedback,
+docs/controller.md), run interleaved with the decoupled ones and listed as build "coupled".
 
 Every DDS process runs in a private network namespace (the script re-executes itself under
 `unshare -n` when run as root), pinned to the loopback interface.
 
 Usage: /usr/bin/python3 bench/loop/run_loop_bench.py [--build build] [--baseline-build DIR]
-           [--runs 3] [--rt-runs 10] [--fanout-ticks 10000] [--hog] [--out out/loop-bench]
+           [--runs 3] [--rt-runs 10] [--fanout-ticks 10000] [--hog] [--coupled-legs]
+           [--out out/loop-bench]
 """
 import argparse
 import contextlib
@@ -293,6 +296,9 @@ def main():
     ap.add_argument("--hog", action="store_true", help="a CPU hog on CPU 0 beside everything")
     ap.add_argument("--session-args", default="", help="extra hexa_session arguments "
                     "for --build (e.g. '--cpus-control 1')")
+    ap.add_argument("--coupled-legs", action="store_true",
+                    help="also run --build's system rows with hexa_session --coupled-legs, "
+                         "interleaved (build \"coupled\")")
     ap.add_argument("--cpu-latency-us", default="0",
                     help="the CPU wake-up latency limit the system's services hold "
                     "(hexa_session --cpu-latency-us; default 0) and under which the anchors run; "
@@ -319,7 +325,8 @@ def main():
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         time.sleep(1)
     res = {"load_before": loadavg(), "hog": a.hog, "runs": a.runs, "rt_runs": a.rt_runs,
-           "builds": {"new": a.build, "baseline": a.baseline_build}}
+           "builds": {"new": a.build, "baseline": a.baseline_build,
+                      "coupled": a.build if a.coupled_legs else None}}
     try:
         log("cyclictest ...")
         res["cyclictest"] = run_cyclictest(a.cyclictest_loops)  # holds 0 us itself
@@ -339,6 +346,8 @@ def main():
         builds = [("new", a.build, a.session_args.split() +
                    (["--cpu-latency-us", "none"] if latency is None else
                     ["--cpu-latency-us", str(latency)]))]
+        if a.coupled_legs:
+            builds.append(("coupled", a.build, builds[0][2] + ["--coupled-legs"]))
         if a.baseline_build:
             builds.append(("baseline", a.baseline_build, []))
         for name, _, _ in builds:

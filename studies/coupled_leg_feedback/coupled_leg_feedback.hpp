@@ -30,4 +30,15 @@ struct CoupledLegFeedbackParams {
 // !params.enabled: the system's independent legs.
 LegRunnerFactory CoupledLegRunnerFactory(const CoupledLegFeedbackParams& params);
 
+// The system's coupled leg feedback (LegControllerParams::coupled: gain, low-pass, raise_only;
+// CoupledFeedbackMix's increment on the plant's relay) with W = M_ls(q) / M refreshed every
+// supervisor tick at q = the supervisor's desired pose (`kDesired`) or pose estimate
+// (`kEstimate`); `kHome`: W at home as in the system (a check of this runner: the system's
+// figures up to rounding, the fall-back runs Finish with the own part, not FinishOwn). Study
+// only: in the system W is fixed at home. At its end the runner prints to stderr what the
+// coupling adds at the platform over the tracking window: the RMS of the wrench J(q)^T of the
+// applied increments against that of the legs' own parts (q: the pose estimate).
+enum class CouplingPose { kHome, kDesired, kEstimate };
+LegRunnerFactory PoseCouplingRowRunnerFactory(CouplingPose pose);
+
 }  // namespace hexa::study

@@ -82,6 +82,9 @@ hexa::study::PlatformObserverFeedbackParams g_platform_observer;
 // cl_raise; like pobs, applied after --calibrate's procedure (the user calibrates with the
 // decoupled legs, docs/calibration.md).
 hexa::CoupledLegsParams g_coupled_legs;
+// cl_pose=1 / 2 / 3: with cl=1, W at the supervisor's desired pose / pose estimate, refreshed
+// every supervisor tick / at home, through the study's runner (PoseCouplingRowRunnerFactory).
+int g_coupled_legs_pose = 0;
 
 std::vector<Key> Keys() {
   return {
@@ -90,6 +93,7 @@ std::vector<Key> Keys() {
       {"cl_gain", [](auto&, double v) { g_coupled_legs.gain = v; }},
       {"cl_cutoff", [](auto&, double v) { g_coupled_legs.cutoff_hz = v; }},
       {"cl_raise", [](auto&, double v) { g_coupled_legs.raise_only = v != 0.0; }},
+      {"cl_pose", [](auto&, double v) { g_coupled_legs_pose = static_cast<int>(v); }},
       {"pobs_rate", [](auto&, double v) { g_platform_observer.disturbance_rate_m_s3 = v; }},
       {"lambda", [](auto& c, double v) { c.leg_controller.bssmc.lambda_1_s = v; }},
       {"K", [](auto& c, double v) { c.leg_controller.bssmc.switching_gain_n = v; }},
@@ -295,6 +299,16 @@ int main(int argc, char** argv) {
       return 2;
     }
     config.leg_runner = hexa::study::PlatformObserverLegRunnerFactory(g_platform_observer);
+  }
+  if (g_coupled_legs_pose != 0) {
+    if (coupled.enabled || g_platform_observer.enabled || !g_coupled_legs.enabled) {
+      std::fprintf(stderr, "cl_pose needs cl=1 and excludes coupled=1 and pobs=1 (one leg runner)\n");
+      return 2;
+    }
+    config.leg_runner = hexa::study::PoseCouplingRowRunnerFactory(
+        g_coupled_legs_pose == 1   ? hexa::study::CouplingPose::kDesired
+        : g_coupled_legs_pose == 2 ? hexa::study::CouplingPose::kEstimate
+                                   : hexa::study::CouplingPose::kHome);
   }
   // The subcommands that study one paper motion.
   using MotionStudy = void (*)(const hexa::LockstepConfig&, PaperMotion, int);

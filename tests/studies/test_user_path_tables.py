@@ -4,6 +4,7 @@ hexa_recorder report writes), no session run."""
 import os
 import sys
 import tempfile
+import types
 import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "studies"))
@@ -72,6 +73,50 @@ class Tables(unittest.TestCase):
                 text = f.read()
         self.assertEqual(text, "# Results\n\n## In process\n\nA\n\n" + upt.SECTION +
                          " (two)\n\nsecond\n\n## DDS sessions (seed 1)\n\nB\n")
+
+
+class CoupledLegs(unittest.TestCase):
+    def commands(self, coupled):
+        """run_seed's commands with the runs faked (hexa_calibrate writes its overlay)."""
+        issued = []
+
+        def fake_run(cmd, log_path, reuse_path=None):
+            issued.append(cmd)
+            if cmd[0].endswith("hexa_calibrate"):
+                with open(cmd[cmd.index("--out") + 1], "w") as f:
+                    f.write("")
+            return 0, 0.0
+        with tempfile.TemporaryDirectory() as d:
+            os.makedirs(os.path.join(d, "seed1", "calibration"))
+            a = types.SimpleNamespace(build="b", out=d, controller="bssmc", profile="realistic",
+                                      timeout=0, rig=None, lockstep_lease=None, reuse=False,
+                                      in_process=True, coupled_legs=coupled)
+            saved, upt.run = upt.run, fake_run
+            try:
+                upt.run_seed(a, 1, 150)
+            finally:
+                upt.run = saved
+        return issued
+
+    def test_the_trajectories_and_hexa_sim_couple_the_calibration_session_does_not(self):
+        cmds = self.commands(True)
+        calibration = [c for c in cmds if "calibration" in c and "--trajectory" in c]
+        trajectories = [c for c in cmds if "--rig-overlay" in c and "--trajectory" in c]
+        sim = [c for c in cmds if c[0].endswith("hexa_sim")]
+        self.assertEqual(len(calibration), 1)
+        self.assertEqual(len(trajectories), 7)
+        self.assertEqual(len(sim), 1)
+        self.assertNotIn("--coupled-legs", calibration[0])
+        for c in trajectories + sim:
+            self.assertIn("--coupled-legs", c)
+        self.assertFalse(any("--coupled-legs" in c for c in self.commands(False)))
+
+    def test_the_section_names_the_coupled_law(self):
+        res = {1: results_for(1, 1.0)}
+        s = upt.format_section(res, [1], "cmd", "2026-12-07", "abc1234", coupled=True)
+        self.assertIn("| Table 10 layout (combined): BS-SMC, coupled legs, calibrated, DDS |", s)
+        self.assertIn("with `--coupled-legs`", s)
+        self.assertNotIn("coupled", upt.format_section(res, [1], "cmd", "2026-12-07", "abc1234"))
 
 
 if __name__ == "__main__":
