@@ -4,6 +4,9 @@
 // system's runner equal, to the bit, to no hook.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "coupled_leg_feedback.hpp"
 #include "hexa/core/lockstep_simulation.hpp"
 
@@ -80,6 +83,29 @@ TEST(CoupledLegFeedback, CouplingMatrixRaiseOnlyBelowEveryModeIsThePlainMix) {
   EXPECT_TRUE(hexa::CouplingMatrix(m_ls, mass_kg, true).isApprox(plain, 1e-12));
   const hexa::LegArray<double> heavy{1e3, 1e3, 1e3, 1e3, 1e3, 1e3};
   EXPECT_TRUE(hexa::CouplingMatrix(m_ls, heavy, true).isApprox(hexa::Matrix6d::Identity(), 1e-12));
+}
+
+// The pose runner (platform_study cl_pose) with W at home is the system's coupled law: one
+// combined period gives the figures of the legs' own mix (LegController with
+// params.coupled) to 1e-3 relative (only the fall-back ticks' arithmetic differs: Finish with
+// the own part instead of FinishOwn); with W at the desired pose the figures move by more.
+TEST(CoupledLegFeedback, PoseRunnerWithWAtHomeIsTheSystemsCoupledLaw) {
+  hexa::LockstepConfig system;
+  system.leg_controller.coupled.enabled = true;
+  hexa::LockstepConfig home = system, desired = system;
+  home.leg_runner = hexa::study::PoseCouplingRowRunnerFactory(hexa::study::CouplingPose::kHome);
+  desired.leg_runner = hexa::study::PoseCouplingRowRunnerFactory(hexa::study::CouplingPose::kDesired);
+  const auto a = hexa::RunPaperSession(system, hexa::PaperMotion::kCombined, 1);
+  const auto b = hexa::RunPaperSession(home, hexa::PaperMotion::kCombined, 1);
+  const auto c = hexa::RunPaperSession(desired, hexa::PaperMotion::kCombined, 1);
+  ASSERT_TRUE(a.completed && b.completed && c.completed);
+  const auto ea = a.metrics.vs_truth.Rmse(), eb = b.metrics.vs_truth.Rmse(), ec = c.metrics.vs_truth.Rmse();
+  double moved = 0.0;
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_NEAR(eb[k], ea[k], 1e-3 * ea[k]) << "axis " << k;
+    moved = std::max(moved, std::abs(ec[k] - ea[k]) / ea[k]);
+  }
+  EXPECT_GT(moved, 1e-3);
 }
 
 // The hook itself: the system's runner supplied explicitly is the simulation without a hook.
