@@ -45,9 +45,9 @@ std::vector<std::string> BoardSessionArgs() {
 }
 
 TEST(BoardSession, LockstepCompletesAndIsBitIdenticalRunToRun) {
-  const auto first = RunSession("board_session_1", 60, BoardSessionArgs());
+  const auto first = RunSession("board_session_1", 58, BoardSessionArgs());
   ASSERT_EQ(first.exit_code, 0) << Slurp(first.dir + "/session.log");
-  const auto second = RunSession("board_session_2", 61, BoardSessionArgs());
+  const auto second = RunSession("board_session_2", 147, BoardSessionArgs());
   ASSERT_EQ(second.exit_code, 0) << Slurp(second.dir + "/session.log");
   ASSERT_TRUE(first.has_report && second.has_report);
   const std::string plant = Slurp(first.dir + "/plant.log");
@@ -267,7 +267,7 @@ std::pair<int, std::string> RunPlant(const std::string& name, std::vector<std::s
   hexa::deploy::ProcessGroup group;
   hexa::deploy::ChildSpec s{"plant", {HEXA_PLANT_SIM}, {}, dir + "/plant.console.log"};
   s.argv.insert(s.argv.end(), args.begin(), args.end());
-  s.argv.insert(s.argv.end(), {"--domain", "62", "--log-file", dir + "/plant.log"});
+  s.argv.insert(s.argv.end(), {"--domain", "148", "--log-file", dir + "/plant.log"});
   std::string err;
   if (group.Start(s, err) < 0) return {-1, err};
   const auto ev = group.WaitEvent(std::chrono::seconds(60));

@@ -148,7 +148,7 @@ void CheckRealtimeSetup(bool event_thread_normal) {
   ASSERT_TRUE(hold.held());
   EXPECT_LE(KernelCpuLatencyLimit_us(), 7);
   {
-    hexa::comm::Participant participant(static_cast<dds_domainid_t>(100 + getpid() % 100));
+    hexa::comm::Participant participant(static_cast<dds_domainid_t>(100 + getpid() % 20));
     // Cyclone's threads name themselves once they run: wait for the names (not for a time).
     auto policies = ThreadPolicies();
     for (int i = 0; i < 500 && (policies.count("tev") == 0 || policies.count("recvUC") == 0 ||

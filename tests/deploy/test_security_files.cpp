@@ -64,7 +64,7 @@ class SecurityFiles : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     base_ = ::testing::TempDir() + "/secfiles_" + std::to_string(getpid());
-    domain_ = 150 + getpid() % 40;
+    domain_ = 160 + getpid() % 30;
     MakeSecured(base_ + "/good", domain_);
     MakeSecured(base_ + "/other", domain_);  // same deployment, another CA
   }

@@ -32,7 +32,7 @@ std::string Faults(const hexa::recorder::SessionReport& r) {
 
 // Lockstep, deterministic: leg 3 starts writing NaN / 42 V at t = 1 s.
 TEST(Faults, GarbageCommandsAreNulledReportedAndTheSupervisorHolds) {
-  const auto run = RunSession("fault_garbage", 73, {"--trajectory", "combined", "--periods", "1",
+  const auto run = RunSession("fault_garbage", 99, {"--trajectory", "combined", "--periods", "1",
                                                     "--fault", "3:garbage:1.0"});
   EXPECT_NE(run.exit_code, 0) << "a session that ends in HOLD must not report success";
   ASSERT_TRUE(run.has_report) << Slurp(run.dir + "/session.log");
@@ -190,7 +190,7 @@ void ExpectStandbyTakesOverWithoutAFault(const std::string& name, int domain, in
 // ownership passes to the standby, which answers the plant's re-ask. Before this (AUTOMATIC
 // liveliness in lockstep), a silent or hung primary was never replaced.
 TEST(Faults, LockstepSilentPrimaryIsReplacedByItsStandbyWithoutAFault) {
-  ExpectStandbyTakesOverWithoutAFault("fault_silence_sb", 85, 2, "silence", 3);
+  ExpectStandbyTakesOverWithoutAFault("fault_silence_sb", 50, 2, "silence", 3);
 }
 
 // Leg 5's primary hangs (its control thread stops in the data callback, holding the control
@@ -205,7 +205,7 @@ TEST(Faults, LockstepHungPrimaryIsReplacedByItsStandbyWithoutAFault) {
 // cycles in a row the plant reports FAULT_COMPUTE_OVERRUN and the supervisor holds. Before,
 // `slow` tested nothing in lockstep.
 TEST(Faults, LockstepSlowLegIsAComputeOverrun) {
-  const auto run = RunFaultSession("fault_slow_ls", 86, {"--fault", "4:slow:1.0"});
+  const auto run = RunFaultSession("fault_slow_ls", 51, {"--fault", "4:slow:1.0"});
   const std::string f = ExpectHeldAfter(run, "plant: leg 4", "FAULT_COMPUTE_OVERRUN");
   if (f.empty()) return;
   EXPECT_GE(TickOf(f), 1019u);  // the 20th slow cycle answers tick 1019
@@ -217,7 +217,7 @@ TEST(Faults, LockstepSlowLegIsAComputeOverrun) {
 // Rig faults injected into the plant (docs/faults.md): each is detected by the component that
 // can see it, named, and held.
 TEST(Faults, DeadPressureSensorIsSensorInvalidFromItsLeg) {
-  const auto run = RunFaultSession("fault_pdead", 87, {"--plant-fault", "pressure-dead:2:1.0"});
+  const auto run = RunFaultSession("fault_pdead", 52, {"--plant-fault", "pressure-dead:2:1.0"});
   const std::string f = ExpectHeldAfter(run, "leg2: leg 2", "FAULT_SENSOR_INVALID");
   if (f.empty()) return;
   const auto& r = run.report;

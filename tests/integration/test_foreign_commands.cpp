@@ -175,7 +175,7 @@ TEST(ForeignCommands, LockstepOperatorStopFromOutsideIsRefused) {
 // machine stalls a process beyond a rate tolerance: then it holds (exit 3) for that stall,
 // which is a real-time benchmark's concern (bench/session/), and the attack checks still hold.
 TEST(ForeignCommands, RealTimeValveIntruderIsRefused) {
-  const auto run = RunWithIntruder("foreign_valve_rt", 63,
+  const auto run = RunWithIntruder("foreign_valve_rt", 54,
                                    {"--trajectory", "combined", "--periods", "1", "--mode", "realtime"},
                                    {"--topic", "valve", "--leg", "3", "--strength", "1000",
                                     "--user-data", "leg=3 standby=0", "--value", "9.88", "--follow"});
@@ -201,7 +201,7 @@ TEST(ForeignCommands, RealTimeValveIntruderIsRefused) {
 // plant refuses its samples all the same.
 TEST(ForeignCommands, SecuredLockstepIntruderWithLeg3sIdentityIsRefused) {
   const std::string name = "foreign_valve_secure";
-  const int domain = 64;
+  const int domain = 55;
   const std::string dir = hexa::testing::ScratchDir(name);
   ProcessGroup group;
   ChildSpec s{"session", {HEXA_SESSION}, {}, dir + "/launcher.console.log"};

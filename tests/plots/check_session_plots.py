@@ -5,7 +5,10 @@
 
 Usage: check_session_plots.py BUILD_DIR CASE DOMAIN [OUT_DIR]
 CASE: default | fault (--fault 3:garbage:1.0) | takeover (--standby --fault 2:crash:1.5) |
-      realtime (--mode realtime). Run inside a network namespace (DDS on loopback).
+      realtime (--mode realtime). Run inside a network namespace (DDS on loopback). Every case
+      tracks one period of the default trajectory and a held session ends 1 s after its HOLD
+      (--periods 1 --hold-timeout 1): what is checked, where the markers and the window sit and
+      how the session ends, does not depend on the session's length.
 
 A real-time session either completes (exit 0) or, when the machine stalls a process beyond a
 rate tolerance, holds (exit 3). Completing in real time is a benchmark's claim
@@ -77,7 +80,7 @@ def main():
     out = sys.argv[4] if len(sys.argv) > 4 else tempfile.mkdtemp(prefix=f"plots_{case}_")
     args, want_exit = CASES[case]
     cmd = [os.path.join(build, "deploy/hexa_session"), "--domain", domain, "--out", out,
-           "--timeout", "400"] + args
+           "--timeout", "400", "--periods", "1", "--hold-timeout", "1"] + args
     print("running:", " ".join(cmd))
     r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     wanted = want_exit if isinstance(want_exit, tuple) else (want_exit,)
