@@ -20,14 +20,14 @@
 #include "bounded_file.hpp"
 #include "internal.hpp"
 #include "rig_overlay.pb.h"
-#include "text_format.hpp"
+#include "hexa/config/text_format.hpp"
 
 namespace hexa::config {
 
 namespace gp = google::protobuf;
 using internal::FormatDouble;
-using internal::Locate;
-using internal::Location;
+using text_format::Locate;
+using text_format::Location;
 using ParseInfoTree = gp::TextFormat::ParseInfoTree;
 
 // ---- LegOverride ------------------------------------------------------------------------------
@@ -163,7 +163,7 @@ void CheckFinite(const gp::Message& msg, const ParseInfoTree* tree, const std::s
         for (int k = 0; k < r->FieldSize(msg, fd); ++k) {
           const gp::Message& element = r->GetRepeatedMessage(msg, fd, k);
           CheckFinite(element, tree ? tree->GetTreeForNested(fd, k) : nullptr,
-                      field_path + internal::ElementSelector(element, k), file, issues);
+                      field_path + text_format::ElementSelector(element, k), file, issues);
         }
       } else if (r->HasField(msg, fd)) {
         CheckFinite(r->GetMessage(msg, fd), tree ? tree->GetTreeForNested(fd, -1) : nullptr,
@@ -177,7 +177,7 @@ void CheckFinite(const gp::Message& msg, const ParseInfoTree* tree, const std::s
     }
     const double v = r->GetDouble(msg, fd);
     if (!std::isfinite(v)) {
-      const Location loc = tree ? internal::FromRange(tree->GetLocationRange(fd, -1)) : Location{};
+      const Location loc = tree ? text_format::FromRange(tree->GetLocationRange(fd, -1)) : Location{};
       issues.push_back({file, loc.line, loc.column, field_path, "value must be a finite number",
                         FormatDouble(v), "finite"});
     }
@@ -235,7 +235,7 @@ void ReadLeg(const pb::LegOverlay& leg, int k, const ParseInfoTree* leg_tree, co
   }
   const gp::FieldDescriptor* id_fd = pb::LegOverlay::descriptor()->FindFieldByName("leg_id");
   const Location id_loc =
-      leg_tree ? internal::FromRange(leg_tree->GetLocationRange(id_fd, -1)) : block;
+      leg_tree ? text_format::FromRange(leg_tree->GetLocationRange(id_fd, -1)) : block;
   const int id = leg.leg_id();
   if (id < 1 || id > static_cast<int>(kNumLegs)) {
     issues.push_back({file, id_loc.line, id_loc.column, index_path + ".leg_id",
@@ -277,7 +277,7 @@ void ReadLeg(const pb::LegOverlay& leg, int k, const ParseInfoTree* leg_tree, co
     if (!(f.v->has_x() && f.v->has_y() && f.v->has_z())) {
       const gp::FieldDescriptor* fd = pb::LegOverlay::descriptor()->FindFieldByName(f.name);
       const Location loc =
-          leg_tree ? internal::FromRange(leg_tree->GetLocationRange(fd, -1)) : block;
+          leg_tree ? text_format::FromRange(leg_tree->GetLocationRange(fd, -1)) : block;
       issues.push_back({file, loc.line, loc.column, path + "." + f.name,
                         "a joint position needs all three coordinates",
                         std::string(f.v->has_x() ? "x" : "") + (f.v->has_y() ? "y" : "") +
@@ -302,17 +302,17 @@ OverlayResult ParseRigOverlay(const std::string& text, const std::string& displa
     pb::RigOverlay file;
     ParseInfoTree tree;
     std::vector<ConfigIssue> issues;
-    if (!internal::ParseTextFormat(text, display_name, file, tree, issues)) {
+    if (!text_format::ParseTextFormat(text, display_name, file, tree, issues)) {
       return FailOverlay(std::move(issues));
     }
-    const int eof_line = internal::CountLines(text);
+    const int eof_line = text_format::CountLines(text);
     CheckFinite(file, &tree, "", display_name, issues);
     if (!file.has_rig_name() || file.rig_name().empty()) {
       issues.push_back({display_name, eof_line, 1, "rig_name",
                         "required field 'rig_name' is missing (the rig file's rig_name)", "(absent)",
                         "the rig_name of the rig file it applies to"});
     }
-    const Location prov_loc = internal::FromRange(
+    const Location prov_loc = text_format::FromRange(
         tree.GetLocationRange(pb::RigOverlay::descriptor()->FindFieldByName("provenance"), -1));
     if (!file.has_provenance()) {
       issues.push_back({display_name, eof_line, 1, "provenance",
@@ -344,7 +344,7 @@ OverlayResult ParseRigOverlay(const std::string& text, const std::string& displa
     const gp::FieldDescriptor* leg_fd = pb::RigOverlay::descriptor()->FindFieldByName("leg");
     std::map<int, int> first_line_of_id;
     for (int k = 0; k < file.leg_size(); ++k) {
-      const Location block = internal::FromRange(tree.GetLocationRange(leg_fd, k));
+      const Location block = text_format::FromRange(tree.GetLocationRange(leg_fd, k));
       ReadLeg(file.leg(k), k, tree.GetTreeForNested(leg_fd, k), block, display_name,
               first_line_of_id, issues, overlay);
     }
@@ -376,7 +376,7 @@ ConfigResult ApplyRigOverlay(const SystemConfig& base, const RigOverlay& overlay
   bool have_tree = false;
   if (!text.empty()) {
     std::vector<ConfigIssue> ignored;  // the overlay was parsed (and its errors told) before
-    have_tree = internal::ParseTextFormat(text, file, parsed, tree, ignored);
+    have_tree = text_format::ParseTextFormat(text, file, parsed, tree, ignored);
   }
   auto locate = [&](ConfigIssue& issue) {
     issue.file = file;

@@ -1,5 +1,5 @@
-// Protobuf text-format helpers shared by the rig-file, rig-overlay and washout-file loaders.
-#include "text_format.hpp"
+// Protobuf text-format reading shared by every file loader (hexa/config/text_format.hpp).
+#include "hexa/config/text_format.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include "internal.hpp"
 
-namespace hexa::config::internal {
+namespace hexa::config::text_format {
 
 namespace gp = google::protobuf;
 using ParseInfoTree = gp::TextFormat::ParseInfoTree;
@@ -261,7 +261,7 @@ void CheckPresence(const gp::Message& msg, const ParseInfoTree* tree, const std:
                                                                             : r->GetFloat(msg, fd);
       if (!std::isfinite(v)) {
         ctx.issues.push_back({ctx.file, loc.line, loc.column, field_path, "value must be a finite number",
-                              FormatDouble(v), "finite"});
+                              internal::FormatDouble(v), "finite"});
       }
     }
   }
@@ -276,4 +276,4 @@ void CheckEveryFieldWritten(const gp::Message& message, const ParseInfoTree& tre
   CheckPresence(message, &tree, "", Location{1, 1, eof_line}, ctx);
 }
 
-}  // namespace hexa::config::internal
+}  // namespace hexa::config::text_format

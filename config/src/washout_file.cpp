@@ -5,14 +5,14 @@
 #include <sstream>
 
 #include "motion_cueing.pb.h"
-#include "text_format.hpp"
+#include "hexa/config/text_format.hpp"
 
 namespace hexa::config {
 namespace {
 
 namespace gp = google::protobuf;
-using internal::FromRange;
-using internal::Location;
+using text_format::FromRange;
+using text_format::Location;
 using ParseInfoTree = gp::TextFormat::ParseInfoTree;
 
 WashoutTranslationParams FromPb(const pb::WashoutTranslationChannel& c) {
@@ -52,8 +52,8 @@ WashoutFileResult ParseWashoutFile(const std::string& text, const std::string& d
   pb::WashoutFile file;
   ParseInfoTree tree;
   std::vector<ConfigIssue> issues;
-  if (!internal::ParseTextFormat(text, display_name, file, tree, issues)) return Fail(std::move(issues));
-  internal::CheckEveryFieldWritten(file, tree, display_name, internal::CountLines(text), {}, issues);
+  if (!text_format::ParseTextFormat(text, display_name, file, tree, issues)) return Fail(std::move(issues));
+  text_format::CheckEveryFieldWritten(file, tree, display_name, text_format::CountLines(text), {}, issues);
   if (!issues.empty()) return Fail(std::move(issues));
   WashoutFileResult result;
   result.config = Translate(file);
@@ -61,7 +61,7 @@ WashoutFileResult ParseWashoutFile(const std::string& text, const std::string& d
   ParamChecker checker(rules);
   CheckWashoutConfig(checker, result.config, "");
   for (const ParamIssue& rule : rules) {
-    const Location loc = internal::Locate(file, tree, rule.field);
+    const Location loc = text_format::Locate(file, tree, rule.field);
     issues.push_back({display_name, loc.line > 0 ? loc.line : 1, loc.line > 0 ? loc.column : 1,
                       rule.field, rule.message, rule.value, rule.limit});
   }

@@ -2,6 +2,24 @@
 
 namespace hexa {
 
+LockstepClock::Silence LockstepClock::CheckSilence(std::int64_t now_ns) {
+  Silence s;
+  s.action = barrier_.Check(now_ns);
+  switch (s.action) {
+    case LockstepBarrier::Action::kWait:
+      s.next_check_ns = barrier_.next_check_ns();
+      break;
+    case LockstepBarrier::Action::kReask:
+      s.legs = barrier_.missing();
+      s.reask_supervisor = supervisor_reask_.Due(now_ns);
+      break;
+    case LockstepBarrier::Action::kTimeout:
+      s.legs = barrier_.missing();
+      break;
+  }
+  return s;
+}
+
 LockstepClock::Flow LockstepClock::AfterTick(std::uint64_t tick, std::int64_t now_ns) {
   if (params_.sync_every_ticks == 0 || tick % params_.sync_every_ticks != 0) return Flow::kStart;
   if (!ack_wait_requested_ && !ack_wait_active_) {

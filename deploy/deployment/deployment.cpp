@@ -1,6 +1,5 @@
 #include "deployment.hpp"
 
-#include <google/protobuf/io/tokenizer.h>
 #include <google/protobuf/text_format.h>
 
 #include <cmath>
@@ -10,6 +9,8 @@
 #include <set>
 #include <sstream>
 
+#include "hexa/config/text_format.hpp"
+
 namespace hexa::deploy {
 namespace {
 
@@ -18,17 +19,6 @@ using deployment::Deployment;
 using deployment::Host;
 using deployment::Process;
 using deployment::Role;
-
-class CollectingErrors : public gp::io::ErrorCollector {
- public:
-  void AddError(int line, gp::io::ColumnNumber column, const std::string& message) override {
-    errors.push_back(std::to_string(line + 1) + ":" + std::to_string(column + 1) + ": error: " +
-                     (message.find("has no field named") != std::string::npos ? "" : "syntax error: ") +
-                     message);
-  }
-  void AddWarning(int, gp::io::ColumnNumber, const std::string&) override {}
-  std::vector<std::string> errors;
-};
 
 // Line numbers of hosts and processes, for messages.
 struct Lines {
@@ -352,13 +342,9 @@ void Validate(const Deployment& d, Checker& c) {
 }
 
 
-LoadedDeployment Finish(Deployment d, const std::string& name, const Lines& lines,
-                        std::vector<std::string> parse_errors) {
+// Validates a parsed deployment; the defaults fill what it leaves out once it is valid.
+LoadedDeployment Finish(Deployment d, const std::string& name, const Lines& lines) {
   LoadedDeployment out;
-  if (!parse_errors.empty()) {
-    for (auto& e : parse_errors) out.errors.push_back(name + ":" + e);
-    return out;
-  }
   Checker c(name, lines);
   Validate(d, c);
   out.errors = std::move(c.errors);
@@ -371,19 +357,18 @@ LoadedDeployment Finish(Deployment d, const std::string& name, const Lines& line
 }  // namespace
 
 LoadedDeployment ParseDeployment(const std::string& text, const std::string& name) {
+  // The parser every text-format file of the system goes through (config/, text_format.hpp):
+  // its errors name the file, line and column, and an unknown field its path, the known
+  // fields and the nearest one.
   Deployment d;
-  gp::TextFormat::Parser parser;
-  CollectingErrors errors;
   gp::TextFormat::ParseInfoTree tree;
-  parser.RecordErrorsTo(&errors);
-  parser.WriteLocationsTo(&tree);
-  parser.AllowPartialMessage(false);
-  if (!parser.ParseFromString(text, &d)) {
-    if (errors.errors.empty()) errors.errors.push_back("0:0: error: cannot parse");
-    return Finish(std::move(d), name, Lines{}, std::move(errors.errors));
+  std::vector<config::ConfigIssue> issues;
+  if (!config::text_format::ParseTextFormat(text, name, d, tree, issues)) {
+    LoadedDeployment out;
+    for (const config::ConfigIssue& issue : issues) out.errors.push_back(issue.ToString());
+    return out;
   }
-  Lines lines{&tree};
-  return Finish(std::move(d), name, lines, {});
+  return Finish(std::move(d), name, Lines{&tree});
 }
 
 LoadedDeployment LoadDeployment(const std::string& path) {

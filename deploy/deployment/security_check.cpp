@@ -15,6 +15,15 @@
 #include <sstream>
 
 namespace hexa::deploy {
+
+std::string FormatUtc(std::time_t t, const char* format) {
+  char buf[64];
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  std::strftime(buf, sizeof buf, format, &tm);
+  return buf;
+}
+
 namespace {
 
 template <typename T, void (*F)(T*)>
@@ -100,7 +109,7 @@ std::map<std::string, std::string> SubjectFields(const std::string& subject) {
   return fields;
 }
 
-// "2026-11-23T01:02:03" -> time_t (UTC); -1 if malformed.
+// "2026-11-23T01:02:03" (kPermissionsTimeFormat) -> time_t (UTC); -1 if malformed.
 std::time_t ParseIsoTime(const std::string& text) {
   std::tm tm{};
   int n = 0;
@@ -112,13 +121,8 @@ std::time_t ParseIsoTime(const std::string& text) {
   return timegm(&tm);
 }
 
-std::string IsoTime(std::time_t t) {
-  char buf[32];
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M:%S UTC", &tm);
-  return buf;
-}
+// For messages: "2026-11-23 01:02:03 UTC".
+std::string IsoTime(std::time_t t) { return FormatUtc(t, "%Y-%m-%d %H:%M:%S UTC"); }
 
 X509Ptr LoadCert(const std::string& path, const char* what, std::vector<std::string>& errors) {
   BioPtr bio(BIO_new_file(path.c_str(), "r"));

@@ -19,6 +19,12 @@
 
 namespace hexa::deploy {
 
+// The permissions document's validity dates: written by the generator (security_xml.cpp) and
+// read back by the check, in UTC.
+inline constexpr char kPermissionsTimeFormat[] = "%Y-%m-%dT%H:%M:%S";
+// `t` as UTC text in strftime's `format` (kPermissionsTimeFormat, or "... UTC" for messages).
+std::string FormatUtc(std::time_t t, const char* format);
+
 struct SecurityFiles {
   bool has_security = false;  // the configuration has a <Security> section
   std::string identity_ca, identity_certificate, private_key;

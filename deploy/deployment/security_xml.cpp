@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "generate.hpp"
+#include "security_check.hpp"
 #include "hexa/comm/partition.hpp"
 #include "hexa/comm/qos.hpp"
 
@@ -83,14 +84,6 @@ RolePermissions PermissionsOf(Role role, int leg) {
       break;
   }
   return p;
-}
-
-std::string IsoTime(std::time_t t) {
-  char buf[32];
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S", &tm);
-  return buf;
 }
 
 std::string RulesXml(const std::vector<TopicRule>& rules, const char* kind, const char* indent) {
@@ -185,8 +178,8 @@ std::string PermissionsXml(const Deployment& d, const std::string& node, Role ro
      << "    <grant name=\"" << node << "\">\n"
      << "      <subject_name>" << SubjectOf(d, node) << "</subject_name>\n"
      << "      <validity>\n"
-     << "        <not_before>" << IsoTime(from) << "</not_before>\n"
-     << "        <not_after>" << IsoTime(to) << "</not_after>\n"
+     << "        <not_before>" << FormatUtc(from, kPermissionsTimeFormat) << "</not_before>\n"
+     << "        <not_after>" << FormatUtc(to, kPermissionsTimeFormat) << "</not_after>\n"
      << "      </validity>\n"
      << "      <allow_rule>\n"
      << "        <domains><id>" << d.domain_id() << "</id></domains>\n"

@@ -235,32 +235,32 @@ void PlantNode::WatchSilence(dds_duration_t& wait) {
   const std::int64_t now = node::MonotonicNow_ns();
   JudgeSilentLegs(now);
   if (exit_code_ >= 0) return;
-  LockstepBarrier& barrier = lockstep_.barrier();
-  switch (barrier.Check(now)) {
+  const LockstepClock::Silence silence = lockstep_.CheckSilence(now);
+  switch (silence.action) {
     case LockstepBarrier::Action::kWait:
-      wait = std::clamp<dds_duration_t>(barrier.next_check_ns() - now, DDS_MSECS(1), DDS_MSECS(10));
+      wait = std::clamp<dds_duration_t>(silence.next_check_ns - now, DDS_MSECS(1), DDS_MSECS(10));
       break;
     case LockstepBarrier::Action::kReask:
       // A sample can be lost to a reader that had not yet matched this writer, or to an
       // ownership hand-over (hot standby): ask the silent legs again for this tick. Leg
       // controllers answer a repeated tick with their cached command.
       for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg)
-        if (barrier.missing() & LegBit(leg)) {
+        if (silence.legs & LegBit(leg)) {
           PublishTick(leg);
           ++figures_.resent_samples;
         }
-      if (lockstep_.SupervisorReaskDue(now)) ReaskSupervisor();
+      if (silence.reask_supervisor) ReaskSupervisor();
       break;
     case LockstepBarrier::Action::kTimeout: {
       std::string states;
       for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg)
-        if (barrier.missing() & LegBit(leg))
+        if (silence.legs & LegBit(leg))
           states += "; " + runtime_.peer_processes().Describe(leg_name_[static_cast<std::size_t>(leg - 1)]);
       if (options_.expect_supervisor) states += "; " + runtime_.peer_processes().Describe("supervisor");
       log_->error("lockstep: tick {} not answered within {} s (the last resort) by:{}{}", tick_,
-                  options_.common.lockstep_timeout_s, LegList(barrier.missing()), states);
+                  options_.common.lockstep_timeout_s, LegList(silence.legs), states);
       for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
-        if (!(barrier.missing() & LegBit(leg))) continue;
+        if (!(silence.legs & LegBit(leg))) continue;
         char detail[160];
         std::snprintf(detail, sizeof detail, "lockstep: no command for tick %llu within %.1f s",
                       static_cast<unsigned long long>(tick_), options_.common.lockstep_timeout_s);

@@ -256,7 +256,7 @@ TEST(RigConfigReference, BoardBlockIsOptionalAndRoundTrips) {
 }
 
 // A field added to a core struct must also be added to proto/rig.proto, the translation
-// in config/src/rig_config.cpp, the reference file and the Expect*Eq helpers above; the
+// in config/src/rig_proto.cpp, the reference file and the Expect*Eq helpers above; the
 // sizes below were those when the schema was last brought in line with the structs.
 TEST(RigConfigReference, CoreStructsHaveNotGrownPastTheSchema) {
   EXPECT_EQ(sizeof(hexa::AirParams), 5 * sizeof(double));

@@ -1,7 +1,10 @@
-// LockstepClock (core/lockstep_clock.hpp): the recorder's flow control around the barrier.
+// LockstepClock (core/lockstep_clock.hpp): the recorder's flow control around the barrier, and
+// what a silent leg calls for (the plant and the replay act on the same decisions).
 #include "hexa/core/lockstep_clock.hpp"
 
 #include <gtest/gtest.h>
+
+#include <vector>
 
 namespace {
 
@@ -69,6 +72,41 @@ TEST(LockstepClock, WithoutARecorderItNeverWaits) {
   for (std::uint64_t t = 1; t < 3000; ++t) EXPECT_EQ(c.AfterTick(t, 0), Flow::kStart);
   c.Stop();
   EXPECT_FALSE(c.ReadyToStep());
+}
+
+TEST(LockstepClock, SilentLegsAreAskedAgainThenGivenUpAndTheSupervisorBacksOff) {
+  hexa::LockstepClockParams p;
+  p.barrier.reask_after_ns = 50'000'000;
+  p.barrier.timeout_ns = 1'000'000'000;
+  p.supervisor_reask_max_ns = 200'000'000;
+  LockstepClock c(p);
+  c.Run(100);
+  c.Begin(7, hexa::kAllLegs, 0);
+  for (int leg : {1, 2, 4, 6}) c.Answer(leg, 7);
+  using Action = hexa::LockstepBarrier::Action;
+  const hexa::LegMask silent = static_cast<hexa::LegMask>(hexa::LegBit(3) | hexa::LegBit(5));
+
+  LockstepClock::Silence s = c.CheckSilence(10'000'000);
+  EXPECT_EQ(s.action, Action::kWait);
+  EXPECT_EQ(s.next_check_ns, 50'000'000);
+  // Legs 3 and 5 are asked again every 50 ms; the supervisor at 50, then 100 and 200 ms apart.
+  std::vector<std::int64_t> supervisor_reasks_ms;
+  for (std::int64_t t_ms = 50; t_ms < 1000; t_ms += 50) {
+    s = c.CheckSilence(t_ms * 1'000'000);
+    ASSERT_EQ(s.action, Action::kReask) << t_ms;
+    EXPECT_EQ(s.legs, silent) << t_ms;
+    if (s.reask_supervisor) supervisor_reasks_ms.push_back(t_ms);
+  }
+  EXPECT_EQ(supervisor_reasks_ms, (std::vector<std::int64_t>{50, 150, 350, 550, 750, 950}));
+  // Leg 3 answers; leg 5 stays silent until the last resort.
+  c.Answer(3, 7);
+  s = c.CheckSilence(1'000'000'000);
+  EXPECT_EQ(s.action, Action::kTimeout);
+  EXPECT_EQ(s.legs, hexa::LegBit(5));
+  EXPECT_FALSE(c.ReadyToStep());
+  c.Answer(5, 7);
+  EXPECT_TRUE(c.ReadyToStep());
+  EXPECT_EQ(c.CheckSilence(1'100'000'000).action, Action::kWait);
 }
 
 }  // namespace

@@ -43,7 +43,7 @@ check "wait_log 'motion stream: at neutral at t' 1" "the platform returned to ne
 "$send" --port "$port" --rate-hz 100 --duration-s 0.4 --bad-every 1 --amplitude-m 0.0 \
     --first-sequence 1 > "$out/send_bad.log" 2>&1
 sleep 1
-run operator_stop 0 stop
+run stop_streaming 0 stop
 check "wait_log 'stream stopped: at neutral at t' 1" "stop: at neutral, IDLE"
 check "wait_log 'motion stream so far: applied [1-9]' 1" "the counters are logged"
 grep -E "motion stream|stream stopped|streaming from" "$out/supervisor.log" || true

@@ -1,11 +1,10 @@
 #include "hexa/services/peer_processes.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+
+#include "proc_text.hpp"
 
 namespace hexa::node {
 namespace {
@@ -16,13 +15,8 @@ namespace {
 bool ReadStat(int pid, char& state, std::uint64_t& start_ticks) {
   char path[32];
   std::snprintf(path, sizeof path, "/proc/%d/stat", pid);
-  const int fd = open(path, O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return false;
   char buf[1024];
-  const ssize_t n = read(fd, buf, sizeof buf - 1);
-  close(fd);
-  if (n <= 0) return false;
-  buf[n] = '\0';
+  if (!proc::ReadText(path, buf, sizeof buf)) return false;
   const char* p = std::strrchr(buf, ')');
   if (p == nullptr || p[1] != ' ') return false;
   p += 2;

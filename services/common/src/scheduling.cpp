@@ -12,6 +12,8 @@
 #include <cstdio>
 #include <cstring>
 
+#include "proc_text.hpp"
+
 namespace hexa::sched {
 namespace {
 
@@ -139,13 +141,8 @@ int CurrentThreadId() {
 bool ReadThreadSchedStat(int tid, std::uint64_t& run_ns, std::uint64_t& wait_ns) {
   char path[64];
   std::snprintf(path, sizeof path, "/proc/self/task/%d/schedstat", tid);
-  const int fd = open(path, O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return false;
   char text[96];
-  const ssize_t n = read(fd, text, sizeof text - 1);
-  close(fd);
-  if (n <= 0) return false;
-  text[n] = '\0';
+  if (!proc::ReadText(path, text, sizeof text)) return false;
   unsigned long long run = 0, wait = 0;
   if (std::sscanf(text, "%llu %llu", &run, &wait) != 2) return false;
   run_ns = run;

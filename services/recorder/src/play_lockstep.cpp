@@ -8,7 +8,7 @@
 
 #include "hexa/comm/time.hpp"
 #include "hexa/comm/waitset.hpp"
-#include "hexa/core/lockstep_protocol.hpp"
+#include "hexa/core/lockstep_clock.hpp"
 #include "topic_recorder.hpp"
 
 namespace hexa::recorder::cli {
@@ -22,12 +22,13 @@ class LockstepPlayback {
                    const std::vector<std::unique_ptr<TopicPlayerBase>>& owned,
                    comm::Participant& participant, comm::ShutdownGuard& shutdown)
       : path_(path), o_(o), catalog_(catalog), owned_(owned), participant_(participant),
-        shutdown_(shutdown), barrier_(BarrierParams(o)), waitset_(participant, 4) {
+        shutdown_(shutdown), clock_(ClockParams(o)), waitset_(participant, 4) {
     SelectTickedTopics(players);
     waitset_.Attach(shutdown.guard_condition(), 0);
   }
 
   int Run() {
+    clock_.Run(UINT64_MAX);  // the recording's last tick ends the replay, not the clock
     FindAnswerLegs();
     if (await_answers_) StartAnswers();
     WaitForPeers();
@@ -61,9 +62,13 @@ class LockstepPlayback {
     uint64_t tick = 0;
   };
 
-  static LockstepBarrierParams BarrierParams(const LockstepOptions& o) {
-    LockstepBarrierParams p;
-    p.timeout_ns = static_cast<int64_t>(o.answer_timeout_s * 1e9);
+  // The plant's clock with the replay's timeout; no recorder flow control: the replay's
+  // writers keep all (a reader that falls behind throttles them, nothing is overwritten),
+  // where the plant's keep a bounded history (docs/architecture.md, "Lockstep").
+  static LockstepClockParams ClockParams(const LockstepOptions& o) {
+    LockstepClockParams p;
+    p.barrier.timeout_ns = static_cast<int64_t>(o.answer_timeout_s * 1e9);
+    p.sync_every_ticks = 0;
     return p;
   }
 
@@ -102,8 +107,8 @@ class LockstepPlayback {
   }
 
   // Answers: the ValveCommands of the controllers under test, recorded like `record` does.
-  // The clock's side of the lockstep protocol (core/lockstep_protocol.hpp) decides when a tick
-  // is complete, asks a silent leg again and gives up, exactly as the plant service does.
+  // The plant's lockstep clock (core/lockstep_clock.hpp) decides when a tick is complete,
+  // asks a silent leg again and gives up, exactly as in the plant service.
   void StartAnswers() {
     answers_writer_ = std::make_unique<RecordingWriter>(McapWriterConfig{});
     answers_writer_->Open(o_.answers_out);
@@ -116,7 +121,7 @@ class LockstepPlayback {
       if (!tick || leg == 0) return;
       uint64_t& newest = answered_[leg];
       newest = std::max(newest, *tick);
-      if (leg <= kNumLegs) barrier_.Answer(static_cast<int>(leg), *tick);
+      if (leg <= kNumLegs) clock_.Answer(static_cast<int>(leg), *tick);
     };
     answers_writer_->mcap().FlushChunk();
     waitset_.Attach(answers_->condition(), 1);
@@ -200,34 +205,35 @@ class LockstepPlayback {
         }
       }
     }
-    barrier_.Begin(tick, awaited, comm::MonotonicNow_ns());
+    clock_.Begin(tick, awaited, comm::MonotonicNow_ns());
     for (const auto& [leg, newest] : answered_)  // answered before this tick was played
-      if (newest >= tick && leg <= kNumLegs) barrier_.Answer(static_cast<int>(leg), tick);
+      if (newest >= tick && leg <= kNumLegs) clock_.Answer(static_cast<int>(leg), tick);
     for (;;) {
       DrainAnswers();
-      if (barrier_.complete()) return;
+      if (clock_.ReadyToStep()) return;
       if (shutdown_.requested()) throw StopPlayback{};
       const int64_t now = comm::MonotonicNow_ns();
-      const LockstepBarrier::Action action = barrier_.Check(now);
-      if (action == LockstepBarrier::Action::kTimeout) {
+      const LockstepClock::Silence silence = clock_.CheckSilence(now);
+      if (silence.action == LockstepBarrier::Action::kTimeout) {
         std::string late;
         for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg)
-          if (barrier_.missing() & LegBit(leg)) late += " " + std::to_string(leg);
+          if (silence.legs & LegBit(leg)) late += " " + std::to_string(leg);
         throw std::runtime_error("play --lockstep: tick " + std::to_string(tick) +
                                  " not answered within " + std::to_string(o_.answer_timeout_s) +
                                  " s by leg(s)" + late);
       }
-      if (action == LockstepBarrier::Action::kReask) {
+      if (silence.action == LockstepBarrier::Action::kReask) {
         // As the plant does: the silent legs' sensor samples once more (a controller answers
-        // a repeated tick from its cache).
+        // a repeated tick from its cache). The supervisor is not asked again: its setpoints
+        // are the recording's, published with their tick.
         for (const Pending& m : msgs) {
           if (m.player == sensors_player_ && m.leg >= 1 && m.leg <= kNumLegs &&
-              (barrier_.missing() & LegBit(static_cast<int>(m.leg))) && m.player->Publish(m.data))
+              (silence.legs & LegBit(static_cast<int>(m.leg))) && m.player->Publish(m.data))
             ++resent_;
         }
+        continue;
       }
-      const int64_t wait_ns = std::max<int64_t>(1'000'000, barrier_.next_check_ns() - now);
-      waitset_.Wait(wait_ns);
+      waitset_.Wait(std::max<int64_t>(1'000'000, silence.next_check_ns - now));
     }
   }
 
@@ -332,7 +338,7 @@ class LockstepPlayback {
 
   std::unique_ptr<RecordingWriter> answers_writer_;
   std::unique_ptr<TopicRecorderBase> answers_;
-  LockstepBarrier barrier_;
+  LockstepClock clock_;
   comm::WaitSet waitset_;
   uint64_t answers_received_ = 0;
   std::map<uint32_t, uint64_t> answered_;  // leg -> newest tick answered (for the summary)

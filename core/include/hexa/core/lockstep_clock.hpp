@@ -1,6 +1,9 @@
 // The lockstep clock's decisions (docs/architecture.md, "Lockstep"), without the transport:
 // the tick's barrier with its re-ask and last-resort timeout (LockstepBarrier), and the flow
-// control that keeps a fast loop within a window of a slow recorder.
+// control that keeps a fast loop within a window of a slow recorder. Two clocks drive it: the
+// plant service (simulated ticks) and the recorder's deterministic replay (`hexa_recorder play
+// --lockstep`: the recording's ticks), so that when a tick is complete, when a silent leg is
+// asked again and when it is given up are decided by the same code for both.
 //
 // Recorder flow control: every sync_every_ticks the loop asks for an acknowledgement wait
 // (the node's main thread waits, beside the loop, until every reliable reader has
@@ -57,6 +60,15 @@ class LockstepClock {
   }
   // At a re-ask of the legs (LockstepBarrier::Check): is the supervisor to be asked again too?
   bool SupervisorReaskDue(std::int64_t now_ns) { return supervisor_reask_.Due(now_ns); }
+
+  // What the silence of the legs the tick still awaits calls for at `now_ns`.
+  struct Silence {
+    LockstepBarrier::Action action = LockstepBarrier::Action::kWait;
+    LegMask legs = 0;                // kReask: the legs to ask again; kTimeout: the legs missing
+    bool reask_supervisor = false;   // kReask: the supervisor's inputs are due again as well
+    std::int64_t next_check_ns = 0;  // kWait: when to look again at the latest
+  };
+  Silence CheckSilence(std::int64_t now_ns);
   bool Answer(int leg, std::uint64_t tick) { return barrier_.Answer(leg, tick); }
   bool Release(LegMask legs) { return barrier_.Release(legs); }
   // Every awaited leg answered, the loop runs and no recorder sync holds it.

@@ -1,7 +1,8 @@
-// Protobuf text-format helpers shared by the rig-file, rig-overlay and washout-file loaders
-// (not installed): the parser's set-up with its errors turned into ConfigIssues with "did you
-// mean", the every-field-written check, line lookup of a field path through the parser's
-// ParseInfoTree.
+// Reading a protobuf text-format file the same way everywhere: the rig file, rig overlays and
+// washout files (config/), deployment files (deploy/deployment). The parser's set-up with its
+// errors turned into ConfigIssues ("FILE:LINE:COLUMN: error: FIELD: message (value V, limit
+// L)", with the field path and "did you mean" for an unknown field), the every-field-written
+// check, and line lookup of a field path through the parser's ParseInfoTree.
 #pragma once
 
 #include <google/protobuf/descriptor.h>
@@ -14,7 +15,7 @@
 
 #include "hexa/config/rig_config.hpp"
 
-namespace hexa::config::internal {
+namespace hexa::config::text_format {
 
 struct Location {
   int line = 0;    // 1-based, 0 = unknown
@@ -72,4 +73,4 @@ std::string ElementSelector(const google::protobuf::Message& element, int index)
 Location Locate(const google::protobuf::Message& root,
                 const google::protobuf::TextFormat::ParseInfoTree& tree, const std::string& path);
 
-}  // namespace hexa::config::internal
+}  // namespace hexa::config::text_format
