@@ -39,6 +39,14 @@ def read_json(path):
         return None
 
 
+def pin(cpus):
+    """A preexec_fn that pins the child to CPUS ("0", "0,1"), or None for no pinning."""
+    if not cpus:
+        return None
+    chosen = {int(c) for c in cpus.split(",")}
+    return lambda: os.sched_setaffinity(0, chosen)
+
+
 def run(a, variant, index, tmp):
     out = os.path.join(tmp, f"{variant.replace(' ', '_')}_{index}")
     argv = [os.path.join(a.build, "deploy/hexa_session"), "--trajectory", "combined",
@@ -59,7 +67,7 @@ def run(a, variant, index, tmp):
                 load = subprocess.Popen(["node", "load_clients.mjs", f"ws://127.0.0.1:{port}",
                                          str(a.clients)], cwd=a.node_dir, stdout=subprocess.PIPE,
                                         stderr=subprocess.STDOUT, text=True,
-                                        start_new_session=True)
+                                        start_new_session=True, preexec_fn=pin(a.client_cpus))
         rc = session.wait()
     finally:
         if session.poll() is None:
@@ -103,6 +111,9 @@ def main():
     ap.add_argument("--periods", type=int, default=2)
     ap.add_argument("--seed", type=int, default=4)
     ap.add_argument("--domain", type=int, default=89)
+    ap.add_argument("--client-cpus", default="",
+                    help="pin the clients' node process to these CPUs (e.g. 0: the bridge's CPU, "
+                         "standing for clients on another machine); default: not pinned")
     a = ap.parse_args()
     a.build = os.path.abspath(a.build)
     a.node_dir = os.path.abspath(a.node_dir or os.path.join(a.build, "tests/foxglove/js"))

@@ -1,9 +1,13 @@
 // The supervisor's cycle (supervisor_node.hpp): which samples a tick runs on. Real time: each
 // IMU sample with the legs' newest; lockstep: the IMU and the six legs' samples of the same
 // tick, a re-asked tick answered again; the main thread's IMU-miss count.
+#include <time.h>
+
 #include <algorithm>
 
 #include "supervisor_node.hpp"
+
+#include "hexa/comm/time.hpp"
 
 namespace hexa::task_space {
 
@@ -85,6 +89,7 @@ void SupervisorNode::RunCycle() {
     if (!fresh_imu) return;
     last_imu_mono_ns_ = node::MonotonicNow_ns();
     imu_misses_consecutive_ = 0;
+    NoteInputLag(m);
     RunTick(m, imu_.header.sim_time_s);
   } else {
     // Lockstep: the IMU of tick m and the six legs' samples of tick m.
@@ -98,6 +103,29 @@ void SupervisorNode::RunCycle() {
     RunTick(m, imu_.header.sim_time_s);
   }
   if (exit_code_ >= 0) done_.Set();
+}
+
+void SupervisorNode::NoteInputLag(std::uint64_t tick) {
+  timespec cpu{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &cpu);
+  const std::int64_t cpu_ns = static_cast<std::int64_t>(cpu.tv_sec) * 1'000'000'000 + cpu.tv_nsec;
+  const std::int64_t mono_ns = last_imu_mono_ns_;
+  const std::int64_t lag_ns = comm::RealtimeNow_ns() - imu_.header.source_time_ns;
+  // A sample older than 4 IMU periods, and a process that ran under a quarter of the time
+  // since its previous cycle: it was ready to run (its data had come) but did not run.
+  constexpr std::int64_t kLateInput_ns = 20'000'000;
+  if (cycle_mono_ns_ > 0 && lag_ns > kLateInput_ns &&
+      4 * (cpu_ns - cycle_cpu_ns_) < mono_ns - cycle_mono_ns_) {
+    host_stall_ = HostStall{tick, static_cast<double>(lag_ns) * 1e-9,
+                            static_cast<double>(mono_ns - cycle_mono_ns_) * 1e-9,
+                            static_cast<double>(cpu_ns - cycle_cpu_ns_) * 1e-9, mono_ns};
+    log_->warn("tick {}: the plant's IMU sample was {:.1f} ms old when this process took it, and "
+               "the process ran {:.2f} ms of CPU in the {:.1f} ms since its previous cycle: the "
+               "host did not run it",
+               tick, host_stall_.lag_s * 1e3, host_stall_.cpu_s * 1e3, host_stall_.wall_s * 1e3);
+  }
+  cycle_mono_ns_ = mono_ns;
+  cycle_cpu_ns_ = cpu_ns;
 }
 
 void SupervisorNode::MainThreadLook() {

@@ -188,6 +188,15 @@ void SupervisorNode::ReportHold(double time_s) {
                 leg > 0 ? std::to_string(leg).c_str() : "",
                 reported ? "reported by" : "detected by", reported ? r.source.data() : "supervisor",
                 reported ? r.detail.data() : output_.fault_detail.data());
+  // A stale setpoint right after the host stopped this process is the host's stall: say so.
+  if (host_stall_.at_mono_ns > 0 && node::MonotonicNow_ns() - host_stall_.at_mono_ns < 2'000'000'000) {
+    const std::size_t used = std::strlen(line);
+    std::snprintf(line + used, sizeof line - used,
+                  "; the host stopped the supervisor: the plant's tick %llu reached it %.1f ms old, "
+                  "while it ran %.2f ms of CPU in %.1f ms",
+                  static_cast<unsigned long long>(host_stall_.tick), host_stall_.lag_s * 1e3,
+                  host_stall_.cpu_s * 1e3, host_stall_.wall_s * 1e3);
+  }
   log_->error("{}", line);
   if (options_.hold_report_path.empty()) return;
   const std::string tmp = options_.hold_report_path + ".tmp";

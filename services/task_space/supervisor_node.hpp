@@ -137,6 +137,20 @@ class SupervisorNode {
   // RunCycle on the IMU and leg-sensor readers' data; its mutex guards everything below.
   services::ControlCycle cycle_;
   std::int64_t last_imu_mono_ns_ = 0;  // real time: when the last IMU sample was taken
+  // Real time: an IMU sample taken far later than the plant wrote it while this process used
+  // almost no CPU meanwhile means the host did not run the process (docs/liveliness.md); the
+  // newest such stall is named in the hold line.
+  struct HostStall {
+    std::uint64_t tick = 0;
+    double lag_s = 0.0;   // the sample's age when it was taken
+    double wall_s = 0.0;  // since the cycle before it
+    double cpu_s = 0.0;   // the process's CPU time in that interval
+    std::int64_t at_mono_ns = 0;
+  };
+  HostStall host_stall_;
+  std::int64_t cycle_mono_ns_ = 0;  // the previous real-time cycle: monotonic and process CPU
+  std::int64_t cycle_cpu_ns_ = 0;
+  void NoteInputLag(std::uint64_t tick);
   LegArray<hexa_msg_LegSensors> sensors_{};
   bool imu_lost_ = false;  // the plant reported FAULT_IMU_LOST: lockstep runs without it
   bool RunLockstepWithoutImu();
