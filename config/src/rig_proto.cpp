@@ -324,6 +324,43 @@ void ToPb(const LegControllerParams& p, pb::LegControllerConfig* lc) {
   k->set_raise_only(p.coupled.raise_only);
 }
 
+SoftLimitParams FromPb(const pb::SoftLimitsConfig& f) {
+  SoftLimitParams p;
+  p.max_base_joint_angle_rad = f.max_base_joint_angle_rad();
+  p.max_platform_joint_angle_rad = f.max_platform_joint_angle_rad();
+  const pb::Vector3& lo = f.position_min_from_home_m();
+  const pb::Vector3& hi = f.position_max_from_home_m();
+  p.position_min_from_home_m = {lo.x(), lo.y(), lo.z()};
+  p.position_max_from_home_m = {hi.x(), hi.y(), hi.z()};
+  const pb::RollPitchYaw& rlo = f.rotation_min_rad();
+  const pb::RollPitchYaw& rhi = f.rotation_max_rad();
+  p.rotation_min_rad = {rlo.roll(), rlo.pitch(), rlo.yaw()};
+  p.rotation_max_rad = {rhi.roll(), rhi.pitch(), rhi.yaw()};
+  p.max_linear_speed_m_s = f.max_linear_speed_m_s();
+  p.max_angular_speed_rad_s = f.max_angular_speed_rad_s();
+  return p;
+}
+void ToPb(const SoftLimitParams& p, pb::SoftLimitsConfig* f) {
+  f->set_max_base_joint_angle_rad(p.max_base_joint_angle_rad);
+  f->set_max_platform_joint_angle_rad(p.max_platform_joint_angle_rad);
+  const auto vec = [](const std::array<double, 3>& v, pb::Vector3* out) {
+    out->set_x(v[0]);
+    out->set_y(v[1]);
+    out->set_z(v[2]);
+  };
+  const auto rpy = [](const std::array<double, 3>& v, pb::RollPitchYaw* out) {
+    out->set_roll(v[0]);
+    out->set_pitch(v[1]);
+    out->set_yaw(v[2]);
+  };
+  vec(p.position_min_from_home_m, f->mutable_position_min_from_home_m());
+  vec(p.position_max_from_home_m, f->mutable_position_max_from_home_m());
+  rpy(p.rotation_min_rad, f->mutable_rotation_min_rad());
+  rpy(p.rotation_max_rad, f->mutable_rotation_max_rad());
+  f->set_max_linear_speed_m_s(p.max_linear_speed_m_s);
+  f->set_max_angular_speed_rad_s(p.max_angular_speed_rad_s);
+}
+
 SupervisorParams FromPb(const pb::SupervisorConfig& sv) {
   SupervisorParams p;
   p.period_s = sv.period_s();
@@ -346,6 +383,7 @@ SupervisorParams FromPb(const pb::SupervisorConfig& sv) {
   p.outer_loop.max_correction_m = sv.outer_loop().max_correction_m();
   p.outer_loop.translation_gain_scale = sv.outer_loop().translation_gain_scale();
   p.outer_loop.gate_leg_speed_m_s = sv.outer_loop().gate_leg_speed_m_s();
+  p.soft_limits = FromPb(sv.soft_limits());
   return p;
 }
 void ToPb(const SupervisorParams& p, pb::SupervisorConfig* sv) {
@@ -369,6 +407,7 @@ void ToPb(const SupervisorParams& p, pb::SupervisorConfig* sv) {
   sv->mutable_outer_loop()->set_max_correction_m(p.outer_loop.max_correction_m);
   sv->mutable_outer_loop()->set_translation_gain_scale(p.outer_loop.translation_gain_scale);
   sv->mutable_outer_loop()->set_gate_leg_speed_m_s(p.outer_loop.gate_leg_speed_m_s);
+  ToPb(p.soft_limits, sv->mutable_soft_limits());
 }
 
 }  // namespace

@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "hexa/core/soft_limits.hpp"
+
 namespace hexa {
 namespace {
 
@@ -142,17 +144,26 @@ FeasibilityReport CheckFeasibility(const RigParams& rig, const SupervisorParams&
   // first, then the stroke, then speed, then acceleration; within a kind the largest
   // relative excess (stroke: excess / usable stroke; speed, acceleration: value / limit - 1),
   // the earliest sample on a tie.
+  // Last, the soft limits' static checks (the pose box, the joints' deflections; the stroke
+  // is the envelope's above), largest normalised excess first.
   auto rank = [](FeasibilityViolation v) {
     switch (v) {
-      case FeasibilityViolation::kTooLong: return 5;
-      case FeasibilityViolation::kNotFinite: return 4;
-      case FeasibilityViolation::kStroke: return 3;
-      case FeasibilityViolation::kSpeed: return 2;
-      case FeasibilityViolation::kAcceleration: return 1;
+      case FeasibilityViolation::kTooLong: return 6;
+      case FeasibilityViolation::kNotFinite: return 5;
+      case FeasibilityViolation::kStroke: return 4;
+      case FeasibilityViolation::kSpeed: return 3;
+      case FeasibilityViolation::kAcceleration: return 2;
+      case FeasibilityViolation::kSoftLimit: return 1;
       case FeasibilityViolation::kNone: return 0;
     }
     return 0;
   };
+  const SoftLimits soft_limits(rig, MakeSoftLimitsConfig(rig, params));
+  PoseLimitCheck soft_violation;
+  // A rest pose already outside them (the estimate after a reset from HOLD) may blend back in:
+  // the blend is then not held to them, the motion is.
+  const bool rest_outside =
+      soft_limits.CheckPose(PoseFromVector(trajectory.start_xyz_rpy())).kind != SoftLimitKind::kNone;
   double worst_ratio = 0.0;
   LegArray<double> bad_length_m{}, bad_speed_m_s{}, bad_accel_m_s2{};
   const double usable_stroke_m = env.max_length_m - env.min_length_m;
@@ -161,6 +172,22 @@ FeasibilityReport CheckFeasibility(const RigParams& rig, const SupervisorParams&
     trajectory.Evaluate(t, sample);
     LegKinematicsOf(rig.geometry, sample, length_m, speed_m_s, accel_m_s2);
     ++report.samples;
+    const PoseLimitCheck pose_check = soft_limits.CheckPose(sample.pose);
+    const bool held_to_soft_limits = !(rest_outside && sample.phase == TrajectoryPhase::kBlend);
+    if (held_to_soft_limits && pose_check.kind != SoftLimitKind::kNone &&
+        pose_check.kind != SoftLimitKind::kStroke &&
+        pose_check.kind != SoftLimitKind::kNotFinite &&
+        (rank(FeasibilityViolation::kSoftLimit) > rank(report.violation) ||
+         (report.violation == FeasibilityViolation::kSoftLimit && pose_check.excess > worst_ratio))) {
+      worst_ratio = pose_check.excess;
+      report.feasible = false;
+      report.violation = FeasibilityViolation::kSoftLimit;
+      report.leg = pose_check.kind == SoftLimitKind::kPoseBox ? 0 : pose_check.index;
+      report.time_s = t;
+      report.value = pose_check.value;
+      report.limit = pose_check.limit;
+      soft_violation = pose_check;
+    }
     for (std::size_t i = 0; i < kNumLegs; ++i) {
       const double l = length_m[i], ld = speed_m_s[i], ldd = accel_m_s2[i];
       report.min_length_m[i] = std::min(report.min_length_m[i], l);
@@ -233,6 +260,24 @@ FeasibilityReport CheckFeasibility(const RigParams& rig, const SupervisorParams&
           "leg %d at t=%.3f s: length, speed or acceleration is not finite (%g, %g, %g)", leg, t,
           bad_length_m[leg - 1], bad_speed_m_s[leg - 1], bad_accel_m_s2[leg - 1]);
       break;
+    case FeasibilityViolation::kSoftLimit: {
+      static constexpr const char* kAxis[6] = {"x", "y", "z", "roll", "pitch", "yaw"};
+      char buffer[200];
+      if (soft_violation.kind == SoftLimitKind::kPoseBox) {
+        const int axis = soft_violation.index - 1;
+        std::snprintf(buffer, sizeof(buffer),
+                      "at t=%.3f s the pose leaves the soft limits' pose box: %s %.4f %s beyond "
+                      "the limit %.4f (rig file supervisor.soft_limits)",
+                      t, kAxis[axis], value, axis < 3 ? "m" : "rad", limit);
+      } else {
+        std::snprintf(buffer, sizeof(buffer),
+                      "leg %d at t=%.3f s: %s %.4f rad beyond the soft limit %.4f rad (rig file "
+                      "supervisor.soft_limits)",
+                      leg, t, ToString(soft_violation.kind), value, limit);
+      }
+      report.message = buffer;
+      break;
+    }
     case FeasibilityViolation::kTooLong:
     case FeasibilityViolation::kNone: break;
   }

@@ -54,7 +54,8 @@ LockstepSimulation::LockstepSimulation(const LockstepConfig& config) : config_(c
 PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartRequest* start,
                                      const JogRequest* jog, const Pose* goal_X_BP,
                                      const StreamPacket* stream_packets,
-                                     std::size_t stream_packet_count) {
+                                     std::size_t stream_packet_count,
+                                     const UserFramesConfig* frames) {
   plant_before_ = plant_->output();
   const double now_s = time_s();
   // The clock's barrier, as the plant service runs it (answers arrive here in call order;
@@ -73,6 +74,7 @@ PlantStatus LockstepSimulation::Tick(OperatorCommandKind command, const StartReq
     in.start = start;
     if (jog != nullptr) in.jog = *jog;
     if (goal_X_BP != nullptr) in.goal_X_BP = *goal_X_BP;
+    if (frames != nullptr) in.frames = *frames;
     in.stream_packets = stream_packets;
     in.stream_packet_count = stream_packet_count;
     supervisor_->Update(in, sup_out_);

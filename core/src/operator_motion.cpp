@@ -89,6 +89,30 @@ void OperatorMotion::BeginStream(const Pose& X_BP) noexcept {
 
 void OperatorMotion::RequestStop() noexcept { stopping_ = true; }
 
+bool OperatorMotion::SetFrames(const UserFramesConfig& frames,
+                               std::array<char, 160>& message) noexcept {
+  const bool still = mode_ == OperatorMode::kNone ||
+                     (mode_ == OperatorMode::kJog && !stopping_ && jog_.still());
+  if (!still) {
+    std::snprintf(message.data(), message.size(),
+                  "frames refused: the %s motion is not at rest (frames change only while still)",
+                  ToString(mode_));
+    return false;
+  }
+  char why[136];  // + the prefix: fits the 160 of the message
+  if (!CheckFramesRequest(frames, config_.frames, why, sizeof(why))) {
+    std::snprintf(message.data(), message.size(), "frames refused: %s", why);
+    return false;
+  }
+  const double max_pivot_distance_m = config_.frames.max_pivot_distance_m;
+  const double max_work_offset_m = config_.frames.max_work_offset_m;
+  config_.frames = frames;
+  config_.frames.max_pivot_distance_m = max_pivot_distance_m;  // the configured bounds stay
+  config_.frames.max_work_offset_m = max_work_offset_m;
+  message[0] = '\0';
+  return true;
+}
+
 namespace {
 
 // Angular velocity, in the parent's axes, of R(rpy) = Rz(yaw) Ry(pitch) Rx(roll) (pose.hpp)

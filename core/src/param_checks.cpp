@@ -1,6 +1,7 @@
 // Value rules of the parameter structs (see param_checks.hpp, docs/config.md).
 #include "hexa/core/param_checks.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -362,6 +363,48 @@ void CheckOuterLoopParams(ParamChecker& c, const OuterLoopParams& o, const std::
 // the feasibility check's 2000 s (feasibility.hpp).
 inline constexpr double kMaxBlendOrStop_s = 60.0;
 
+namespace {
+
+// The soft limits of the supervisor's setpoints (docs/operate.md "Soft limits"). The box must
+// contain the home pose (where the platform starts), and lie inside the workspace check
+// (a setpoint held at the box must not hold the platform as "outside the workspace").
+void CheckSoftLimitParams(ParamChecker& c, const SoftLimitParams& s, const std::string& path,
+                          double workspace_radius_m, double workspace_max_rotation_rad) {
+  const std::string p = path + ".";
+  c.InClosed(p + "max_base_joint_angle_rad", s.max_base_joint_angle_rad, 1e-3, 1.5,
+             "base joint deflection limit");
+  c.InClosed(p + "max_platform_joint_angle_rad", s.max_platform_joint_angle_rad, 1e-3, 1.5,
+             "platform joint deflection limit");
+  static constexpr const char* kXyz[3] = {"x", "y", "z"};
+  static constexpr const char* kRpy[3] = {"roll", "pitch", "yaw"};
+  const auto bound = [&](const std::string& field, double v, bool is_min, double reach,
+                         const char* reach_field) {
+    if (!c.Finite(field, v)) return;
+    if (is_min ? !(v < 0.0) : !(v > 0.0)) {
+      c.Fail(field, "the pose box must contain the home pose", FormatParam(v), is_min ? "< 0" : "> 0");
+    } else if (std::isfinite(reach) && reach > 0.0 && !(std::abs(v) <= reach)) {
+      c.Fail(field,
+             std::string("the pose box must lie inside the workspace check (") + reach_field + ")",
+             FormatParam(v), "[-" + FormatParam(reach) + ", " + FormatParam(reach) + "]");
+    }
+  };
+  const double max_angle_rad = std::min(workspace_max_rotation_rad, 1.5);  // rpy singular at 90 deg
+  for (int k = 0; k < 3; ++k) {
+    bound(p + "position_min_from_home_m." + kXyz[k], s.position_min_from_home_m[k], true,
+          workspace_radius_m, "supervisor.workspace_radius_m");
+    bound(p + "position_max_from_home_m." + kXyz[k], s.position_max_from_home_m[k], false,
+          workspace_radius_m, "supervisor.workspace_radius_m");
+    bound(p + "rotation_min_rad." + kRpy[k], s.rotation_min_rad[k], true, max_angle_rad,
+          "supervisor.workspace_max_rotation_rad, at most 1.5 rad");
+    bound(p + "rotation_max_rad." + kRpy[k], s.rotation_max_rad[k], false, max_angle_rad,
+          "supervisor.workspace_max_rotation_rad, at most 1.5 rad");
+  }
+  c.Positive(p + "max_linear_speed_m_s", s.max_linear_speed_m_s, "linear speed limit");
+  c.Positive(p + "max_angular_speed_rad_s", s.max_angular_speed_rad_s, "angular speed limit");
+}
+
+}  // namespace
+
 void CheckSupervisorParams(ParamChecker& c, const SupervisorParams& s, const std::string& path) {
   const std::string p = path + ".";
   c.TickMultiple(p + "period_s", s.period_s, "supervisor period");
@@ -395,6 +438,8 @@ void CheckSupervisorParams(ParamChecker& c, const SupervisorParams& s, const std
                 "length-consistency persistence (supervisor ticks)");
   c.InClosed(p + "setpoint_lead_s", s.setpoint_lead_s, 0.0, 0.05, "setpoint lead (0 = off)");
   CheckOuterLoopParams(c, s.outer_loop, p + "outer_loop");
+  CheckSoftLimitParams(c, s.soft_limits, p + "soft_limits", s.workspace_radius_m,
+                       s.workspace_max_rotation_rad);
 }
 
 void CheckPlantFaultParams(ParamChecker& c, const PlantFaultParams& f, const std::string& path) {

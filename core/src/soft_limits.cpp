@@ -86,12 +86,22 @@ void SoftLimitsConfig::Validate() const {
 
 SoftLimitsConfig MakeSoftLimitsConfig(const RigParams& rig, const SupervisorParams& params) {
   SoftLimitsConfig config;
+  const SoftLimitParams& s = params.soft_limits;
   config.stroke_margin_m = params.stroke_margin_m;
   config.max_leg_speed_m_s = params.max_leg_speed_m_s;
+  config.max_base_joint_angle_rad = s.max_base_joint_angle_rad;
+  config.max_platform_joint_angle_rad = s.max_platform_joint_angle_rad;
+  config.max_linear_speed_m_s = s.max_linear_speed_m_s;
+  config.max_angular_speed_rad_s = s.max_angular_speed_rad_s;
+  // The box about home (home has no rotation: the angles' bounds are the angles').
   const Vector6d home = HomePoseVector(rig.geometry.home_position_m);
-  const Vector6d half = (config.box_max - config.box_min) / 2.0;
-  config.box_min = home - half;
-  config.box_max = home + half;
+  for (int k = 0; k < 3; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    config.box_min[k] = home[k] + s.position_min_from_home_m[i];
+    config.box_max[k] = home[k] + s.position_max_from_home_m[i];
+    config.box_min[3 + k] = home[3 + k] + s.rotation_min_rad[i];
+    config.box_max[3 + k] = home[3 + k] + s.rotation_max_rad[i];
+  }
   return config;
 }
 

@@ -91,6 +91,7 @@ const char* ToString(OperatorCommandKind kind) {
     case OperatorCommandKind::kJog: return "jog";
     case OperatorCommandKind::kGoal: return "goal";
     case OperatorCommandKind::kStream: return "stream";
+    case OperatorCommandKind::kFrames: return "frames";
   }
   return "?";
 }
@@ -301,6 +302,7 @@ void Supervisor::HandleCommand(const SupervisorInput& input, SupervisorOutput& o
     case OperatorCommandKind::kJog:
     case OperatorCommandKind::kGoal:
     case OperatorCommandKind::kStream:
+    case OperatorCommandKind::kFrames:
       HandleMotionCommand(input, output);
       return;
     case OperatorCommandKind::kStop: {
@@ -540,6 +542,20 @@ void Supervisor::Update(const SupervisorInput& input, SupervisorOutput& output) 
 
 void Supervisor::HandleMotionCommand(const SupervisorInput& input, SupervisorOutput& output) {
   CommandResult& result = output.command_result;
+  if (input.command == OperatorCommandKind::kFrames) {
+    // Only while still: IDLE, or a jog at rest (OperatorMotion::SetFrames checks the latter).
+    if (state_ != SupervisorState::kIdle && state_ != SupervisorState::kJogging) {
+      result = CommandResult::kRefused;
+      std::snprintf(output.command_detail.data(), output.command_detail.size(),
+                    "frames only from SUPERVISOR_IDLE or SUPERVISOR_JOGGING at rest (state %s)",
+                    ToString(state_));
+      return;
+    }
+    result = operator_motion_.SetFrames(input.frames, output.command_detail)
+                 ? CommandResult::kAccepted
+                 : CommandResult::kRefused;
+    return;
+  }
   const bool jog = input.command == OperatorCommandKind::kJog;
   if (jog && state_ == SupervisorState::kJogging) {
     result = CommandResult::kAccepted;  // the jog goes on (Update takes the message)

@@ -2,6 +2,7 @@
 #include "hexa/core/user_frames.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,51 @@ void UserFramesConfig::Validate() const {
   CheckVector(c, "frames.work.p_BW_B_m", X_BW.p_BP_B_m, max_work_offset_m, "work origin");
   CheckRotation(c, "frames.work.R_BW", X_BW.R_BP);
   ThrowIfIssues(issues, "user frames");
+}
+
+namespace {
+
+bool OffsetOk(const char* field, const Eigen::Vector3d& v, double max_norm_m, const char* what,
+              char* message, std::size_t size) noexcept {
+  if (!v.allFinite()) {
+    std::snprintf(message, size, "%s: %s must be finite (value %g %g %g)", field, what, v.x(),
+                  v.y(), v.z());
+    return false;
+  }
+  if (!(v.norm() <= max_norm_m)) {
+    std::snprintf(message, size, "%s: %s is too far away (value %.4g m, limit <= %.4g m)", field,
+                  what, v.norm(), max_norm_m);
+    return false;
+  }
+  return true;
+}
+
+bool RotationOk(const char* field, const Eigen::Matrix3d& R, char* message, std::size_t size) noexcept {
+  const double orthogonality =
+      R.allFinite() ? (R.transpose() * R - Eigen::Matrix3d::Identity()).norm() : INFINITY;
+  if (!(orthogonality <= 1e-9) || !(R.determinant() > 0.0)) {
+    std::snprintf(message, size,
+                  "%s: rotation must be orthonormal and proper (|R^T R - I| = %.3g, limit <= "
+                  "1e-09, det = +1)",
+                  field, orthogonality);
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool CheckFramesRequest(const UserFramesConfig& request, const UserFramesConfig& bounds,
+                        char* message, std::size_t message_size) noexcept {
+  if (message_size > 0) message[0] = '\0';
+  return OffsetOk("frames.p_PC_P_m", request.p_PC_P_m, bounds.max_pivot_distance_m,
+                  "pivot point (from the platform origin)", message, message_size) &&
+         OffsetOk("frames.tool.p_PT_P_m", request.X_PT.p_BP_B_m, bounds.max_pivot_distance_m,
+                  "tool origin (from the platform origin)", message, message_size) &&
+         RotationOk("frames.tool.R_PT", request.X_PT.R_BP, message, message_size) &&
+         OffsetOk("frames.work.p_BW_B_m", request.X_BW.p_BP_B_m, bounds.max_work_offset_m,
+                  "work origin (from the base origin)", message, message_size) &&
+         RotationOk("frames.work.R_BW", request.X_BW.R_BP, message, message_size);
 }
 
 bool RotationFromUnitQuaternion(double w, double x, double y, double z, Eigen::Matrix3d& R) {

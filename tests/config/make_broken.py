@@ -137,6 +137,15 @@ CASES = {
         r"potentiometer_m \{", "potentiometer_m { offset_si: 0.3734 gain_si_per_count: 4.0e-6 min_si: 0.40 max_si: 0.6324 }",
         "leg 1's potentiometer range misses the short end of the stroke"),
     "board_five_legs": delete_block_lines(r"^  leg \{", "board", "a board block with five legs"),
+    # The supervisor's soft limits (docs/operate.md "Soft limits").
+    "soft_box_excludes_home": replace(r"position_max_from_home_m \{",
+                                      "position_max_from_home_m { x: 0.1 y: -0.02 z: 0.1 }",
+                                      "the box's y maximum is below home"),
+    "soft_box_beyond_workspace": replace(r"rotation_max_rad \{",
+                                         "rotation_max_rad { roll: 0.3 pitch: 0.6 yaw: 0.3 }",
+                                         "pitch bound beyond the workspace check"),
+    "soft_joint_limit_zero": replace(r"max_platform_joint_angle_rad:", "max_platform_joint_angle_rad: 0",
+                                     "no platform joint deflection allowed"),
 }
 
 

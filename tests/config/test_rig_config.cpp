@@ -158,6 +158,16 @@ void ExpectSupervisorEq(const hexa::SupervisorParams& a, const hexa::SupervisorP
   EXPECT_EQ(a.length_consistency_limit_m, b.length_consistency_limit_m);
   EXPECT_EQ(a.length_consistency_ticks, b.length_consistency_ticks);
   EXPECT_EQ(a.setpoint_lead_s, b.setpoint_lead_s);
+  const hexa::SoftLimitParams& x = a.soft_limits;
+  const hexa::SoftLimitParams& y = b.soft_limits;
+  EXPECT_EQ(x.max_base_joint_angle_rad, y.max_base_joint_angle_rad);
+  EXPECT_EQ(x.max_platform_joint_angle_rad, y.max_platform_joint_angle_rad);
+  EXPECT_EQ(x.position_min_from_home_m, y.position_min_from_home_m);
+  EXPECT_EQ(x.position_max_from_home_m, y.position_max_from_home_m);
+  EXPECT_EQ(x.rotation_min_rad, y.rotation_min_rad);
+  EXPECT_EQ(x.rotation_max_rad, y.rotation_max_rad);
+  EXPECT_EQ(x.max_linear_speed_m_s, y.max_linear_speed_m_s);
+  EXPECT_EQ(x.max_angular_speed_rad_s, y.max_angular_speed_rad_s);
 }
 
 void ExpectProfileEq(const hexa::DisturbanceProfile& a, const hexa::DisturbanceProfile& b) {
@@ -274,8 +284,9 @@ TEST(RigConfigReference, CoreStructsHaveNotGrownPastTheSchema) {
   EXPECT_EQ(sizeof(hexa::CoupledLegsParams), 4 * sizeof(double));  // 2 doubles + 2 bools (padded)
   EXPECT_EQ(sizeof(hexa::LegControllerParams), 46 * sizeof(double));
   EXPECT_EQ(sizeof(hexa::OuterLoopParams), 5 * sizeof(double));
-  // + feedforward_enabled (padded), length_consistency_ticks (padded)
-  EXPECT_EQ(sizeof(hexa::SupervisorParams), 20 * sizeof(double));
+  EXPECT_EQ(sizeof(hexa::SoftLimitParams), 16 * sizeof(double));
+  // + feedforward_enabled (padded), length_consistency_ticks (padded), soft_limits
+  EXPECT_EQ(sizeof(hexa::SupervisorParams), 36 * sizeof(double));
 }
 
 TEST(RigConfigReference, DefaultsBuiltInCodeAreValid) {
@@ -396,6 +407,51 @@ TEST(RigConfigValidate, CoreConstructorsApplyTheSameRuleAsTheRigFile) {
                                                                       hexa::LegControllerKind::kBsSmc)),
                std::invalid_argument);
   EXPECT_THROW(hexa::Supervisor(c.rig, c.supervisor), std::invalid_argument);
+}
+
+// The soft limits written in the rig file are the ones the supervisor holds its setpoints in
+// (the box about home, the joints, the speeds), and the supervisor refuses what the file does.
+TEST(RigConfigValidate, SoftLimitsOfTheRigFileAreTheSupervisors) {
+  std::string text = ReadFile(hexa::config::DefaultRigFile());
+  const auto set = [&](const std::string& pattern, const std::string& replacement) {
+    const std::string before = text;
+    text = std::regex_replace(text, std::regex(pattern), replacement);
+    ASSERT_NE(text, before) << pattern;
+  };
+  set("max_platform_joint_angle_rad: 0.8", "max_platform_joint_angle_rad: 0.15");
+  set("position_max_from_home_m \\{[^}]*\\}", "position_max_from_home_m { x: 0.03 y: 0.1 z: 0.1 }");
+  set("rotation_min_rad \\{[^}]*\\}", "rotation_min_rad { roll: -0.3 pitch: -0.3 yaw: -0.05 }");
+  set("max_linear_speed_m_s: 0.8", "max_linear_speed_m_s: 0.4");
+  const ConfigResult r = hexa::config::ParseSystemConfig(text, "tight_soft_limits");
+  ASSERT_TRUE(r.ok) << r.error;
+  const hexa::Supervisor supervisor(hexa::config::MakeSupervisorRig(r.config), r.config.supervisor);
+  const hexa::SoftLimitsConfig& limits = supervisor.operator_motion().limits().config();
+  const Eigen::Vector3d home = r.config.rig.geometry.home_position_m;
+  EXPECT_DOUBLE_EQ(limits.box_max[0], home.x() + 0.03);
+  EXPECT_DOUBLE_EQ(limits.box_min[0], home.x() - 0.1);
+  EXPECT_DOUBLE_EQ(limits.box_max[2], home.z() + 0.1);
+  EXPECT_DOUBLE_EQ(limits.box_min[5], -0.05);
+  EXPECT_DOUBLE_EQ(limits.box_max[5], 0.3);
+  EXPECT_DOUBLE_EQ(limits.max_platform_joint_angle_rad, 0.15);
+  EXPECT_DOUBLE_EQ(limits.max_base_joint_angle_rad, 0.8);
+  EXPECT_DOUBLE_EQ(limits.max_linear_speed_m_s, 0.4);
+  EXPECT_DOUBLE_EQ(limits.max_angular_speed_rad_s, 1.0);
+  EXPECT_DOUBLE_EQ(limits.stroke_margin_m, r.config.supervisor.stroke_margin_m);
+  EXPECT_DOUBLE_EQ(limits.max_leg_speed_m_s, r.config.supervisor.max_leg_speed_m_s);
+  // A box that leaves home out: the file and the supervisor refuse it on the same field.
+  SystemConfig bad = r.config;
+  bad.supervisor.soft_limits.position_min_from_home_m[1] = 0.01;
+  const auto issues = hexa::config::ValidateSystemConfig(bad);
+  ASSERT_EQ(issues.size(), 1u);
+  EXPECT_EQ(issues[0].field, "supervisor.soft_limits.position_min_from_home_m.y");
+  EXPECT_EQ(issues[0].limit, "< 0");
+  try {
+    hexa::Supervisor s(bad.rig, bad.supervisor);
+    ADD_FAILURE() << "the supervisor accepted a box without home";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("supervisor.soft_limits.position_min_from_home_m.y"),
+              std::string::npos) << e.what();
+  }
 }
 
 // Four values that once passed validation, as a user would write them: each is rejected on its field with

@@ -91,6 +91,13 @@ const std::vector<BrokenCase> kBrokenCases = {
     {"board_potentiometer_short", "board.leg[id=1].potentiometer_m.min_si",
      "plausible range must cover the stroke", "0.4", "<= 0.3784"},
     {"board_five_legs", "board.leg", "the board serves exactly six legs", "5 legs", "exactly 6"},
+    // The supervisor's soft limits (docs/operate.md "Soft limits").
+    {"soft_box_excludes_home", "supervisor.soft_limits.position_max_from_home_m.y",
+     "the pose box must contain the home pose", "-0.02", "> 0"},
+    {"soft_box_beyond_workspace", "supervisor.soft_limits.rotation_max_rad.pitch",
+     "the pose box must lie inside the workspace check", "0.6", "[-0.5236, 0.5236]"},
+    {"soft_joint_limit_zero", "supervisor.soft_limits.max_platform_joint_angle_rad",
+     "platform joint deflection limit is out of range", "0", "[0.001, 1.5]"},
 };
 
 class BrokenFile : public ::testing::TestWithParam<BrokenCase> {};

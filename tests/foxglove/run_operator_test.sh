@@ -5,7 +5,9 @@
 # refused, the rate limit, jogs in two frames, a pose goal, a goal outside the soft limits
 # refused, start and stop seen in the supervisor's state. Then: the session
 # ended by itself after the stop (exit 6: stopped by the operator, docs/exit_codes.md), the supervisor logged both commands from the
-# bridge, and the bridge logged what it wrote and what it refused.
+# bridge, and the bridge logged what it wrote and what it refused; and, on the recording's ground
+# truth (tests/support/operator_truth.py), the jog let go was at rest within the dead-man time plus
+# the braking time and distance, and the goal was reached.
 # Usage: run_operator_test.sh SRC_DIR NODE_DIR BUILD_DIR DOMAIN
 set -euo pipefail
 src="$1"; node_dir="$2"; build="$3"; domain="$4"
@@ -46,5 +48,8 @@ grep -E "jogging from|jog at rest|goal motion at rest" "$out/supervisor.log" || 
 refusals=$(grep -c "operator input refused\|not accepted\|rate limit" "$out/bridge.log" || true)
 echo "refusals logged by the bridge: $refusals"
 [ "$refusals" -ge 10 ] || { echo "FAIL: expected the refusals in bridge.log"; fail=1; }
+# Ground truth (the recording's pose.csv): the first jog (+x at 3 cm/s, work frame) let go, at
+# rest within the dead-man time plus the braking; the goal reached.
+/usr/bin/python3 "$src/../support/operator_truth.py" "$out" 0.03 || fail=1
 echo "operator_input: $([ $fail -eq 0 ] && echo PASSED || echo FAILED)"
 exit $fail

@@ -56,63 +56,6 @@ check "[ $rc -eq 0 ]" "hexa_session ends 0 after the shutdown (got $rc)"
 
 grep -E "jog at rest|goal motion at rest|goal started|goal #|refused" "$out/supervisor.log" || true
 # Ground truth: pose.csv (time, desired, true, measured); the supervisor's log gives the times.
-/usr/bin/python3 - "$out" <<'EOF' || fail=1
-import csv, math, re, sys
-out = sys.argv[1]
-log = open(out + "/supervisor.log").read()
-rows = [list(map(float, r)) for r in list(csv.reader(open(out + "/pose.csv")))[1:]]
-t = [r[0] for r in rows]
-def at(ts, col):  # the row at or after time ts
-    for r in rows:
-        if r[0] >= ts - 1e-9: return r[col:col + 6]
-    return rows[-1][col:col + 6]
-DES, TRUE = 1, 7
-ok = True
-def expect(cond, what):
-    global ok
-    print(("ok: " if cond else "FAIL: ") + what)
-    ok = ok and cond
-# Jog +x 0.04 m/s: T_d + v/A + A/J = 0.25 + 0.16 + 0.10 = 0.51 s; travel after the last message
-# v T_d + v (v/A + A/J) / 2 = 15.2 mm (docs/operate.md, JogProfileConfig defaults).
-m = re.search(r"jog at rest at t = ([0-9.]+) s, ([0-9.]+) s after the last jog message \(t = ([0-9.]+) s\)", log)
-rest_t, after_s, last_t = float(m.group(1)), float(m.group(2)), float(m.group(3))
-starts = [float(x) for x in re.findall(r"jogging from t = ([0-9.]+) s", log)]
-t0 = starts[0]
-# The platform 0.3 s after the setpoint came to rest, unless the next jog started before.
-t_end = min(rest_t + 0.3, starts[1] - 0.005) if len(starts) > 1 else rest_t + 0.3
-p0, p_last, p_rest = at(t0, TRUE), at(last_t, TRUE), at(t_end, TRUE)
-d_last, d_rest = at(last_t, DES), at(rest_t, DES)
-moved = [p_rest[k] - p0[k] for k in range(3)]
-print(f"jog +x: from t = {t0:.3f} s, last message t = {last_t:.3f} s, at rest {after_s:.3f} s later "
-      f"(bound 0.510 s + one 5 ms tick); truth at t = {t_end:.3f} s moved ({moved[0]*1e3:.2f}, {moved[1]*1e3:.2f}, "
-      f"{moved[2]*1e3:.2f}) mm; after the last message setpoint {1e3*(d_rest[0]-d_last[0]):.2f} mm, "
-      f"truth {1e3*(p_rest[0]-p_last[0]):.2f} mm (bound 15.2 mm)")
-expect(after_s <= 0.515 + 1e-9, "the jog was at rest within the dead-man time plus braking")
-expect(moved[0] > 0.01 and math.hypot(moved[1], moved[2]) < 0.15 * moved[0], "the jog moved the platform along +x")
-expect(d_last[0] < 0.1 - 0.0152, "let go before the box limit (what stopped it is the braking)")
-expect(d_rest[0] - d_last[0] <= 0.0152 + 1e-6, "setpoint travel after the last message within the braking bound")
-expect(p_rest[0] - p_last[0] <= 0.0152 + 0.004, "truth travel after the last message within the bound + 4 mm")
-# Goal: the platform's move within 4 mm of the one asked, and at rest on the goal within the
-# estimator's static offset from the truth (measured at the goal's start) + 4 mm, 8 mrad.
-g = re.search(r"goal #[0-9]+: \(([-0-9.]+), ([-0-9.]+), ([-0-9.]+)\) m, \(([-0-9.]+), ([-0-9.]+), ([-0-9.]+)\) rad", log)
-goal = [float(g.group(k)) for k in range(1, 7)]
-tg0 = float(re.search(r"goal started at t = ([0-9.]+) s", log).group(1))
-tg = float(re.search(r"goal motion at rest at t = ([0-9.]+) s", log).group(1))
-true0, des0 = at(tg0, TRUE), at(tg0, DES)
-true_g, des_g = at(tg + 0.5, TRUE), at(tg, DES)
-offset = math.dist(true0[:3], des0[:3])
-asked = [goal[k] - des0[k] for k in range(3)]
-moved = [true_g[k] - true0[k] for k in range(3)]
-err_move = math.dist(asked, moved)
-err_p = math.dist(true_g[:3], goal[:3]); err_r = max(abs(true_g[k] - goal[k]) for k in range(3, 6))
-print(f"goal: planned from t = {tg0:.3f} s, at rest t = {tg:.3f} s; setpoint {1e3*math.dist(des_g[:3], goal[:3]):.4f} mm "
-      f"from it; platform 0.5 s later {err_p*1e3:.2f} mm, {err_r*1e3:.2f} mrad from it (static offset of "
-      f"the estimate from the truth before: {offset*1e3:.2f} mm); move {1e3*math.hypot(*asked):.2f} mm asked, "
-      f"{err_move*1e3:.2f} mm off")
-expect(math.dist(des_g[:3], goal[:3]) < 1e-4, "the setpoint ended on the goal (to the log's 0.1 mm)")
-expect(err_move < 0.004, "the platform's move within 4 mm of the one asked")
-expect(err_p < offset + 0.004 and err_r < 0.008, "the platform at rest on the goal within the static offset + 4 mm, 8 mrad")
-sys.exit(0 if ok else 1)
-EOF
+/usr/bin/python3 "$(dirname "$0")/../support/operator_truth.py" "$out" 0.04 || fail=1
 echo "operator_modes_session: $([ $fail -eq 0 ] && echo PASSED || echo FAILED)"
 exit $fail

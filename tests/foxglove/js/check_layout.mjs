@@ -43,17 +43,38 @@ for (const id of ids) check(/^[A-Za-z0-9]+![A-Za-z0-9_]+$/.test(id), `panel id '
 const types = ids.map((i) => i.split("!")[0]);
 for (const t of ["3D", "Plot", "StateTransitions"]) check(types.includes(t), `a ${t} panel`);
 // The operator controls (Publish panels; the bridge with --operator-input): each publishes a
-// JSON operator input on hexa_OperatorInput, one per command.
+// JSON operator input on hexa_OperatorInput with the fields of its command (services/bridge/
+// operator_input.hpp): start stop reset home stream once each, jogs along each axis both ways
+// and about z, and a pose goal.
+const fieldsOf = {
+  start: ["command", "trajectory"], stop: ["command"], reset: ["command"], home: ["command"],
+  stream: ["command"], jog: ["command", "frame", "velocity_m_s", "angular_velocity_rad_s"],
+  goal: ["command", "position_m", "orientation_wxyz"],
+};
 const commands = [];
+const jogs = new Set();
 for (const [id, config] of Object.entries(layout.configById)) {
   if (!id.startsWith("Publish!")) continue;
   check(config.topicName === "hexa_OperatorInput", `${id} publishes on hexa_OperatorInput`);
   const value = JSON.parse(config.value);
-  check(Object.keys(value).every((k) => k === "command" || k === "trajectory"), `${id}: fields ${Object.keys(value)}`);
-  commands.push(value.command);
+  const allowed = fieldsOf[value.command] ?? [];
+  check(Object.keys(value).every((k) => allowed.includes(k)), `${id}: fields ${Object.keys(value)}`);
+  if (value.command === "jog") {
+    const twist = [...value.velocity_m_s, ...value.angular_velocity_rad_s];
+    check(twist.length === 6 && twist.filter((v) => v !== 0).length === 1, `${id}: one axis`);
+    jogs.add(twist.map((v) => Math.sign(v)).join(","));
+  } else {
+    commands.push(value.command);
+  }
+  if (value.command === "goal") {
+    const q = value.orientation_wxyz;
+    check(value.position_m.length === 3 && q.length === 4 &&
+          Math.abs(Math.hypot(...q) - 1) < 1e-6, `${id}: a position and a unit quaternion`);
+  }
 }
-check(JSON.stringify(commands.sort()) === JSON.stringify(["home", "reset", "start", "stop", "stream"]),
-      `operator controls for start stop reset home stream (${commands})`);
+check(JSON.stringify(commands.sort()) === JSON.stringify(["goal", "home", "reset", "start", "stop", "stream"]),
+      `operator controls for start stop reset home stream goal (${commands})`);
+check(jogs.size === 8, `jogs along x, y, z both ways and about z both ways (${[...jogs]})`);
 
 // The recording: schema per topic and every decoded message.
 const bytes = new Uint8Array(readFileSync(file));

@@ -2,6 +2,8 @@
 // `supervisor`). Plain data with the defaults of the reference rig; validated by config/.
 #pragma once
 
+#include <array>
+
 namespace hexa {
 
 // Gaussian-weighted numerical differentiator (eq 40, 41).
@@ -169,6 +171,27 @@ struct OuterLoopParams {
   double gate_leg_speed_m_s = 0.05;
 };
 
+// Soft limits held on every setpoint the supervisor sends, whatever its source (rig file
+// `supervisor.soft_limits`; core/soft_limits.hpp; docs/operate.md "Soft limits"). The legs'
+// stroke margin is SupervisorParams::stroke_margin_m and their speed limit max_leg_speed_m_s.
+struct SoftLimitParams {
+  // Deflection of each leg from its direction at home, at its base and its platform joint.
+  // The reference rig's joints are not specified (docs/design.md): 0.8 rad (45.8 deg) lies
+  // above what the default box reaches inside the stroke, so it does not bind by default.
+  double max_base_joint_angle_rad = 0.8;
+  double max_platform_joint_angle_rad = 0.8;
+  // The pose box about the home pose: x y z offsets (m) and roll pitch yaw (rad). Home +-10 cm
+  // and +-0.3 rad hold the paper's motions (8 cm, 15 deg) inside the workspace check.
+  std::array<double, 3> position_min_from_home_m{-0.10, -0.10, -0.10};
+  std::array<double, 3> position_max_from_home_m{0.10, 0.10, 0.10};
+  std::array<double, 3> rotation_min_rad{-0.30, -0.30, -0.30};
+  std::array<double, 3> rotation_max_rad{0.30, 0.30, 0.30};
+  // Between two setpoints one period apart: the platform origin's speed (eq 49 peaks at
+  // 0.71 m/s) and its rotation rate.
+  double max_linear_speed_m_s = 0.8;
+  double max_angular_speed_rad_s = 1.0;
+};
+
 struct SupervisorParams {
   double period_s = 0.005;
   double blend_duration_s = 2.0;        // smooth blend from the current pose
@@ -203,6 +226,7 @@ struct SupervisorParams {
   // it was 5 ms, the valve chain's two first-order lags (2 ms spool filter + 3 ms spool), when
   // the legs lagged 8-17 ms. 0 = off.
   double setpoint_lead_s = 0.002;
+  SoftLimitParams soft_limits;
 };
 
 }  // namespace hexa

@@ -42,7 +42,9 @@ struct LegEnvelope {
 // Stroke with margin; speed/acceleration = min(configured, valve-derived).
 LegEnvelope MakeLegEnvelope(const RigParams& rig, const SupervisorParams& params);
 
-enum class FeasibilityViolation { kNone, kStroke, kSpeed, kAcceleration, kNotFinite, kTooLong };
+// kSoftLimit: a pose outside the rig file's soft limits (soft_limits.hpp: the pose box, the
+// joints' deflections), which every setpoint must respect.
+enum class FeasibilityViolation { kNone, kStroke, kSpeed, kAcceleration, kNotFinite, kTooLong, kSoftLimit };
 
 // Longest trajectory (blend + motion + stop) CheckFeasibility samples; longer ones are
 // infeasible (kTooLong) without sampling. At the default 1 ms period that is 2e6 samples,

@@ -86,13 +86,14 @@ class LockstepSimulation {
 
   // Runs tick n = tick(): supervisor (when due, with `command`/`start`), the six leg
   // controllers, command hygiene, one plant step. Returns the plant status.
-  // `jog` with kJog, `goal_X_BP` with kGoal (operator_motion.hpp); `stream_packets`: the
-  // motion stream's packets received since the previous supervisor tick (used in STREAMING,
-  // ignored when the supervisor does not run this tick: pass them at a due tick).
+  // `jog` with kJog, `goal_X_BP` with kGoal, `frames` with kFrames (operator_motion.hpp);
+  // `stream_packets`: the motion stream's packets received since the previous supervisor tick
+  // (used in STREAMING, ignored when the supervisor does not run this tick: pass them at a
+  // due tick).
   PlantStatus Tick(OperatorCommandKind command = OperatorCommandKind::kNone,
                    const StartRequest* start = nullptr, const JogRequest* jog = nullptr,
                    const Pose* goal_X_BP = nullptr, const StreamPacket* stream_packets = nullptr,
-                   std::size_t stream_packet_count = 0);
+                   std::size_t stream_packet_count = 0, const UserFramesConfig* frames = nullptr);
 
   std::uint64_t tick() const { return tick_; }
   double time_s() const { return static_cast<double>(tick_) * config_.tick_s; }

@@ -71,6 +71,12 @@ class OperatorMotion {
   GoalCheck BeginGoal(const Pose& X_BP, const Pose& X_BP_goal, double time_s) noexcept;
   // A stream from rest at X_BP, which becomes its neutral pose (the displacements' origin).
   void BeginStream(const Pose& X_BP) noexcept;
+  // The pivot, tool and work frames for the commands from now on (user_frames.hpp); the
+  // platform does not move. Taken only while the setpoint is still: no mode, or a jog at rest
+  // (a changed pivot under a moving jog, goal or stream would change the motion under way).
+  // Refused, nothing changed, with `message` naming the rule, the field, the value and the
+  // limit (CheckFramesRequest with the configured bounds; a pivot 10 m away is refused).
+  bool SetFrames(const UserFramesConfig& frames, std::array<char, 160>& message) noexcept;
   // Brings the current mode to rest: a jog or a goal at the jog profile's limits, a stream
   // back to its neutral pose at the stream's limits.
   void RequestStop() noexcept;

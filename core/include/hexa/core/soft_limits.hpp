@@ -55,7 +55,8 @@ struct SoftLimitsConfig {
   void Validate() const;
 };
 
-// The rig's own figures: margin and leg speed from SupervisorParams, box centred on home.
+// The rig file's soft limits: SupervisorParams::soft_limits (joints, the box about home,
+// speeds), the stroke margin and the leg speed limit of SupervisorParams.
 SoftLimitsConfig MakeSoftLimitsConfig(const RigParams& rig, const SupervisorParams& params);
 
 struct SoftLimitsInput {

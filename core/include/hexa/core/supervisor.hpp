@@ -16,6 +16,7 @@
 //            stream (operator)        stop: back to the neutral pose, at rest
 //   IDLE ------------> STREAMING ---------------------------------------> IDLE
 //   (a stream gap longer than its timeout: back to neutral, still STREAMING; packets resume it)
+//   frames (pivot, tool, work): taken in IDLE or in JOGGING at rest; the platform does not move
 //   (operator_motion.hpp: every jog, goal and stream setpoint is held inside the soft limits;
 //   a goal outside them is refused with the reason, the state unchanged)
 //
@@ -74,7 +75,7 @@ enum class FaultReason {
 };
 const char* ToString(FaultReason reason);  // "FAULT_NONE", ...
 
-enum class OperatorCommandKind { kNone, kStart, kStop, kReset, kHome, kJog, kGoal, kStream };
+enum class OperatorCommandKind { kNone, kStart, kStop, kReset, kHome, kJog, kGoal, kStream, kFrames };
 const char* ToString(OperatorCommandKind kind);
 
 enum class CommandResult {
@@ -104,6 +105,9 @@ struct SupervisorInput {
   const StartRequest* start = nullptr;                   // for kStart; copied, not kept
   JogRequest jog;                                        // for kJog: the newest jog message
   Pose goal_X_BP;                                        // for kGoal: the platform's goal pose
+  // For kFrames: the pivot point, tool and work frames from now on (user_frames.hpp); taken in
+  // IDLE or while a jog is at rest, validated with the configured bounds.
+  UserFramesConfig frames;
   // The external motion stream's packets decoded since the previous tick (arrival order; the
   // service's receiver owns them). Applied in STREAMING only, ignored otherwise.
   const StreamPacket* stream_packets = nullptr;

@@ -11,6 +11,8 @@
 // command changes.
 #pragma once
 
+#include <cstddef>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -30,6 +32,13 @@ struct UserFramesConfig {
   // beyond the bounds, rotations that are not orthonormal (|R^T R - I| > 1e-9, det != 1).
   void Validate() const;
 };
+
+// The rules of Validate() for frames asked for at run time, with the bounds of `bounds` (the
+// configured max_pivot_distance_m and max_work_offset_m, not the request's own): false with
+// `message` (NUL-terminated) naming the field, the value and the limit. Neither throws nor
+// allocates.
+bool CheckFramesRequest(const UserFramesConfig& request, const UserFramesConfig& bounds,
+                        char* message, std::size_t message_size) noexcept;
 
 // Rotation from a quaternion (w, x, y, z) given by a user: kept only if its norm is within
 // 1e-6 of 1 (a non-unit quaternion is refused, not normalised). False otherwise.
