@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "hexa/services/command_answer.hpp"
 #include "hexa/services/exit_code.hpp"
 #include "hexa/services/service_manager.hpp"
 
@@ -133,7 +134,12 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
                     node::QosFor(options.common, comm::TopicKind::kFaultEvent), 64),
       operator_topic_(runtime_.participant()),
       operator_reader_(runtime_.participant(), operator_topic_, comm::EndpointRole::kControlReader,
-                       node::QosFor(options.common, comm::TopicKind::kOperatorCommand), 16),
+                       [&] {
+                         comm::QosParams q = node::QosFor(options.common, comm::TopicKind::kOperatorCommand);
+                         q.user_data = services::kPlantCommandReader;  // hexa_operator waits for it
+                         return q;
+                       }(),
+                       16),
       arbitration_(arbitration_params_),
       lockstep_(ClockParams(options)),
       realtime_(1'000'000, kSlipAfter_ns),

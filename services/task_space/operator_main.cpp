@@ -211,6 +211,15 @@ int SendAcknowledged(Request& r, const hexa::comm::Participant& participant,
     }
     ws.Wait(DDS_MSECS(20));
   }
+  // A start or home asks the plant for the hardware's activation (docs/faults.md, "Hardware
+  // lifecycle"): its reader too, for up to 2 s more (a plant that does not have the command
+  // lets the supervisor refuse it, naming the plant's silence).
+  if (!r.any_reader && (r.cmd.kind == hexa_msg_OPERATOR_START || r.cmd.kind == hexa_msg_OPERATOR_HOME)) {
+    const int64_t plant_end = hexa::node::MonotonicNow_ns() + 2'000'000'000LL;
+    while (hexa::comm::CountMatchedReadersWithUserData(writer.get(), hexa::services::kPlantCommandReader) == 0 &&
+           hexa::node::MonotonicNow_ns() < plant_end)
+      ws.Wait(DDS_MSECS(20));
+  }
   writer.WriteNow(r.cmd);
   // Reliable delivery before the participant goes away. The wait counts only readers that
   // have answered a heartbeat; one whose side of the match completes after the write gets

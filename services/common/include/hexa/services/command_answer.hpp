@@ -17,6 +17,11 @@
 
 namespace hexa::services {
 
+// The USER_DATA of the plant's OperatorCommand reader: hexa_operator waits for it too before
+// it writes a start or home (the plant answers their activation), as for the supervisor's
+// (comm::kSupervisorCommandReader); a command written before a reader matched never reaches it.
+inline constexpr const char* kPlantCommandReader = "role=plant";
+
 enum class CommandAnswer { kNone, kAccepted, kRefused, kRejected };
 
 // Writes the answer into `out` (NUL-terminated, cut to its size). `why` may be empty.
