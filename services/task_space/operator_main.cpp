@@ -211,10 +211,13 @@ int SendAcknowledged(Request& r, const hexa::comm::Participant& participant,
     }
     ws.Wait(DDS_MSECS(20));
   }
-  // A start or home asks the plant for the hardware's activation (docs/faults.md, "Hardware
-  // lifecycle"): its reader too, for up to 2 s more (a plant that does not have the command
-  // lets the supervisor refuse it, naming the plant's silence).
-  if (!r.any_reader && (r.cmd.kind == hexa_msg_OPERATOR_START || r.cmd.kind == hexa_msg_OPERATOR_HOME)) {
+  // The plant acts on a start or home (the hardware's activation, docs/faults.md "Hardware
+  // lifecycle"), a reset (the e-stop latch's reset) and an e-stop: its reader too, for up to
+  // 2 s more (a plant that does not have a start lets the supervisor refuse it, naming the
+  // plant's silence).
+  const auto kind = r.cmd.kind;
+  if (!r.any_reader && (kind == hexa_msg_OPERATOR_START || kind == hexa_msg_OPERATOR_HOME ||
+                        kind == hexa_msg_OPERATOR_RESET || kind == hexa_msg_OPERATOR_ESTOP)) {
     const int64_t plant_end = hexa::node::MonotonicNow_ns() + 2'000'000'000LL;
     while (hexa::comm::CountMatchedReadersWithUserData(writer.get(), hexa::services::kPlantCommandReader) == 0 &&
            hexa::node::MonotonicNow_ns() < plant_end)
