@@ -225,6 +225,7 @@ ChildSpec Supervisor(const ProcessSpec& p, const Options& o, const Launch& launc
                                 std::to_string(o.periods), "--hold-timeout", o.hold_timeout_text,
                                 "--hold-report", launch.hold_report};
   if (!o.wait_for_operator) args.push_back("--autostart");
+  if (o.operator_activation) Append(args, {"--activation", "operator"});
   // Identification: the supervisor only holds home (no trajectory); its outer loop would
   // fight the excited leg, which moves the platform. The free-fall bench has no platform, but
   // lockstep legs answer a tick only with its setpoint: the supervisor runs (holding, outer
@@ -262,6 +263,7 @@ ChildSpec Plant(const ProcessSpec& p, const Options& o, const Launch& launch) {
   Append(s.argv, {"--summary", o.out_dir + "/plant.json"});
   if (o.tracker) s.argv.push_back("--tracker");
   if (!o.plant_faults.empty()) Append(s.argv, {"--fault", o.plant_faults});
+  if (o.operator_activation) Append(s.argv, {"--activation", "operator"});
   Append(s.argv, o.plant_extra_args);
   if (o.identify()) {
     Append(s.argv, {"--duration", std::to_string(launch.plan.total_duration_s), "--truth-out",

@@ -25,6 +25,9 @@ struct Options {
   bool recorder = true, standby = false, coupled_legs = false, outer_loop = true, rt_sched = true, bridge = false,
        feedforward = true, tracker = false, secure = false, command_auth = true,
        wait_for_operator = false;
+  // --activation operator: the hardware stays inactive until an operator start or home is
+  // granted (implies --wait-for-operator; docs/faults.md, "Hardware lifecycle").
+  bool operator_activation = false;
   std::string cpus_control, cpus_recorder, cpus_standby, cpus_supervisor, cpus_bridge;
   std::string bridge_listen, bridge_port, bridge_queue_kb, bridge_max_clients;
   bool bridge_operator_input = false;

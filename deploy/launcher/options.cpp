@@ -141,6 +141,13 @@ void AddProcessOptions(hexa::cli::Parser& cli) {
               "the supervisor holds the home pose until an operator start (hexa_operator start, "
               "or Foxglove with --bridge-operator-input) instead of starting the trajectory "
               "itself; the session ends when the trajectory has finished or was stopped");
+  cli.AddChoice("activation", {"auto", "operator"},
+                "the hardware lifecycle (docs/faults.md, \"Hardware lifecycle\"): auto, the plant "
+                "activates the valves at its first tick once every peer is up; operator, the valves "
+                "stay at their safe state (sensors published, commands computed, not applied) until "
+                "an operator start or home (hexa_operator) is granted; implies --wait-for-operator. "
+                "Activation is refused, with the reason, when the e-stop is open, a leg has no live "
+                "controller, a sensor is out of range or the supply pressure is low", "auto");
   cli.AddFlag("bridge-operator-input",
               "hexa_bridge --operator-input: Foxglove clients may start, stop, reset and home "
               "the platform (docs/foxglove.md)");
@@ -395,7 +402,8 @@ bool TakeFlags(const hexa::cli::Parser& cli, Options& o) {
   o.stream = cli.Flag("stream");
   o.stream_port = cli.Get("stream-port");
   o.tracker = cli.Flag("tracker");
-  o.wait_for_operator = cli.Flag("wait-for-operator");
+  o.operator_activation = cli.Get("activation") == "operator";
+  o.wait_for_operator = cli.Flag("wait-for-operator") || o.operator_activation;
   o.rt_lease = cli.Get("rt-lease");
   o.lockstep_lease = cli.Get("lockstep-lease");
   o.cpu_latency_us = cli.Get("cpu-latency-us");

@@ -85,9 +85,9 @@ std::string DeviceLink::BringUp() {
 }
 
 device::DeviceStatus DeviceLink::Exchange(const LegArray<double>& valve_v, std::uint64_t tick,
-                                          DeviceEvents& events) {
+                                          DeviceEvents& events, bool safe_state) {
   const std::int64_t written_ns = now_ns_();
-  const device::DeviceStatus written = device_.WriteValves(valve_v);
+  const device::DeviceStatus written = safe_state ? device_.WriteSafeState() : device_.WriteValves(valve_v);
   if (sample_read_ns_ >= 0) {
     round_trip_.Add(written_ns - sample_read_ns_);
     sample_read_ns_ = -1;

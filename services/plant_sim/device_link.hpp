@@ -82,9 +82,11 @@ class DeviceLink {
 
   // One tick: write `valve_v`, then read the sample the device has for the next tick (a board
   // in lockstep: awaited). The status of the write (kFault: the device cannot go on). Without
-  // a new sample the last one stays; a board's link is then judged for `tick`.
+  // a new sample the last one stays; a board's link is then judged for `tick`. With
+  // `safe_state` (the hardware lifecycle not active) every valve is held at its safe value
+  // instead of `valve_v` (Device::WriteSafeState).
   device::DeviceStatus Exchange(const LegArray<double>& valve_v, std::uint64_t tick,
-                                DeviceEvents& events);
+                                DeviceEvents& events, bool safe_state = false);
   // The e-stop as the newest sample shows it, for `tick`.
   void JudgeSafety(std::uint64_t tick, DeviceEvents& events);
   // The operator's e-stop #`sequence`: latched in the device once per command, whichever path

@@ -14,7 +14,9 @@ void PlantNode::BringUpDevice() {
 
 device::DeviceStatus PlantNode::ExchangeWithDevice(const LegArray<double>& valve_v) {
   device_events_.Clear();
-  const device::DeviceStatus status = link_.Exchange(valve_v, tick_, device_events_);
+  // Not active (hardware lifecycle): the device holds every valve at its safe value.
+  const device::DeviceStatus status =
+      link_.Exchange(valve_v, tick_, device_events_, /*safe_state=*/!hardware_.apply_commands);
   Report(device_events_);
   return status;
 }
@@ -72,7 +74,9 @@ void PlantNode::TakeOperatorCommands() {
     for (std::size_t k = 0; k < operator_reader_.count(); ++k) {
       if (!operator_reader_.info(k).valid_data) continue;
       const hexa_msg_OperatorCommand& c = operator_reader_.sample(k);
-      if (c.kind != hexa_msg_OPERATOR_ESTOP && c.kind != hexa_msg_OPERATOR_RESET) continue;
+      if (c.kind != hexa_msg_OPERATOR_ESTOP && c.kind != hexa_msg_OPERATOR_RESET &&
+          c.kind != hexa_msg_OPERATOR_START && c.kind != hexa_msg_OPERATOR_HOME)
+        continue;
       // Only the session's operator tools (docs/faults.md, "Foreign commands").
       const comm::CommandTrust trust = operator_reader_.Authenticate(k);
       if (!comm::Trusted(trust)) {
@@ -82,7 +86,10 @@ void PlantNode::TakeOperatorCommands() {
       }
       if (c.kind == hexa_msg_OPERATOR_ESTOP) {
         LatchOperatorEstop(c.sequence);
-      } else if (link_.RequestEstopReset()) {
+        continue;
+      }
+      AskActivation(c);  // start / home; a reset only when the activation is automatic
+      if (c.kind == hexa_msg_OPERATOR_RESET && link_.RequestEstopReset()) {
         log_->warn("tick {}: operator reset #{}: e-stop reset asked of the rig", tick_,
                    static_cast<unsigned>(c.sequence));
       }

@@ -25,9 +25,18 @@ int PlantNode::Run() {
   runtime_.waitset().Detach(peers_.data_condition());
   if (started != services::PeerWaitResult::kMatched)
     return runtime_.FailStart(Figures(), "peers not ready", exit_code::kPeersNotMatched);
-  runtime_.Running(Figures(), realtime ? "real time" : "lockstep",
-                   realtime ? "ticking in real time" : "ticking in lockstep");
+  {
+    HardwareLifecycleInput configured;  // the device was brought up (BringUpDevice)
+    configured.device_configured = true;
+    lifecycle_.Update(configured, hardware_);
+  }
+  runtime_.Running(Figures(), StatusDetail(), realtime ? "ticking in real time" : "ticking in lockstep");
   LogStart();
+  log_->info("hardware {}: {}", ToString(hardware_.state),
+             options_.activation == HardwareActivation::kAuto
+                 ? "activated at the first tick (--activation auto)"
+                 : "every valve at its safe value until an operator start or home is granted "
+                   "(--activation operator)");
   const uint64_t last_tick = options_.duration_s > 0
                                  ? static_cast<uint64_t>(std::llround(options_.duration_s / kTickS))
                                  : UINT64_MAX;
@@ -36,6 +45,13 @@ int PlantNode::Run() {
   if (rc == exit_code::kOk && link_.lost()) rc = exit_code::kPlantDeviceLost;  // said at the end
   std::lock_guard<std::mutex> lock(cycle_.mutex());
   figures_.loop_ended_ns = node::MonotonicNow_ns();
+  {
+    HardwareLifecycleInput end;  // the run is over: back to inactive, then the device closes
+    end.device_configured = !link_.lost();
+    end.deactivate = true;
+    lifecycle_.Update(end, hardware_);
+    if (hardware_.changed) log_->info("hardware {}: the run ended", ToString(hardware_.state));
+  }
   LogEnd();
   LogDeviceEnd();
   LogCommandAges();

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "hexa/services/command_answer.hpp"
 #include "hexa/services/exit_code.hpp"
 #include "hexa/services/service_manager.hpp"
 
@@ -64,6 +65,13 @@ DeviceLinkParams LinkParams(const PlantNodeOptions& o) {
   p.lost_after_ticks = o.board.lost_after_ticks;
   p.address = o.board.host + ":" + std::to_string(o.board.port);
   return p;
+}
+
+// The activation's checks use the leg controllers' own input ranges (the rig's nominal legs).
+HardwareLifecycleConfig LifecycleConfig(const PlantNodeOptions& o, const config::SystemConfig& c) {
+  return HardwareLifecycleConfig::FromLegController(
+      LegControllerConfig::FromRig(c.rig, c.leg_controller, LegControllerKind::kBsSmc),
+      o.expected_legs);
 }
 
 LockstepClockParams ClockParams(const PlantNodeOptions& o) {
@@ -126,11 +134,17 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
                     node::QosFor(options.common, comm::TopicKind::kFaultEvent), 64),
       operator_topic_(runtime_.participant()),
       operator_reader_(runtime_.participant(), operator_topic_, comm::EndpointRole::kControlReader,
-                       node::QosFor(options.common, comm::TopicKind::kOperatorCommand), 16),
+                       [&] {
+                         comm::QosParams q = node::QosFor(options.common, comm::TopicKind::kOperatorCommand);
+                         q.user_data = services::kPlantCommandReader;  // hexa_operator waits for it
+                         return q;
+                       }(),
+                       16),
       arbitration_(arbitration_params_),
       lockstep_(ClockParams(options)),
       realtime_(1'000'000, kSlipAfter_ns),
-      link_(device_, board_, LinkParams(options), &node::MonotonicNow_ns) {
+      link_(device_, board_, LinkParams(options), &node::MonotonicNow_ns),
+      lifecycle_(LifecycleConfig(options, config)) {
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     leg_name_[i] = "leg" + std::to_string(i + 1);
     standby_name_[i] = leg_name_[i] + "_standby";
@@ -158,6 +172,7 @@ PlantNode::PlantNode(const PlantNodeOptions& options, const config::SystemConfig
 
 bool PlantNode::CompleteTick(const ArbitrationInput& in) {
   TakeOperatorCommands();  // an e-stop acts on this tick's write
+  UpdateHardware();  // the lifecycle: do the commands apply at this tick?
   arbitration_.Update(in, arbitration_out_);  // arbitrate
   relayed_ = relay_.For(tick_, arbitration_out_.forced);  // with the next tick's samples
   for (std::size_t i = 0; i < kNumLegs; ++i) {
@@ -181,7 +196,7 @@ bool PlantNode::CompleteTick(const ArbitrationInput& in) {
   events_.Clear();
   arbitration_.EndTick(tick_, events_);
   if (tick_ % 100 == 0) {
-    runtime_.Publish(hexa_msg_NODE_RUNNING, Figures(), arbitration_params_.realtime ? "real time" : "lockstep");
+    runtime_.Publish(hexa_msg_NODE_RUNNING, Figures(), StatusDetail());
   }
   Report(events_);  // a fault episode in effect, repeated at the status rate
   return true;

@@ -49,6 +49,7 @@
 #include "hexa/comm/comm.hpp"
 #include "hexa/core/command_arbitration.hpp"
 #include "hexa/core/coupled_legs.hpp"
+#include "hexa/core/hardware_lifecycle.hpp"
 #include "hexa/core/lockstep_clock.hpp"
 #include "hexa/core/lockstep_protocol.hpp"
 #include "hexa/core/plant_faults.hpp"
@@ -81,6 +82,12 @@ struct BoardLinkOptions {
   // intact frame came for `lost_after_ticks` ticks in a row (lost or refused frames).
   double answer_timeout_s = 2.0;
   std::uint64_t lost_after_ticks = 20;
+};
+
+// How the hardware lifecycle's activation is asked for (hexa/core/hardware_lifecycle.hpp).
+enum class HardwareActivation {
+  kAuto,      // at the first tick (and at an operator reset while inactive)
+  kOperator,  // by an operator start or home only
 };
 
 struct PlantNodeOptions {
@@ -124,6 +131,7 @@ struct PlantNodeOptions {
   FreeFallBenchParams free_fall;   // --bench free-fall: the Appendix B bench, not the platform
   DeviceKind device = DeviceKind::kSim;
   BoardLinkOptions board;          // --device board
+  HardwareActivation activation = HardwareActivation::kAuto;
 };
 
 // SCHED_FIFO priority in real time, below the legs (80): a tick of the simulation can cost a
@@ -181,6 +189,17 @@ class PlantNode {
   void LatchOperatorEstop(std::uint32_t sequence);  // once per command, whichever path brings it
   void LogDeviceEnd() const;
   void Report(const DeviceEvents& events);  // FaultEvents and log lines
+
+  // plant_hardware.cpp: the hardware lifecycle (core/hardware_lifecycle.hpp) for this tick:
+  // reads the device's sample and safety, the legs' controllers and the activation asked for,
+  // decides, answers the operator on NodeStatus and says whether the commands apply.
+  void UpdateHardware();
+  // An operator start / home (operator activation) or reset (automatic activation) asks for
+  // activation at this tick.
+  void AskActivation(const hexa_msg_OperatorCommand& c);
+  // The NodeStatus detail: the newest activation answer for a while, else the mode and the
+  // hardware state (hexa/services/command_answer.hpp says how it reads).
+  const char* StatusDetail();
 
   // plant_outputs.cpp: sensors of tick_ (all legs, or `only_leg` alone: a re-ask), the IMU
   // (every 5th tick), ground truth and the tracker. Batched: each reader gets one datagram.
@@ -265,6 +284,17 @@ class PlantNode {
   // (device_link.hpp), and the events of its newest call.
   DeviceLink link_;
   DeviceEvents device_events_;
+  // The hardware lifecycle (plant_hardware.cpp) and its newest decision; the activation asked
+  // for this tick (0: the automatic one, else the operator command's sequence).
+  HardwareLifecycle lifecycle_;
+  HardwareLifecycleOutput hardware_;
+  bool activation_asked_ = false;
+  std::uint32_t activation_sequence_ = 0;
+  const char* activation_kind_ = "";
+  bool auto_activation_done_ = false;
+  char hardware_answer_[160] = {};  // repeated on NodeStatus for a while (a keep-last topic)
+  std::uint64_t hardware_answer_tick_ = 0;
+  char status_detail_[160] = {};
 };
 
 }  // namespace hexa::plant_sim

@@ -63,6 +63,13 @@ void AddOptions(cli::Parser& cli) {
                 "--device board: ticks in a row without an intact sensor frame (lost, refused) after "
                 "which the link is lost (FAULT_BOARD_LINK, exit 7; lockstep: also no answer within "
                 "--board-timeout)", "20");
+  cli.AddChoice("activation", {"auto", "operator"},
+                "the hardware lifecycle (docs/faults.md, \"Hardware lifecycle\"): auto activates the "
+                "valves at the first tick, once the peers are up; operator keeps them at their safe "
+                "state (sensors published, commands computed but not applied) until an operator "
+                "start or home (hexa_operator) is granted. Either activation is refused, named, "
+                "with the e-stop open, a leg without a live controller, a sensor out of range or "
+                "the supply pressure low", "auto");
   cli.AddOption("fault", "kind:leg:time_s[,...]",
                 "inject rig faults (docs/faults.md): pot-stuck, pot-drift, pressure-dead (leg "
                 "1..6), imu-dropout, supply-loss (leg 0); e.g. pot-stuck:3:1.5");
@@ -117,6 +124,8 @@ bool ReadOptions(cli::Parser& cli, PlantNodeOptions& o) {
   }
   o.device = cli.Get("device") == "board" ? DeviceKind::kBoard
                                            : DeviceKind::kSim;
+  o.activation = cli.Get("activation") == "operator" ? HardwareActivation::kOperator
+                                                    : HardwareActivation::kAuto;
   o.board.answer_timeout_s = *board_timeout;
   o.board.lost_after_ticks = static_cast<std::uint64_t>(*board_lost);
   if (o.device == DeviceKind::kBoard) {

@@ -275,3 +275,54 @@ void SupervisorNode::FinishCommand(SupervisorState before, std::uint64_t tick, d
 }
 
 }  // namespace hexa::task_space
+
+namespace hexa::task_space {
+
+bool SupervisorNode::ActivationAllows() {
+  const OperatorCommandKind cmd = pending_command_;
+  const bool asks_activation = cmd == OperatorCommandKind::kStart || cmd == OperatorCommandKind::kHome;
+  const bool moves = asks_activation || cmd == OperatorCommandKind::kJog ||
+                     cmd == OperatorCommandKind::kGoal || cmd == OperatorCommandKind::kStream;
+  if (!moves) return true;  // stop, reset: never wait
+  plant_status_.Poll();
+  const std::string detail = plant_status_.DetailOf("plant");
+  const services::HardwareStatus status = services::ParseHardwareStatus(detail);
+  if (status != services::HardwareStatus::kUnknown) hardware_active_ = status == services::HardwareStatus::kActive;
+  auto refuse = [&](const std::string& why) {
+    if (pending_from_operator_) AnswerCommand(pending_sequence_, ToString(cmd), CommandAnswer::kRefused, why.c_str());
+    pending_command_ = OperatorCommandKind::kNone;
+    pending_start_.reset();
+    pending_from_operator_ = false;
+    activation_deadline_ns_ = 0;
+    return false;
+  };
+  if (!asks_activation) {
+    if (hardware_active_) return true;
+    return refuse("hardware inactive: an operator start or home activates it (--activation operator)");
+  }
+  // The plant answers the activation the same command asked of it.
+  const CommandAnswer plant = pending_from_operator_ ? ParseCommandAnswer(detail, pending_sequence_)
+                                                     : CommandAnswer::kNone;
+  if (plant == CommandAnswer::kAccepted) {
+    activation_deadline_ns_ = 0;
+    hardware_active_ = true;
+    return true;
+  }
+  if (plant != CommandAnswer::kNone) {
+    std::string why = services::CommandAnswerReason(detail);
+    const std::string inactive = "hardware inactive: ";
+    if (why.rfind(inactive, 0) == 0) why.erase(0, inactive.size());
+    return refuse("hardware not activated: " + why);
+  }
+  const std::int64_t now = node::MonotonicNow_ns();
+  if (activation_deadline_ns_ == 0) {
+    activation_deadline_ns_ = now + static_cast<std::int64_t>(options_.activation_answer_wait_s * 1e9);
+    log_->info("command #{} {}: waiting for the plant's answer to the activation", pending_sequence_, ToString(cmd));
+  } else if (now > activation_deadline_ns_) {
+    return refuse(fmt::format("the plant did not answer the activation within {:.1f} s (its status: '{}')",
+                              options_.activation_answer_wait_s, detail));
+  }
+  return false;
+}
+
+}  // namespace hexa::task_space

@@ -211,6 +211,18 @@ int SendAcknowledged(Request& r, const hexa::comm::Participant& participant,
     }
     ws.Wait(DDS_MSECS(20));
   }
+  // The plant acts on a start or home (the hardware's activation, docs/faults.md "Hardware
+  // lifecycle"), a reset (the e-stop latch's reset) and an e-stop: its reader too, for up to
+  // 2 s more (a plant that does not have a start lets the supervisor refuse it, naming the
+  // plant's silence).
+  const auto kind = r.cmd.kind;
+  if (!r.any_reader && (kind == hexa_msg_OPERATOR_START || kind == hexa_msg_OPERATOR_HOME ||
+                        kind == hexa_msg_OPERATOR_RESET || kind == hexa_msg_OPERATOR_ESTOP)) {
+    const int64_t plant_end = hexa::node::MonotonicNow_ns() + 2'000'000'000LL;
+    while (hexa::comm::CountMatchedReadersWithUserData(writer.get(), hexa::services::kPlantCommandReader) == 0 &&
+           hexa::node::MonotonicNow_ns() < plant_end)
+      ws.Wait(DDS_MSECS(20));
+  }
   writer.WriteNow(r.cmd);
   // Reliable delivery before the participant goes away. The wait counts only readers that
   // have answered a heartbeat; one whose side of the match completes after the write gets

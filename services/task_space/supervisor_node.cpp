@@ -89,6 +89,7 @@ SupervisorNode::SupervisorNode(const SupervisorNodeOptions& options,
       pose_writer_(runtime_.participant(), pose_topic_,
                    node::QosFor(options.common, comm::TopicKind::kPoseReport)),
       faults_(runtime_.participant(), "supervisor"),
+      plant_status_(runtime_.participant()),
       done_(runtime_.participant()) {
   runtime_.waitset().Attach(operator_reader_.data_condition(), kTokenOperator);
   runtime_.waitset().Attach(fault_reader_.data_condition(), kTokenFault);
@@ -218,10 +219,13 @@ void SupervisorNode::RunTick(std::uint64_t tick, double time_s) {
   // (a local take; nothing is sent).
   TakeFaults();
   const int64_t t0 = node::MonotonicNow_ns();
+  const bool command_allowed = !options_.operator_activation || ActivationAllows();
   FillInput(time_s);
+  if (!command_allowed) input_.command = OperatorCommandKind::kNone;  // it waits
   const SupervisorState state_before = output_.state;
   supervisor_.Update(input_, output_);
-  if (pending_command_ != OperatorCommandKind::kNone) FinishCommand(state_before, tick, time_s);
+  if (pending_command_ != OperatorCommandKind::kNone && command_allowed)
+    FinishCommand(state_before, tick, time_s);
   if (output_.state == SupervisorState::kStreaming || state_before == SupervisorState::kStreaming)
     LogStreamEvents(state_before, time_s);
   if (output_.state == SupervisorState::kIdle && state_before != output_.state)

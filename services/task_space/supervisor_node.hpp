@@ -56,6 +56,10 @@ struct SupervisorNodeOptions {
   // Fault injection (docs/faults.md): kill this process with SIGKILL at this simulated time
   // (< 0: never).
   double crash_at_s = -1.0;
+  // --activation operator: the plant's hardware is activated by the operator's start or home
+  // (docs/faults.md, "Hardware lifecycle"); motion waits for the plant's answer.
+  bool operator_activation = false;
+  double activation_answer_wait_s = 2.0;  // wall time for the plant's answer
 };
 
 // hexa_task_space's command line into `options`: -1 to go on, else the exit code (0 --help,
@@ -87,6 +91,10 @@ class SupervisorNode {
   void LogStreamEvents(SupervisorState before, double time_s);
   void LogStreamCounters(const char* when);
   void TakeFaults();
+  // --activation operator: whether the pending command may reach the core at this tick. A
+  // start or home waits for the plant's answer to the activation it asked for (refused with
+  // the plant's reason); jog, goal and stream are refused while the hardware is inactive.
+  bool ActivationAllows();
   void RunCycle();
   // One wake-up of the main thread (operator commands, faults, IMU misses in real time), with
   // the control lock held.
@@ -132,6 +140,7 @@ class SupervisorNode {
   comm::LegRoutedWriter<hexa_msg_LegSetpoint> setpoint_writer_;
   comm::Writer<hexa_msg_PoseReport> pose_writer_;
   node::FaultPublisher faults_;
+  node::PeerTracker plant_status_;  // the plant's NodeStatus: its hardware lifecycle
   comm::GuardCondition done_;  // set by the cycle when the service should exit
 
   // RunCycle on the IMU and leg-sensor readers' data; its mutex guards everything below.
@@ -212,6 +221,8 @@ class SupervisorNode {
   // Start-up: the legs whose primary's setpoint reader has not matched yet (WaitUntilMatched).
   std::string missing_primaries_;
   bool autostart_pending_ = false;
+  bool hardware_active_ = false;            // --activation operator: the plant's word
+  std::int64_t activation_deadline_ns_ = 0; // the pending start / home's answer due (0: none)
   bool left_idle_ = false;
   bool was_initialized_ = false;
   int exit_code_ = -1;  // set when the service should exit

@@ -1,4 +1,7 @@
 // hexa_task_space's command line: the common service options and the supervisor's own.
+#include <cstdio>
+
+#include "hexa/services/exit_code.hpp"
 #include "hexa/services/runtime.hpp"
 #include "supervisor_node.hpp"
 
@@ -49,6 +52,12 @@ int ParseOptions(int argc, char** argv, SupervisorNodeOptions& o) {
   cli.AddOption("washout", "file",
                 "--stream-kind vehicle: the washout parameters (protobuf text, e.g. "
                 "deploy/cueing/washout.textproto; default: the same values built in)");
+  cli.AddChoice("activation", {"auto", "operator"},
+                "the plant's hardware lifecycle (docs/faults.md, \"Hardware lifecycle\"), as "
+                "hexa_plant_sim --activation: with operator, a start or home waits for the plant's "
+                "answer to the activation it asks for (refused with the plant's reason), and jog, "
+                "goal and stream are refused while the hardware is inactive; not with --autostart",
+                "auto");
   cli.AddChoice("fault", {"none", "crash"},
                 "fault injection (docs/faults.md): crash = SIGKILL at --fault-at", "none");
   cli.AddOption("fault-at", "s", "simulated time at which the fault starts", "0");
@@ -81,6 +90,12 @@ int ParseOptions(int argc, char** argv, SupervisorNodeOptions& o) {
   o.stream_kind = cli.Get("stream-kind") == "vehicle" ? StreamKind::kVehicle : StreamKind::kPose;
   if (cli.Has("washout")) o.washout_path = cli.Get("washout");
   if (cli.Get("fault") == "crash") o.crash_at_s = *fault_at;
+  o.operator_activation = cli.Get("activation") == "operator";
+  if (o.operator_activation && o.autostart) {
+    std::fprintf(stderr, "error: --autostart with --activation operator: the operator's start "
+                 "activates the hardware (docs/faults.md, \"Hardware lifecycle\")\n(see --help)\n");
+    return exit_code::kUsage;
+  }
   return -1;
 }
 

@@ -37,7 +37,10 @@ class ScriptedDevice : public device::Device {
     ++writes;
     return write_status;
   }
-  device::DeviceStatus WriteSafeState() override { return device::DeviceStatus::kOk; }
+  device::DeviceStatus WriteSafeState() override {
+    ++safe_writes;
+    return device::DeviceStatus::kOk;
+  }
   void LatchEstop() override {
     ++latches;
     safety.estop_latched = true;
@@ -54,7 +57,7 @@ class ScriptedDevice : public device::Device {
   device::DeviceStatus write_status = device::DeviceStatus::kOk;
   device::DeviceSafety safety;
   LegArray<double> written{};
-  int writes = 0, latches = 0, resets = 0;
+  int writes = 0, safe_writes = 0, latches = 0, resets = 0;
 };
 
 class DeviceLinkTest : public ::testing::Test {
@@ -167,6 +170,20 @@ TEST_F(DeviceLinkTest, AFaultOfTheDeviceIsReturnedAndNothingIsRead) {
   EXPECT_EQ(link_.Exchange(LegArray<double>{}, 3, events_), device::DeviceStatus::kFault);
   EXPECT_EQ(device_.reads.size(), 1u) << "no read after a failed write";
   EXPECT_EQ(link_.samples_missed_total(), 0u);
+}
+
+// The hardware lifecycle not active: the device holds its safe state instead of the commands;
+// the sample is read as on any tick (sensors are published while inactive).
+TEST_F(DeviceLinkTest, SafeStateExchangeWritesTheSafeStateAndStillReadsTheSample) {
+  events_.Clear();
+  link_.Exchange(LegArray<double>{1, 2, 3, 4, 6, 7}, 0, events_, /*safe_state=*/true);
+  EXPECT_EQ(device_.safe_writes, 1);
+  EXPECT_EQ(device_.writes, 0);
+  EXPECT_EQ(link_.samples_missed_total(), 0u);
+  link_.Exchange(LegArray<double>{1, 2, 3, 4, 6, 7}, 1, events_);
+  EXPECT_EQ(device_.safe_writes, 1);
+  EXPECT_EQ(device_.writes, 1);
+  EXPECT_EQ(device_.written[0], 1.0);
 }
 
 TEST(DeviceEvents, AFullListDropsAndSaysSo) {
