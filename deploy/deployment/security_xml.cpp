@@ -60,8 +60,9 @@ RolePermissions PermissionsOf(Role role, int leg) {
       break;
     case deployment::SUPERVISOR:
       p.publish = {{kLegSetpointTopic, {"", any_leg}}, {kPoseReportTopic, {}}, status, faults};
+      // NodeStatus: the plant's answer to an activation (docs/faults.md, "Hardware lifecycle").
       p.subscribe = {{kLegSensorsTopic, {}}, {kImuSampleTopic, {}}, {kOperatorCommandTopic, {}},
-                     faults, valve_any};
+                     faults, valve_any, status};
       break;
     case deployment::RECORDER:
       p.publish = {status};
