@@ -25,10 +25,15 @@ void FindFixedIndexPorts(int domain, DomainProbe& result) {
     // The two ports of indices 0..kMaxParticipantIndex are one contiguous range.
     if (socket.port < DiscoveryUnicastPort(domain, 0) || socket.port > UserUnicastPort(domain, kMaxParticipantIndex))
       continue;
+    const SocketHolder owner = SocketOwner(socket.inode);
+    // A process started for another domain holds one of these ports by chance (the kernel gave
+    // one of its sockets an ephemeral port in this range): not a participant of this domain.
+    const int its_domain = owner.pid > 0 ? DomainArgumentOf(owner.pid) : -1;
+    if (its_domain >= 0 && its_domain != domain) continue;
     ++result.fixed_index_ports;
-    const std::string owner = SocketOwner(socket.inode);
     auto& owners = result.port_owners;
-    if (!owner.empty() && std::find(owners.begin(), owners.end(), owner) == owners.end()) owners.push_back(owner);
+    if (!owner.name.empty() && std::find(owners.begin(), owners.end(), owner.name) == owners.end())
+      owners.push_back(owner.name);
   }
 }
 

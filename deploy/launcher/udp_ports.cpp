@@ -3,6 +3,7 @@
 #include <dirent.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -44,11 +45,11 @@ bool UdpLoopbackPortBound(int port) {
   return false;
 }
 
-std::string SocketOwner(std::uint64_t inode) {
+SocketHolder SocketOwner(std::uint64_t inode) {
   const std::string want = "socket:[" + std::to_string(inode) + "]";
   DIR* proc = opendir("/proc");
-  if (proc == nullptr) return "";
-  std::string owner;
+  if (proc == nullptr) return {};
+  SocketHolder owner;
   while (const dirent* p = readdir(proc)) {
     if (p->d_name[0] < '0' || p->d_name[0] > '9') continue;
     const std::string dir = std::string("/proc/") + p->d_name;
@@ -62,14 +63,30 @@ std::string SocketOwner(std::uint64_t inode) {
       if (want != target) continue;
       std::string comm;
       std::getline(std::ifstream(dir + "/comm"), comm);
-      owner = comm + " (pid " + p->d_name + ")";
+      owner.name = comm + " (pid " + p->d_name + ")";
+      owner.pid = std::atoi(p->d_name);
       break;
     }
     closedir(fds);
-    if (!owner.empty()) break;
+    if (owner.pid != 0) break;
   }
   closedir(proc);
   return owner;
+}
+
+int DomainArgumentOf(int pid) {
+  std::ifstream cmdline("/proc/" + std::to_string(pid) + "/cmdline");
+  std::string argument;
+  bool next_is_domain = false;
+  while (std::getline(cmdline, argument, '\0')) {
+    if (next_is_domain) {
+      char* end = nullptr;
+      const long domain = std::strtol(argument.c_str(), &end, 10);
+      return end != argument.c_str() && *end == '\0' && domain >= 0 ? static_cast<int>(domain) : -1;
+    }
+    next_is_domain = argument == "--domain";
+  }
+  return -1;
 }
 
 }  // namespace hexa::deploy

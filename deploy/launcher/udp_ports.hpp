@@ -19,8 +19,16 @@ std::vector<BoundUdpSocket> BoundUdpSockets();
 // Whether a socket has bound 127.0.0.1:`port`.
 bool UdpLoopbackPortBound(int port);
 
-// "hexa_leg_ctrl (pid 1234)" for the process holding the socket with this inode, read from
-// /proc/<pid>/fd; "" when no readable process holds it.
-std::string SocketOwner(std::uint64_t inode);
+// The process holding the socket with this inode, read from /proc/<pid>/fd: its name as
+// "hexa_leg_ctrl (pid 1234)" ("" and pid 0 when no readable process holds it).
+struct SocketHolder {
+  std::string name;
+  int pid = 0;
+};
+SocketHolder SocketOwner(std::uint64_t inode);
+
+// The value of a process's `--domain N` argument (/proc/<pid>/cmdline), or -1 when it has
+// none or it cannot be read.
+int DomainArgumentOf(int pid);
 
 }  // namespace hexa::deploy
