@@ -189,7 +189,8 @@ void SupervisorNode::ReportHold(double time_s) {
                 leg > 0 ? std::to_string(leg).c_str() : "",
                 reported ? "reported by" : "detected by", reported ? r.source.data() : "supervisor",
                 reported ? r.detail.data() : output_.fault_detail.data());
-  // A stale setpoint right after the host stopped this process is the host's stall: say so.
+  // A hold within 2 s of a stall of this process by the host (NoteInputLag): the line says so,
+  // since the legs' stale setpoints then come from the host, not from a controller.
   if (host_stall_.at_mono_ns > 0 && node::MonotonicNow_ns() - host_stall_.at_mono_ns < 2'000'000'000) {
     const std::size_t used = std::strlen(line);
     std::snprintf(line + used, sizeof line - used,
