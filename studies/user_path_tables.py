@@ -16,9 +16,11 @@ With --coupled-legs the seven trajectories (and hexa_sim) run with the coupled l
 (`hexa_session --coupled-legs`, docs/controller.md "Coupled leg feedback"); the calibration
 session stays decoupled, as a user calibrates (docs/calibration.md).
 
+--trajectories runs a subset of the seven (e.g. z,combined); the cells of the others read n/a.
+
 Usage: /usr/bin/python3 studies/user_path_tables.py [--build build] [--seeds 1,2,3]
        [--out out/user_path] [--in-process] [--reuse] [--coupled-legs]
-       [--doc docs/measurements/results.md]
+       [--trajectories x,y,z,roll,pitch,yaw,combined] [--doc docs/measurements/results.md]
 """
 import argparse
 import datetime
@@ -114,7 +116,8 @@ def run_seed(a, seed, domain):
         progress(f"seed {seed}: no calibration overlay; see {root}/hexa_calibrate.log")
         return res
     coupled = ["--coupled-legs"] if a.coupled_legs else []
-    for t in TRAJ:
+    trajs = getattr(a, "trajectories", TRAJ)
+    for t in trajs:
         d = os.path.join(root, t)
         cmd = [session, "--trajectory", t, "--rig-overlay", overlay, "--out", d] + common + coupled
         res["commands"].append(cmd)
@@ -125,18 +128,23 @@ def run_seed(a, seed, domain):
         progress(f"seed {seed}: {t:8s} exit {code} ({wall:.0f} s) RMSE "
                  + ("n/a" if ax is None else " ".join(f"{v:.4f}" for v in ax)))
     if a.in_process:
-        j = os.path.join(root, "in_process.json")
-        cmd = [os.path.join(a.build, "tools", "hexa_sim"), "--controller", a.controller,
-               "--profile", a.profile, "--seed", str(seed), "--rig-overlay", overlay, "--json", j] + rig \
-            + coupled
-        res["commands"].append(cmd)
-        code, wall = run(cmd, os.path.join(root, "in_process.log"), j if a.reuse else None)
-        progress(f"seed {seed}: hexa_sim with the same overlay exit {code} ({wall:.0f} s)")
-        sim = load_json(j)
-        if sim:
-            res["in_process"] = {
-                t: [v * (100.0 if k < 3 else DEG) for k, v in enumerate(r["rmse_vs_truth"])]
-                for t, r in sim["trajectories"].items() if r.get("completed")}
+        # All seven in one run, or one hexa_sim run per trajectory of a subset.
+        runs = [("all", "in_process")] if trajs == TRAJ else [(t, f"in_process_{t}") for t in trajs]
+        res["in_process"] = {}
+        for traj, name in runs:
+            j = os.path.join(root, name + ".json")
+            cmd = [os.path.join(a.build, "tools", "hexa_sim"), "--controller", a.controller,
+                   "--profile", a.profile, "--seed", str(seed)] \
+                + ([] if traj == "all" else ["--trajectory", traj]) \
+                + ["--rig-overlay", overlay, "--json", j] + rig + coupled
+            res["commands"].append(cmd)
+            code, wall = run(cmd, os.path.join(root, name + ".log"), j if a.reuse else None)
+            progress(f"seed {seed}: hexa_sim {traj} with the same overlay exit {code} ({wall:.0f} s)")
+            sim = load_json(j)
+            if sim:
+                res["in_process"].update({
+                    t: [v * (100.0 if k < 3 else DEG) for k, v in enumerate(r["rmse_vs_truth"])]
+                    for t, r in sim["trajectories"].items() if r.get("completed")})
     return res
 
 
@@ -160,7 +168,7 @@ def f3(v):
     return "n/a" if v is None else f"{v:.3f}"
 
 
-def format_section(results, seeds, command, date, commit, coupled=False):
+def format_section(results, seeds, command, date, commit, coupled=False, trajs=TRAJ):
     """The markdown section (Table 9/10 layout, the 12 cells against one fifth of the paper,
     valve activity on combined, agreement with the in-process simulation)."""
     seed_list = ", ".join(map(str, seeds))
@@ -169,7 +177,8 @@ def format_section(results, seeds, command, date, commit, coupled=False):
          "DDS (every process started by `hexa_session`; lockstep, BS-SMC, `realistic` profile): "
          "`hexa_session --trajectory calibration --tracker --out DIR`, `hexa_calibrate "
          "DIR/session.mcap --out DIR/calibration.textproto`, then `hexa_session --trajectory T "
-         "--rig-overlay DIR/calibration.textproto` for the seven trajectories"
+         "--rig-overlay DIR/calibration.textproto` for "
+         + ("the seven trajectories" if trajs == TRAJ else "the trajectories " + ", ".join(trajs))
          + (" with `--coupled-legs` (the coupled leg feedback; the calibration session "
             "decoupled)" if coupled else "") + ". RMSE against "
          "ground truth over the tracking window, from each session's report.json; median over "
@@ -205,7 +214,9 @@ def format_section(results, seeds, command, date, commit, coupled=False):
                 row += f" {f3(None if ax is None else ax[k])} |"
         L.append(row)
     L.append("")
-    L.append(f"{met} of the 12 cells at most one fifth of the paper.\n")
+    run_cells = sum(1 for t, _, _ in cells() if t in trajs)
+    L.append(f"{met} of the 12 cells at most one fifth of the paper"
+             + ("" if run_cells == 12 else f" ({run_cells} cells run; n/a: trajectory not run)") + ".\n")
     valves = [(s, valve_activity(results[s]["sessions"].get("combined"))) for s in seeds]
     L.append("Valve activity on combined (mean over the six valves of the mean |dV| per tick and "
              "of the share of ticks at 0.05 V or 9.95 V; in brackets the worst valve's share): "
@@ -218,13 +229,13 @@ def format_section(results, seeds, command, date, commit, coupled=False):
         if not sim:
             continue
         worst = 0.0
-        for t in TRAJ:
+        for t in trajs:
             ax = report_axes(results[s]["sessions"].get(t))
             if ax is None or t not in sim:
                 worst = float("inf")
                 continue
             worst = max(worst, max(abs(x - y) for x, y in zip(ax, sim[t])))
-        agree.append(f"seed {s}: largest difference over the 7 x 6 figures {worst:.2e} (cm / deg)")
+        agree.append(f"seed {s}: largest difference over the {len(trajs)} x 6 figures {worst:.2e} (cm / deg)")
     if agree:
         L.append("Against the in-process simulation with the same overlay and seed (`hexa_sim "
                  "--seed N --rig-overlay DIR/calibration.textproto`): " + "; ".join(agree) + ".\n")
@@ -273,6 +284,8 @@ def main():
     ap.add_argument("--coupled-legs", action="store_true",
                     help="run the seven trajectories (and hexa_sim) with --coupled-legs; the "
                          "calibration session stays decoupled")
+    ap.add_argument("--trajectories", default=",".join(TRAJ),
+                    help="the trajectories to run, comma separated (default: all seven)")
     ap.add_argument("--doc", help="also put the section into this page (e.g. "
                                   "docs/measurements/results.md)")
     a = ap.parse_args()
@@ -280,6 +293,11 @@ def main():
         seeds = [int(s) for s in a.seeds.split(",")]
     except ValueError:
         ap.error(f"--seeds '{a.seeds}': expected integers separated by commas, e.g. 1,2,3")
+    a.trajectories = [t.strip() for t in a.trajectories.split(",") if t.strip()]
+    unknown = [t for t in a.trajectories if t not in TRAJ]
+    if unknown or not a.trajectories:
+        ap.error(f"--trajectories: unknown {', '.join(unknown) or '(none given)'}; choose from {', '.join(TRAJ)}")
+    a.trajectories = [t for t in TRAJ if t in a.trajectories]  # the tables' order
     for exe in ["deploy/hexa_session", "tools/hexa_calibrate"] + (["tools/hexa_sim"] if a.in_process else []):
         if not os.access(os.path.join(a.build, exe), os.X_OK):
             ap.error(f"--build {a.build}: {exe} not found (build it: ./scripts/build.sh)")
@@ -290,7 +308,7 @@ def main():
                             capture_output=True, text=True).stdout.strip() or "unknown commit"
     command = "/usr/bin/python3 studies/user_path_tables.py " + " ".join(sys.argv[1:])
     section = format_section(results, seeds, command.strip(),
-                             datetime.date.today().isoformat(), commit, a.coupled_legs)
+                             datetime.date.today().isoformat(), commit, a.coupled_legs, a.trajectories)
     with open(os.path.join(a.out, "section.md"), "w") as f:
         f.write(section + "\n")
     with open(os.path.join(a.out, "commands.txt"), "w") as f:
@@ -301,7 +319,7 @@ def main():
         write_doc(a.doc, section)
         progress(f"section written to {a.doc}")
     print(section)
-    complete = all(report_axes(results[s]["sessions"].get(t)) for s in seeds for t in TRAJ)
+    complete = all(report_axes(results[s]["sessions"].get(t)) for s in seeds for t in a.trajectories)
     return 0 if complete else 1
 
 

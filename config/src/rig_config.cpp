@@ -248,8 +248,9 @@ std::string Summary(const SystemConfig& c) {
   for (const RigOverlay& o : c.overlays) {
     int legs = 0;
     for (const LegOverride& l : o.leg) legs += l.empty() ? 0 : 1;
-    out << "; overlay " << o.source_path << " (" << legs << " legs, " << o.provenance.method << ", "
-        << o.provenance.date << ")";
+    out << "; overlay " << o.source_path << " (" << legs << " legs, ";
+    if (o.platform.mass_kg) out << "platform " << *o.platform.mass_kg << " kg, ";
+    out << o.provenance.method << ", " << o.provenance.date << ")";
   }
   return out.str();
 }

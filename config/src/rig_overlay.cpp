@@ -5,9 +5,10 @@
 // Stages, each stopping at the first failing one:
 //   1. parse (syntax, unknown fields): the parser's line/column, "did you mean";
 //   2. structure: rig_name and provenance (method, date) written, each leg block with a
-//      leg_id in 1..6 at most once, 3-vectors complete, every number finite;
-//   3. apply: the rig name must be the rig file's; the merged per-leg model is checked with
-//      the rig file's value rules (validate.cpp, ValidateControllerModel).
+//      leg_id in 1..6 at most once, 3-vectors complete, every number finite, a platform block
+//      not empty;
+//   3. apply: the rig name must be the rig file's; the merged per-leg model and platform are
+//      checked with the rig file's value rules (validate.cpp, ValidateControllerModel).
 #include <google/protobuf/descriptor.h>
 #include <google/protobuf/text_format.h>
 
@@ -78,6 +79,11 @@ void LegOverride::MergeFrom(const LegOverride& later) {
   Take(potentiometer_gain, later.potentiometer_gain);
 }
 
+void PlatformOverride::MergeFrom(const PlatformOverride& later) {
+  Take(mass_kg, later.mass_kg);
+  Take(inertia_diag_kg_m2, later.inertia_diag_kg_m2);
+}
+
 // ---- The controllers' model -----------------------------------------------------------------
 
 namespace {
@@ -117,6 +123,8 @@ ControllerModel MakeControllerModel(const SystemConfig& config) {
     Apply(leg.potentiometer.offset_m, o.potentiometer_offset_m);
     Apply(leg.potentiometer.gain, o.potentiometer_gain);
   }
+  Apply(m.platform.mass_kg, config.platform_override.mass_kg);
+  Apply(m.platform.inertia_diag_kg_m2, config.platform_override.inertia_diag_kg_m2);
   return m;
 }
 
@@ -295,6 +303,31 @@ void ReadLeg(const pb::LegOverlay& leg, int k, const ParseInfoTree* leg_tree, co
   out.leg[static_cast<std::size_t>(id - 1)] = o;
 }
 
+// Stage 2 for the platform block.
+void ReadPlatform(const pb::PlatformOverlay& p, const Location& block, const ParseInfoTree* tree,
+                  const std::string& file, std::vector<ConfigIssue>& issues, PlatformOverride& out) {
+  out.mass_kg = Opt(p.has_mass_kg(), p.mass_kg());
+  if (p.has_inertia_diag_kg_m2()) {
+    const pb::Vector3& v = p.inertia_diag_kg_m2();
+    if (!(v.has_x() && v.has_y() && v.has_z())) {
+      const gp::FieldDescriptor* fd = pb::PlatformOverlay::descriptor()->FindFieldByName("inertia_diag_kg_m2");
+      const Location loc = tree ? text_format::FromRange(tree->GetLocationRange(fd, -1)) : block;
+      issues.push_back({file, loc.line, loc.column, "platform.inertia_diag_kg_m2",
+                        "the platform's inertia needs all three principal moments",
+                        std::string(v.has_x() ? "x" : "") + (v.has_y() ? "y" : "") +
+                            (v.has_z() ? "z" : "") + " written",
+                        "x, y and z"});
+      return;
+    }
+    out.inertia_diag_kg_m2 = Eigen::Vector3d(v.x(), v.y(), v.z());
+  }
+  if (out.empty()) {
+    issues.push_back({file, block.line, block.column, "platform",
+                      "platform block changes nothing (no value written)", "",
+                      "mass_kg and / or inertia_diag_kg_m2"});
+  }
+}
+
 }  // namespace
 
 OverlayResult ParseRigOverlay(const std::string& text, const std::string& display_name) {
@@ -348,6 +381,11 @@ OverlayResult ParseRigOverlay(const std::string& text, const std::string& displa
       ReadLeg(file.leg(k), k, tree.GetTreeForNested(leg_fd, k), block, display_name,
               first_line_of_id, issues, overlay);
     }
+    if (file.has_platform()) {
+      const gp::FieldDescriptor* fd = pb::RigOverlay::descriptor()->FindFieldByName("platform");
+      ReadPlatform(file.platform(), text_format::FromRange(tree.GetLocationRange(fd, -1)),
+                   tree.GetTreeForNested(fd, -1), display_name, issues, overlay.platform);
+    }
     if (!issues.empty()) return FailOverlay(std::move(issues));
     OverlayResult result;
     result.ok = true;
@@ -399,6 +437,7 @@ ConfigResult ApplyRigOverlay(const SystemConfig& base, const RigOverlay& overlay
   }
   SystemConfig merged = base;
   for (std::size_t i = 0; i < kNumLegs; ++i) merged.leg_override[i].MergeFrom(overlay.leg[i]);
+  merged.platform_override.MergeFrom(overlay.platform);
   merged.overlays.push_back(overlay);
   issues = ValidateControllerModel(merged);
   for (ConfigIssue& issue : issues) locate(issue);
@@ -463,6 +502,8 @@ std::string ToTextFormat(const RigOverlay& o) {
     if (l.potentiometer_offset_m) leg->set_potentiometer_offset_m(*l.potentiometer_offset_m);
     if (l.potentiometer_gain) leg->set_potentiometer_gain(*l.potentiometer_gain);
   }
+  if (o.platform.mass_kg) f.mutable_platform()->set_mass_kg(*o.platform.mass_kg);
+  if (o.platform.inertia_diag_kg_m2) ToPb(*o.platform.inertia_diag_kg_m2, f.mutable_platform()->mutable_inertia_diag_kg_m2());
   std::string text;
   gp::TextFormat::Printer printer;
   printer.PrintToString(f, &text);

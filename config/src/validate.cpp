@@ -198,6 +198,10 @@ void CheckGeometry(Checker& c, const SystemConfig& config) {
 constexpr double kMaxJointCalibration_m = 0.02;
 constexpr double kMaxPotentiometerOffset_m = 0.01;
 constexpr double kMinPotentiometerGain = 0.9;
+// An overlay's platform mass and each principal moment within this factor of the rig file's:
+// a payload estimate, not a different platform.
+constexpr double kMinPlatformRatio = 0.5;
+constexpr double kMaxPlatformRatio = 2.0;
 constexpr double kMaxPotentiometerGain = 1.1;
 
 std::string OverlayLegPath(std::size_t i) { return "leg[leg_id=" + std::to_string(i + 1) + "]"; }
@@ -307,6 +311,33 @@ std::vector<ConfigIssue> ValidateControllerModel(const SystemConfig& config) {
                "calibrated joint is implausibly far from the rig file's (geometry.leg[id=" +
                    std::to_string(i + 1) + "]." + member + ")",
                FormatDouble(moved) + " m", "<= " + FormatDouble(kMaxJointCalibration_m) + " m");
+      }
+    }
+  }
+  // The platform with its payload: positive, and within kMin/MaxPlatformRatio of the rig file's.
+  const PlatformOverride& po = config.platform_override;
+  const std::string ratio_limit = FormatDouble(kMinPlatformRatio) + "-" + FormatDouble(kMaxPlatformRatio) +
+                                  " x the rig file's ";
+  if (po.mass_kg && c.Finite("platform.mass_kg", *po.mass_kg)) {
+    const double rig_kg = config.rig.platform.mass_kg;
+    if (!(*po.mass_kg >= kMinPlatformRatio * rig_kg && *po.mass_kg <= kMaxPlatformRatio * rig_kg)) {
+      c.Fail("platform.mass_kg", "platform mass (with payload) is implausibly far from the rig file's",
+             FormatDouble(*po.mass_kg) + " kg",
+             "[" + FormatDouble(kMinPlatformRatio * rig_kg) + ", " + FormatDouble(kMaxPlatformRatio * rig_kg) +
+                 "] kg (" + ratio_limit + "platform.mass_kg " + FormatDouble(rig_kg) + " kg)");
+    }
+  }
+  if (po.inertia_diag_kg_m2 && po.inertia_diag_kg_m2->allFinite()) {
+    for (int k = 0; k < 3; ++k) {
+      const std::string axis = std::string(1, "xyz"[k]);
+      const double v = (*po.inertia_diag_kg_m2)[k];
+      const double rig_v = config.rig.platform.inertia_diag_kg_m2[k];
+      if (!(v >= kMinPlatformRatio * rig_v && v <= kMaxPlatformRatio * rig_v)) {
+        c.Fail("platform.inertia_diag_kg_m2." + axis,
+               "platform moment of inertia (with payload) is implausibly far from the rig file's",
+               FormatDouble(v) + " kg m^2",
+               "[" + FormatDouble(kMinPlatformRatio * rig_v) + ", " + FormatDouble(kMaxPlatformRatio * rig_v) +
+                   "] kg m^2 (" + ratio_limit + "platform.inertia_diag_kg_m2." + axis + ")");
       }
     }
   }

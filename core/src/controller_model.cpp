@@ -5,6 +5,7 @@ namespace hexa {
 ControllerModel ControllerModel::FromRig(const RigParams& rig, const LegControllerParams& params) {
   ControllerModel m;
   m.geometry = rig.geometry;
+  m.platform = rig.platform;
   for (LegControllerModel& leg : m.legs) {
     leg.model = NominalLegModel::FromRig(rig);
     leg.params = params;
@@ -16,6 +17,7 @@ ControllerModel ControllerModel::FromRig(const RigParams& rig, const LegControll
 RigParams ControllerModel::SupervisorRig(const RigParams& rig) const {
   RigParams r = rig;
   r.geometry = geometry;
+  r.platform = platform;
   return r;
 }
 

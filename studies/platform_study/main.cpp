@@ -287,8 +287,9 @@ int main(int argc, char** argv) {
     // no per-leg overrides), then the fit.
     config.controllers = hexa::ControllerModel::FromRig(loaded_rig->rig, config.leg_controller);
     hexa::KinematicCalibration calibration;
-    if (!hexa::calib::CalibrateInProcess(config, calibration, stderr)) return 1;
-    hexa::calib::ApplyKinematicCalibration(calibration, config);
+    hexa::PayloadEstimate payload;
+    if (!hexa::calib::CalibrateInProcess(config, calibration, stderr, payload)) return 1;
+    hexa::calib::ApplyKinematicCalibration(calibration, payload, config);
   }
   config.leg_controller.coupled = g_coupled_legs;
   if (config.controllers)

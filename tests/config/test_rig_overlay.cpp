@@ -153,6 +153,32 @@ TEST(RigOverlay, CalibrationReachesTheSupervisorAndTheLegController) {
   EXPECT_EQ(leg1.potentiometer.gain, 1.0);
 }
 
+// The platform block (with its payload, as hexa_calibrate estimates it) reaches the supervisor's
+// rig (feed-forward) and each leg's coupling row W; the plant's rig keeps the rig file's.
+TEST(RigOverlay, PlatformMassReachesTheSupervisorAndTheCoupledLegs) {
+  SystemConfig base = Reference();
+  base.leg_controller.coupled.enabled = true;
+  const auto parsed = hexa::config::ParseRigOverlay(
+      OverlayText("platform { mass_kg: 7.2 inertia_diag_kg_m2 { x: 0.1128 y: 0.1128 z: 0.228 } }\n"), "p.textproto");
+  ASSERT_TRUE(parsed.ok) << parsed.error;
+  const ConfigResult r = hexa::config::ApplyRigOverlay(base, parsed.overlay);
+  ASSERT_TRUE(r.ok) << r.error;
+  const hexa::RigParams sup = hexa::config::MakeSupervisorRig(r.config);
+  EXPECT_EQ(sup.platform.mass_kg, 7.2);
+  EXPECT_EQ(sup.platform.inertia_diag_kg_m2.z(), 0.228);
+  EXPECT_EQ(r.config.rig.platform.mass_kg, 6.0);  // the plant's rig is untouched
+  const auto with = hexa::config::MakeLegControllerConfig(r.config, 3, hexa::LegControllerKind::kBsSmc);
+  const auto without = hexa::config::MakeLegControllerConfig(base, 3, hexa::LegControllerKind::kBsSmc);
+  // W = M_ls / M: a heavier platform, a larger inertia seen by the leg.
+  EXPECT_GT(with.coupling_row[2], without.coupling_row[2]);
+  // Written and read back: the same overlay.
+  const auto again = hexa::config::ParseRigOverlay(hexa::config::ToTextFormat(parsed.overlay), "again.textproto");
+  ASSERT_TRUE(again.ok) << again.error;
+  EXPECT_EQ(again.overlay.platform.mass_kg, 7.2);
+  EXPECT_EQ(*again.overlay.platform.inertia_diag_kg_m2, parsed.overlay.platform.inertia_diag_kg_m2.value());
+  EXPECT_NE(hexa::config::Summary(r.config).find("platform 7.2 kg"), std::string::npos);
+}
+
 struct Defect {
   const char* name;
   std::string legs;        // the leg blocks of the overlay (line 3 on)
@@ -186,6 +212,15 @@ TEST(RigOverlay, DefectsNameFileLineFieldValueAndLimit) {
       {"unknown field", "leg { leg_id: 3\n coulomb_n: 4 }\n", 4, "leg.coulomb_n", "unknown field"},
       {"discharge", "leg { leg_id: 3\n discharge_coefficient: 1.2 }\n", 4,
        "leg[leg_id=3].discharge_coefficient", "out of range"},
+      // The platform with its payload (whole platform): 0.5-2 x the rig file's 6 kg.
+      {"platform mass", "platform {\n mass_kg: 60 }\n", 4, "platform.mass_kg", "implausibly far"},
+      {"platform mass zero", "platform {\n mass_kg: 0 }\n", 4, "platform.mass_kg", "implausibly far"},
+      {"platform inertia", "platform { mass_kg: 7.2\n inertia_diag_kg_m2 { x: 0.1 y: 0.1 z: 1.9 } }\n", 4,
+       "platform.inertia_diag_kg_m2.z", "implausibly far"},
+      {"platform partial inertia", "platform {\n inertia_diag_kg_m2 { x: 0.1 } }\n", 4,
+       "platform.inertia_diag_kg_m2", "all three"},
+      {"platform empty", "platform { }\n", 3, "platform", "changes nothing"},
+      {"platform nan", "platform {\n mass_kg: nan }\n", 4, "platform.mass_kg", "finite"},
   };
   for (const Defect& d : defects) {
     const ConfigResult r = Apply(OverlayText(d.legs), "bad.textproto");

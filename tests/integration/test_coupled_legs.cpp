@@ -1,7 +1,8 @@
 // Coupled leg feedback over DDS (docs/controller.md "Coupled leg feedback"): the session with
-// --coupled-legs equals the in-process simulation with the coupling on, bit for bit; a leg
-// that crashes, hangs or goes silent takes the others back to their decoupled law on the
-// tick after the first tick it did not answer. Lockstep: nothing depends on the machine.
+// --coupled-legs equals the in-process simulation with the coupling on, bit for bit (also with
+// an overlay's platform payload); a leg that crashes, hangs or goes silent takes the others
+// back to their decoupled law on the tick after the first tick it did not answer. Lockstep:
+// nothing depends on the machine.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -89,6 +90,33 @@ std::uint64_t ExpectFallBackTheTickAfter(const std::string& name, int domain, co
   hexa::testing::ExpectSameAsInProcess(run.report, hexa::PaperMotion::kCombined, 1, 1,
                                        hexa::LegControllerKind::kBsSmc, first_missing - 1, {}, true);
   return first_missing;
+}
+
+// The overlay's platform (with its payload, docs/calibration.md "Payload") reaches the
+// supervisor's feed-forward and the legs' W over DDS as in process: the coupled session with
+// it equals the in-process simulation with it bit for bit, and differs from the one without.
+TEST(CoupledLegs, PayloadOverlayReachesSupervisorAndLegsAsInProcess) {
+  const std::string overlay = HEXA_PAYLOAD_OVERLAY;
+  const auto run = RunSession("coupled_payload", 244, {"--trajectory", "combined", "--periods", "1",
+                                                      "--seed", "1", "--coupled-legs", "--rig-overlay", overlay});
+  ASSERT_EQ(run.exit_code, 0) << Slurp(run.dir + "/session.log");
+  ASSERT_TRUE(run.has_report);
+  const std::string logs = Slurp(run.dir + "/leg3.log") + Slurp(run.dir + "/supervisor.log");
+  EXPECT_NE(logs.find("platform mass 7.2 kg"), std::string::npos) << logs;
+  EXPECT_EQ(Slurp(run.dir + "/plant.log").find("rig overlay"), std::string::npos);
+  hexa::testing::ExpectSameAsInProcess(run.report, hexa::PaperMotion::kCombined, 1, 1,
+                                       hexa::LegControllerKind::kBsSmc, UINT64_MAX, {overlay}, true);
+  bool differs = false;
+  hexa::testing::RunInProcessSession(
+      hexa::PaperMotion::kCombined, 1, 1, hexa::LegControllerKind::kBsSmc, {},
+      [&](std::uint64_t n, const hexa::LockstepSimulation& sim) {
+        if (n + 1 >= run.report.applied_valve_v.size()) return false;
+        for (int i = 0; i < 6; ++i)
+          differs = differs || run.report.applied_valve_v[n + 1][i] != sim.applied_valve_v()[i];
+        return !differs;
+      },
+      true);
+  EXPECT_TRUE(differs) << "the platform's payload changed nothing the plant applied";
 }
 
 TEST(CoupledLegs, OtherLegsFallBackTheTickAfterACrashedLegsFirstMissedTick) {

@@ -76,7 +76,7 @@ class Tables(unittest.TestCase):
 
 
 class CoupledLegs(unittest.TestCase):
-    def commands(self, coupled):
+    def commands(self, coupled, trajectories=None):
         """run_seed's commands with the runs faked (hexa_calibrate writes its overlay)."""
         issued = []
 
@@ -91,6 +91,8 @@ class CoupledLegs(unittest.TestCase):
             a = types.SimpleNamespace(build="b", out=d, controller="bssmc", profile="realistic",
                                       timeout=0, rig=None, lockstep_lease=None, reuse=False,
                                       in_process=True, coupled_legs=coupled)
+            if trajectories:
+                a.trajectories = trajectories
             saved, upt.run = upt.run, fake_run
             try:
                 upt.run_seed(a, 1, 150)
@@ -110,6 +112,18 @@ class CoupledLegs(unittest.TestCase):
         for c in trajectories + sim:
             self.assertIn("--coupled-legs", c)
         self.assertFalse(any("--coupled-legs" in c for c in self.commands(False)))
+
+    def test_a_subset_runs_only_its_trajectories_and_one_hexa_sim_each(self):
+        cmds = self.commands(False, ["z", "combined"])
+        sessions = [c[c.index("--trajectory") + 1] for c in cmds
+                    if "--rig-overlay" in c and not c[0].endswith("hexa_sim")]
+        sim = [c[c.index("--trajectory") + 1] for c in cmds if c[0].endswith("hexa_sim")]
+        self.assertEqual(sessions, ["z", "combined"])
+        self.assertEqual(sim, ["z", "combined"])
+        res = {1: results_for(1, 1.0)}
+        s = upt.format_section(res, [1], "cmd", "2026-12-07", "abc1234", trajs=["z", "combined"])
+        self.assertIn("for the trajectories z, combined", s)
+        self.assertIn("(7 cells run; n/a: trajectory not run)", s)
 
     def test_the_section_names_the_coupled_law(self):
         res = {1: results_for(1, 1.0)}

@@ -8,7 +8,8 @@
 
 namespace hexa::calib {
 
-bool CalibrateInProcess(const LockstepConfig& base, KinematicCalibration& out, std::FILE* report) {
+bool CalibrateInProcess(const LockstepConfig& base, KinematicCalibration& out, std::FILE* report,
+                        PayloadEstimate& payload) {
   LockstepConfig config = base;
   config.tracker.enabled = true;
   config.controllers.reset();  // nominal model: what is being calibrated
@@ -26,6 +27,7 @@ bool CalibrateInProcess(const LockstepConfig& base, KinematicCalibration& out, s
     return false;
   }
   CalibrationSampleCollector collector(StillWindowParams{});
+  PayloadRecord payload_record;
   bool started = false, left_idle = false;
   while (sim.time_s() < 1000.0) {
     const bool due = sim.supervisor_due();
@@ -36,7 +38,11 @@ bool CalibrateInProcess(const LockstepConfig& base, KinematicCalibration& out, s
     }
     const std::uint64_t tick = sim.tick() - 1;
     const auto& p = sim.plant_before_step();
-    for (std::size_t i = 0; i < kNumLegs; ++i) collector.AddReading(tick, i, p.legs[i].length_m);
+    for (std::size_t i = 0; i < kNumLegs; ++i) {
+      collector.AddReading(tick, i, p.legs[i].length_m);
+      payload_record.Add(tick, i, p.legs[i].length_m, p.legs[i].chamber1_pressure_pa,
+                         p.legs[i].chamber2_pressure_pa);
+    }
     if (p.tracker.fresh) collector.AddTracker(tick, p.tracker.p_BP_B_m, p.tracker.q_BP);
     if (!due) continue;
     started = true;
@@ -83,12 +89,25 @@ bool CalibrateInProcess(const LockstepConfig& base, KinematicCalibration& out, s
   std::fprintf(report, "  worst residual: joint %.4f mm, offset %.4f mm, gain %.1f ppm\n", 1e3 * worst_joint,
               1e3 * worst_offset, 1e6 * worst_gain);
   out = fit.calibration;
+  payload = EstimatePayload(config.rig, fit.calibration, payload_record, PayloadEstimatorConfig{});
+  if (payload.ok) {
+    std::fprintf(report, "payload scale: estimate %.4f +- %.4f (%s), truth %.4f\n", payload.scale,
+                 payload.scale_std, payload.precise ? "applied" : "not applied: not precise enough",
+                 config.disturbance.payload_scale);
+  } else {
+    std::fprintf(report, "payload: not estimated (%s)\n", payload.message.c_str());
+  }
   return true;
 }
 
 
-void ApplyKinematicCalibration(const KinematicCalibration& calibration, LockstepConfig& config) {
+void ApplyKinematicCalibration(const KinematicCalibration& calibration, const PayloadEstimate& payload,
+                               LockstepConfig& config) {
   ControllerModel model = *config.controllers;
+  if (payload.precise) {
+    model.platform.mass_kg = payload.mass_kg;
+    model.platform.inertia_diag_kg_m2 = payload.inertia_diag_kg_m2;
+  }
   model.geometry = CalibratedGeometry(model.geometry, calibration);
   for (std::size_t i = 0; i < kNumLegs; ++i) {
     model.legs[i].potentiometer.offset_m = calibration[i].potentiometer_offset_m;

@@ -8,16 +8,21 @@
 
 #include "hexa/core/calibration.hpp"
 #include "hexa/core/lockstep_simulation.hpp"
+#include "hexa/core/payload_estimation.hpp"
 
 namespace hexa::calib {
 
 // Runs the procedure on `base` (tracker on, nominal controller model, outer loop off), prints
 // the fit against the plant's truth to `report` (the lines studies/accuracy_tables.py reads),
-// and returns false when the run or the fit failed.
-bool CalibrateInProcess(const LockstepConfig& base, KinematicCalibration& out, std::FILE* report);
+// and returns false when the run or the fit failed. `payload`: the platform's payload from the
+// same run, as hexa_calibrate estimates it (payload_estimation.hpp).
+bool CalibrateInProcess(const LockstepConfig& base, KinematicCalibration& out, std::FILE* report,
+                        PayloadEstimate& payload);
 
 // The fitted calibration reaches the controllers as a rig overlay would (ControllerModel):
-// calibrated joints and potentiometer offsets and gains in config.controllers.
-void ApplyKinematicCalibration(const KinematicCalibration& calibration, LockstepConfig& config);
+// calibrated joints and potentiometer offsets and gains in config.controllers, and a precise
+// payload estimate's platform mass and inertia (as hexa_calibrate writes it to the overlay).
+void ApplyKinematicCalibration(const KinematicCalibration& calibration, const PayloadEstimate& payload,
+                               LockstepConfig& config);
 
 }  // namespace hexa::calib

@@ -10,7 +10,10 @@
 // (rank, condition, predicted uncertainty; refuses otherwise, exit 3); fits the base and
 // platform joints and the potentiometer offsets and gains with Ceres (least squares); prints
 // the per-leg report and, for a simulated rig, the error of every parameter against the
-// plant's truth (--truth-seed).
+// plant's truth (--truth-seed). Then the platform's payload from the same recording's moves
+// (chamber pressures against the platform's weight through the calibrated geometry,
+// core/payload_estimation.hpp), reported with its standard error and written to the overlay's
+// `platform` block when it is that precise (--payload-max-std).
 #include <algorithm>
 #include <cmath>
 #include <ctime>
@@ -22,6 +25,7 @@
 
 #include "calibration_fit.hpp"
 #include "hexa/config/rig_config.hpp"
+#include "hexa/core/payload_estimation.hpp"
 #include "hexa/core/platform_plant.hpp"
 #include "hexa/recording/recording.hpp"
 #include "hexa/services/progress.hpp"
@@ -39,6 +43,30 @@ T Parse(const hexa::recorder::McapMessageView& view) {
     throw std::runtime_error("cannot parse a " + T::descriptor()->name() + " message");
   }
   return msg;
+}
+
+// Prints the payload estimate; true when it is precise enough to be written.
+bool ReportPayload(const hexa::PayloadEstimate& p, const hexa::RigParams& rig, double max_std) {
+  if (!p.ok) {
+    std::printf("\npayload: not estimated (%s); the overlay leaves the rig file's platform\n", p.message.c_str());
+    return false;
+  }
+  std::printf("\npayload (leg forces while sliding, friction per leg and direction fitted with it):\n"
+              "leg | sliding samples | payload scale | residual N\n");
+  for (std::size_t i = 0; i < kNumLegs; ++i) {
+    const auto& l = p.legs[i];
+    std::printf("%zu   | %zu | %.4f | %.2f\n", i + 1, l.samples, l.scale, l.residual_rms_n);
+  }
+  std::printf("payload scale %.4f +- %.4f (1 sigma, the legs' scatter): platform mass %.3f kg +- %.3f "
+              "(rig file %.3f kg), inertia scaled alike\n", p.scale, p.scale_std, p.mass_kg,
+              p.scale_std * rig.platform.mass_kg, rig.platform.mass_kg);
+  if (p.failed_kinematics > 0) std::printf("  (%zu samples left out: forward kinematics failed)\n", p.failed_kinematics);
+  if (!p.precise) {
+    std::printf("warning: the payload's standard error %.4f exceeds --payload-max-std %.4f: not written; "
+                "the controllers keep the rig file's platform\n", p.scale_std, max_std);
+    return false;
+  }
+  return true;
 }
 
 }  // namespace
@@ -62,6 +90,13 @@ int main(int argc, char** argv) {
   cli.AddOption("truth-seed", "N",
                 "simulated rig: compare every parameter with the plant's truth for this seed");
   cli.AddOption("truth-profile", "name", "disturbance profile of the simulated rig", "realistic");
+  cli.AddFlag("no-payload",
+              "do not estimate the platform's payload (the overlay then has no platform block: the "
+              "controllers keep the rig file's platform mass)");
+  cli.AddOption("payload-max-std", "fraction",
+                "write the payload estimate only if its standard error is at most this fraction "
+                "of the rig file's platform mass",
+                std::to_string(hexa::PayloadEstimatorConfig{}.max_scale_std).substr(0, 4));
   cli.AllowPositional("RECORDING.mcap", 1);
   const bool parsed = cli.Parse(argc, argv);
   if (int rc = hexa::cli::HandleParseResult(cli, parsed); rc >= 0) return rc;
@@ -69,7 +104,8 @@ int main(int argc, char** argv) {
   const auto window = cli.GetDouble("window", 0.005, 1e4);
   const auto noise_mm = cli.GetDouble("noise-mm", 1e-9, 10);
   const auto max_poses = cli.GetInt("max-poses", 0, 1000000);
-  if (!min_still || !window || !noise_mm || !max_poses) {
+  const auto payload_max_std = cli.GetDouble("payload-max-std", 0.0, 1.0);
+  if (!min_still || !window || !noise_mm || !max_poses || !payload_max_std) {
     std::fprintf(stderr, "error: %s\n(see --help)\n", cli.error().c_str());
     return 2;
   }
@@ -89,6 +125,8 @@ int main(int argc, char** argv) {
   // 1. Read the three topics; 2. still windows from the desired pose, the last `window`
   // seconds of each averaged (core CalibrationSampleCollector).
   hexa::CalibrationSampleCollector collector(hexa::StillWindowParams{*min_still, *window, 0.001});
+  hexa::PayloadRecord payload_record;
+  const bool estimate_payload = !cli.Flag("no-payload");
   try {
     hexa::progress::Line line("hexa_calibrate: reading " + recording);
     hexa::recorder::McapScanOptions scan;
@@ -110,6 +148,10 @@ int main(int argc, char** argv) {
             const auto m = Parse<hexa::rec::LegSensors>(view);
             if (m.leg_id() < 1 || m.leg_id() > 6) return;
             collector.AddReading(m.header().tick(), m.leg_id() - 1, m.length_m());
+            if (estimate_payload) {
+              payload_record.Add(m.header().tick(), m.leg_id() - 1, m.length_m(), m.cap_pressure_pa(),
+                                 m.rod_pressure_pa());
+            }
           } else if (ch.topic == "hexa_PoseReport") {
             const auto m = Parse<hexa::rec::PoseReport>(view);
             if (m.desired_pose_size() != 6) return;
@@ -171,7 +213,18 @@ int main(int argc, char** argv) {
     return 1;
   }
 
-  // 4. The calibrated rig overlay, validated by loading it on the rig file.
+  // 4. The payload: the platform's weight and inertia forces against the leg forces while the
+  // legs slide (core/payload_estimation.hpp), with the fitted calibration.
+  hexa::PayloadEstimate payload;
+  bool write_payload = false;
+  if (estimate_payload) {
+    hexa::PayloadEstimatorConfig pc;
+    pc.max_scale_std = *payload_max_std;
+    payload = hexa::EstimatePayload(rig, fit.calibration, payload_record, pc);
+    write_payload = ReportPayload(payload, rig, pc.max_scale_std);
+  }
+
+  // 5. The calibrated rig overlay, validated by loading it on the rig file.
   if (cli.Has("out")) {
     hexa::config::RigOverlay overlay;
     overlay.rig_name = loaded.config.rig_name;
@@ -191,6 +244,15 @@ int main(int argc, char** argv) {
       leg.potentiometer_offset_m = fit.calibration[i].potentiometer_offset_m;
       leg.potentiometer_gain = fit.calibration[i].potentiometer_gain;
     }
+    if (write_payload) {
+      overlay.platform.mass_kg = payload.mass_kg;
+      overlay.platform.inertia_diag_kg_m2 = payload.inertia_diag_kg_m2;
+      char note[160];
+      std::snprintf(note, sizeof(note),
+                    "platform: payload scale %.4f +- %.4f (1 sigma) of the rig file's mass and inertia, "
+                    "from the leg forces while the legs slide", payload.scale, payload.scale_std);
+      overlay.provenance.note = note;
+    }
     const std::string path = cli.Get("out");
     {
       std::ofstream file(path);
@@ -209,7 +271,7 @@ int main(int argc, char** argv) {
                 "--rig-overlay %s\n", path.c_str(), cli.Get("rig").c_str(), path.c_str());
   }
 
-  // 5. Against the simulated plant's truth.
+  // 6. Against the simulated plant's truth.
   if (cli.Has("truth-seed")) {
     const auto seed = cli.GetInt("truth-seed", 0, 1LL << 62);
     const auto profile = loaded.config.profiles.find(cli.Get("truth-profile"));
@@ -252,6 +314,12 @@ int main(int argc, char** argv) {
                 "potentiometer offset %.3f -> %.4f mm, gain %.0f -> %.1f ppm\n",
                 1e3 * worst_joint_before, 1e3 * worst_joint, 1e3 * worst_offset_before,
                 1e3 * worst_offset, 1e6 * worst_gain_before, 1e6 * worst_gain);
+    if (estimate_payload && payload.ok) {
+      const double truth = profile->second.payload_scale;
+      std::printf("payload scale: estimate %.4f +- %.4f, truth %.4f, error %+.4f (%.1f sigma)\n",
+                  payload.scale, payload.scale_std, truth, payload.scale - truth,
+                  payload.scale_std > 0 ? std::abs(payload.scale - truth) / payload.scale_std : 0.0);
+    }
   }
   return 0;
 }

@@ -140,8 +140,9 @@ int main(int argc, char** argv) {
   bool calibrated = false;
   if (cli.Flag("calibrate")) {
     hexa::KinematicCalibration calibration;
-    if (!hexa::calib::CalibrateInProcess(config, calibration, stdout)) return 1;
-    hexa::calib::ApplyKinematicCalibration(calibration, config);
+    hexa::PayloadEstimate payload;
+    if (!hexa::calib::CalibrateInProcess(config, calibration, stdout, payload)) return 1;
+    hexa::calib::ApplyKinematicCalibration(calibration, payload, config);
     calibrated = true;
   }
 

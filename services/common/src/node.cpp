@@ -177,6 +177,7 @@ std::optional<config::SystemConfig> LoadConfig(const CommonOptions& options, spd
     log.info("rig overlay {} applied: legs {}, method '{}', date {}, source '{}'", o.source_path,
              legs.empty() ? "none" : legs, o.provenance.method, o.provenance.date,
              o.provenance.source_recording);
+    if (o.platform.mass_kg) log.info("rig overlay {}: platform mass {} kg (payload included)", o.source_path, *o.platform.mass_kg);
   }
   return std::move(result.config);
 }

@@ -48,6 +48,13 @@ struct LegOverride {
   // Fields written in `later` replace this one's.
   void MergeFrom(const LegOverride& later);
 };
+// The platform's mass and inertia with its payload (whole platform, not per leg).
+struct PlatformOverride {
+  std::optional<double> mass_kg;
+  std::optional<Eigen::Vector3d> inertia_diag_kg_m2;
+  bool empty() const { return !mass_kg && !inertia_diag_kg_m2; }
+  void MergeFrom(const PlatformOverride& later);
+};
 struct OverlayProvenance {
   std::string source_recording, method, date, tool, note;
 };
@@ -56,6 +63,7 @@ struct RigOverlay {
   std::string rig_name;  // must equal the rig file's
   OverlayProvenance provenance;
   LegArray<LegOverride> leg{};  // index = leg id - 1
+  PlatformOverride platform;
   std::string source_path;      // file it was loaded from ("" if built in code)
 };
 
@@ -72,6 +80,7 @@ struct SystemConfig {
   // and the supervisor see rig + leg_override (MakeControllerModel); the plant never does.
   std::vector<RigOverlay> overlays;
   LegArray<LegOverride> leg_override{};
+  PlatformOverride platform_override;
   // The remote I/O board's calibration (the file's optional `board` block; absent: a rig the
   // simulator drives only).
   std::optional<hexa::BoardCalibration> board;
@@ -168,12 +177,14 @@ std::vector<ConfigIssue> ValidateControllerModel(const SystemConfig& config);
 // The overlay in its text format (ParseRigOverlay reads it back to an equal overlay).
 std::string ToTextFormat(const RigOverlay& overlay);
 
-// What the controllers and the supervisor run with: rig file + overlays.
+// What the controllers and the supervisor run with: rig file + overlays (per-leg models,
+// calibrated joints, the platform's mass and inertia).
 hexa::ControllerModel MakeControllerModel(const SystemConfig& config);
 // Leg `leg_id` (1..6)'s controller configuration (its own model, gains, calibration).
 hexa::LegControllerConfig MakeLegControllerConfig(const SystemConfig& config, int leg_id,
                                                   hexa::LegControllerKind kind);
-// The rig as the supervisor sees it (calibrated joint positions; the rest of the rig file).
+// The rig as the supervisor sees it (calibrated joint positions, the overlays' platform mass
+// and inertia; the rest of the rig file).
 hexa::RigParams MakeSupervisorRig(const SystemConfig& config);
 
 }  // namespace hexa::config

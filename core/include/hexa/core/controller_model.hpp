@@ -28,12 +28,15 @@ struct ControllerModel {
   // Joint positions the supervisor's kinematics use (eq 46-48): calibrated by an overlay,
   // else the rig file's nominal geometry.
   GeometryParams geometry;
+  // Platform mass and inertia (with its payload) the supervisor's feed-forward and the coupled
+  // legs' W use (eq 48's mass matrix): an overlay's estimate, else the rig file's.
+  PlatformParams platform;
   LegArray<LegControllerModel> legs{};
 
   // Every leg = the rig's nominal model and the same controller parameters (no overlay).
   static ControllerModel FromRig(const RigParams& rig, const LegControllerParams& params);
 
-  // `rig` with this model's geometry: what the supervisor is constructed with.
+  // `rig` with this model's geometry and platform: what the supervisor is constructed with.
   RigParams SupervisorRig(const RigParams& rig) const;
 };
 
