@@ -97,7 +97,7 @@ std::uint64_t ExpectFallBackTheTickAfter(const std::string& name, int domain, co
 // it equals the in-process simulation with it bit for bit, and differs from the one without.
 TEST(CoupledLegs, PayloadOverlayReachesSupervisorAndLegsAsInProcess) {
   const std::string overlay = HEXA_PAYLOAD_OVERLAY;
-  const auto run = RunSession("coupled_payload", 244, {"--trajectory", "combined", "--periods", "1",
+  const auto run = RunSession("coupled_payload", 230, {"--trajectory", "combined", "--periods", "1",
                                                       "--seed", "1", "--coupled-legs", "--rig-overlay", overlay});
   ASSERT_EQ(run.exit_code, 0) << Slurp(run.dir + "/session.log");
   ASSERT_TRUE(run.has_report);
