@@ -24,6 +24,7 @@ const char* CommandName(hexa_msg_OperatorCommandKind kind) {
     case hexa_msg_OPERATOR_GOAL: return "goal";
     case hexa_msg_OPERATOR_ESTOP: return "estop";
     case hexa_msg_OPERATOR_STREAM: return "stream";
+    case hexa_msg_OPERATOR_FRAMES: return "frames";
   }
   return "unknown";
 }
@@ -130,6 +131,7 @@ void SupervisorNode::TakeOperatorCommands() {
       case hexa_msg_OPERATOR_HOME: pending_command_ = OperatorCommandKind::kHome; break;
       case hexa_msg_OPERATOR_JOG:
       case hexa_msg_OPERATOR_GOAL:
+      case hexa_msg_OPERATOR_FRAMES:
         if (!TakeMotionCommand(c, operator_reader_.info(k).publication_handle)) return;
         break;
       case hexa_msg_OPERATOR_STREAM:
@@ -206,6 +208,19 @@ bool SupervisorNode::TakeMotionCommand(const hexa_msg_OperatorCommand& c, dds_in
     jog_writer_ = writer;
     return true;
   }
+  if (c.kind == hexa_msg_OPERATOR_FRAMES) {
+    UserFramesConfig frames;
+    if (!wire::FramesFromWire(c, frames, why)) {
+      AnswerCommand(c.sequence, "frames", CommandAnswer::kRefused, why);
+      return false;
+    }
+    const Eigen::Vector3d& p = frames.p_PC_P_m;
+    log_->info("frames #{}: pivot ({:.4f}, {:.4f}, {:.4f}) m in the platform frame", c.sequence,
+               p.x(), p.y(), p.z());
+    pending_frames_ = frames;
+    pending_command_ = OperatorCommandKind::kFrames;
+    return true;
+  }
   Pose goal;
   if (!wire::GoalFromWire(c, goal, why)) {
     AnswerCommand(c.sequence, "goal", CommandAnswer::kRefused, why);
@@ -242,6 +257,7 @@ void SupervisorNode::FinishCommand(SupervisorState before, std::uint64_t tick, d
   if (accepted && cmd == OperatorCommandKind::kGoal)
     log_->info("goal started at t = {:.3f} s: {:.3f} s to reach it", time_s,
                supervisor_.operator_motion().goal_duration_s());
+  if (accepted && cmd == OperatorCommandKind::kFrames) LogFrames(time_s);
   if (accepted && cmd == OperatorCommandKind::kStop &&
       (before == SupervisorState::kBlending || before == SupervisorState::kTracking)) {
     stopped_by_operator_ = true;
@@ -272,6 +288,20 @@ void SupervisorNode::FinishCommand(SupervisorState before, std::uint64_t tick, d
                                : result == CommandResult::kRejected ? CommandAnswer::kRejected
                                                                       : CommandAnswer::kRefused;
   AnswerCommand(pending_sequence_, ToString(cmd), answer, why);
+}
+
+void SupervisorNode::LogFrames(double time_s) {
+  const UserFramesConfig& f = supervisor_.operator_motion().config().frames;
+  const Eigen::Vector3d& c = f.p_PC_P_m;
+  const Eigen::Vector3d& t = f.X_PT.p_BP_B_m;
+  const Eigen::Vector3d& w = f.X_BW.p_BP_B_m;
+  const Eigen::Vector3d t_rpy = RollPitchYawFromRotation(f.X_PT.R_BP) * (180.0 / M_PI);
+  const Eigen::Vector3d w_rpy = RollPitchYawFromRotation(f.X_BW.R_BP) * (180.0 / M_PI);
+  log_->info("frames set at t = {:.3f} s: pivot ({:.4f}, {:.4f}, {:.4f}) m in the platform frame; "
+             "tool ({:.4f}, {:.4f}, {:.4f}) m, ({:.2f}, {:.2f}, {:.2f}) deg in the platform frame; "
+             "work ({:.4f}, {:.4f}, {:.4f}) m, ({:.2f}, {:.2f}, {:.2f}) deg in the base frame",
+             time_s, c.x(), c.y(), c.z(), t.x(), t.y(), t.z(), t_rpy.x(), t_rpy.y(), t_rpy.z(),
+             w.x(), w.y(), w.z(), w_rpy.x(), w_rpy.y(), w_rpy.z());
 }
 
 }  // namespace hexa::task_space

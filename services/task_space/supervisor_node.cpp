@@ -261,6 +261,7 @@ void SupervisorNode::FillInput(double time_s) {
   input_.start = pending_start_ ? &*pending_start_ : nullptr;
   input_.jog = pending_jog_;
   input_.goal_X_BP = pending_goal_;
+  input_.frames = pending_frames_;
   if (stream_receiver_) {
     // Drained every tick (outside STREAMING the core ignores them): no backlog at the start.
     input_.stream_packet_count = stream_receiver_->Receive(stream_decoder_refusals_);

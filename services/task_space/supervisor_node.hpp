@@ -115,6 +115,7 @@ class SupervisorNode {
   // After the core ran a pending operator command: answer it, and the session's part of it
   // (a stop that ends the motion, a reset that resumes).
   void FinishCommand(SupervisorState before, std::uint64_t tick, double time_s);
+  void LogFrames(double time_s);  // the frames in use, after a frames command was taken
   // The one-line description of the hold (fault, leg, who reported it and why) to the log and,
   // with --hold-report, to that file.
   void ReportHold(double time_s);
@@ -201,6 +202,7 @@ class SupervisorNode {
   std::uint32_t pending_sequence_ = 0;
   JogRequest pending_jog_;              // the newest jog message (kJog)
   Pose pending_goal_;                   // kGoal
+  UserFramesConfig pending_frames_;     // kFrames
   dds_instance_handle_t jog_writer_ = 0;  // the writer of the newest jog message
   bool answer_jog_ = false;             // the pending jog is a writer's first: answer it
   double last_jog_time_s_ = 0.0;        // the tick that applied the last jog message
