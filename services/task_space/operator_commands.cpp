@@ -295,8 +295,13 @@ void SupervisorNode::LogFrames(double time_s) {
   const Eigen::Vector3d& c = f.p_PC_P_m;
   const Eigen::Vector3d& t = f.X_PT.p_BP_B_m;
   const Eigen::Vector3d& w = f.X_BW.p_BP_B_m;
-  const Eigen::Vector3d t_rpy = RollPitchYawFromRotation(f.X_PT.R_BP) * (180.0 / M_PI);
-  const Eigen::Vector3d w_rpy = RollPitchYawFromRotation(f.X_BW.R_BP) * (180.0 / M_PI);
+  // Degrees to the log's 0.01: no "-0.00" for an angle of -1e-17 rad.
+  const auto degrees = [](const Eigen::Matrix3d& R) {
+    return Eigen::Vector3d(RollPitchYawFromRotation(R) * (180.0 / M_PI))
+        .unaryExpr([](double v) { return std::abs(v) < 0.005 ? 0.0 : v; });
+  };
+  const Eigen::Vector3d t_rpy = degrees(f.X_PT.R_BP);
+  const Eigen::Vector3d w_rpy = degrees(f.X_BW.R_BP);
   log_->info("frames set at t = {:.3f} s: pivot ({:.4f}, {:.4f}, {:.4f}) m in the platform frame; "
              "tool ({:.4f}, {:.4f}, {:.4f}) m, ({:.2f}, {:.2f}, {:.2f}) deg in the platform frame; "
              "work ({:.4f}, {:.4f}, {:.4f}) m, ({:.2f}, {:.2f}, {:.2f}) deg in the base frame",
