@@ -297,8 +297,9 @@ void SupervisorNode::LogFrames(double time_s) {
   const Eigen::Vector3d& w = f.X_BW.p_BP_B_m;
   // Degrees to the log's 0.01: no "-0.00" for an angle of -1e-17 rad.
   const auto degrees = [](const Eigen::Matrix3d& R) {
-    return Eigen::Vector3d(RollPitchYawFromRotation(R) * (180.0 / M_PI))
-        .unaryExpr([](double v) { return std::abs(v) < 0.005 ? 0.0 : v; });
+    Eigen::Vector3d deg = RollPitchYawFromRotation(R) * (180.0 / M_PI);
+    for (int k = 0; k < 3; ++k) deg[k] = std::abs(deg[k]) < 0.005 ? 0.0 : deg[k];
+    return deg;
   };
   const Eigen::Vector3d t_rpy = degrees(f.X_PT.R_BP);
   const Eigen::Vector3d w_rpy = degrees(f.X_BW.R_BP);
