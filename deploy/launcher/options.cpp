@@ -87,7 +87,8 @@ void AddSessionOptions(hexa::cli::Parser& cli) {
   cli.AddFlag("standby", "also start a hot-standby controller per leg");
   cli.AddFlag("coupled-legs",
               "the leg controllers run the coupled leg feedback (the rig file's "
-              "leg_controller.coupled_legs, turned on; docs/controller.md \"Coupled leg feedback\")");
+              "leg_controller.coupled_legs, turned on; docs/controller_additions.md \"Coupled "
+              "leg feedback\")");
   cli.AddChoice("device", {"sim", "board"},
                 "the rig behind the plant: sim (the plant simulates it) or board (the session also "
                 "runs hexa_board_emulator on 127.0.0.1 at a free UDP port, stepped once per command "

@@ -132,7 +132,7 @@ bool SupervisorNode::PeersMatched(std::string& missing) {
   // Every leg's primary controller reads its setpoints (plus the plant in lockstep). Its
   // reader says so in its USER_DATA: a hot standby's reader alone is not enough, since a
   // primary without setpoints holds its leg (and its ownership of the valve) while the
-  // others move (docs/measurements/deployment.md, "A primary without setpoints").
+  // others move (docs/measurements/deployment_partitions.md, "A primary without setpoints").
   bool legs = true;
   missing_primaries_.clear();
   for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
