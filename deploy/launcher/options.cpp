@@ -427,8 +427,8 @@ int ParseOptions(int argc, char** argv, Options& o) {
                         "session was stopped (signal, --timeout); 2 bad arguments; 3 held after a "
                         "fault and not reset within --hold-timeout; 4 the plant stopped; 5 the "
                         "supervisor was lost; 6 stopped by the operator (hexa_operator stop or shutdown) "
-                        "before the trajectory's end; 7 the trajectory completed but the recording "
-                        "lost samples.");
+                        "before the trajectory's end, or shut down before it started; 7 the "
+                        "trajectory completed but the recording lost samples.");
   AddSessionOptions(cli);
   AddProcessOptions(cli);
   const bool parsed = cli.Parse(argc, argv);

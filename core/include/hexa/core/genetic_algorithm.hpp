@@ -37,9 +37,9 @@ struct GaParams {
   double crossover_gamma = 0.4;
   double mutation_sigma_fraction = 0.1;
   double selection_pressure = 8.0;  // beta
-  // Departures from the template, all off by default here (= the template exactly); hexa_identify
-  // chooses (docs/measurements/identification.md, "Why the template GA stalls, and the gene map
-  // that fixes it"):
+  // Departures from the template, all off by default here (= the template exactly);
+  // hexa_identify chooses (docs/measurements/identification.md, "Why the template GA stalls,
+  // and the gene map that fixes it"):
   //   - crossover_per_pair: one a per parent pair (y on the line through x1 and x2,
   //     extended by gamma either side) instead of one a per gene: offspring of two parents
   //     in a narrow diagonal valley stay in it instead of filling the box around them;
