@@ -20,13 +20,15 @@ runs the same system rows with another build (e.g. the commit before) interleave
 one, so before and after are measured in the same minutes. --hog runs everything with a CPU
 hog (stress-ng --cpu 1 at normal priority, pinned to CPU 0) beside it. --coupled-legs adds
 the same system rows of --build with `hexa_session --coupled-legs` (the coupled leg feedback,
-docs/controller.md), run interleaved with the decoupled ones and listed as build "coupled".
+docs/controller.md), run interleaved with the decoupled ones and listed as build "coupled";
+--variant NAME=ARGS does the same with any hexa_session arguments.
 
 Every DDS process runs in a private network namespace (the script re-executes itself under
 `unshare -n` when run as root), pinned to the loopback interface.
 
 Usage: /usr/bin/python3 bench/loop/run_loop_bench.py [--build build] [--baseline-build DIR]
            [--runs 3] [--rt-runs 10] [--fanout-ticks 10000] [--hog] [--coupled-legs]
+           [--variant NAME=ARGS ...]
            [--out out/loop-bench]
 """
 import argparse
@@ -299,6 +301,10 @@ def main():
     ap.add_argument("--coupled-legs", action="store_true",
                     help="also run --build's system rows with hexa_session --coupled-legs, "
                          "interleaved (build \"coupled\")")
+    ap.add_argument("--variant", action="append", default=[], metavar="NAME=ARGS",
+                    help="also run --build's system rows with these extra hexa_session "
+                         "arguments, interleaved, listed as build NAME (repeatable; e.g. "
+                         "'no-auth=--insecure-commands' prices the command authentication)")
     ap.add_argument("--cpu-latency-us", default="0",
                     help="the CPU wake-up latency limit the system's services hold "
                     "(hexa_session --cpu-latency-us; default 0) and under which the anchors run; "
@@ -307,6 +313,13 @@ def main():
     ap.add_argument("--out", default=os.path.join(HERE, "out", "loop-bench"))
     a = ap.parse_args()
     latency = None if a.cpu_latency_us == "none" else int(a.cpu_latency_us)
+    variants = []
+    for v in a.variant:
+        name, sep, args = v.partition("=")
+        if not sep or not name or name in ("new", "baseline", "coupled"):
+            sys.exit(f"--variant {v!r}: expected NAME=ARGS with a NAME other than new, "
+                     "baseline and coupled")
+        variants.append((name, args.split()))
 
     if os.geteuid() == 0 and os.environ.get("HEXA_BENCH_NETNS") != "1":
         env = dict(os.environ, HEXA_BENCH_NETNS="1")
@@ -326,7 +339,8 @@ def main():
         time.sleep(1)
     res = {"load_before": loadavg(), "hog": a.hog, "runs": a.runs, "rt_runs": a.rt_runs,
            "builds": {"new": a.build, "baseline": a.baseline_build,
-                      "coupled": a.build if a.coupled_legs else None}}
+                      "coupled": a.build if a.coupled_legs else None,
+                      **{name: a.build for name, _ in variants}}}
     try:
         log("cyclictest ...")
         res["cyclictest"] = run_cyclictest(a.cyclictest_loops)  # holds 0 us itself
@@ -348,6 +362,8 @@ def main():
                     ["--cpu-latency-us", str(latency)]))]
         if a.coupled_legs:
             builds.append(("coupled", a.build, builds[0][2] + ["--coupled-legs"]))
+        for name, args in variants:
+            builds.append((name, a.build, builds[0][2] + args))
         if a.baseline_build:
             builds.append(("baseline", a.baseline_build, []))
         for name, _, _ in builds:
