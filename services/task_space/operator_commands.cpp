@@ -144,15 +144,10 @@ void SupervisorNode::TakeOperatorCommands() {
         break;
       case hexa_msg_OPERATOR_SHUTDOWN:
         AnswerCommand(c.sequence, "shutdown", CommandAnswer::kAccepted, "");
-        // A session's trajectory that a shutdown cuts short did not complete: the same exit
-        // as a `stop` before the trajectory's end (docs/exit_codes.md). Jog, goal and stream
-        // modes are not a trajectory (left_idle_ stays false): a shutdown after them ends 0.
-        if (options_.exit_when_done && exit_code_ < 0 && left_idle_) {
-          log_->warn("shut down by the operator in state {} (trajectory time {:.3f} s), before the "
-                     "trajectory's end (exit {})", ToString(output_.state), output_.trajectory_time_s,
-                     exit_code::kStoppedByOperator);
-          exit_code_ = exit_code::kStoppedByOperator;
-        }
+        // A session that a shutdown ends before its trajectory's end did not complete, whether
+        // the trajectory ran or had not started (only jogs, goals, a stream or a home ran, or
+        // nothing): the same exit as a `stop` before the trajectory's end (docs/exit_codes.md).
+        if (options_.exit_when_done && exit_code_ < 0) EndByShutdown();
         runtime_.shutdown().RequestShutdown();
         return;
       case hexa_msg_OPERATOR_ESTOP:
@@ -258,9 +253,15 @@ void SupervisorNode::FinishCommand(SupervisorState before, std::uint64_t tick, d
     log_->info("goal started at t = {:.3f} s: {:.3f} s to reach it", time_s,
                supervisor_.operator_motion().goal_duration_s());
   if (accepted && cmd == OperatorCommandKind::kFrames) LogFrames(time_s);
-  if (accepted && cmd == OperatorCommandKind::kStop &&
+  if (accepted && cmd == OperatorCommandKind::kStart) {
+    trajectory_started_ = true;
+    homing_ = false;
+  }
+  if (accepted && cmd == OperatorCommandKind::kHome) homing_ = true;  // not the trajectory
+  if (accepted && cmd == OperatorCommandKind::kStop && !homing_ &&
       (before == SupervisorState::kBlending || before == SupervisorState::kTracking)) {
     stopped_by_operator_ = true;
+    stopped_at_trajectory_s_ = output_.trajectory_time_s;
     log_->warn("stopped by the operator at t = {:.3f} s (trajectory time {:.3f} s)", time_s,
                output_.trajectory_time_s);
   }

@@ -4,7 +4,8 @@
 # hexa_operator as a user runs it: a jog (+x, work frame) let go, a tool-frame jog, a pose goal,
 # a goal outside the soft limits (refused, exit 4, the reason), bad arguments (exit 2), a pivot
 # and tool frame (`frames`: absurd ones exit 2, one past the supervisor's bound exit 4), then
-# shutdown. Checked against the recording's ground truth (pose.csv): the jog moved the platform
+# shutdown (exit 6: the trajectory never started, console and report.md say so). Checked
+# against the recording's ground truth (pose.csv): the jog moved the platform
 # along +x and was at rest within the dead-man time plus the braking time after its last message;
 # the goal was reached within the stated tolerance.
 # Usage: run_operator_modes_session.sh BUILD_DIR DOMAIN
@@ -66,7 +67,13 @@ sleep 1
 # Ends the session (its answer may be lost as the supervisor leaves: exit 0 or 3).
 "$op" --domain "$domain" --wait 30 shutdown > "$out/op_shutdown.log" 2>&1 || true
 rc=0; wait "$session" || rc=$?
-check "[ $rc -eq 0 ]" "hexa_session ends 0 after the shutdown (got $rc)"
+# Jogs and goals are not the session's trajectory: the shutdown ends it before the trajectory
+# started (exit 6, docs/exit_codes.md), and the console and report.md say so.
+check "[ $rc -eq 6 ]" "hexa_session ends 6 after the shutdown, the trajectory never started (got $rc)"
+check "grep -q 'session did NOT complete (exit 6): shut down by the operator before the trajectory started (operator motions only: jog / goal)' '$out/hexa_session.out'" \
+      "the console says the operator shut the session down before the trajectory, after a jog and a goal"
+check "grep -q '^- completed: NO: shut down by the operator before the trajectory started' '$out/report.md'" \
+      "report.md says the session did not complete"
 
 grep -E "jog at rest|goal motion at rest|goal started|goal #|refused" "$out/supervisor.log" || true
 # Ground truth: pose.csv (time, desired, true, measured); the supervisor's log gives the times.
