@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Creates the DDS Security files of a deployment (docs/security.md, "DDS Security"):
+# Creates the DDS Security files of a deployment (docs/security.md, "Files"):
 #   - a project CA (EC P-256, self-signed) that is both the identity CA and the permissions CA,
 #     unless --ca-dir names an existing one (ca_cert.pem + ca_key.pem);
 #   - one identity per node: EC P-256 key + certificate signed by the CA, subject from the list;

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Plots of a session, of the kinds in the paper (Figs 8-30), from the files that
-`hexa_recorder report` writes into the output directory (docs/recorder.md, "Report"):
+`hexa_recorder report` writes into the output directory (docs/recorder.md, "CLI"):
 
   pose.csv    time_s, desired_/true_/measured_{x,y,z [m], roll,pitch,yaw [rad]}
   legs.csv    time_s, desired_length_m_N, measured_length_m_N [m], valve_v_N [V],

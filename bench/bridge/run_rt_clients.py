@@ -80,8 +80,13 @@ def run(a, variant, index, tmp):
             except subprocess.TimeoutExpired:
                 load.kill()
                 text = load.communicate()[0]
+            # The clients print their counts when the bridge closes their connections at the
+            # session's end, or on the SIGTERM above if it came first.
             m = re.search(r"received (\d+)\.\.(\d+) messages per client", text)
             received = (int(m.group(1)), int(m.group(2))) if m else None
+            if m is None:
+                print(f"# {variant} run {index}: the clients printed no counts (exit "
+                      f"{load.returncode}): {text.strip()[-300:]!r}", file=sys.stderr)
     r = {"variant": variant, "rc": rc, "completed": rc == 0, "received": received}
     summary = read_json(os.path.join(out, "plant.json"))
     if summary:

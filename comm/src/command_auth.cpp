@@ -70,7 +70,7 @@ class MacInput {
   void Bytes(const std::uint8_t* p, std::size_t n) {
     for (std::size_t i = 0; i < n; ++i) Byte(p[i]);
   }
-  std::array<std::uint8_t, 640> buffer_{};  // the largest input (OperatorCommand) is 492 bytes
+  std::array<std::uint8_t, 768> buffer_{};  // the largest input (OperatorCommand) is 628 bytes
   std::size_t size_ = 0;
 };
 
@@ -121,6 +121,11 @@ MacInput InputOf(const ParticipantPrefix& w, const hexa_msg_OperatorCommand& c) 
   for (const double v : c.jog_angular_velocity_rad_s) m.F64(v);
   for (const double v : c.goal_position_m) m.F64(v);
   for (const double v : c.goal_orientation_wxyz) m.F64(v);
+  for (const double v : c.pivot_m) m.F64(v);
+  for (const double v : c.tool_position_m) m.F64(v);
+  for (const double v : c.tool_orientation_wxyz) m.F64(v);
+  for (const double v : c.work_position_m) m.F64(v);
+  for (const double v : c.work_orientation_wxyz) m.F64(v);
   return m;
 }
 

@@ -180,13 +180,13 @@ Qos MakeQos(TopicKind kind, EndpointRole role, const QosParams& params) {
 
   // Reliability. Event topics: RELIABLE everywhere. Periodic topics in lockstep: RELIABLE
   // everywhere (a lost sample would stall the tick). Periodic topics in real time: the writer
-  // offers BEST_EFFORT, so every reader must request it (a reliable request does not match:
-  // Cyclone reports REQUESTED_INCOMPATIBLE_QOS with the RELIABILITY policy). Not only to
-  // spare the writer repairs: Debian's Cyclone DDS 0.10.2 drops the sample after every lost
-  // one for a best-effort reader of a *reliable* writer (eclipse-cyclonedds issue 1561, fixed
-  // in 11.0), so a reliable real-time writer cost its control readers a second tick per lost
-  // packet (docs/measurements/deployment.md, "The lossy recorder link"). The recorder's periodic readers
-  // follow recorder_periodic_best_effort (real time) instead of `lockstep`.
+  // offers BEST_EFFORT, so every reader must request it (a reliable request does not match: Cyclone
+  // reports REQUESTED_INCOMPATIBLE_QOS with the RELIABILITY policy). Not only to spare the writer
+  // repairs: Debian's Cyclone DDS 0.10.2 drops the sample after every lost one for a best-effort
+  // reader of a *reliable* writer (eclipse-cyclonedds issue 1561, fixed in 11.0), so a reliable
+  // real-time writer cost its control readers a second tick per lost packet
+  // (docs/measurements/deployment_recorder_link.md, "The lossy recorder link"). The recorder's
+  // periodic readers follow recorder_periodic_best_effort (real time) instead of `lockstep`.
   // Writers use keep-last histories (below), so a reliable writer never blocks in write();
   // max_blocking_time only matters for the keep-all OperatorCommand writer.
   const bool reliable =

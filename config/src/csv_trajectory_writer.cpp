@@ -1,4 +1,4 @@
-// Trajectory CSV text from rows (see csv_trajectory.hpp, docs/task_space.md "CSV user
+// Trajectory CSV text from rows (see csv_trajectory.hpp, docs/trajectories.md "CSV user
 // trajectory"): the writing side of ParseCsvTrajectory.
 #include <sstream>
 

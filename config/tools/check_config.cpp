@@ -69,7 +69,7 @@ int main(int argc, char** argv) {
   bool structs_valid = result.translated;
   for (const auto& issue : result.issues) structs_valid = structs_valid && issue.physical_limit;
   if (explain && structs_valid) {
-    std::cout << "Physical limits of " << path << " (docs/config.md, \"Physical limits\"):\n"
+    std::cout << "Physical limits of " << path << " (docs/rig_checks.md, \"Physical limits\"):\n"
               << hexa::ExplainLimits(hexa::config::DerivePhysicalLimits(result.config));
   } else if (explain) {
     std::cout << "Physical limits of " << path << ": not derived, the file has errors below\n";

@@ -1,5 +1,5 @@
 // External motion stream: packet, decoder, limited follower (see motion_stream.hpp,
-// docs/operate.md "Motion stream").
+// docs/motion_stream.md "Motion stream").
 #include "hexa/core/motion_stream.hpp"
 
 #include <algorithm>

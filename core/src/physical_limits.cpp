@@ -1,4 +1,4 @@
-// Limits derived from physics (see physical_limits.hpp, docs/config.md "Physical limits").
+// Limits derived from physics (see physical_limits.hpp, docs/rig_checks.md "Physical limits").
 #include "hexa/core/physical_limits.hpp"
 #include "hexa/core/math_constants.hpp"
 

@@ -1,5 +1,5 @@
 // Platform state observer: a modal steady-state Kalman filter in leg space
-// (platform_state_observer.hpp, docs/controller.md "Platform state observer").
+// (platform_state_observer.hpp, docs/controller_additions.md "Platform state observer").
 #include "hexa/core/platform_state_observer.hpp"
 
 #include <cmath>

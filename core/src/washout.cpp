@@ -1,4 +1,4 @@
-// Classical washout filter (see washout.hpp, docs/operate.md "Motion cueing").
+// Classical washout filter (see washout.hpp, docs/motion_stream.md "Motion cueing").
 #include "hexa/core/washout.hpp"
 
 #include <algorithm>

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -223,7 +224,8 @@ ChildSpec Supervisor(const ProcessSpec& p, const Options& o, const Launch& launc
   ChildSpec s = ChildOf(p, o, launch);
   std::vector<std::string> args{"--trajectory", o.trajectory, "--exit-when-done", "--periods",
                                 std::to_string(o.periods), "--hold-timeout", o.hold_timeout_text,
-                                "--hold-report", launch.hold_report};
+                                "--hold-report", launch.hold_report, "--end-report",
+                                launch.end_report};
   if (!o.wait_for_operator) args.push_back("--autostart");
   if (o.operator_activation) Append(args, {"--activation", "operator"});
   // Identification: the supervisor only holds home (no trajectory); its outer loop would
@@ -336,6 +338,8 @@ int PrepareSession(Options& o, Launch& launch, spdlog::logger& log) {
   if (int rc = SecureSession(o, launch, log); rc != kContinue) return rc;
   launch.mcap = o.out_dir + "/session.mcap";
   launch.hold_report = o.out_dir + "/hold.txt";
+  launch.end_report = o.out_dir + "/end.txt";
+  std::remove(launch.end_report.c_str());  // a previous session's in the same --out
   launch.truth_path = o.out_dir + "/plant_truth.textproto";
   // The identification experiment's schedule (the same plan hexa_sim --experiment uses).
   launch.plan = o.identify() ? PlanIdentificationExperiment(o.excite_legs, o.excite_duration_s,

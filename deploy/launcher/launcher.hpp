@@ -88,6 +88,7 @@ struct Launch {
   std::vector<deploy::ChildSpec> children;    // in the layout's start order
   ExcitationPlan plan;                        // --experiment identify
   std::string mcap, hold_report, truth_path;  // files in the output directory
+  std::string end_report;  // the supervisor's line on how the session ended (--end-report)
 };
 
 // Checks the DDS domain (another session on it: the next free one, or exit 2), makes the

@@ -87,7 +87,8 @@ void AddSessionOptions(hexa::cli::Parser& cli) {
   cli.AddFlag("standby", "also start a hot-standby controller per leg");
   cli.AddFlag("coupled-legs",
               "the leg controllers run the coupled leg feedback (the rig file's "
-              "leg_controller.coupled_legs, turned on; docs/controller.md \"Coupled leg feedback\")");
+              "leg_controller.coupled_legs, turned on; docs/controller_additions.md \"Coupled "
+              "leg feedback\")");
   cli.AddChoice("device", {"sim", "board"},
                 "the rig behind the plant: sim (the plant simulates it) or board (the session also "
                 "runs hexa_board_emulator on 127.0.0.1 at a free UDP port, stepped once per command "
@@ -426,8 +427,8 @@ int ParseOptions(int argc, char** argv, Options& o) {
                         "session was stopped (signal, --timeout); 2 bad arguments; 3 held after a "
                         "fault and not reset within --hold-timeout; 4 the plant stopped; 5 the "
                         "supervisor was lost; 6 stopped by the operator (hexa_operator stop or shutdown) "
-                        "before the trajectory's end; 7 the trajectory completed but the recording "
-                        "lost samples.");
+                        "before the trajectory's end, or shut down before it started; 7 the "
+                        "trajectory completed but the recording lost samples.");
   AddSessionOptions(cli);
   AddProcessOptions(cli);
   const bool parsed = cli.Parse(argc, argv);

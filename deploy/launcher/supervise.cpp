@@ -81,6 +81,8 @@ class SessionWatch {
   void WatchHold();
   void OnChildExited(const ChildExit& e, double elapsed_s, SessionEnd& end);
   void OnSupervisorExited(const ChildExit& e, double elapsed_s, SessionEnd& end);
+  // The supervisor's line on how the session ended (--end-report), "" without one.
+  std::string SupervisorEndLine() const;
   void Fail(SessionEnd& end, std::string why, int outcome) {
     end.ended_because = std::move(why);
     end.outcome = outcome;
@@ -112,9 +114,25 @@ void SessionWatch::WatchHold() {
   }
 }
 
+std::string SessionWatch::SupervisorEndLine() const {
+  std::string line;
+  std::ifstream in(launch_.end_report);
+  if (in) std::getline(in, line);
+  return line;
+}
+
 void SessionWatch::OnSupervisorExited(const ChildExit& e, double elapsed_s, SessionEnd& end) {
   const bool exited = e.signal == 0;
-  if (exited && e.exit_code == exit_code::kOk) {
+  // Exit 0 is the trajectory's end only when the supervisor says so (--end-report): a
+  // supervisor stopped by a signal leaves 0 too.
+  const std::string line = SupervisorEndLine();
+  const bool finished = o_.is_experiment() || line.rfind("the trajectory finished", 0) == 0;
+  if (exited && e.exit_code == exit_code::kOk && !finished) {
+    log_.error("{} before the trajectory's end; its last log lines:\n{}", e.Describe(),
+               TailOf(o_.out_dir + "/supervisor.console.log", 15));
+    Fail(end, line.empty() ? "the supervisor exited before the trajectory's end (no end report)"
+                           : line, exit_code::kRunError);
+  } else if (exited && e.exit_code == exit_code::kOk) {
     log_.info("supervisor finished the trajectory after {:.1f} s wall", elapsed_s);
     end.completed = true;
   } else if (exited && e.exit_code == exit_code::kSupervisorHeld) {
@@ -126,9 +144,12 @@ void SessionWatch::OnSupervisorExited(const ChildExit& e, double elapsed_s, Sess
     log_.error("the supervisor left HOLD unreset (exit {}): {}", exit_code::kSessionHeld,
                end.ended_because);
   } else if (exited && e.exit_code == exit_code::kStoppedByOperator) {
-    Fail(end, "stopped by the operator before the trajectory's end",
-         exit_code::kSessionStoppedByOperator);
-    log_.warn("the motion was {} ({:.1f} s wall; exit {})", end.ended_because, elapsed_s,
+    // The supervisor's words: stopped or shut down, when, and whether the trajectory had
+    // started at all.
+    std::string line = SupervisorEndLine();
+    if (line.empty()) line = "stopped by the operator before the trajectory's end";
+    Fail(end, line, exit_code::kSessionStoppedByOperator);
+    log_.warn("the session was {} ({:.1f} s wall; exit {})", end.ended_because, elapsed_s,
               exit_code::kSessionStoppedByOperator);
   } else if (o_.fault_supervisor() || !exited) {
     // The legs see its setpoint writer's lease lapse and hold (docs/faults.md): watch

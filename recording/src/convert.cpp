@@ -168,6 +168,11 @@ void ToProto(const hexa_msg_OperatorCommand& in, rec::OperatorCommand& out) {
   ArrayToProto(in.jog_angular_velocity_rad_s, out.mutable_jog_angular_velocity_rad_s());
   ArrayToProto(in.goal_position_m, out.mutable_goal_position_m());
   ArrayToProto(in.goal_orientation_wxyz, out.mutable_goal_orientation_wxyz());
+  ArrayToProto(in.pivot_m, out.mutable_pivot_m());
+  ArrayToProto(in.tool_position_m, out.mutable_tool_position_m());
+  ArrayToProto(in.tool_orientation_wxyz, out.mutable_tool_orientation_wxyz());
+  ArrayToProto(in.work_position_m, out.mutable_work_position_m());
+  ArrayToProto(in.work_orientation_wxyz, out.mutable_work_orientation_wxyz());
 }
 
 void ToProto(const hexa_msg_NodeStatus& in, rec::NodeStatus& out) {
@@ -281,7 +286,7 @@ bool FromProto(const rec::OperatorCommand& in, hexa_msg_OperatorCommand& out) {
   out.sequence = in.sequence();
   out.kind = static_cast<hexa_msg_OperatorCommandKind>(in.kind());
   out.source_time_ns = in.source_time_ns();
-  // Jog and goal fields: absent (zero) in commands recorded before they existed.
+  // Jog, goal and frames fields: absent (zero) in commands recorded before they existed.
   if (!rec::JogFrame_IsValid(in.jog_frame())) return false;
   out.jog_frame = static_cast<hexa_msg_JogFrame>(in.jog_frame());
   return StringFromProto(in.trajectory(), out.trajectory) &&
@@ -289,7 +294,12 @@ bool FromProto(const rec::OperatorCommand& in, hexa_msg_OperatorCommand& out) {
          OptionalArrayFromProto(in.jog_velocity_m_s(), out.jog_velocity_m_s, 0.0) &&
          OptionalArrayFromProto(in.jog_angular_velocity_rad_s(), out.jog_angular_velocity_rad_s, 0.0) &&
          OptionalArrayFromProto(in.goal_position_m(), out.goal_position_m, 0.0) &&
-         OptionalArrayFromProto(in.goal_orientation_wxyz(), out.goal_orientation_wxyz, 0.0);
+         OptionalArrayFromProto(in.goal_orientation_wxyz(), out.goal_orientation_wxyz, 0.0) &&
+         OptionalArrayFromProto(in.pivot_m(), out.pivot_m, 0.0) &&
+         OptionalArrayFromProto(in.tool_position_m(), out.tool_position_m, 0.0) &&
+         OptionalArrayFromProto(in.tool_orientation_wxyz(), out.tool_orientation_wxyz, 0.0) &&
+         OptionalArrayFromProto(in.work_position_m(), out.work_position_m, 0.0) &&
+         OptionalArrayFromProto(in.work_orientation_wxyz(), out.work_orientation_wxyz, 0.0);
 }
 
 bool FromProto(const rec::NodeStatus& in, hexa_msg_NodeStatus& out) {

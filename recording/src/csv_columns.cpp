@@ -33,7 +33,8 @@ bool IsXyz(const std::string& name) {
   return name == "position_m" || name == "linear_velocity_m_s" || name == "angular_velocity_rad_s" ||
          name == "angular_rate_rad_s" || name == "p_BA_B_m" || name == "p_PB_P_m" ||
          name == "platform_inertia_diag_kg_m2" || name == "jog_velocity_m_s" ||
-         name == "jog_angular_velocity_rad_s" || name == "goal_position_m";
+         name == "jog_angular_velocity_rad_s" || name == "goal_position_m" || name == "pivot_m" ||
+         name == "tool_position_m" || name == "work_position_m";
 }
 
 // Suffixes of the SI naming rule (docs/style.md), longest first where one ends another.
@@ -107,7 +108,7 @@ std::string MessageDescription(const std::string& full_name) {
                                "state (pose, velocities, legs, pressures, spools, applied "
                                "voltages, command age)"},
       {"hexa.rec.OperatorCommand", "operator -> supervisor, event: start / stop / reset / home / "
-                                   "shutdown"},
+                                   "shutdown / estop / jog / goal / stream / frames"},
       {"hexa.rec.NodeStatus", "every process, 10 Hz and on change: state, deadline misses, "
                               "cycle counts and times"},
       {"hexa.rec.FaultEvent", "every process, event: a detected fault, its leg, tick and reason"},

@@ -115,7 +115,7 @@ void WriteExportReadme(const std::string& readme, const std::string& recording,
                        const std::vector<ExportedFile>& files) {
   std::ofstream o(readme);
   if (!o) throw McapError("cannot write '" + readme + "': " + std::strerror(errno));
-  o << "CSV export of " << recording << " (hexa_recorder export; docs/recorder.md, \"Export\").\n\n"
+  o << "CSV export of " << recording << " (hexa_recorder export; docs/recorder.md, \"CLI\").\n\n"
     << "One file per topic, one row per recorded message. Every header cell is \"name [unit]\":\n"
     << "SI units (m, rad, s, ns, Pa, V, N, kg, Hz and their products), [1] for a dimensionless\n"
     << "number (counts, ids, tick numbers of 1 ms, flags 0/1, quaternion components, scale\n"

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <stdexcept>
 
 #include <Eigen/Geometry>
@@ -22,6 +23,7 @@ constexpr double kBaseJointDiameterM = 0.030;
 constexpr double kPlatformJointDiameterM = 0.026;
 constexpr double kOutlineThicknessM = 0.006;
 constexpr double kLabelSizeM = 0.04;
+constexpr double kLimitLineThicknessM = 0.003;
 
 struct Rgba {
   double r, g, b, a;
@@ -32,6 +34,8 @@ constexpr Rgba kPlateColor{0.15, 0.45, 0.85, 0.25};
 constexpr Rgba kMeasuredColor{1.0, 0.55, 0.0, 1.0};
 constexpr Rgba kDesiredColor{0.1, 0.75, 0.25, 1.0};
 constexpr Rgba kTextColor{0.1, 0.1, 0.1, 1.0};
+constexpr Rgba kLimitEdgeColor{0.85, 0.25, 0.1, 0.8};
+constexpr Rgba kLimitFillColor{0.85, 0.25, 0.1, 0.06};
 
 Rgba LegColor(LegDisplayState s) {
   switch (s) {
@@ -115,9 +119,48 @@ void AddOutline(foxglove::SceneEntity* e, const LegArray<Eigen::Vector3d>& point
   SetColor(l->mutable_color(), color);
 }
 
+std::string Triple(const Vector6d& v, int first) {
+  return Num(v[first]) + " " + Num(v[first + 1]) + " " + Num(v[first + 2]);
+}
+
+// The soft limits' pose box: the positions the platform origin may take (box_min..box_max x y z,
+// in base), as a translucent cube and its 12 edges; the rotation bounds in the metadata.
+void AddSoftLimitBox(foxglove::SceneUpdate& u, const SoftLimitsConfig& limits, uint64_t stamp_ns) {
+  auto* e = NewEntity(u, "soft_limits", "base", stamp_ns);
+  const Eigen::Vector3d lo = limits.box_min.head<3>(), hi = limits.box_max.head<3>();
+  auto* cube = e->add_cubes();
+  SetPose(cube->mutable_pose(), 0.5 * (lo + hi), Eigen::Quaterniond::Identity());
+  SetVec(cube->mutable_size(), hi - lo);
+  SetColor(cube->mutable_color(), kLimitFillColor);
+  auto* l = e->add_lines();
+  l->set_type(foxglove::LinePrimitive::LINE_LIST);
+  SetPose(l->mutable_pose(), Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity());
+  l->set_thickness(kLimitLineThicknessM);
+  SetColor(l->mutable_color(), kLimitEdgeColor);
+  const auto corner = [&](int bits) {
+    return Eigen::Vector3d((bits & 1) ? hi.x() : lo.x(), (bits & 2) ? hi.y() : lo.y(),
+                           (bits & 4) ? hi.z() : lo.z());
+  };
+  for (int a = 0; a < 8; ++a) {
+    for (int axis = 1; axis < 8; axis <<= 1) {
+      if ((a & axis) != 0) continue;  // each edge once: from the corner with that bit clear
+      SetPoint(l->add_points(), corner(a));
+      SetPoint(l->add_points(), corner(a | axis));
+    }
+  }
+  AddMeta(e, "what", "soft limits: the pose box of the platform origin (rig file "
+                     "supervisor.soft_limits, about home)");
+  AddMeta(e, "position_min_m", Triple(limits.box_min, 0));
+  AddMeta(e, "position_max_m", Triple(limits.box_max, 0));
+  AddMeta(e, "rotation_min_rad", Triple(limits.box_min, 3));
+  AddMeta(e, "rotation_max_rad", Triple(limits.box_max, 3));
+}
+
 const char* SupervisorStateName(int s) {
-  static const char* kNames[] = {"IDLE", "BLENDING", "TRACKING", "STOPPING", "HOLD"};
-  return s >= 0 && s < 5 ? kNames[s] : "no pose report yet";
+  if (s < 0) return "no pose report yet";
+  // rec::SupervisorState_Name: "SUPERVISOR_JOGGING" -> "JOGGING"; "" for a value it lacks.
+  const std::string& name = rec::SupervisorState_Name(static_cast<rec::SupervisorState>(s));
+  return name.empty() ? "unknown" : name.c_str() + std::strlen("SUPERVISOR_");
 }
 
 // [x y z roll pitch yaw] -> pose; nullopt when not six finite values.
@@ -161,6 +204,7 @@ SceneOptions SceneOptionsFromRig(const std::string& rig_path, const std::string&
   } else {
     o.geometry_note = "nominal joints of " + rig_path;
   }
+  o.soft_limits = MakeSoftLimitsConfig(config::MakeSupervisorRig(loaded.config), loaded.config.supervisor);
   return o;
 }
 
@@ -312,6 +356,7 @@ void SceneBuilder::Build(std::uint64_t stamp_ns) {
       AddMeta(e, "tick", std::to_string(drawn_tick_));
     }
   }
+  if (options_.soft_limits) AddSoftLimitBox(scene_, *options_.soft_limits, stamp_ns);
   // Status label above the platform.
   {
     auto* e = NewEntity(scene_, "status", "base", stamp_ns);
@@ -338,7 +383,7 @@ SceneChannels::SceneChannels(RecordingWriter& writer, const SceneOptions& option
                                               {"hexa.scene.joints", options.geometry_note}};
   };
   scene_channel_ = writer_.AddTopic(kSceneTopic, *foxglove::SceneUpdate::descriptor(),
-                                    meta("legs, joints, outlines, status (docs/foxglove.md)"));
+                                    meta("legs, joints, outlines, soft limits, status (docs/foxglove.md)"));
   transforms_channel_ =
       writer_.AddTopic(kTransformsTopic, *foxglove::FrameTransforms::descriptor(),
                        meta("base -> platform, platform_measured, platform_desired"));

@@ -34,9 +34,9 @@ void AddOptions(cli::Parser& cli) {
   cli.AddOption("stats-s", "s", "log every client's sent / dropped counts this often (0 = only "
                 "when a client leaves)", "5");
   cli.AddFlag("operator-input",
-              "accept the operator's commands (start stop reset home jog goal stream) from Foxglove clients on "
-              "topic hexa_OperatorInput and forward them to the supervisor: whoever can connect "
-              "can then move the platform (docs/foxglove.md, \"Operator input\")");
+              "accept the operator's commands (start stop reset home jog goal stream frames) from "
+              "Foxglove clients on topic hexa_OperatorInput and forward them to the supervisor: "
+              "whoever can connect can then move the platform (docs/foxglove.md, \"Operator input\")");
   cli.AddOption("operator-input-rate-hz", "hz",
                 "per client: operator inputs a second beyond which they are refused", "10");
   cli.AddOption("operator-jog-rate-hz", "hz",

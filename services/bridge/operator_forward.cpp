@@ -56,6 +56,7 @@ void OperatorForwarder::WritePending() {
       case OperatorInput::Command::kJog: cmd.kind = hexa_msg_OPERATOR_JOG; break;
       case OperatorInput::Command::kGoal: cmd.kind = hexa_msg_OPERATOR_GOAL; break;
       case OperatorInput::Command::kStream: cmd.kind = hexa_msg_OPERATOR_STREAM; break;
+      case OperatorInput::Command::kFrames: cmd.kind = hexa_msg_OPERATOR_FRAMES; break;
     }
     const OperatorInput& in = item.input;
     cmd.jog_frame = in.tool_frame ? hexa_msg_JOG_FRAME_TOOL : hexa_msg_JOG_FRAME_WORK;
@@ -63,8 +64,15 @@ void OperatorForwarder::WritePending() {
       cmd.jog_velocity_m_s[k] = in.velocity_m_s[k];
       cmd.jog_angular_velocity_rad_s[k] = in.angular_velocity_rad_s[k];
       cmd.goal_position_m[k] = in.position_m[k];
+      cmd.pivot_m[k] = in.pivot_m[k];
+      cmd.tool_position_m[k] = in.tool_position_m[k];
+      cmd.work_position_m[k] = in.work_position_m[k];
     }
-    for (int k = 0; k < 4; ++k) cmd.goal_orientation_wxyz[k] = in.orientation_wxyz[k];
+    for (int k = 0; k < 4; ++k) {
+      cmd.goal_orientation_wxyz[k] = in.orientation_wxyz[k];
+      cmd.tool_orientation_wxyz[k] = in.tool_orientation_wxyz[k];
+      cmd.work_orientation_wxyz[k] = in.work_orientation_wxyz[k];
+    }
     std::snprintf(cmd.trajectory, sizeof cmd.trajectory, "%s", item.input.trajectory.c_str());
     cmd.sequence = ++sequence_;
     const dds_return_t rc = writer_.WriteNow(cmd);

@@ -36,9 +36,28 @@ std::string ReadNumbers(const json& j, const char* key, double (&out)[N]) {
   return "";
 }
 
-// The jog's or goal's fields, checked as the supervisor checks them.
+// The frames' fields: pivot_m required, the tool's and work frame's optional (the identity).
+std::string ReadFrames(const json& j, OperatorInput& in) {
+  if (std::string e = ReadNumbers(j, "pivot_m", in.pivot_m); !e.empty()) return e;
+  const auto optional = [&](const char* key, auto& out) {
+    return j.contains(key) ? ReadNumbers(j, key, out) : std::string();
+  };
+  for (std::string e : {optional("tool_position_m", in.tool_position_m),
+                        optional("tool_orientation_wxyz", in.tool_orientation_wxyz),
+                        optional("work_position_m", in.work_position_m),
+                        optional("work_orientation_wxyz", in.work_orientation_wxyz)})
+    if (!e.empty()) return e;
+  char why[160] = "";
+  if (!wire::CheckFrames(in.pivot_m, in.tool_position_m, in.tool_orientation_wxyz,
+                         in.work_position_m, in.work_orientation_wxyz, why, sizeof why))
+    return std::string("operator input: ") + why;
+  return "";
+}
+
+// The jog's, goal's or frames' fields, checked as the supervisor checks them.
 std::string ReadMotion(const json& j, OperatorInput& in) {
   char why[160] = "";
+  if (in.command == OperatorInput::Command::kFrames) return ReadFrames(j, in);
   if (in.command == OperatorInput::Command::kJog) {
     if (const auto f = j.find("frame"); f != j.end()) {
       if (!f->is_string() || (*f != "work" && *f != "tool"))
@@ -61,6 +80,24 @@ std::string ReadMotion(const json& j, OperatorInput& in) {
 
 constexpr std::array<const char*, 7> kTrajectories = {"x", "y", "z", "roll", "pitch", "yaw",
                                                       "combined"};
+
+// Every field a message may hold, and the one command it belongs to (null: any command).
+struct Field {
+  const char* name;
+  const char* command;
+};
+constexpr std::array<Field, 12> kFields = {{{"command", nullptr},
+                                            {"trajectory", "start"},
+                                            {"frame", "jog"},
+                                            {"velocity_m_s", "jog"},
+                                            {"angular_velocity_rad_s", "jog"},
+                                            {"position_m", "goal"},
+                                            {"orientation_wxyz", "goal"},
+                                            {"pivot_m", "frames"},
+                                            {"tool_position_m", "frames"},
+                                            {"tool_orientation_wxyz", "frames"},
+                                            {"work_position_m", "frames"},
+                                            {"work_orientation_wxyz", "frames"}}};
 }  // namespace
 
 const char* CommandName(OperatorInput::Command c) {
@@ -72,6 +109,7 @@ const char* CommandName(OperatorInput::Command c) {
     case OperatorInput::Command::kJog: return "jog";
     case OperatorInput::Command::kGoal: return "goal";
     case OperatorInput::Command::kStream: return "stream";
+    case OperatorInput::Command::kFrames: return "frames";
   }
   return "?";
 }
@@ -81,14 +119,13 @@ OperatorInputResult ParseOperatorInput(std::string_view text) {
   const json j = json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/false);
   if (j.is_discarded()) return Refuse("operator input is not valid JSON");
   if (!j.is_object()) return Refuse("operator input is not a JSON object");
-  static constexpr std::array<const char*, 7> kFields = {
-      "command", "trajectory", "frame", "velocity_m_s", "angular_velocity_rad_s", "position_m",
-      "orientation_wxyz"};
   for (const auto& [key, value] : j.items()) {
-    if (std::find_if(kFields.begin(), kFields.end(), [&](const char* f) { return key == f; }) == kFields.end())
+    if (std::find_if(kFields.begin(), kFields.end(), [&](const Field& f) { return key == f.name; }) ==
+        kFields.end())
       return Refuse("operator input: unknown field '" + key.substr(0, 40) +
                     "' (fields: command, trajectory, frame, velocity_m_s, angular_velocity_rad_s, "
-                    "position_m, orientation_wxyz)");
+                    "position_m, orientation_wxyz, pivot_m, tool_position_m, tool_orientation_wxyz, "
+                    "work_position_m, work_orientation_wxyz)");
   }
   const auto cmd = j.find("command");
   if (cmd == j.end()) return Refuse("operator input: field 'command' is absent");
@@ -102,20 +139,19 @@ OperatorInputResult ParseOperatorInput(std::string_view text) {
   else if (name == "jog") r.input.command = OperatorInput::Command::kJog;
   else if (name == "goal") r.input.command = OperatorInput::Command::kGoal;
   else if (name == "stream") r.input.command = OperatorInput::Command::kStream;
+  else if (name == "frames") r.input.command = OperatorInput::Command::kFrames;
   else return Refuse("operator input: unknown command '" + name.substr(0, 40) +
-                     "' (start stop reset home jog goal stream)");
-  const bool jog = r.input.command == OperatorInput::Command::kJog;
-  const bool goal = r.input.command == OperatorInput::Command::kGoal;
-  for (const char* key : {"frame", "velocity_m_s", "angular_velocity_rad_s"})
-    if (!jog && j.contains(key)) return Refuse(std::string("operator input: '") + key + "' is for jog only");
-  for (const char* key : {"position_m", "orientation_wxyz"})
-    if (!goal && j.contains(key)) return Refuse(std::string("operator input: '") + key + "' is for goal only");
-  if (jog || goal) {
+                     "' (start stop reset home jog goal stream frames)");
+  for (const Field& f : kFields) {
+    if (f.command != nullptr && f.command != name && j.contains(f.name))
+      return Refuse(std::string("operator input: '") + f.name + "' is for " + f.command + " only");
+  }
+  const OperatorInput::Command c = r.input.command;
+  if (c == OperatorInput::Command::kJog || c == OperatorInput::Command::kGoal ||
+      c == OperatorInput::Command::kFrames) {
     if (std::string e = ReadMotion(j, r.input); !e.empty()) return Refuse(e);
   }
   const auto traj = j.find("trajectory");
-  if (traj != j.end() && r.input.command != OperatorInput::Command::kStart)
-    return Refuse("operator input: 'trajectory' is for start only");
   if (r.input.command == OperatorInput::Command::kStart) {
     r.input.trajectory = "combined";
     if (traj != j.end()) {

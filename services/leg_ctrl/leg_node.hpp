@@ -52,7 +52,7 @@ inline constexpr std::size_t kSetpointRing = 256;
 
 // SCHED_FIFO priority in real time unless --rt-priority says otherwise: the highest of the
 // loop's processes; a leg has the tightest deadline (its 10 ms liveliness lease) and the
-// shortest work (docs/measurements/deployment.md, "Where the lapses' milliseconds go").
+// shortest work (docs/measurements/deployment_lapses.md, "Where the lapses' milliseconds go").
 inline constexpr int kRealtimePriority = 80;
 
 struct LegNodeOptions {

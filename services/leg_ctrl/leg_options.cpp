@@ -26,7 +26,8 @@ int ParseOptions(int argc, char** argv, LegNodeOptions& o) {
   cli.AddFlag("standby", "hot standby: same law, lower ownership strength");
   cli.AddFlag("coupled-legs",
               "the coupled leg feedback (the rig file's leg_controller.coupled_legs, turned on "
-              "whatever its 'enabled' says; docs/controller.md \"Coupled leg feedback\")");
+              "whatever its 'enabled' says; docs/controller_additions.md \"Coupled leg "
+              "feedback\")");
   cli.AddChoice("fault", {"none", "crash", "hang", "slow", "garbage", "silence"},
                 "fault injection (safety tests)", "none");
   cli.AddOption("fault-at", "s", "simulated time at which the fault starts", "0");

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "hexa/services/command_answer.hpp"
+#include "hexa/services/format_cut.hpp"
 #include "plant_node.hpp"
 
 namespace hexa::plant_sim {
@@ -77,15 +78,16 @@ void PlantNode::UpdateHardware() {
   }
   if (!hardware_.activation_asked) return;
   const bool refused = hardware_.refusal != ActivationRefusal::kNone;
+  // Cut to the DDS detail field it is sent in (the log line below has the whole detail).
   char why[160];
-  std::snprintf(why, sizeof why, "%s%s", refused ? "hardware inactive: " : "", hardware_.detail.data());
+  text::FormatCut(why, sizeof why, "%s%s", refused ? "hardware inactive: " : "", hardware_.detail.data());
   if (sequence != 0) {
     services::FormatCommandAnswer(hardware_answer_, sequence, activation_kind_,
                                   refused ? services::CommandAnswer::kRefused : services::CommandAnswer::kAccepted,
                                   why);
   } else {
-    std::snprintf(hardware_answer_, sizeof hardware_answer_, "%s %s: %s", activation_kind_,
-                  refused ? "refused" : "granted", why);
+    text::FormatCut(hardware_answer_, sizeof hardware_answer_, "%s %s: %s", activation_kind_,
+                    refused ? "refused" : "granted", why);
   }
   hardware_answer_tick_ = tick_;
   if (refused) {

@@ -135,9 +135,9 @@ struct PlantNodeOptions {
 };
 
 // SCHED_FIFO priority in real time, below the legs (80): a tick of the simulation can cost a
-// millisecond (stiff substeps), and the plant above the legs on their CPU made their valve
-// writers lapse (docs/measurements/deployment.md, "Where the lapses' milliseconds go"); late,
-// the plant only slips.
+// millisecond (stiff substeps), and the plant above the legs on their CPU made their valve writers
+// lapse (docs/measurements/deployment_lapses.md, "Where the lapses' milliseconds go"); late, the
+// plant only slips.
 inline constexpr int kRealtimePriority = 70;
 
 // Reads hexa_plant_sim's command line into `options`: -1 to run, else the exit code (--help:

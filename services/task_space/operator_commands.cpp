@@ -24,6 +24,7 @@ const char* CommandName(hexa_msg_OperatorCommandKind kind) {
     case hexa_msg_OPERATOR_GOAL: return "goal";
     case hexa_msg_OPERATOR_ESTOP: return "estop";
     case hexa_msg_OPERATOR_STREAM: return "stream";
+    case hexa_msg_OPERATOR_FRAMES: return "frames";
   }
   return "unknown";
 }
@@ -130,6 +131,7 @@ void SupervisorNode::TakeOperatorCommands() {
       case hexa_msg_OPERATOR_HOME: pending_command_ = OperatorCommandKind::kHome; break;
       case hexa_msg_OPERATOR_JOG:
       case hexa_msg_OPERATOR_GOAL:
+      case hexa_msg_OPERATOR_FRAMES:
         if (!TakeMotionCommand(c, operator_reader_.info(k).publication_handle)) return;
         break;
       case hexa_msg_OPERATOR_STREAM:
@@ -142,15 +144,10 @@ void SupervisorNode::TakeOperatorCommands() {
         break;
       case hexa_msg_OPERATOR_SHUTDOWN:
         AnswerCommand(c.sequence, "shutdown", CommandAnswer::kAccepted, "");
-        // A session's trajectory that a shutdown cuts short did not complete: the same exit
-        // as a `stop` before the trajectory's end (docs/exit_codes.md). Jog, goal and stream
-        // modes are not a trajectory (left_idle_ stays false): a shutdown after them ends 0.
-        if (options_.exit_when_done && exit_code_ < 0 && left_idle_) {
-          log_->warn("shut down by the operator in state {} (trajectory time {:.3f} s), before the "
-                     "trajectory's end (exit {})", ToString(output_.state), output_.trajectory_time_s,
-                     exit_code::kStoppedByOperator);
-          exit_code_ = exit_code::kStoppedByOperator;
-        }
+        // A session that a shutdown ends before its trajectory's end did not complete, whether
+        // the trajectory ran or had not started (only jogs, goals, a stream or a home ran, or
+        // nothing): the same exit as a `stop` before the trajectory's end (docs/exit_codes.md).
+        if (options_.exit_when_done && exit_code_ < 0) EndByShutdown();
         runtime_.shutdown().RequestShutdown();
         return;
       case hexa_msg_OPERATOR_ESTOP:
@@ -206,6 +203,19 @@ bool SupervisorNode::TakeMotionCommand(const hexa_msg_OperatorCommand& c, dds_in
     jog_writer_ = writer;
     return true;
   }
+  if (c.kind == hexa_msg_OPERATOR_FRAMES) {
+    UserFramesConfig frames;
+    if (!wire::FramesFromWire(c, frames, why)) {
+      AnswerCommand(c.sequence, "frames", CommandAnswer::kRefused, why);
+      return false;
+    }
+    const Eigen::Vector3d& p = frames.p_PC_P_m;
+    log_->info("frames #{}: pivot ({:.4f}, {:.4f}, {:.4f}) m in the platform frame", c.sequence,
+               p.x(), p.y(), p.z());
+    pending_frames_ = frames;
+    pending_command_ = OperatorCommandKind::kFrames;
+    return true;
+  }
   Pose goal;
   if (!wire::GoalFromWire(c, goal, why)) {
     AnswerCommand(c.sequence, "goal", CommandAnswer::kRefused, why);
@@ -242,9 +252,16 @@ void SupervisorNode::FinishCommand(SupervisorState before, std::uint64_t tick, d
   if (accepted && cmd == OperatorCommandKind::kGoal)
     log_->info("goal started at t = {:.3f} s: {:.3f} s to reach it", time_s,
                supervisor_.operator_motion().goal_duration_s());
-  if (accepted && cmd == OperatorCommandKind::kStop &&
+  if (accepted && cmd == OperatorCommandKind::kFrames) LogFrames(time_s);
+  if (accepted && cmd == OperatorCommandKind::kStart) {
+    trajectory_started_ = true;
+    homing_ = false;
+  }
+  if (accepted && cmd == OperatorCommandKind::kHome) homing_ = true;  // not the trajectory
+  if (accepted && cmd == OperatorCommandKind::kStop && !homing_ &&
       (before == SupervisorState::kBlending || before == SupervisorState::kTracking)) {
     stopped_by_operator_ = true;
+    stopped_at_trajectory_s_ = output_.trajectory_time_s;
     log_->warn("stopped by the operator at t = {:.3f} s (trajectory time {:.3f} s)", time_s,
                output_.trajectory_time_s);
   }
@@ -272,6 +289,26 @@ void SupervisorNode::FinishCommand(SupervisorState before, std::uint64_t tick, d
                                : result == CommandResult::kRejected ? CommandAnswer::kRejected
                                                                       : CommandAnswer::kRefused;
   AnswerCommand(pending_sequence_, ToString(cmd), answer, why);
+}
+
+void SupervisorNode::LogFrames(double time_s) {
+  const UserFramesConfig& f = supervisor_.operator_motion().config().frames;
+  const Eigen::Vector3d& c = f.p_PC_P_m;
+  const Eigen::Vector3d& t = f.X_PT.p_BP_B_m;
+  const Eigen::Vector3d& w = f.X_BW.p_BP_B_m;
+  // Degrees to the log's 0.01: no "-0.00" for an angle of -1e-17 rad.
+  const auto degrees = [](const Eigen::Matrix3d& R) {
+    Eigen::Vector3d deg = RollPitchYawFromRotation(R) * (180.0 / M_PI);
+    for (int k = 0; k < 3; ++k) deg[k] = std::abs(deg[k]) < 0.005 ? 0.0 : deg[k];
+    return deg;
+  };
+  const Eigen::Vector3d t_rpy = degrees(f.X_PT.R_BP);
+  const Eigen::Vector3d w_rpy = degrees(f.X_BW.R_BP);
+  log_->info("frames set at t = {:.3f} s: pivot ({:.4f}, {:.4f}, {:.4f}) m in the platform frame; "
+             "tool ({:.4f}, {:.4f}, {:.4f}) m, ({:.2f}, {:.2f}, {:.2f}) deg in the platform frame; "
+             "work ({:.4f}, {:.4f}, {:.4f}) m, ({:.2f}, {:.2f}, {:.2f}) deg in the base frame",
+             time_s, c.x(), c.y(), c.z(), t.x(), t.y(), t.z(), t_rpy.x(), t_rpy.y(), t_rpy.z(),
+             w.x(), w.y(), w.z(), w_rpy.x(), w_rpy.y(), w_rpy.z());
 }
 
 }  // namespace hexa::task_space

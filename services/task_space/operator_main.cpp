@@ -69,7 +69,20 @@ void AddOptions(hexa::cli::Parser& cli) {
   cli.AddOption("rpy-deg", "roll,pitch,yaw",
                 "goal: the platform's orientation, degrees (R = Rz(yaw) Ry(pitch) Rx(roll))", "0,0,0");
   cli.AddOption("quaternion", "w,x,y,z", "goal: the orientation as a unit quaternion instead of --rpy-deg");
-  cli.AllowPositional("start|stop|reset|home|shutdown|estop|jog|goal|stream", 1);
+  cli.AddOption("pivot-m", "x,y,z",
+                "frames: the pivot point (the centre of every rotation of jog, goals and streams) in "
+                "the platform frame, m; 0,0,0 is the platform origin (the supervisor allows up to "
+                "0.5 m)");
+  cli.AddOption("tool-position-m", "x,y,z", "frames: the tool frame's origin in the platform frame, m",
+                "0,0,0");
+  cli.AddOption("tool-rpy-deg", "roll,pitch,yaw",
+                "frames: the tool frame's orientation in the platform frame, degrees", "0,0,0");
+  cli.AddOption("work-position-m", "x,y,z",
+                "frames: the work frame's origin in the base frame, m (the supervisor allows up to 1 m)",
+                "0,0,0");
+  cli.AddOption("work-rpy-deg", "roll,pitch,yaw",
+                "frames: the work frame's orientation in the base frame, degrees", "0,0,0");
+  cli.AllowPositional("start|stop|reset|home|shutdown|estop|jog|goal|stream|frames", 1);
 }
 
 // "a,b,c" -> N finite numbers; false with `error` naming the option.
@@ -89,6 +102,38 @@ bool ParseList(const std::string& option, const std::string& text, double (&out)
     }
     pos = comma + 1;
   }
+  return true;
+}
+
+// "roll,pitch,yaw" in degrees (R = Rz(yaw) Ry(pitch) Rx(roll)) -> a unit quaternion w, x, y, z.
+bool QuaternionFromRpyDeg(const std::string& option, const std::string& text, double (&q_wxyz)[4],
+                          std::string& error) {
+  double rpy_deg[3];
+  if (!ParseList(option, text, rpy_deg, error)) return false;
+  const Eigen::Vector3d rpy_rad = Eigen::Vector3d(rpy_deg[0], rpy_deg[1], rpy_deg[2]) * (M_PI / 180.0);
+  const Eigen::Quaterniond q(hexa::RotationFromRollPitchYaw(rpy_rad));
+  q_wxyz[0] = q.w();
+  q_wxyz[1] = q.x();
+  q_wxyz[2] = q.y();
+  q_wxyz[3] = q.z();
+  return true;
+}
+
+// The frames' fields from the command line (checked as the supervisor checks them on sight;
+// its configured bounds it checks itself). All three frames are sent: the options left out are
+// the identity.
+bool ReadFrames(hexa::cli::Parser& cli, hexa_msg_OperatorCommand& cmd, std::string& error) {
+  if (!cli.Has("pivot-m"))
+    return (error = "frames needs --pivot-m x,y,z (0,0,0: the platform origin)", false);
+  if (!ParseList("pivot-m", cli.Get("pivot-m"), cmd.pivot_m, error) ||
+      !ParseList("tool-position-m", cli.Get("tool-position-m"), cmd.tool_position_m, error) ||
+      !QuaternionFromRpyDeg("tool-rpy-deg", cli.Get("tool-rpy-deg"), cmd.tool_orientation_wxyz, error) ||
+      !ParseList("work-position-m", cli.Get("work-position-m"), cmd.work_position_m, error) ||
+      !QuaternionFromRpyDeg("work-rpy-deg", cli.Get("work-rpy-deg"), cmd.work_orientation_wxyz, error))
+    return false;
+  char why[160] = "";
+  hexa::UserFramesConfig frames;
+  if (!hexa::wire::FramesFromWire(cmd, frames, why)) return (error = why, false);
   return true;
 }
 
@@ -116,15 +161,8 @@ bool ReadMotion(hexa::cli::Parser& cli, Request& r, std::string& error) {
   if (!ParseList("position-m", cli.Get("position-m"), cmd.goal_position_m, error)) return false;
   if (cli.Has("quaternion")) {
     if (!ParseList("quaternion", cli.Get("quaternion"), cmd.goal_orientation_wxyz, error)) return false;
-  } else {
-    double rpy_deg[3];
-    if (!ParseList("rpy-deg", cli.Get("rpy-deg"), rpy_deg, error)) return false;
-    const Eigen::Vector3d rpy_rad = Eigen::Vector3d(rpy_deg[0], rpy_deg[1], rpy_deg[2]) * (M_PI / 180.0);
-    const Eigen::Quaterniond q(hexa::RotationFromRollPitchYaw(rpy_rad));
-    cmd.goal_orientation_wxyz[0] = q.w();
-    cmd.goal_orientation_wxyz[1] = q.x();
-    cmd.goal_orientation_wxyz[2] = q.y();
-    cmd.goal_orientation_wxyz[3] = q.z();
+  } else if (!QuaternionFromRpyDeg("rpy-deg", cli.Get("rpy-deg"), cmd.goal_orientation_wxyz, error)) {
+    return false;
   }
   hexa::Pose goal;
   if (!hexa::wire::GoalFromWire(cmd, goal, why)) return (error = why, false);
@@ -161,14 +199,15 @@ int ReadRequest(hexa::cli::Parser& cli, int argc, char** argv, Request& r) {
   else if (what == "jog") cmd.kind = hexa_msg_OPERATOR_JOG;
   else if (what == "goal") cmd.kind = hexa_msg_OPERATOR_GOAL;
   else if (what == "stream") cmd.kind = hexa_msg_OPERATOR_STREAM;
+  else if (what == "frames") cmd.kind = hexa_msg_OPERATOR_FRAMES;
   else {
-    std::fprintf(stderr, "error: unknown command '%s' (start stop reset home shutdown estop jog goal stream)\n",
-                 what.c_str());
+    std::fprintf(stderr, "error: unknown command '%s' (start stop reset home shutdown estop jog goal "
+                 "stream frames)\n", what.c_str());
     return exit_code::kUsage;
   }
-  if (what == "jog" || what == "goal") {
+  if (what == "jog" || what == "goal" || what == "frames") {
     std::string error;
-    if (!ReadMotion(cli, r, error)) {
+    if (!(what == "frames" ? ReadFrames(cli, cmd, error) : ReadMotion(cli, r, error))) {
       std::fprintf(stderr, "error: %s\n(see --help)\n", error.c_str());
       return exit_code::kUsage;
     }
@@ -351,7 +390,7 @@ int StreamJog(Request& r, hexa::comm::Writer<hexa_msg_OperatorCommand>& writer,
 int main(int argc, char** argv) {
   hexa::cli::Parser cli("hexa_operator",
                         "Sends an operator command to the supervisor: hexa_operator [options] "
-                        "start|stop|reset|home|shutdown|estop|jog|goal|stream\n"
+                        "start|stop|reset|home|shutdown|estop|jog|goal|stream|frames\n"
                         "  jog: a twist of the pivot (--velocity-m-s, --angular-velocity-rad-s, "
                         "--frame) sent every 1/--rate-hz for --duration-s; at rest 0.25 s (the "
                         "dead-man) plus the braking time after the last one.\n"
@@ -361,6 +400,14 @@ int main(int argc, char** argv) {
                         "  stream: from IDLE, the platform follows the external motion stream "
                         "(UDP packets, docs/operate.md) from where it rests, until `stop` brings it "
                         "back there; refused (exit 4) unless hexa_task_space runs with --stream.\n"
+                        "  frames: the pivot point (--pivot-m, in the platform frame), the tool "
+                        "frame (--tool-position-m, --tool-rpy-deg) and the work frame "
+                        "(--work-position-m, --work-rpy-deg, in the base frame) for the jogs, goals "
+                        "and streams from now on; all three at once (left out: the identity). The "
+                        "platform does not move. Taken in IDLE or with a jog at rest; refused "
+                        "(exit 4, the reason logged) while moving or beyond the supervisor's bounds "
+                        "(pivot and tool origin 0.5 m, work origin 1 m); more than 2 m away is a "
+                        "usage error (exit 2).\n"
                         "Exit status: 0 the supervisor accepted the command (with --to any-reader: "
                         "acknowledged by every matched reader), 1 no supervisor (with --to "
                         "any-reader: no reader) matched within --wait (or a DDS error), 2 bad "

@@ -132,7 +132,7 @@ bool SupervisorNode::PeersMatched(std::string& missing) {
   // Every leg's primary controller reads its setpoints (plus the plant in lockstep). Its
   // reader says so in its USER_DATA: a hot standby's reader alone is not enough, since a
   // primary without setpoints holds its leg (and its ownership of the valve) while the
-  // others move (docs/measurements/deployment.md, "A primary without setpoints").
+  // others move (docs/measurements/deployment_partitions.md, "A primary without setpoints").
   bool legs = true;
   missing_primaries_.clear();
   for (int leg = 1; leg <= static_cast<int>(kNumLegs); ++leg) {
@@ -200,6 +200,7 @@ void SupervisorNode::ReportHold(double time_s) {
                   host_stall_.cpu_s * 1e3, host_stall_.wall_s * 1e3);
   }
   log_->error("{}", line);
+  std::snprintf(hold_line_, sizeof hold_line_, "%s", line);
   if (options_.hold_report_path.empty()) return;
   const std::string tmp = options_.hold_report_path + ".tmp";
   if (FILE* f = std::fopen(tmp.c_str(), "w")) {
@@ -261,6 +262,7 @@ void SupervisorNode::FillInput(double time_s) {
   input_.start = pending_start_ ? &*pending_start_ : nullptr;
   input_.jog = pending_jog_;
   input_.goal_X_BP = pending_goal_;
+  input_.frames = pending_frames_;
   if (stream_receiver_) {
     // Drained every tick (outside STREAMING the core ignores them): no backlog at the start.
     input_.stream_packet_count = stream_receiver_->Receive(stream_decoder_refusals_);
@@ -289,7 +291,10 @@ void SupervisorNode::ReactToOutput(std::uint64_t tick, double time_s) {
   if (hold_exit_tick_ != 0 && tick >= hold_exit_tick_ && exit_code_ < 0) {
     log_->error("no operator reset within {} s in HOLD: leaving held (exit {}): {}",
                 options_.hold_timeout_s, exit_code::kSupervisorHeld, output_.fault_detail.data());
-    exit_code_ = exit_code::kSupervisorHeld;
+    char line[sizeof end_line_];
+    std::snprintf(line, sizeof line, "held, no operator reset within %g s: %s",
+                  options_.hold_timeout_s, hold_line_);
+    EndSession(exit_code::kSupervisorHeld, line);
   }
   if (!was_initialized_ && supervisor_.initialized()) {
     was_initialized_ = true;
@@ -312,23 +317,9 @@ void SupervisorNode::ReactToOutput(std::uint64_t tick, double time_s) {
     PrepareStart(options_.trajectory, options_.periods);
     pending_from_operator_ = false;
   }
-  // A session ends when its trajectory ends (or a hold, with --exit-when-done); a jog or a
-  // goal ends in IDLE without ending it.
-  const bool operator_mode = output_.state == SupervisorState::kJogging ||
-                             output_.state == SupervisorState::kGoal ||
-                             output_.state == SupervisorState::kStreaming;
-  if (output_.state != SupervisorState::kIdle && !operator_mode) left_idle_ = true;
-  if (options_.exit_when_done && left_idle_ && output_.state == SupervisorState::kIdle &&
-      exit_code_ < 0) {
-    if (stopped_by_operator_) {
-      log_->warn("motion ended at t = {:.3f} s by the operator's stop, before the trajectory's "
-                 "end (exit {})", time_s, exit_code::kStoppedByOperator);
-      exit_code_ = exit_code::kStoppedByOperator;
-    } else {
-      log_->info("trajectory finished at t = {:.3f} s", time_s);
-      exit_code_ = exit_code::kOk;
-    }
-  }
+  // A session ends when its trajectory ends (or a hold, with --exit-when-done); a jog, a goal,
+  // a stream or a home ends in IDLE without ending it.
+  NoteSessionMotion(time_s);
   // The last command's answer is repeated for 1 s (200 cycles), then the state is the detail.
   const bool repeat_answer = last_answer_[0] != '\0' && cycles_ - last_answer_cycle_ <= 200;
   if (cycles_ % 20 == 0)
@@ -483,6 +474,13 @@ int SupervisorNode::Run() {
   }
   runtime_.Stop(Figures(), "stopped");
   LogSummary();
+  if (options_.exit_when_done && exit_code_ < 0 && runtime_.shutdown().signal_number() != 0) {
+    std::snprintf(end_line_, sizeof end_line_, "the supervisor was stopped by signal %d (%s) "
+                  "before the trajectory's end", runtime_.shutdown().signal_number(),
+                  strsignal(runtime_.shutdown().signal_number()));
+    log_->warn("{}", end_line_);
+  }
+  WriteEndReport();
   return exit_code_ < 0 ? exit_code::kOk : exit_code_;
 }
 

@@ -47,6 +47,10 @@ struct SupervisorNodeOptions {
   // the platform is held, and the file is removed when a reset leaves HOLD (the launcher shows
   // it on its console).
   std::string hold_report_path;
+  // --exit-when-done: when not empty, one line saying how the session's motion ended (the
+  // trajectory finished; stopped or shut down by the operator, and when; held) is written here
+  // as the service leaves (the launcher's console and report.md say it).
+  std::string end_report_path;
   int pose_readers = 0;  // matched PoseReport readers required before RUNNING (the recorder)
   // The external motion stream (docs/operate.md): off unless asked; loopback by default.
   bool stream = false;
@@ -115,9 +119,17 @@ class SupervisorNode {
   // After the core ran a pending operator command: answer it, and the session's part of it
   // (a stop that ends the motion, a reset that resumes).
   void FinishCommand(SupervisorState before, std::uint64_t tick, double time_s);
+  void LogFrames(double time_s);  // the frames in use, after a frames command was taken
   // The one-line description of the hold (fault, leg, who reported it and why) to the log and,
   // with --hold-report, to that file.
   void ReportHold(double time_s);
+  // --exit-when-done (session_end.cpp): which motions ran (the session's trajectory, or the
+  // operator's jog / goal / stream / home, which do not end a session), the exit code and the
+  // end line when the session ends, and the line of an operator's shutdown.
+  void NoteSessionMotion(double time_s);
+  void EndSession(int exit_code, const char* line);
+  void EndByShutdown();
+  void WriteEndReport() const;
   services::StatusFigures Figures();
   // The running state on NodeStatus: HOLD while held, else RUNNING.
   hexa_msg_NodeState RunningState() const;
@@ -201,10 +213,19 @@ class SupervisorNode {
   std::uint32_t pending_sequence_ = 0;
   JogRequest pending_jog_;              // the newest jog message (kJog)
   Pose pending_goal_;                   // kGoal
+  UserFramesConfig pending_frames_;     // kFrames
   dds_instance_handle_t jog_writer_ = 0;  // the writer of the newest jog message
   bool answer_jog_ = false;             // the pending jog is a writer's first: answer it
   double last_jog_time_s_ = 0.0;        // the tick that applied the last jog message
   bool stopped_by_operator_ = false;    // a `stop` ended the motion before its end
+  double stopped_at_trajectory_s_ = 0;  // the trajectory time of that stop
+  bool homing_ = false;                 // an operator's `home` runs (not the session's trajectory)
+  bool trajectory_started_ = false;     // the session's trajectory was started (start, autostart)
+  // The operator motions that ran (kMotion* bits): named in the end line of a shutdown that
+  // came before the trajectory started.
+  unsigned operator_motions_ = 0;
+  char hold_line_[512] = {};  // the newest hold's one-line description (ReportHold)
+  char end_line_[600] = {};   // how the session ended (EndSession)
   // The last answer, repeated in the periodic NodeStatus for a while: the status writer keeps
   // only its newest sample, so a periodic status written right after the answer could
   // otherwise replace it before a slow operator's reader has it.
@@ -223,7 +244,7 @@ class SupervisorNode {
   bool autostart_pending_ = false;
   bool hardware_active_ = false;            // --activation operator: the plant's word
   std::int64_t activation_deadline_ns_ = 0; // the pending start / home's answer due (0: none)
-  bool left_idle_ = false;
+  bool left_idle_ = false;  // the session's trajectory (or a hold) took the platform out of IDLE
   bool was_initialized_ = false;
   int exit_code_ = -1;  // set when the service should exit
   std::uint64_t hold_exit_tick_ = 0;  // --exit-when-done after a fault: leave at this tick

@@ -11,10 +11,11 @@ int ParseOptions(int argc, char** argv, SupervisorNodeOptions& o) {
   cli::Parser cli("hexa_task_space",
                   "Task-space supervisor: trajectories, pose estimate (IMU + GQFK, eq 47), "
                   "Jacobian outer loop (eq 48), safety state machine; 5 ms.\n"
-                  "Exit status: 0 the trajectory finished (--exit-when-done) or shutdown, "
-                  "1 error, 2 bad arguments, 3 peers not matched at start-up, 5 held and not "
-                  "reset within --hold-timeout, 6 the operator's stop ended the motion "
-                  "before the trajectory's end (docs/exit_codes.md).");
+                  "Exit status: 0 the trajectory finished (--exit-when-done), a shutdown without "
+                  "--exit-when-done, or SIGINT / SIGTERM (--end-report says which); 1 error, 2 "
+                  "bad arguments, 3 peers not matched at start-up, 5 held and not reset within "
+                  "--hold-timeout, 6 an operator's stop or shutdown before the trajectory's end, "
+                  "or before it started (docs/exit_codes.md).");
   node::AddCommonOptions(cli);
   cli.AddOption("trajectory", "name|file.csv",
                 "trajectory for --autostart: x y z roll pitch yaw combined, or a CSV file",
@@ -22,8 +23,9 @@ int ParseOptions(int argc, char** argv, SupervisorNodeOptions& o) {
   cli.AddOption("periods", "N", "periods to track (0 = the trajectory's default)", "0");
   cli.AddFlag("autostart", "start the trajectory as soon as the pose is known");
   cli.AddFlag("exit-when-done",
-              "exit 0 when the trajectory has finished; 6 when an operator's stop ended it; in "
-              "HOLD wait --hold-timeout for an operator reset, then exit 5");
+              "exit 0 when the trajectory has finished; 6 when an operator's stop or shutdown "
+              "came before its end (a jog, goal, stream or home does not end it); in HOLD wait "
+              "--hold-timeout for an operator reset, then exit 5");
   cli.AddOption("hold-timeout", "s",
                 "--exit-when-done: simulated seconds to wait in HOLD for an operator reset "
                 "(real time: wall seconds; lockstep: at the machine's pace); a reset resumes "
@@ -31,6 +33,10 @@ int ParseOptions(int argc, char** argv, SupervisorNodeOptions& o) {
   cli.AddOption("hold-report", "file",
                 "write one line naming the fault and its cause here when the platform is held "
                 "(removed on reset)");
+  cli.AddOption("end-report", "file",
+                "--exit-when-done: write one line here saying how the session ended (the "
+                "trajectory finished; stopped or shut down by the operator, and when; held; "
+                "stopped by a signal)");
   cli.AddFlag("no-outer-loop", "disable the task-space outer loop");
   cli.AddFlag("no-feedforward",
               "no platform inverse-dynamics feed-forward on the leg setpoints (paper-faithful)");
@@ -83,6 +89,7 @@ int ParseOptions(int argc, char** argv, SupervisorNodeOptions& o) {
   o.startup_timeout_s = *startup;
   o.hold_timeout_s = *hold_timeout;
   if (cli.Has("hold-report")) o.hold_report_path = cli.Get("hold-report");
+  if (cli.Has("end-report")) o.end_report_path = cli.Get("end-report");
   o.pose_readers = static_cast<int>(*pose_readers);
   o.stream = cli.Flag("stream");
   o.stream_endpoint.address = cli.Get("stream-address");

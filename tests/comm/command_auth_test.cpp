@@ -102,6 +102,18 @@ TEST(CommandAuth, SetpointsAndOperatorCommandsAreBoundToTheirFieldsToo) {
   EXPECT_TRUE(VerifyCommand(mac, writer, o));
   std::strcpy(o.trajectory, "x");
   EXPECT_FALSE(VerifyCommand(mac, writer, o));
+  // The frames' fields, the sample's last: a pivot or a work frame changed after signing.
+  o.kind = hexa_msg_OPERATOR_FRAMES;
+  o.pivot_m[2] = 0.2;
+  o.tool_orientation_wxyz[0] = 1.0;
+  o.work_orientation_wxyz[0] = 1.0;
+  SignCommand(mac, writer, o);
+  EXPECT_TRUE(VerifyCommand(mac, writer, o));
+  o.pivot_m[2] = 2.0;
+  EXPECT_FALSE(VerifyCommand(mac, writer, o));
+  o.pivot_m[2] = 0.2;
+  o.work_orientation_wxyz[3] = 1e-12;
+  EXPECT_FALSE(VerifyCommand(mac, writer, o));
   // A tag of one topic never verifies on another with the same bytes in its fields.
   hexa_msg_ValveCommand c{};
   std::memcpy(c.auth_tag, s.auth_tag, kAuthTagBytes);

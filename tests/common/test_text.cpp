@@ -9,6 +9,7 @@
 #include <sstream>
 #include <string>
 
+#include "hexa/services/format_cut.hpp"
 #include "hexa/services/logging.hpp"
 #include "hexa/services/node.hpp"
 #include "hexa/services/text.hpp"
@@ -108,6 +109,23 @@ TEST(Text, RandomBytesAlwaysGiveValidBoundedText) {
       ASSERT_EQ(std::string(buffer), Sanitize(in, 160));
     }
   }
+}
+
+// FormatCut: printf cut to the array on purpose (a DDS detail field), never mid-character.
+TEST(Text, FormatCutCutsToTheArrayAtACharacterBoundary) {
+  char fits[8];
+  EXPECT_FALSE(FormatCut(fits, sizeof fits, "#%u %s", 12u, "abc"));  // 7 bytes + NUL
+  EXPECT_STREQ(fits, "#12 abc");
+  char cut[8];
+  EXPECT_TRUE(FormatCut(cut, sizeof cut, "#%u %s", 12u, "abcd"));
+  EXPECT_STREQ(cut, "#12 abc");
+  char euro[8];  // "ab" + three euro signs (3 bytes each): the cut falls inside the second
+  EXPECT_TRUE(FormatCut(euro, sizeof euro, "ab%s", "\xE2\x82\xAC\xE2\x82\xAC\xE2\x82\xAC"));
+  EXPECT_STREQ(euro, "ab\xE2\x82\xAC");
+  EXPECT_TRUE(IsValidUtf8(euro));
+  char exact[6];  // "ab" + one euro sign: 5 bytes, fits
+  EXPECT_FALSE(FormatCut(exact, sizeof exact, "ab%s", "\xE2\x82\xAC"));
+  EXPECT_STREQ(exact, "ab\xE2\x82\xAC");
 }
 
 // The wire types' bounded strings (FaultEvent.detail, NodeStatus.detail: string<160>): the copy

@@ -8,8 +8,7 @@
 #      report.md say why.
 #   3. `hexa_operator stop` during the motion: exit 6 and report.md "completed: NO: stopped by
 #      the operator", never "completed: yes"; a reset outside HOLD is refused (exit 4).
-#   3b. `hexa_operator shutdown` during the motion: the operator says accepted (exit 0); the
-#      session ends as for stop (exit 6, "completed: NO").
+#   (`shutdown` during the motion and before the trajectory started: task_space.session_ends.)
 #   4. the console's pipe closed at once: the session runs to its end (was killed by SIGPIPE,
 #      exit 141, silently).
 #   5. two --fault options for two legs: both injected.
@@ -134,26 +133,6 @@ if grep -q "^- completed: NO: stopped by the operator" "$DIR/stop/report.md" && 
 else
   bad "3: report.md: $(grep completed "$DIR/stop/report.md")"
 fi
-
-# ---- 3b. shutdown during the motion: the supervisor answers and stops within the same tick;
-# the operator reports it accepted (its answer, or the supervisor's STOPPING status when a
-# reader keeps only the newest status), exit 0; the session did not complete.
-"$B/deploy/hexa_session" --trajectory x --periods 3 --domain "$D" --out "$DIR/shutdown" \
-  --timeout 300 >"$DIR/shutdown.console" 2>&1 &
-SESSION=$!
-wait_for "$DIR/shutdown/supervisor.log" "trajectory 'x' accepted" 180 || bad "3b: the trajectory never started"
-KEY="$DIR/shutdown/session.key"
-operator 0 "sent shutdown to domain $D: the supervisor \(command #[0-9]* shutdown: accepted\|is stopping\)" shutdown
-session_rc
-# Cut short, the session did not complete: exit 6 as for stop, and the report says so.
-if [ "$rc" -eq 6 ] && grep -q "session did NOT complete (exit 6): stopped by the operator" "$DIR/shutdown.console" &&
-   grep -q "shut down by the operator in state SUPERVISOR_" "$DIR/shutdown/supervisor.log"; then
-  ok "3b: shutdown: exit 6: $(grep "shut down by the operator" "$DIR/shutdown/supervisor.log" | cut -c 1-200)"
-else
-  bad "3b: shutdown: exit $rc: $(tail -3 "$DIR/shutdown.console")"
-fi
-grep -q "^- completed: NO: stopped by the operator" "$DIR/shutdown/report.md" ||
-  bad "3b: report.md: $(grep completed "$DIR/shutdown/report.md")"
 
 # ---- 4. the console's pipe closed at once.
 ( "$B/deploy/hexa_session" --trajectory x --periods 1 --no-recorder --domain "$D" --out "$DIR/pipe" \

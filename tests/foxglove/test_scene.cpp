@@ -4,16 +4,22 @@
 
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <iterator>
+#include <optional>
+#include <regex>
 
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include "hexa/config/rig_config.hpp"
 #include "hexa/core/platform_plant.hpp"
 #include "hexa/core/scene.hpp"
 #include "hexa/recording/scene.hpp"
 #include "protocol.hpp"
 #include "ws_server.hpp"
 #include "recording.pb.h"
+#include "scratch_dir.hpp"
 
 namespace hexa {
 namespace {
@@ -143,6 +149,75 @@ TEST(Scene, LegsMeetTheJointsAndHaveTheTrueLengths) {
       EXPECT_EQ(Meta(*leg, "tick"), std::to_string(20 * k));
     }
   }
+}
+
+// The soft limits' pose box of `rig_path` as the scene draws it: the cube's centre and size, and
+// the 12 edges (24 points) of a LINE_LIST on its corners.
+struct DrawnBox {
+  Eigen::Vector3d center_m, size_m;
+  std::optional<foxglove::SceneEntity> entity;  // "soft_limits"
+};
+DrawnBox DrawSoftLimits(const std::string& rig_path) {
+  SceneBuilder b(recorder::SceneOptionsFromRig(rig_path, "", std::nullopt));
+  EXPECT_TRUE(b.Add(Truth(0, SomePose(0), MakeReferenceRig().geometry)));
+  b.Build(0);
+  DrawnBox d;
+  if (const auto* e = Entity(b.scene(), "soft_limits")) d.entity = *e;
+  if (!d.entity || d.entity->cubes_size() != 1) return d;
+  const auto& c = d.entity->cubes(0);
+  d.center_m = Eigen::Vector3d(c.pose().position().x(), c.pose().position().y(), c.pose().position().z());
+  d.size_m = Eigen::Vector3d(c.size().x(), c.size().y(), c.size().z());
+  EXPECT_EQ(d.entity->frame_id(), "base");
+  EXPECT_LT(c.color().a(), 0.5) << "translucent";
+  EXPECT_EQ(d.entity->lines_size(), 1);
+  if (d.entity->lines_size() != 1) return d;
+  const auto& l = d.entity->lines(0);
+  EXPECT_EQ(l.type(), foxglove::LinePrimitive::LINE_LIST);
+  EXPECT_EQ(l.points_size(), 24);
+  Eigen::Vector3d edge_total = Eigen::Vector3d::Zero();
+  for (int k = 0; k + 1 < l.points_size(); k += 2) {
+    const Eigen::Vector3d a(l.points(k).x(), l.points(k).y(), l.points(k).z());
+    const Eigen::Vector3d e = Eigen::Vector3d(l.points(k + 1).x(), l.points(k + 1).y(), l.points(k + 1).z()) - a;
+    // A corner of the box, and an edge along one axis: its full side.
+    EXPECT_LT(((a - d.center_m).cwiseAbs() - 0.5 * d.size_m).norm(), 1e-12);
+    EXPECT_EQ((e.array() != 0.0).count(), 1);
+    edge_total += e.cwiseAbs();
+  }
+  EXPECT_LT((edge_total - 4.0 * d.size_m).norm(), 1e-12) << "four edges along each axis";
+  return d;
+}
+
+TEST(Scene, SoftLimitBoxIsDrawnWithTheRigFilesDimensions) {
+  // The default rig file: home (0, 0, 0.45) m, the box home -+ 0.1 m, the angles -+ 0.3 rad.
+  const DrawnBox home_box = DrawSoftLimits(config::DefaultRigFile());
+  ASSERT_TRUE(home_box.entity) << "entity soft_limits";
+  EXPECT_LT((home_box.center_m - Eigen::Vector3d(0, 0, 0.45)).norm(), 1e-12);
+  EXPECT_LT((home_box.size_m - Eigen::Vector3d(0.2, 0.2, 0.2)).norm(), 1e-12);
+  EXPECT_EQ(Meta(*home_box.entity, "rotation_max_rad"), "0.300000 0.300000 0.300000");
+  // A file with another box: the drawing follows it.
+  std::ifstream in(config::DefaultRigFile());
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string before = text;
+  text = std::regex_replace(text, std::regex("position_min_from_home_m \\{[^}]*\\}"),
+                            "position_min_from_home_m { x: -0.02 y: -0.05 z: -0.04 }");
+  text = std::regex_replace(text, std::regex("position_max_from_home_m \\{[^}]*\\}"),
+                            "position_max_from_home_m { x: 0.03 y: 0.08 z: 0.06 }");
+  text = std::regex_replace(text, std::regex("rotation_max_rad \\{[^}]*\\}"),
+                            "rotation_max_rad { roll: 0.2 pitch: 0.25 yaw: 0.3 }");
+  ASSERT_NE(text, before);
+  const std::string path = hexa::testing::ScratchDir("scene_soft_limits") + "/tight.textproto";
+  std::ofstream(path) << text;
+  const DrawnBox tight = DrawSoftLimits(path);
+  ASSERT_TRUE(tight.entity) << "entity soft_limits";
+  EXPECT_LT((tight.size_m - Eigen::Vector3d(0.05, 0.13, 0.10)).norm(), 1e-12);
+  EXPECT_LT((tight.center_m - Eigen::Vector3d(0.005, 0.015, 0.46)).norm(), 1e-12);
+  EXPECT_EQ(Meta(*tight.entity, "position_min_m"), "-0.020000 -0.050000 0.410000");
+  EXPECT_EQ(Meta(*tight.entity, "rotation_max_rad"), "0.200000 0.250000 0.300000");
+  // Options built in code without limits draw none.
+  SceneBuilder none(Options(1));
+  ASSERT_TRUE(none.Add(Truth(0, SomePose(0), MakeReferenceRig().geometry)));
+  none.Build(0);
+  EXPECT_EQ(Entity(none.scene(), "soft_limits"), nullptr);
 }
 
 TEST(Scene, LegColoursFollowTheLegState) {
@@ -330,6 +405,52 @@ TEST(BridgeOperatorInput, JogAndGoalAreCheckedFieldByField) {
       {R"({"command": "goal", "position_m": [10, 0, 0.4], "orientation_wxyz": [1, 0, 0, 0]})", "absurd"},
       {R"({"command": "stop", "velocity_m_s": [0, 0, 0]})", "for jog only"},
       {R"({"command": "jog", "position_m": [0, 0, 0]})", "for goal only"}};
+  for (const auto& [text, words] : bad) {
+    const auto r = ParseOperatorInput(text);
+    EXPECT_FALSE(r.ok) << text;
+    EXPECT_NE(r.error.find(words), std::string::npos) << text << ": " << r.error;
+  }
+}
+
+TEST(BridgeOperatorInput, FramesAreCheckedFieldByField) {
+  using hexa::bridge::OperatorInput;
+  using hexa::bridge::ParseOperatorInput;
+  // The pivot alone: the tool and work frames are the identity.
+  auto pivot = ParseOperatorInput(R"({"command": "frames", "pivot_m": [0, 0.05, 0.2]})");
+  ASSERT_TRUE(pivot.ok) << pivot.error;
+  EXPECT_EQ(pivot.input.command, OperatorInput::Command::kFrames);
+  EXPECT_STREQ(hexa::bridge::CommandName(pivot.input.command), "frames");
+  EXPECT_EQ(pivot.input.pivot_m[2], 0.2);
+  EXPECT_EQ(pivot.input.tool_orientation_wxyz[0], 1.0);
+  EXPECT_EQ(pivot.input.work_orientation_wxyz[0], 1.0);
+  EXPECT_EQ(pivot.input.work_position_m[0], 0.0);
+  auto all = ParseOperatorInput(
+      R"({"command": "frames", "pivot_m": [0, 0, 0.1], "tool_position_m": [0.01, 0, 0.05],
+          "tool_orientation_wxyz": [0, 1, 0, 0], "work_position_m": [0.1, 0, 0],
+          "work_orientation_wxyz": [0.7071067811865476, 0, 0, 0.7071067811865476]})");
+  ASSERT_TRUE(all.ok) << all.error;
+  EXPECT_EQ(all.input.tool_position_m[2], 0.05);
+  EXPECT_EQ(all.input.tool_orientation_wxyz[1], 1.0);
+  EXPECT_EQ(all.input.work_position_m[0], 0.1);
+  EXPECT_EQ(all.input.work_orientation_wxyz[3], 0.7071067811865476);
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {R"({"command": "frames"})", "field 'pivot_m' is absent"},
+      {R"({"command": "frames", "tool_position_m": [0, 0, 0]})", "field 'pivot_m' is absent"},
+      {R"({"command": "frames", "pivot_m": [0, NaN, 0]})", "not valid JSON"},
+      {R"({"command": "frames", "pivot_m": [0, 1e999, 0]})", "not valid JSON"},  // overflow: not JSON
+      {R"({"command": "frames", "pivot_m": [0, 0]})", "'pivot_m' must be an array of 3 numbers"},
+      {R"({"command": "frames", "pivot_m": [10, 0, 0]})",
+       "pivot_m (10, 0, 0) is 10 m from the platform origin: absurd (limit 2 m)"},
+      {R"({"command": "frames", "pivot_m": [0, 0, 0], "work_position_m": [0, 3, 0]})",
+       "work_position_m (0, 3, 0) is 3 m from the base origin: absurd (limit 2 m)"},
+      {R"({"command": "frames", "pivot_m": [0, 0, 0], "tool_orientation_wxyz": [1, 0, 0, 0.1]})",
+       "tool_orientation_wxyz (1 0 0 0.1) is not a unit quaternion"},
+      {R"({"command": "frames", "pivot_m": [0, 0, 0], "work_orientation_wxyz": [0, 0, 0, 0]})",
+       "work_orientation_wxyz (0 0 0 0) is not a unit quaternion"},
+      {R"({"command": "frames", "pivot_m": [0, 0, 0], "position_m": [0, 0, 0]})", "for goal only"},
+      {R"({"command": "jog", "pivot_m": [0, 0, 0]})", "'pivot_m' is for frames only"},
+      {R"({"command": "goal", "position_m": [0, 0, 0.4], "orientation_wxyz": [1, 0, 0, 0],
+           "work_orientation_wxyz": [1, 0, 0, 0]})", "'work_orientation_wxyz' is for frames only"}};
   for (const auto& [text, words] : bad) {
     const auto r = ParseOperatorInput(text);
     EXPECT_FALSE(r.ok) << text;

@@ -265,9 +265,22 @@ TEST(Convert, OperatorCommandBothWays) {
   std::strcpy(d.trajectory, "csv");
   std::strcpy(d.csv_path, "/data/traj.csv");
   d.source_time_ns = -5;
+  for (int k = 0; k < 3; ++k) {
+    d.pivot_m[k] = 0.1 * (k + 1);
+    d.tool_position_m[k] = -0.01 * (k + 1);
+    d.work_position_m[k] = 0.2 + k;
+  }
+  for (int k = 0; k < 4; ++k) {
+    d.tool_orientation_wxyz[k] = 0.5;
+    d.work_orientation_wxyz[k] = k == 0 ? 1.0 : 0.0;
+  }
   rec::OperatorCommand p;
   ToProto(d, p);
   EXPECT_EQ(p.sequence(), 9u);
+  ASSERT_EQ(p.pivot_m_size(), 3);
+  EXPECT_EQ(p.pivot_m(2), 0.1 * 3);
+  ASSERT_EQ(p.work_orientation_wxyz_size(), 4);
+  EXPECT_EQ(p.tool_orientation_wxyz(1), 0.5);
   EXPECT_EQ(p.kind(), rec::OPERATOR_HOME);
   EXPECT_EQ(p.trajectory(), "csv");
   EXPECT_EQ(p.csv_path(), "/data/traj.csv");
@@ -279,6 +292,17 @@ TEST(Convert, OperatorCommandBothWays) {
   EXPECT_FALSE(FromProto(p, b));
   p.set_trajectory(std::string(64, 'x'));
   EXPECT_TRUE(FromProto(p, b));
+  // A command recorded before the frames' fields existed: they read as zero.
+  p.clear_pivot_m();
+  p.clear_tool_position_m();
+  p.clear_tool_orientation_wxyz();
+  p.clear_work_position_m();
+  p.clear_work_orientation_wxyz();
+  ASSERT_TRUE(FromProto(p, b));
+  EXPECT_EQ(b.pivot_m[2], 0.0);
+  EXPECT_EQ(b.work_orientation_wxyz[0], 0.0);
+  p.add_pivot_m(1.0);  // one value where three belong
+  EXPECT_FALSE(FromProto(p, b));
 }
 
 TEST(Convert, NodeStatusBothWays) {

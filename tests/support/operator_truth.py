@@ -8,8 +8,11 @@ rest within the dead-man time plus the braking time, the setpoint within the bra
 and the platform (ground truth) within it + 4 mm; and that the first goal was reached: the
 platform's move within the estimate's static offset + 4 mm of the one asked (the move is measured
 from the truth at the goal's start, which stood that offset from the setpoint), at rest on it
-within the static offset + 4 mm, 8 mrad. Prints every figure; exit 1 if a check fails.
-Usage: operator_truth.py OUT_DIR V_M_S
+within the static offset + 4 mm, 8 mrad. With PIVOT (x,y,z in the platform frame, m): the first
+jog after the supervisor took that pivot ("frames set") is a rotation about it: the pivot point
+(ground truth) stays within 5 mm of where it was while the platform rolls more than 0.15 rad and
+its origin moves. Prints every figure; exit 1 if a check fails.
+Usage: operator_truth.py OUT_DIR V_M_S [PIVOT]
 """
 import csv
 import math
@@ -80,4 +83,48 @@ print(f"goal: planned from t = {tg0:.3f} s, at rest t = {tg:.3f} s; setpoint {1e
 expect(math.dist(des_g[:3], goal[:3]) < 1e-4, "the setpoint ended on the goal (to the log's 0.1 mm)")
 expect(err_move < offset + 0.004, "the platform's move within the static offset + 4 mm of the one asked")
 expect(err_p < offset + 0.004 and err_r < 0.008, "the platform at rest on the goal within the static offset + 4 mm, 8 mrad")
+
+def rotation(roll, pitch, yaw):  # R = Rz(yaw) Ry(pitch) Rx(roll) (core/pose.hpp)
+    cr, sr, cp, sp, cy, sy = (math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch),
+                              math.cos(yaw), math.sin(yaw))
+    return [[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr]]
+
+def pivot_in_base(q, p_PC_P):  # p + R p_PC_P for q = [x y z roll pitch yaw]
+    R = rotation(*q[3:6])
+    return [q[i] + sum(R[i][k] * p_PC_P[k] for k in range(3)) for i in range(3)]
+
+if len(sys.argv) > 3:
+    # Rotation about a pivot set at run time (docs/operate.md "Pivot point and user frames"): from
+    # the first jog after "frames set" to 0.3 s after it was at rest (or the next motion's start).
+    # 5 mm: the platform's tracking error of a jog (<= 3 mm) plus its roll error (< 8 mrad) over
+    # the 0.2 m lever, as the in-process test (SupervisorLimits.RotationAboutAPivot...).
+    p_PC_P = [float(x) for x in sys.argv[3].split(",")]
+    t_frames = float(re.search(r"frames set at t = ([0-9.]+) s", log).group(1))
+    t0 = min(t for t in (float(x) for x in re.findall(r"jogging from t = ([0-9.]+) s", log)) if t >= t_frames)
+    rest_t = min(t for t in (float(x) for x in re.findall(r"jog at rest at t = ([0-9.]+) s", log)) if t > t0)
+    d_rest = at(rest_t, DES)
+    t_end = rest_t + 0.3
+    for r in rows:  # the next motion (a trajectory's blend) starts where the setpoint leaves rest
+        if rest_t < r[0] < t_end and max(abs(r[DES + k] - d_rest[k]) for k in range(6)) > 1e-7:
+            t_end = r[0] - 0.005
+            break
+    span = [r for r in rows if t0 - 1e-9 <= r[0] <= t_end]
+    true0, des0 = span[0][TRUE:TRUE + 6], span[0][DES:DES + 6]
+    c_true0, c_des0 = pivot_in_base(true0, p_PC_P), pivot_in_base(des0, p_PC_P)
+    pivot_true = max(math.dist(pivot_in_base(r[TRUE:TRUE + 6], p_PC_P), c_true0) for r in span)
+    pivot_des = max(math.dist(pivot_in_base(r[DES:DES + 6], p_PC_P), c_des0) for r in span)
+    origin_true = max(math.dist(r[TRUE:TRUE + 3], true0[:3]) for r in span)
+    roll = span[-1][TRUE + 3] - true0[3]
+    lever = math.hypot(*p_PC_P)
+    print(f"pivot ({sys.argv[3]}) m, {lever:.3f} m from the platform origin, taken at t = {t_frames:.3f} s; "
+          f"roll jog from t = {t0:.3f} s, at rest t = {rest_t:.3f} s, measured to t = {t_end:.3f} s: "
+          f"roll {roll:.4f} rad (ground truth); the pivot point moved at most {pivot_true * 1e3:.2f} mm "
+          f"(truth), {pivot_des * 1e3:.4f} mm (setpoint); the platform origin "
+          f"moved {origin_true * 1e3:.2f} mm (truth)")
+    expect(abs(roll) > 0.15, "the platform rolled more than 0.15 rad about the pivot")
+    expect(pivot_des < 1e-6, "the setpoint's pivot point stayed put (pose.csv holds 9 digits)")
+    expect(pivot_true < 0.005, "the pivot point (ground truth) stayed within 5 mm")
+    expect(origin_true > 0.5 * lever * abs(roll), "the platform origin moved (about the old pivot, the origin)")
 sys.exit(0 if ok else 1)

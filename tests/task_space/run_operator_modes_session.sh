@@ -2,8 +2,10 @@
 # ctest driver of task_space.operator_modes_session: a lockstep session over DDS (eight
 # processes and the recorder, `hexa_session --wait-for-operator`, own domain) driven with
 # hexa_operator as a user runs it: a jog (+x, work frame) let go, a tool-frame jog, a pose goal,
-# a goal outside the soft limits (refused, exit 4, the reason), bad arguments (exit 2), then
-# shutdown. Checked against the recording's ground truth (pose.csv): the jog moved the platform
+# a goal outside the soft limits (refused, exit 4, the reason), bad arguments (exit 2), a pivot
+# and tool frame (`frames`: absurd ones exit 2, one past the supervisor's bound exit 4), then
+# shutdown (exit 6: the trajectory never started, console and report.md say so). Checked
+# against the recording's ground truth (pose.csv): the jog moved the platform
 # along +x and was at rest within the dead-man time plus the braking time after its last message;
 # the goal was reached within the stated tolerance.
 # Usage: run_operator_modes_session.sh BUILD_DIR DOMAIN
@@ -48,11 +50,30 @@ check "grep -q 'goal refused: the goal leaves the pose box: x' '$out/op_goal_out
 run goal_not_unit 2 goal --position-m "$gx,$gy,$gz" --quaternion 1,0,0,0.1
 check "grep -q 'not a unit quaternion' '$out/op_goal_not_unit.log'" "a non-unit quaternion is refused before sending"
 run jog_absurd 2 jog --velocity-m-s 5,0,0
+# The pivot and user frames: absent or absurd (2 m) are usage errors, past the supervisor's bound
+# (0.5 m) refused with it (exit 4), a pivot 0.2 m above the platform and a tool frame taken.
+run frames_no_pivot 2 frames
+check "grep -q 'frames needs --pivot-m' '$out/op_frames_no_pivot.log'" "frames without --pivot-m is a usage error"
+run frames_absurd 2 frames --pivot-m 10,0,0
+check "grep -q 'pivot_m (10, 0, 0) is 10 m from the platform origin: absurd (limit 2 m)' '$out/op_frames_absurd.log'" \
+      "a pivot 10 m away is refused before sending, naming the field, value and limit"
+run frames_far 4 frames --pivot-m 0,0,0.8
+check "grep -q 'pivot point (from the platform origin) is too far away (value 0.8 m, limit <= 0.5 m)' '$out/op_frames_far.log'" \
+      "a pivot 0.8 m away is refused by the supervisor, its bound reaching the operator"
+run frames 0 frames --pivot-m 0,0.05,0.2 --tool-position-m 0,0,0.1 --tool-rpy-deg 0,0,90
+check "grep -q 'frames set at t = [0-9.]* s: pivot (0.0000, 0.0500, 0.2000) m in the platform frame; tool (0.0000, 0.0000, 0.1000) m, (0.00, 0.00, 90.00) deg' '$out/supervisor.log'" \
+      "the supervisor took the pivot and the tool frame (supervisor.log)"
 sleep 1
 # Ends the session (its answer may be lost as the supervisor leaves: exit 0 or 3).
 "$op" --domain "$domain" --wait 30 shutdown > "$out/op_shutdown.log" 2>&1 || true
 rc=0; wait "$session" || rc=$?
-check "[ $rc -eq 0 ]" "hexa_session ends 0 after the shutdown (got $rc)"
+# Jogs and goals are not the session's trajectory: the shutdown ends it before the trajectory
+# started (exit 6, docs/exit_codes.md), and the console and report.md say so.
+check "[ $rc -eq 6 ]" "hexa_session ends 6 after the shutdown, the trajectory never started (got $rc)"
+check "grep -q 'session did NOT complete (exit 6): shut down by the operator before the trajectory started (operator motions only: jog / goal)' '$out/hexa_session.out'" \
+      "the console says the operator shut the session down before the trajectory, after a jog and a goal"
+check "grep -q '^- completed: NO: shut down by the operator before the trajectory started' '$out/report.md'" \
+      "report.md says the session did not complete"
 
 grep -E "jog at rest|goal motion at rest|goal started|goal #|refused" "$out/supervisor.log" || true
 # Ground truth: pose.csv (time, desired, true, measured); the supervisor's log gives the times.

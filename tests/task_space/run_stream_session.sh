@@ -53,7 +53,10 @@ check "echo '$counters' | grep -qE 'wrong size [1-9].*wrong version [1-9].*not f
 sleep 1
 "$op" --domain "$domain" --wait 30 shutdown > "$out/op_shutdown.log" 2>&1 || true
 rc=0; wait "$session" || rc=$?
-check "[ $rc -eq 0 ]" "hexa_session ends 0 after the shutdown (got $rc)"
+# A stream is not the session's trajectory: the shutdown ends it before the trajectory started.
+check "[ $rc -eq 6 ]" "hexa_session ends 6 after the shutdown, the trajectory never started (got $rc)"
+check "grep -q 'session did NOT complete (exit 6): shut down by the operator before the trajectory started (operator motions only: stream)' '$out/hexa_session.out'" \
+      "the console says the operator shut the session down before the trajectory, after a stream"
 
 /usr/bin/python3 - "$out" <<'EOF' || fail=1
 import csv, re, sys

@@ -1,4 +1,4 @@
-// hexa_washout: runs the classical washout filter (docs/operate.md "Motion cueing") on a
+// hexa_washout: runs the classical washout filter (docs/motion_stream.md "Motion cueing") on a
 // vehicle motion (a worked example, or a CSV of accelerations and rates) and writes the
 // platform's cue as a trajectory CSV, so that the cue can be run, recorded and viewed with
 // hexa_session --trajectory FILE.csv. Prints the cue's peaks.

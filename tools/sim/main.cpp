@@ -43,7 +43,8 @@ int main(int argc, char** argv) {
               "--coupled-feedback: the feedback part's velocity from the coupled leg observer");
   cli.AddFlag("coupled-legs",
               "the coupled leg feedback of the system (rig file leg_controller.coupled_legs, "
-              "turned on whatever its 'enabled' says; docs/controller.md \"Coupled leg feedback\")");
+              "turned on whatever its 'enabled' says; docs/controller_additions.md \"Coupled "
+              "leg feedback\")");
   cli.AddFlag("calibrate",
               "first run the kinematic calibration procedure (tracker on, Ceres fit) and use the "
               "fitted calibration in the controllers");

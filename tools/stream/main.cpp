@@ -1,4 +1,4 @@
-// hexa_stream_send: sends the external motion stream (docs/operate.md "Motion stream") over
+// hexa_stream_send: sends the external motion stream (docs/motion_stream.md "Motion stream") over
 // UDP at a fixed rate, for tests and demos: a pose sine, or the washout's worked examples as
 // vehicle motion, with optional loss, reordering, duplicates, a gap and bad packets.
 #include <arpa/inet.h>

@@ -45,11 +45,12 @@ for (const t of ["3D", "Plot", "StateTransitions"]) check(types.includes(t), `a 
 // The operator controls (Publish panels; the bridge with --operator-input): each publishes a
 // JSON operator input on hexa_OperatorInput with the fields of its command (services/bridge/
 // operator_input.hpp): start stop reset home stream once each, jogs along each axis both ways
-// and about z, and a pose goal.
+// and about z, a pose goal, and the pivot (frames).
 const fieldsOf = {
   start: ["command", "trajectory"], stop: ["command"], reset: ["command"], home: ["command"],
   stream: ["command"], jog: ["command", "frame", "velocity_m_s", "angular_velocity_rad_s"],
   goal: ["command", "position_m", "orientation_wxyz"],
+  frames: ["command", "pivot_m", "tool_position_m", "tool_orientation_wxyz", "work_position_m", "work_orientation_wxyz"],
 };
 const commands = [];
 const jogs = new Set();
@@ -71,9 +72,13 @@ for (const [id, config] of Object.entries(layout.configById)) {
     check(value.position_m.length === 3 && q.length === 4 &&
           Math.abs(Math.hypot(...q) - 1) < 1e-6, `${id}: a position and a unit quaternion`);
   }
+  if (value.command === "frames") {
+    check(value.pivot_m.length === 3 && Math.hypot(...value.pivot_m) <= 0.5,
+          `${id}: a pivot within the supervisor's 0.5 m (${value.pivot_m})`);
+  }
 }
-check(JSON.stringify(commands.sort()) === JSON.stringify(["goal", "home", "reset", "start", "stop", "stream"]),
-      `operator controls for start stop reset home stream goal (${commands})`);
+check(JSON.stringify(commands.sort()) === JSON.stringify(["frames", "goal", "home", "reset", "start", "stop", "stream"]),
+      `operator controls for start stop reset home stream goal frames (${commands})`);
 check(jogs.size === 8, `jogs along x, y, z both ways and about z both ways (${[...jogs]})`);
 
 // The recording: schema per topic and every decoded message.

@@ -12,6 +12,10 @@
 //    desired pose moving along +x, back to IDLE after the client lets go; a tool-frame jog likewise; bad jogs and
 //    goals refused (absent field, non-unit quaternion, absurd); a goal 2 cm / 1 cm away:
 //    GOAL, then IDLE on it; a goal outside the soft limits: refused by the supervisor (IDLE);
+// 4b. the pivot: frames without a pivot, a NaN one, one 10 m away, a non-unit tool quaternion
+//    refused by the bridge; one 0.8 m away refused by the supervisor (its answer, in its
+//    NodeStatus, reaches the client); one 0.206 m away taken; a roll of 0.2 rad about it: the
+//    setpoint's pivot point stays put while its origin moves (ground truth: operator_truth.py);
 // 5. start (combined): the supervisor leaves IDLE (BLENDING, then TRACKING); an info status
 //    says it was forwarded;
 // 6. stop: the supervisor goes to STOPPING and then IDLE.
@@ -49,7 +53,17 @@ client.on("status", (s) => c.statuses.push(s));
 client.on("close", () => (c.closed = true));
 let poseType = null;
 let poseSub = null;
+let statusType = null;
+let statusSub = null;
+c.answers = [];  // the supervisor's NodeStatus details that answer a command
 client.on("message", (m) => {
+  if (m.subscriptionId === statusSub) {
+    const st = statusType.decode(new Uint8Array(m.data.buffer, m.data.byteOffset, m.data.byteLength));
+    const who = st.nodeName ?? st.node_name;
+    if (who === "supervisor" && /^command #\d+ /.test(st.detail) && c.answers[c.answers.length - 1] !== st.detail)
+      c.answers.push(st.detail);
+    return;
+  }
   if (m.subscriptionId !== poseSub) return;
   const report = poseType.decode(new Uint8Array(m.data.buffer, m.data.byteOffset, m.data.byteLength));
   const state = STATES[report.state ?? 0];
@@ -82,6 +96,10 @@ try {
   poseType = protobuf.Root.fromDescriptor(
     descriptor.FileDescriptorSet.decode(Buffer.from(pose.schema, "base64"))).lookupType(pose.schemaName);
   poseSub = client.subscribe(pose.id);
+  const nodeStatus = c.channels.get("hexa_NodeStatus");
+  statusType = protobuf.Root.fromDescriptor(
+    descriptor.FileDescriptorSet.decode(Buffer.from(nodeStatus.schema, "base64"))).lookupType(nodeStatus.schemaName);
+  statusSub = client.subscribe(nodeStatus.id);
   await until(() => state() === "IDLE", 60000, "the supervisor reports IDLE (waiting for the operator)");
 
   // ---- 2: bad inputs -----------------------------------------------------------------------
@@ -167,6 +185,58 @@ try {
   check(o.level === 0, `a goal outside the limits passes the bridge's checks ('${o.message}')`);
   await sleep(1000);
   check(state() === "IDLE", `the supervisor refused the goal outside the limits and stays IDLE (${c.states.slice(-3).join(" -> ")})`);
+
+  // ---- 4b: the pivot -----------------------------------------------------------------------
+  await sleep(1100);  // the command bucket full again (10)
+  await refused(send('{"command":"frames"}'), "frames without the pivot", "field 'pivot_m' is absent");
+  await refused(send('{"command":"frames","pivot_m":[0,NaN,0]}'), "a NaN pivot", "not valid JSON");
+  await refused(send('{"command":"frames","pivot_m":[10,0,0]}'), "a pivot 10 m away",
+                "pivot_m (10, 0, 0) is 10 m from the platform origin: absurd (limit 2 m)");
+  await refused(send('{"command":"frames","pivot_m":[0,0,0.2],"tool_orientation_wxyz":[1,0,0,0.1]}'),
+                "a tool frame with a non-unit quaternion", "tool_orientation_wxyz (1 0 0 0.1) is not a unit quaternion");
+  // The supervisor's answer to a frames command, in its NodeStatus.
+  const framesAnswer = async (pivot, what) => {
+    const n = c.answers.length;
+    const a = await answer(send(`{"command":"frames","pivot_m":[${pivot.join(",")}]}`), what);
+    check(a.level === 0 && a.message.includes("frames forwarded"), `${what}: '${a.message}'`);
+    await until(() => c.answers.slice(n).some((d) => / frames: /.test(d)), 30000, `${what}: the supervisor's answer`);
+    return c.answers.slice(n).find((d) => / frames: /.test(d));
+  };
+  const far = await framesAnswer([0, 0, 0.8], "a pivot 0.8 m away (past the bridge's 2 m, past the supervisor's 0.5 m)");
+  check(far.includes("frames: refused: frames refused: frames.p_PC_P_m: pivot point (from the platform origin) is too far away (value 0.8 m, limit <= 0.5 m)"),
+        `the supervisor refused the pivot 0.8 m away and the client sees why ('${far}')`);
+  const PIVOT = [0, 0.05, 0.2];
+  const taken = await framesAnswer(PIVOT, "a pivot 0.2 m above the platform, 0.05 m aside");
+  check(taken.includes("frames: accepted"), `the supervisor took the pivot ('${taken}')`);
+  check(state() === "IDLE", "a frames command does not move the platform (IDLE)");
+  // Roll about the new pivot (-0.15 rad/s, work frame) until the setpoint turned 0.2 rad, let go.
+  // R = Rz(yaw) Ry(pitch) Rx(roll) (core/pose.hpp); the pivot in B is p + R p_PC_P.
+  const pivotOf = (q) => {
+    const [cr, sr, cp, sp, cy, sy] = [Math.cos(q[3]), Math.sin(q[3]), Math.cos(q[4]), Math.sin(q[4]), Math.cos(q[5]), Math.sin(q[5])];
+    const R = [[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+               [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+               [-sp, cp * sr, cp * cr]];
+    return [0, 1, 2].map((i) => q[i] + R[i][0] * PIVOT[0] + R[i][1] * PIVOT[1] + R[i][2] * PIVOT[2]);
+  };
+  const q0 = [...c.desired];
+  const c0 = pivotOf(q0);
+  let pivotMoved = 0;
+  const rolling = c.states.length;
+  const t0 = Date.now();
+  while (!(c.states.slice(rolling).includes("JOGGING") && c.desired[3] - q0[3] < -0.2) && Date.now() - t0 < 60000) {
+    client.sendMessage(op, enc.encode('{"command":"jog","velocity_m_s":[0,0,0],"angular_velocity_rad_s":[-0.15,0,0]}'));
+    pivotMoved = Math.max(pivotMoved, Math.hypot(...pivotOf(c.desired).map((v, i) => v - c0[i])));
+    await sleep(50);
+  }
+  await until(() => state() === "IDLE", 60000, "IDLE after the roll was let go");
+  const q1 = [...c.desired];
+  pivotMoved = Math.max(pivotMoved, Math.hypot(...pivotOf(q1).map((v, i) => v - c0[i])));
+  const originMoved = Math.hypot(q1[0] - q0[0], q1[1] - q0[1], q1[2] - q0[2]);
+  console.log(`roll about the pivot (${PIVOT.join(", ")}) m: setpoint roll ${(q1[3] - q0[3]).toFixed(4)} rad; ` +
+              `the setpoint's pivot point moved at most ${pivotMoved.toExponential(2)} m, its origin ${(originMoved * 1e3).toFixed(2)} mm`);
+  check(q1[3] - q0[3] < -0.2, `the setpoint rolled more than 0.2 rad (${(q1[3] - q0[3]).toFixed(4)} rad)`);
+  check(pivotMoved < 1e-6, `the setpoint's pivot point stayed put (${pivotMoved.toExponential(2)} m)`);
+  check(originMoved > 0.5 * Math.hypot(...PIVOT) * 0.2, `the platform origin moved (${(originMoved * 1e3).toFixed(2)} mm)`);
 
   // ---- 5: start ----------------------------------------------------------------------------
   const s = await answer(send('{"command":"start","trajectory":"combined"}'), "start");

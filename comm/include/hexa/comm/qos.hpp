@@ -108,16 +108,16 @@ struct QosParams {
   // an older sample is worthless). A lockstep leg controller asks for more so that a hot
   // standby, which the plant does not wait for, can lag and still see every tick in order.
   int32_t control_reader_depth = 1;
-  // Recorder readers only: request BEST_EFFORT for the periodic topics (LegSensors,
-  // ValveCommand, GroundTruth, ImuSample, LegSetpoint, PoseReport, TrackerPose), as the
-  // real-time control readers do. A reliable recorder reader makes every control writer of
-  // those topics repair what the recorder's link dropped: acknowledgements, retransmission
-  // bursts out of up to 3 s of history, on the writers' receive threads, which in real time
-  // run at the control loop's priority on the control CPU. A 5 % lossy recorder link sent a
-  // real-time session to HOLD that way (docs/measurements/deployment.md, "The lossy recorder link").
-  // Best effort, no recorder can cost a control writer anything: a sample dropped on the
-  // recorder's link is missing in the recording (counted by tick). Lockstep keeps it false:
-  // the lockstep plant waits for the recorder's acknowledgements and nothing may be lost.
+  // Recorder readers only: request BEST_EFFORT for the periodic topics (LegSensors, ValveCommand,
+  // GroundTruth, ImuSample, LegSetpoint, PoseReport, TrackerPose), as the real-time control readers
+  // do. A reliable recorder reader makes every control writer of those topics repair what the
+  // recorder's link dropped: acknowledgements, retransmission bursts out of up to 3 s of history,
+  // on the writers' receive threads, which in real time run at the control loop's priority on the
+  // control CPU. A 5 % lossy recorder link sent a real-time session to HOLD that way
+  // (docs/measurements/deployment_recorder_link.md, "The lossy recorder link"). Best effort, no
+  // recorder can cost a control writer anything: a sample dropped on the recorder's link is missing
+  // in the recording (counted by tick). Lockstep keeps it false: the lockstep plant waits for the
+  // recorder's acknowledgements and nothing may be lost.
   bool recorder_periodic_best_effort = false;
 
   // Throws std::invalid_argument naming the field, value and limit.

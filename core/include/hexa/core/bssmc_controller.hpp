@@ -10,9 +10,9 @@
 //      retract) chosen by the sign of the required flow term, spool -> voltage (eq 42, 44),
 //   saturated to the valve's 0-10 V.
 //
-// phi_dot is the Gaussian derivative (eq 40) of phi's model part, plus a fraction of
-// the low-passed rate of its feedback part from the leg observer (leg_observer.hpp;
-// docs/controller.md "Feedback rate in phi_dot"). Velocity x_dot is the Gaussian derivative of
+// phi_dot is the Gaussian derivative (eq 40) of phi's model part, plus a fraction of the low-passed
+// rate of its feedback part from the leg observer (leg_observer.hpp; docs/controller_additions.md
+// "Feedback rate in phi_dot and the leg observer"). Velocity x_dot is the Gaussian derivative of
 // the measured length.
 //
 // Update neither throws nor allocates and never returns a non-finite voltage.

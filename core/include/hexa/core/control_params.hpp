@@ -31,7 +31,7 @@ struct BsSmcParams {
   // K tanh(xi S) alone the corrective force is capped near K, and a leg held by static
   // friction or by the platform coupling with a large error gets no more force.
   double reaching_proportional_n_s_m = 50.0;  // chatter study (docs/measurements/tuning.md)
-  // Valve-command smoothing (NOT in the paper; docs/controller.md "Valve chatter").
+  // Valve-command smoothing (NOT in the paper; docs/controller.md "Valve chatter fixes").
   // Linearised inversion of the quadratic area law (eq 43) near null: for a required area
   // fraction r = A_v / A_max below this value the spool fraction is r / sqrt(r0) instead of
   // sqrt(r) (continuous at r0). 0 = the paper's square root everywhere, whose slope is
@@ -82,20 +82,20 @@ struct BsSmcParams {
   double observer_length_sigma_m = 0.05e-3;
   double observer_force_sigma_n = 3.0;
   double observer_disturbance_rate_m_s3 = 100.0;
-  // Dither (NOT in the paper, docs/controller.md "Dither"): a sinusoidal force
-  // A sin(2 pi f t) exp(-(v_d / v_g)^2) added to eq 14's friction estimate while the setpoint
-  // is slow. It is part of the model part of phi, so phi_dot carries its rate and the valve
-  // follows it: it keeps the spool off its null, where the chatter band's quadratic area law
-  // (null_band_area_fraction) makes the pressure loop's small-signal gain vanish, and it keeps
-  // the bristles of a slowly moving leg from sticking. t = the sensor tick x period_s (common
-  // to the six legs, lockstep and real time alike); f is rounded to 1 / (N period_s), N integer.
-  // 0 N = off (the paper's eq 14).
-  // Grid on the seven trajectories, seeds 1-3 (docs/measurements/control_friction.md "Pure z and the stick-slip
-  // of the slow motions"); the paper's 0.1 Hz motions move the legs at |v_d| <= 0.045 m/s.
+  // Dither (NOT in the paper, docs/controller_additions.md "Dither on the friction estimate"): a
+  // sinusoidal force A sin(2 pi f t) exp(-(v_d / v_g)^2) added to eq 14's friction estimate while
+  // the setpoint is slow. It is part of the model part of phi, so phi_dot carries its rate and the
+  // valve follows it: it keeps the spool off its null, where the chatter band's quadratic area law
+  // (null_band_area_fraction) makes the pressure loop's small-signal gain vanish, and it keeps the
+  // bristles of a slowly moving leg from sticking. t = the sensor tick x period_s (common to the
+  // six legs, lockstep and real time alike); f is rounded to 1 / (N period_s), N integer. 0 N = off
+  // (the paper's eq 14). Grid on the seven trajectories, seeds 1-3
+  // (docs/measurements/control_friction.md "Pure z and the stick-slip of the slow motions"); the
+  // paper's 0.1 Hz motions move the legs at |v_d| <= 0.045 m/s.
   double dither_amplitude_n = 7.5;
   double dither_frequency_hz = 25.0;
   double dither_gate_speed_m_s = 0.12;
-  // Friction scale adaptation (NOT in the paper, docs/controller.md "Friction
+  // Friction scale adaptation (NOT in the paper, docs/controller_additions.md "Friction
   // adaptation at speed"): eq 14's friction and viscous estimates at v_d, F_r = F_f(v_d) +
   // B_hat v_d, are applied as k F_r with k = 1 + (theta - 1) w(v_d), w = 1 - exp(-(v_d / v_a)^2),
   // and theta follows the gradient law theta_dot = -gamma w S F_r (the Lyapunov-based update of
@@ -122,14 +122,14 @@ struct PiParams {
   double integrator_limit_v = 2.0;      // anti-windup clamp of the integral term
   double velocity_feedforward_v_s_m = 6.0;  // volts per (m/s) of setpoint velocity
   double rate_damping_v_s_m = 20.0;         // volts per (m/s) of velocity error v_d - v
-  // Force feed-forward, used only when the setpoint carries one: volts per newton
-  // of (feed-forward force - measured pneumatic force P1 A1 - P2 A2 - Pa Ar). The PI's only
-  // output is a valve opening, i.e. a rate of force change, so the known load enters as a
-  // proportional force loop towards it (docs/controller.md "Feed-forward").
+  // Force feed-forward, used only when the setpoint carries one: volts per newton of (feed-forward
+  // force - measured pneumatic force P1 A1 - P2 A2 - Pa Ar). The PI's only output is a valve
+  // opening, i.e. a rate of force change, so the known load enters as a proportional force loop
+  // towards it (docs/controller_additions.md "Feed-forward of the platform's inverse dynamics").
   double force_feedforward_v_n = 0.001;  // tuned on the seven trajectories (docs/controller.md)
 };
 
-// Coupled leg feedback (docs/controller.md "Coupled leg feedback"; off by default): leg i
+// Coupled leg feedback (docs/controller_additions.md "Coupled leg feedback"; off by default): leg i
 // applies f_i(n) + gain * LPF(sum_j W_ij f_j(n - 1) - f_i(n - 1)), W = M_ls(home) / M, the
 // six legs' BS-SMC feedback parts f_j of the previous tick as the plant relays them with leg
 // i's sensor sample (RelayedFeedback, coupled_legs.hpp). Any leg's part missing: the decoupled

@@ -1,5 +1,5 @@
 // Coupled leg feedback across the six leg controllers, as the distributed system runs it
-// (docs/controller.md "Coupled leg feedback"). Each BS-SMC leg publishes its own feedback
+// (docs/controller_additions.md "Coupled leg feedback"). Each BS-SMC leg publishes its own feedback
 // part f_j (BsSmcFeedback) with its valve command; the plant, which gathers the six commands
 // of every tick anyway, relays the six parts of tick n - 1 with each leg's sensor sample of
 // tick n (FeedbackRelay); leg i then applies (CoupledFeedbackMix)

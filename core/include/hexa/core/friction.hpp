@@ -1,6 +1,6 @@
 // Cylinder friction: the static Stribeck curve of eq 3 per stroke direction (Table 8
 // magnitudes) and the dynamic LuGre model whose steady state is that curve (the plant's
-// model; the controllers keep the static eq 14). docs/plant.md, "Friction".
+// model; the controllers keep the static eq 14). docs/plant.md, "Leg model".
 #pragma once
 
 #include <cmath>

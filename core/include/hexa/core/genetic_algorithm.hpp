@@ -3,7 +3,7 @@
 // parameter's range), MaxIt iterations, nPop individuals, crossover percentage pc, mutation
 // percentage pm, mutation rate mu. Table 7's names are those of the widely used MATLAB
 // real-coded GA template (Yarpiz); its operators are implemented as that template defines
-// them, which the paper does not spell out (docs/identification.md, "GA"):
+// them, which the paper does not spell out (docs/identification.md, "The two fits"):
 //   - nc = 2 round(pc nPop / 2) offspring per iteration from parent pairs chosen by
 //     roulette wheel with probabilities exp(-beta cost / worst cost), beta = 8;
 //   - arithmetic crossover y1 = a x1 + (1 - a) x2, y2 = a x2 + (1 - a) x1 with a drawn per
@@ -38,7 +38,8 @@ struct GaParams {
   double mutation_sigma_fraction = 0.1;
   double selection_pressure = 8.0;  // beta
   // Departures from the template, all off by default here (= the template exactly);
-  // hexa_identify chooses (docs/measurements/identification.md, "Why the template GA stalls"):
+  // hexa_identify chooses (docs/measurements/identification.md, "Why the template GA stalls,
+  // and the gene map that fixes it"):
   //   - crossover_per_pair: one a per parent pair (y on the line through x1 and x2,
   //     extended by gamma either side) instead of one a per gene: offspring of two parents
   //     in a narrow diagonal valley stay in it instead of filling the box around them;

@@ -1,5 +1,5 @@
 // Velocity / acceleration observer of one leg from its position and its pneumatic force
-// (NOT in the paper; docs/controller.md "Leg observer").
+// (NOT in the paper; docs/controller_additions.md "Feedback rate in phi_dot and the leg observer").
 //
 // The paper's controller gets the piston velocity by differentiating the measured position
 // (eq 40) and phi_dot by differentiating phi (eq 38, 40). The measured chamber pressures give

@@ -1,4 +1,4 @@
-// External motion stream (docs/operate.md "Motion stream"): the UDP packet, its decoder, and
+// External motion stream (docs/motion_stream.md "Motion stream"): the UDP packet, its decoder, and
 // the unit that turns a lossy, reordered stream into a rate-, acceleration- and jerk-limited
 // displacement of the pivot frame from neutral (user_frames.hpp applies it, soft_limits.hpp
 // holds it inside the limits). The socket is the caller's (services/common udp_stream.hpp);

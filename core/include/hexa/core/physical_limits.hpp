@@ -1,4 +1,4 @@
-// Limits derived from physics, across parameter structs (docs/config.md, "Physical limits"):
+// Limits derived from physics, across parameter structs (docs/rig_checks.md, "Physical limits"):
 // supply pressure against the gas model, masses against what the legs can hold, time
 // constants and stiffnesses against the plant's integrator step and the 1 ms tick, controller
 // gains against what the valve chain can do. Each limit carries the reason and the figures it

@@ -32,7 +32,7 @@ DisturbanceProfile MakeRealisticDisturbanceProfile();
 // hangs rod down from the bench with both chambers vented and `load_kg` hung on its rod, held
 // at the top of its stroke until `release_s`, then falls (SingleLegPlant, the plant's leg
 // model with the profile's friction). The sensors read the six falling legs like the
-// platform's; the valves do nothing (vented). docs/identification.md, "Free fall".
+// platform's; the valves do nothing (vented). docs/plant.md, "Free-fall identification".
 struct FreeFallBenchParams {
   bool enabled = false;
   double load_kg = 12.0;     // the paper's 1.410 kg cannot fall against its friction (docs)

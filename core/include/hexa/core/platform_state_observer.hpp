@@ -1,6 +1,6 @@
-// Platform state observer (NOT in the paper; docs/controller.md "Platform state observer"):
-// the platform's pose, twist and the six legs' velocities from the six potentiometers, the
-// six legs' pneumatic forces (chamber pressures), the IMU orientation and the platform's
+// Platform state observer (NOT in the paper; docs/controller_additions.md "Platform state
+// observer"): the platform's pose, twist and the six legs' velocities from the six potentiometers,
+// the six legs' pneumatic forces (chamber pressures), the IMU orientation and the platform's
 // rigid-body model (eq 48's leg-space mass matrix, the feed-forward's inverse dynamics).
 //
 // A modal steady-state Kalman filter in leg space. The rigid platform with its legs obeys

@@ -97,7 +97,7 @@ struct IdentificationConfig {
   // compensation). The same noisy samples enter D[P] and the eq 7 regressors, so their
   // errors correlate and bias the fit (errors in variables); that covariance, computed
   // from the kernels and the regressors' sensitivity to each pressure sample, is taken out
-  // of the pressure channels' normal equations (docs/identification.md, "Noise").
+  // of the pressure channels' normal equations (docs/identification.md, "Model and objective").
   double pressure_noise_sigma_pa = 0.0;
   // The pressure channels of a sample whose window holds a tick where an open flow path's
   // pressure difference (supply to a filling chamber, an exhausting chamber to the
@@ -252,16 +252,16 @@ struct StrokeSearchSpace {
   // The friction variables (v_s, B, F_s - F_c, F_c) in [nominal / factor, nominal x factor]
   // of the rig file's values, the gammas in [1, 2] as Default(): the GA's genes then resolve
   // the range the parameters can plausibly take, and Table 7's mutation step (sigma = 0.1 of
-  // the gene range) shrinks with it (docs/identification.md, "GA search ranges").
+  // the gene range) shrinks with it (docs/identification.md, "The two fits").
   // factor > 1; a nominal value <= 0 keeps Default()'s range for that variable.
   static StrokeSearchSpace AroundNominal(const StrokeParams& nominal, double factor);
-  // Genes 1-3 are the friction force magnitudes of eq 3 at three reference speeds instead
-  // of B, F_s - F_c and F_c (each in [nominal / factor, nominal x factor] of the rig file's
-  // values' force at that speed; v_s and the gammas as AroundNominal): the data fix the
-  // friction curve over the recorded speeds much better than the three coefficients, which
-  // trade off against each other (docs/measurements/identification.md, "Why the template GA stalls").
-  // Decoding solves eq 3 at the three speeds for F_c, F_s - F_c and B (given v_s); they
-  // are not projected onto >= 0 (a projection makes a flat plateau the GA stalls on).
+  // Genes 1-3 are the friction force magnitudes of eq 3 at three reference speeds instead of
+  // B, F_s - F_c and F_c (each in [nominal / factor, nominal x factor] of the rig file's values'
+  // force at that speed; v_s and the gammas as AroundNominal): the data fix the friction curve
+  // over the recorded speeds much better than the three coefficients, which trade off against
+  // each other (docs/measurements/identification.md, "Why the template GA stalls, and the gene
+  // map that fixes it"). Decoding solves eq 3 at the three speeds for F_c, F_s - F_c and B (given v_s); they are
+  // not projected onto >= 0 (a projection makes a flat plateau the GA stalls on).
   static StrokeSearchSpace ForceAtSpeeds(const StrokeParams& nominal, double factor,
                                          const std::array<double, 3>& speeds_m_s);
   bool force_at_speeds = false;

@@ -1,9 +1,9 @@
 #pragma once
-// Accounting of a real-time loop's schedule slips (docs/measurements/deployment.md, "Where the lapses'
-// milliseconds go"): every wake-up later than the threshold is a slip; the record keeps their
-// count, total and worst lateness and, for the first kKept of them, the tick and the lateness,
-// so that a fault at some tick can be matched to the stall before it. Pure: the caller measures
-// the lateness; fixed storage, no allocation (it runs inside the 1 ms cycle).
+// Accounting of a real-time loop's schedule slips (docs/measurements/deployment_lapses.md, "Where
+// the lapses' milliseconds go"): every wake-up later than the threshold is a slip; the record keeps
+// their count, total and worst lateness and, for the first kKept of them, the tick and the
+// lateness, so that a fault at some tick can be matched to the stall before it. Pure: the caller
+// measures the lateness; fixed storage, no allocation (it runs inside the 1 ms cycle).
 #include <array>
 #include <cstddef>
 #include <cstdint>

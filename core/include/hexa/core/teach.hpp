@@ -1,6 +1,6 @@
 // Teach and replay (docs/operate.md "Teach and replay"): measured poses of a recording (the
 // supervisor's estimate, or the setpoints of a jog session) turned into the rows of a
-// trajectory CSV (docs/task_space.md "CSV user trajectory"), and the eased start of its
+// trajectory CSV (docs/trajectories.md "CSV user trajectory"), and the eased start of its
 // replay from the platform's current pose. Outside the control cycle: allocates, never opens
 // a file (config/ writes the CSV text).
 #pragma once

@@ -1,5 +1,5 @@
-// Pivot point and user frames (docs/operate.md "Pivot and user frames"): the pose algebra used
-// by jog, pose goals and streams. Pure functions of fixed-size Eigen types; no allocation.
+// Pivot point and user frames (docs/operate.md "Pivot point and user frames"): the pose algebra
+// used by jog, pose goals and streams. Pure functions of fixed-size Eigen types; no allocation.
 //
 // Frames (Drake-style names, X_AB = pose of B in A):
 //   B  base frame (pose.hpp), P  platform frame,

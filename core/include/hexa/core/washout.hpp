@@ -1,4 +1,4 @@
-// Classical washout filter for motion cueing (docs/operate.md "Motion cueing"): vehicle
+// Classical washout filter for motion cueing (docs/motion_stream.md "Motion cueing"): vehicle
 // accelerations and angular rates -> a displacement of the pivot frame from neutral,
 // [x y z roll pitch yaw] (m, rad, work-frame axes; user_frames.hpp applies it).
 //

@@ -1,4 +1,4 @@
-// Names and units of the columns `hexa_recorder export` writes (docs/recorder.md, "Export").
+// Names and units of the columns `hexa_recorder export` writes (docs/recorder.md, "CLI").
 // Every header cell is "name [unit]": SI units (m, rad, s, ns, Pa, V, N, kg, Hz and their
 // products), "1" for a dimensionless number (counts, ids, tick numbers, flags, quaternion
 // components, scale factors) and "-" for text (strings, enum names). A field the table does not

@@ -80,7 +80,7 @@ struct McapWriterConfig {
   // background fdatasync is reported by the next FlushChunk() or Close().
   McapSyncMode sync = McapSyncMode::kFdatasync;
   bool compute_data_crc = true;
-  // zstd by default: a session recording shrinks ~5x (docs/measurements/recorder.md, "Compression").
+  // zstd: a recording shrinks ~5x (docs/measurements/recorder.md, "Compression benchmark").
   McapCompression compression = McapCompression::kZstd;
   int zstd_level = 3;                         // 1..19 (zstd's own scale; 3 is its default)
   void Validate() const;  // throws std::invalid_argument naming the field

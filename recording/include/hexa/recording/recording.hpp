@@ -194,13 +194,13 @@ class TickLossTracker {
   std::vector<Stream> streams_;
 };
 
-// Loss events: the missing samples of a recording grouped by the process that wrote them and
-// their tick. A producer writes the samples of one tick together (the plant its six
-// LegSensors, GroundTruth and ImuSample in one write batch, the supervisor its setpoints and
-// pose report, each leg controller its ValveCommand), so one datagram lost on the way costs
-// every sample it carried and counts as one event here: comparable with the packets a lossy
-// link dropped, where the sample count is not (docs/measurements/deployment.md, "The lossy recorder link").
-// Samples of one producer and tick that travelled in two datagrams, both lost, count once.
+// Loss events: the missing samples of a recording grouped by the process that wrote them and their
+// tick. A producer writes the samples of one tick together (the plant its six LegSensors,
+// GroundTruth and ImuSample in one write batch, the supervisor its setpoints and pose report, each
+// leg controller its ValveCommand), so one datagram lost on the way costs every sample it carried
+// and counts as one event here: comparable with the packets a lossy link dropped, where the sample
+// count is not (docs/measurements/deployment_recorder_link.md, "The lossy recorder link"). Samples
+// of one producer and tick that travelled in two datagrams, both lost, count once.
 struct LossEvents {
   std::map<std::string, uint64_t> events;   // producer -> (producer, tick) pairs with a loss
   std::map<std::string, uint64_t> samples;  // producer -> samples missing

@@ -1,7 +1,8 @@
 // The 3-D scene of a recording or a live session as Foxglove messages (docs/foxglove.md):
 // foxglove.FrameTransforms (frames base, platform = ground truth, platform_measured = GQFK +
 // IMU, platform_desired) and foxglove.SceneUpdate (legs as cylinders between their joints,
-// coloured by leg state; joints as spheres; base and platform outlines; a status label), at a
+// coloured by leg state; joints as spheres; base and platform outlines; the soft limits' pose
+// box; a status label), at a
 // display rate (default every 20 ticks = 50 Hz), built from the hexa.rec messages the
 // recorder and the bridge already have. No DDS, no clock: the caller stamps each frame.
 #pragma once
@@ -16,6 +17,7 @@
 #include "foxglove/SceneUpdate.pb.h"
 #include "hexa/core/rig.hpp"
 #include "hexa/core/scene.hpp"
+#include "hexa/core/soft_limits.hpp"
 #include "hexa/recording/recording.hpp"
 
 namespace hexa::recorder {
@@ -30,12 +32,17 @@ struct SceneOptions {
   // The controllers' model: joints of the measured and desired platforms.
   GeometryParams nominal_geometry;
   std::string geometry_note = "nominal joints";  // written to the channel metadata
+  // The supervisor's soft limits (rig file supervisor.soft_limits, MakeSoftLimitsConfig): their
+  // pose box is drawn as entity "soft_limits" (the box the platform origin stays in, in base).
+  // Unset: not drawn.
+  std::optional<SoftLimitsConfig> soft_limits;
   std::uint64_t period_ticks = 20;               // one frame per 20 plant ticks = 50 Hz
   void Validate() const;                         // throws std::invalid_argument
 };
 
 // Rig file (docs/config.md) -> options. With `seed`, the ground-truth platform gets the plant's
 // true joints for that profile and seed ("" = the file's default profile); without, nominal.
+// The soft limits are the supervisor's for that file.
 // Throws std::runtime_error naming the file and the problem.
 SceneOptions SceneOptionsFromRig(const std::string& rig_path, const std::string& profile,
                                  std::optional<std::uint64_t> seed);

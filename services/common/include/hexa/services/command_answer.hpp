@@ -15,6 +15,8 @@
 #include <cstring>
 #include <string>
 
+#include "hexa/services/format_cut.hpp"
+
 namespace hexa::services {
 
 // The USER_DATA of the plant's OperatorCommand reader: hexa_operator waits for it too before
@@ -24,15 +26,16 @@ inline constexpr const char* kPlantCommandReader = "role=plant";
 
 enum class CommandAnswer { kNone, kAccepted, kRefused, kRejected };
 
-// Writes the answer into `out` (NUL-terminated, cut to its size). `why` may be empty.
+// Writes the answer into `out` (NUL-terminated, cut to its size: the NodeStatus detail is a
+// fixed field). `why` may be empty.
 template <std::size_t N>
 void FormatCommandAnswer(char (&out)[N], std::uint32_t sequence, const char* kind,
                          CommandAnswer answer, const char* why) {
   const char* word = answer == CommandAnswer::kAccepted   ? "accepted"
                      : answer == CommandAnswer::kRejected ? "rejected"
                                                           : "refused";
-  std::snprintf(out, N, "command #%u %s: %s%s%s", static_cast<unsigned>(sequence), kind, word,
-                (why != nullptr && *why != '\0') ? ": " : "", why != nullptr ? why : "");
+  text::FormatCut(out, N, "command #%u %s: %s%s%s", static_cast<unsigned>(sequence), kind, word,
+                  (why != nullptr && *why != '\0') ? ": " : "", why != nullptr ? why : "");
 }
 
 // The answer to command `sequence` in a NodeStatus detail; kNone if the detail is about

@@ -1,4 +1,4 @@
-// The receiving side of the external motion stream (docs/operate.md "Motion stream"): a
+// The receiving side of the external motion stream (docs/motion_stream.md "Motion stream"): a
 // non-blocking UDP socket that drains the datagrams waiting at each supervisor tick, decodes
 // them (core/motion_stream.hpp) and hands the valid ones to a MotionStream; refusals are
 // counted in it by reason. No allocation after construction.
