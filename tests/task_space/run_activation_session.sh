@@ -46,7 +46,7 @@ refused() {  # refused NAME WORDS: a start refused (exit 4) with WORDS in the op
 start_session estop
 check "grep -q 'hardware inactive: every valve at its safe value until an operator start or home' '$out/plant.log'" \
       "the plant starts inactive"
-run estop 0 estop
+run estop_command 0 estop
 refused start_estop "e-stop open (the latch is set)"
 run reset 0 reset
 run start 0 start

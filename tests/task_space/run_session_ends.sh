@@ -72,7 +72,7 @@ ended home "shut down by the operator before the trajectory started \\(operator 
 # 3. Stop, then shutdown: the stop ended the motion. The shutdown comes while the platform
 # stops, or after the stop ended the session (then no supervisor is left: exit 1).
 start_session stop_shutdown "trajectory 'x' accepted"
-run stop 0 stop
+run stop_command 0 stop
 shutdown_session 5 "0 1 3"
 ended stop_shutdown "stopped by the operator at trajectory time [0-9.]+ s( \\(then shut down\\))? before the trajectory.s end"
 
