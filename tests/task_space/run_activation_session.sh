@@ -18,19 +18,9 @@ out="$root"
 . "$(dirname "$0")/operator_session_lib.sh"
 
 start_session() {  # start_session NAME ARGS...: a session in $root/NAME, until it has a pose
-  out="$root/$1"; shift
-  mkdir -p "$out"
-  "$build/deploy/hexa_session" --trajectory combined --periods 1 --seed 3 --domain "$domain" \
-      --out "$out" --activation operator --hold-timeout 600 --timeout 280 "$@" \
-      > "$out/hexa_session.out" 2>&1 &
-  session=$!; pids+=("$session")
-  export HEXA_SESSION_KEY="$out/session.key"
-  for _ in $(seq 1 600); do
-    grep -q 'pose estimate available' "$out/supervisor.log" 2>/dev/null && return 0
-    kill -0 "$session" 2>/dev/null || { echo "FAIL: the session ended before the supervisor ran"; tail -20 "$out/hexa_session.out"; exit 1; }
-    sleep 0.1
-  done
-  echo "FAIL: no pose estimate in $out/supervisor.log"; exit 1
+  local name="$1"; shift
+  launch_session "$name" 'pose estimate available' 60 --trajectory combined --periods 1 --seed 3 \
+      --activation operator --hold-timeout 600 --timeout 280 "$@"
 }
 end_session() {  # shuts the session down and waits for it
   "$op" --domain "$domain" --wait 30 shutdown > "$out/op_shutdown.log" 2>&1 || true

@@ -24,18 +24,8 @@ out="$root"
 
 # start_session NAME LOG_LINE ARGS...: a session in $root/NAME, until supervisor.log has LOG_LINE.
 start_session() {
-  out="$root/$1"; local ready="$2"; shift 2
-  mkdir -p "$out"
-  "$build/deploy/hexa_session" --trajectory x --periods 3 --seed 3 --domain "$domain" \
-      --out "$out" --timeout 280 "$@" > "$out/hexa_session.out" 2>&1 &
-  session=$!; pids+=("$session")
-  export HEXA_SESSION_KEY="$out/session.key"
-  for _ in $(seq 1 1200); do
-    grep -q "$ready" "$out/supervisor.log" 2>/dev/null && return 0
-    kill -0 "$session" 2>/dev/null || { echo "FAIL: $out: the session ended before '$ready'"; tail -20 "$out/hexa_session.out"; exit 1; }
-    sleep 0.1
-  done
-  echo "FAIL: $out: no '$ready' in supervisor.log"; exit 1
+  local name="$1" ready="$2"; shift 2
+  launch_session "$name" "$ready" 120 --trajectory x --periods 3 --seed 3 --timeout 280 "$@"
 }
 # shutdown_session [WAIT_S [EXITS]]: hexa_operator shutdown; its answer may be lost as the
 # supervisor leaves: exit 0 or 3 (and 1 where the supervisor may be gone already).
